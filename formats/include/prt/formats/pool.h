@@ -1,0 +1,131 @@
+// PointRT pool file: reader (memory-mapped, validated) and writer (atomic: temporary file + rename).
+// Host-only. Layout in pool_layout.h, specification in formats/POOL.md.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "prt/error.h"
+#include "prt/formats/pool_layout.h"
+
+namespace prt::pool {
+
+/// A validated, read-only, memory-mapped pool file. Opening checks everything POOL.md lists
+/// (magic, versions, sizes, bounds, overlaps, checksums, counts, cross-references) and throws
+/// prt::Error with one line "FILE: section NAME: what is wrong" on the first problem found.
+/// Move-only; views stay valid while the PoolFile lives.
+class PoolFile {
+public:
+    static PoolFile open(const std::filesystem::path& path);
+    /// Validates an in-memory image (used by open() and by the fuzz target); `label` names it in errors.
+    static PoolFile from_bytes(std::vector<std::byte> bytes, const std::string& label);
+
+    PoolFile(PoolFile&&) noexcept;
+    PoolFile& operator=(PoolFile&&) noexcept;
+    ~PoolFile();
+
+    const std::string& label() const { return m_label; }
+    const PoolHeader& header() const;
+    std::span<const SectionEntry> sections() const;
+    std::uint64_t file_size() const { return m_size; }
+
+    /// The entry of a section type, or nullptr when absent.
+    const SectionEntry* find(SectionType type) const;
+    bool has(SectionType type) const { return find(type) != nullptr; }
+    std::span<const std::byte> bytes(const SectionEntry& entry) const;
+
+    /// Typed view of a section; an empty span when absent. Throws if the element size differs.
+    template <class T>
+    std::span<const T> array(SectionType type) const {
+        const SectionEntry* e = find(type);
+        if (!e) return {};
+        check_element_size(*e, sizeof(T));
+        return {reinterpret_cast<const T*>(m_data + e->offset), static_cast<std::size_t>(e->count)};
+    }
+    /// Typed view of a section that must be present (throws "FILE: section NAME: missing ...").
+    template <class T>
+    std::span<const T> require(SectionType type, const char* needed_by) const {
+        if (!find(type)) throw_missing(type, needed_by);
+        return array<T>(type);
+    }
+
+    /// The model_info section (every valid pool has one).
+    const ModelInfo& model_info() const;
+    /// The provenance JSON text ("[]" when absent).
+    std::string provenance_json() const;
+
+    /// Throws prt::Error "LABEL: section NAME: what".
+    [[noreturn]] void fail(const SectionEntry* entry, const std::string& what) const;
+
+private:
+    PoolFile() = default;
+    void validate();
+    void check_element_size(const SectionEntry& e, std::size_t expected) const;
+    [[noreturn]] void throw_missing(SectionType type, const char* needed_by) const;
+
+    std::string m_label;
+    const std::byte* m_data = nullptr;
+    std::uint64_t m_size = 0;
+    void* m_map = nullptr;             // mmap base when mapped
+    std::vector<std::byte> m_owned;    // storage when built from bytes
+};
+
+/// Builds a pool in memory and writes it atomically. Sections are either owned buffers or views
+/// into a PoolFile being carried over (which must outlive write()).
+class PoolWriter {
+public:
+    /// Adds (or replaces) a section from raw bytes, copied.
+    void add(SectionType type, std::uint32_t element_size, std::uint64_t count,
+             std::span<const std::byte> payload);
+    /// Adds (or replaces) a section, taking ownership of a vector of elements.
+    template <class T>
+    void add_array(SectionType type, std::vector<T> elements) {
+        const std::uint64_t count = elements.size();
+        auto holder = std::make_shared<std::vector<T>>(std::move(elements));
+        add_shared(type, sizeof(T), count,
+                   {reinterpret_cast<const std::byte*>(holder->data()), holder->size() * sizeof(T)},
+                   std::shared_ptr<const void>(holder, holder.get()));
+    }
+    /// Carries every section of `source` over as a view (no copy), except provenance, which is
+    /// merged by add_provenance().
+    void carry_over(const PoolFile& source);
+    void remove(SectionType type);
+    bool has(SectionType type) const;
+
+    /// Appends {tool, version, parameters, time} to the provenance inherited from carry_over().
+    /// `parameters_json` must be a JSON object text.
+    void add_provenance(const std::string& tool, const std::string& version,
+                        const std::string& parameters_json);
+
+    /// Writes to "PATH.tmp.PID", fsyncs, renames over PATH. On any failure the temporary file is
+    /// removed and PATH is untouched. Returns the bytes written.
+    std::uint64_t write(const std::filesystem::path& path) const;
+    /// The exact bytes write() would produce (for tests and the fuzz corpus).
+    std::vector<std::byte> serialize() const;
+
+private:
+    struct Pending {
+        SectionType type;
+        std::uint32_t element_size;
+        std::uint64_t count;
+        std::span<const std::byte> payload;
+        std::shared_ptr<const void> keep_alive;  // owner of payload, or null for carried views
+    };
+    void add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
+                    std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive);
+    std::vector<Pending> m_sections;
+    std::string m_provenance = "[]";
+};
+
+/// XXH3-64 of a byte range (the pool's checksum).
+std::uint64_t checksum(std::span<const std::byte> bytes);
+
+/// Bytes per input point of a pool: file size / point count (prt-info, benchmarks).
+double bytes_per_point(const PoolFile& pool);
+
+}  // namespace prt::pool

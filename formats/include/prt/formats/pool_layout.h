@@ -1,0 +1,204 @@
+// PointRT pool file: the on-disk (and in-memory) layout. Plain structs only: this header compiles
+// under both g++ and nvcc and is what the runtime core reads section payloads through.
+//
+//   byte 0                                                              (all little-endian)
+//   +----------------------------+
+//   | PoolHeader        64 bytes |  magic "PRTPOOL\0", format version, file size, section table
+//   +----------------------------+
+//   | SectionEntry[n]  64 bytes each, at header.table_offset (= 64)
+//   +----------------------------+
+//   | padding to 256             |
+//   +----------------------------+
+//   | section 0 payload          |  every payload starts on a 256-byte boundary, so a mapped
+//   | padding to 256             |  section can be handed to cudaMemcpy or reinterpret_cast
+//   | section 1 payload          |  without conversion
+//   | ...                        |
+//   +----------------------------+  header.file_size
+//
+// Checksums are XXH3-64 (xxHash): one over the header (bytes 0..55), one over the section table,
+// one per payload. Readers reject a newer major format version and a newer section version.
+// The full specification, with the rules readers enforce, is formats/POOL.md.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace prt::pool {
+
+inline constexpr char k_magic[8] = {'P', 'R', 'T', 'P', 'O', 'O', 'L', '\0'};
+inline constexpr std::uint32_t k_format_major = 1;  ///< bumped on any incompatible change
+inline constexpr std::uint32_t k_format_minor = 0;  ///< bumped when section types are added
+inline constexpr std::uint64_t k_alignment = 256;   ///< payload alignment in bytes
+/// Readers refuse tables longer than this before allocating anything (resource limit).
+inline constexpr std::uint32_t k_max_sections = 4096;
+
+/// Section types. Ranges are reserved per pipeline step so a newcomer can find the owner:
+///   1-15 points (prt-import, prt-synth, prt-radii), 16-31 splat octree (prt-octree, prt-cull),
+///   32-47 ISO (prt-iso), 48-63 MLS kd-tree (prt-mls), 64-79 caustics (prt-photons),
+///   80-95 light map (prt-lightmap), 96-111 textures (prt-texture), 112-127 patches (prt-patches).
+enum class SectionType : std::uint32_t {
+    provenance = 1,    ///< UTF-8 JSON array of {tool, version, parameters, time}; element = 1 byte
+    model_info = 2,    ///< one ModelInfo
+    positions = 3,     ///< Float3 per point, relative to ModelInfo::origin
+    normals = 4,       ///< Float3 per point, unit length
+    colors = 5,        ///< Rgba8 per point
+    radii = 6,         ///< float per point: splat radius (prt-radii, thesis 3.1)
+    material_ids = 7,  ///< uint32 per point: index into the scene's material list
+    octree_info = 16,  ///< one OctreeInfo (prt-octree, thesis 2.2 / 3.2)
+    octree_nodes = 17, ///< uint32 per node: 2-bit type + 30-bit address (OctreeNode helpers)
+    leaf_info = 18,    ///< uint32 per filled leaf + 1: begin index into splats (thesis 3.2)
+    splats = 19,       ///< Splat per stored splat, leaf-contiguous, replicas included
+};
+
+/// Current version of each section type's payload layout; bump on any change.
+inline constexpr std::uint32_t section_version(SectionType type) {
+    switch (type) {
+        case SectionType::provenance: return 1;
+        case SectionType::model_info: return 1;
+        case SectionType::positions: return 1;
+        case SectionType::normals: return 1;
+        case SectionType::colors: return 1;
+        case SectionType::radii: return 1;
+        case SectionType::material_ids: return 1;
+        case SectionType::octree_info: return 1;
+        case SectionType::octree_nodes: return 1;
+        case SectionType::leaf_info: return 1;
+        case SectionType::splats: return 1;
+    }
+    return 0;
+}
+
+/// Human-readable name of a section type ("unknown" for types this build does not know).
+inline constexpr const char* section_name(SectionType type) {
+    switch (type) {
+        case SectionType::provenance: return "provenance";
+        case SectionType::model_info: return "model_info";
+        case SectionType::positions: return "positions";
+        case SectionType::normals: return "normals";
+        case SectionType::colors: return "colors";
+        case SectionType::radii: return "radii";
+        case SectionType::material_ids: return "material_ids";
+        case SectionType::octree_info: return "octree_info";
+        case SectionType::octree_nodes: return "octree_nodes";
+        case SectionType::leaf_info: return "leaf_info";
+        case SectionType::splats: return "splats";
+    }
+    return "unknown";
+}
+
+struct Float3 {
+    float x, y, z;  // 0, 4, 8
+};
+static_assert(sizeof(Float3) == 12);
+
+struct Rgba8 {
+    std::uint8_t r, g, b, a;  // 0, 1, 2, 3
+};
+static_assert(sizeof(Rgba8) == 4);
+
+/// The fixed file header (64 bytes at offset 0).
+struct PoolHeader {
+    char magic[8];                ///< 0: k_magic
+    std::uint32_t format_major;   ///< 8
+    std::uint32_t format_minor;   ///< 12
+    std::uint64_t file_size;      ///< 16: total bytes, checked against the real size
+    std::uint32_t section_count;  ///< 24: entries in the section table
+    std::uint32_t flags;          ///< 28: reserved, 0
+    std::uint64_t table_offset;   ///< 32: byte offset of SectionEntry[section_count]
+    std::uint64_t table_checksum; ///< 40: XXH3-64 of the section table
+    std::uint64_t reserved;       ///< 48: 0
+    std::uint64_t header_checksum;///< 56: XXH3-64 of bytes 0..55
+};
+static_assert(sizeof(PoolHeader) == 64);
+static_assert(offsetof(PoolHeader, header_checksum) == 56);
+
+/// One entry of the section table (64 bytes).
+struct SectionEntry {
+    std::uint32_t type;          ///< 0: SectionType
+    std::uint32_t version;       ///< 4: section_version(type) when written
+    std::uint64_t offset;        ///< 8: payload byte offset, multiple of k_alignment
+    std::uint64_t size;          ///< 16: payload bytes = count * element_size
+    std::uint64_t count;         ///< 24: number of elements
+    std::uint32_t element_size;  ///< 32: bytes per element
+    std::uint32_t flags;         ///< 36: reserved, 0
+    std::uint64_t checksum;      ///< 40: XXH3-64 of the payload
+    char name[16];               ///< 48: section_name(type), NUL-padded (informative)
+};
+static_assert(sizeof(SectionEntry) == 64);
+static_assert(offsetof(SectionEntry, checksum) == 40);
+
+/// Model-wide facts (section model_info, exactly one element). Positions are stored as float
+/// offsets from `origin` (double), so a scan 1e6 units from the world origin keeps full float
+/// precision relative to its own size (DESIGN.md, numerical robustness).
+struct ModelInfo {
+    double origin[3];             ///< 0: world position of the local frame's origin
+    float bounds_min[3];          ///< 24: bounding box of the points, local frame
+    float bounds_max[3];          ///< 36
+    std::uint64_t point_count;    ///< 48: elements in every per-point section
+    std::uint32_t flags;          ///< 56: ModelFlags
+    std::uint32_t reserved;       ///< 60: 0
+};
+static_assert(sizeof(ModelInfo) == 64);
+static_assert(offsetof(ModelInfo, point_count) == 48);
+
+/// ModelInfo::flags bits.
+enum ModelFlags : std::uint32_t {
+    k_model_normals_estimated = 1u << 0,  ///< normals came from PCA, not from the source file
+    k_model_synthetic = 1u << 1,          ///< made by prt-synth: the provenance names the shape
+};
+
+// ---- Splat octree (thesis 2.2, 3.2; written by prt-octree, thinned by prt-cull) ----------------
+//
+// Nodes are 32-bit words: bits 31..30 the type, bits 29..0 the address.
+//   internal     -> address = index of the first of its 8 children in octree_nodes; the 8 children
+//                   are stored together in Morton (space-filling-curve) order, child index
+//                   c = x | (y << 1) | (z << 2) where x,y,z in {0,1} pick the upper half per axis
+//   filled leaf  -> address = index into leaf_info; its splats are splats[leaf_info[a], leaf_info[a+1])
+//   empty leaf   -> address = 0
+// Node 0 is the root; nodes are stored breadth first (level by level).
+
+enum class NodeType : std::uint32_t { internal = 0, filled_leaf = 1, empty_leaf = 2 };
+inline constexpr std::uint32_t k_node_address_bits = 30;
+inline constexpr std::uint32_t k_node_address_max = (1u << k_node_address_bits) - 1;
+
+inline constexpr std::uint32_t make_node(NodeType type, std::uint32_t address) {
+    return (static_cast<std::uint32_t>(type) << k_node_address_bits) | (address & k_node_address_max);
+}
+inline constexpr NodeType node_type(std::uint32_t node) {
+    return static_cast<NodeType>(node >> k_node_address_bits);
+}
+inline constexpr std::uint32_t node_address(std::uint32_t node) { return node & k_node_address_max; }
+
+/// Octree-wide facts (section octree_info, exactly one element). The root is a cube in the
+/// model's local frame (ModelInfo::origin), so traversal can run in normalized [0,1]^3 coordinates.
+struct OctreeInfo {
+    float root_min[3];             ///< 0: root cube corner, local frame
+    float root_size;               ///< 12: root cube edge length
+    std::uint32_t depth;           ///< 16: deepest level (root = level 0)
+    std::uint32_t max_leaf_splats; ///< 20: the X of thesis 3.2 used when building
+    std::uint32_t node_count;      ///< 24: elements of octree_nodes
+    std::uint32_t filled_leaves;   ///< 28: elements of leaf_info minus one
+    std::uint64_t splat_count;     ///< 32: elements of splats (replicas included)
+    std::uint64_t unique_splats;   ///< 40: splats before replication (= points with a radius)
+    std::uint32_t flags;           ///< 48: OctreeFlags
+    std::uint32_t reserved[3];     ///< 52: 0
+};
+static_assert(sizeof(OctreeInfo) == 64);
+static_assert(offsetof(OctreeInfo, splat_count) == 32);
+
+enum OctreeFlags : std::uint32_t {
+    k_octree_replicated = 1u << 0,  ///< splats are replicated into every leaf their disk overlaps
+    k_octree_culled = 1u << 1,      ///< prt-cull removed replicas no probe ray needed (thesis 3.4)
+};
+
+/// One stored splat (32 bytes, thesis 3.2: 8 floats): an oriented disk.
+struct Splat {
+    Float3 position;     ///< 0: centre, local frame
+    float radius;        ///< 12
+    Float3 normal;       ///< 16: unit
+    std::uint32_t point; ///< 28: index of the source point (colors, material_ids)
+};
+static_assert(sizeof(Splat) == 32);
+static_assert(offsetof(Splat, point) == 28);
+
+}  // namespace prt::pool

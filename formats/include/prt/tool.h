@@ -1,0 +1,53 @@
+// PointRT: what every command-line tool shares: the main() boundary (one-line errors, distinct
+// exit codes for usage and runtime errors), --quiet, and progress on stderr.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "prt/error.h"
+
+namespace prt::tool {
+
+/// Options every tool has.
+struct CommonOptions {
+    bool quiet = false;  ///< --quiet: no progress or statistics on stderr
+};
+
+/// Runs a tool: `setup` declares its options on the CLI11 app, `body` does the work once the
+/// command line parsed. Usage errors exit 2 with CLI11's message; prt::Error and other exceptions
+/// print "TOOL: error: MESSAGE" on one line and exit 1. Returns the exit code for main().
+int run(int argc, char** argv, const std::string& tool, const std::string& description,
+        const std::function<void(CLI::App&, CommonOptions&)>& setup,
+        const std::function<void(const CommonOptions&)>& body);
+
+/// Progress of a long step on stderr, at most a few updates per second, silent when quiet.
+class Progress {
+public:
+    Progress(std::string label, std::uint64_t total, bool quiet);
+    ~Progress();
+    /// Reports `done` of `total` (thread-safe enough for one reporting thread).
+    void update(std::uint64_t done);
+    /// Prints the final line with the elapsed time.
+    void finish();
+
+private:
+    std::string m_label;
+    std::uint64_t m_total;
+    bool m_quiet;
+    bool m_finished = false;
+    std::chrono::steady_clock::time_point m_start;
+    std::chrono::steady_clock::time_point m_last;
+};
+
+/// Statistics and notes for the user on stderr unless quiet (printf-style).
+void note(bool quiet, const char* format, ...) __attribute__((format(printf, 2, 3)));
+
+/// Seconds since an arbitrary start, monotonic.
+double now_seconds();
+
+}  // namespace prt::tool

@@ -1,0 +1,292 @@
+// PointRT pool file reader: memory-mapped, every read validated (formats/POOL.md, "Validation").
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "prt/formats/pool.h"
+#include "xxhash_inline.h"
+
+namespace prt::pool {
+
+std::uint64_t checksum(std::span<const std::byte> bytes) { return XXH3_64bits(bytes.data(), bytes.size()); }
+
+namespace {
+
+std::string entry_label(const SectionEntry& e) {
+    const char* name = section_name(static_cast<SectionType>(e.type));
+    if (std::strcmp(name, "unknown") == 0) return "type " + std::to_string(e.type);
+    return name;
+}
+
+/// Element size each known section type must have (0 = variable / unknown type).
+std::uint32_t expected_element_size(SectionType t) {
+    switch (t) {
+        case SectionType::provenance: return 1;
+        case SectionType::model_info: return sizeof(ModelInfo);
+        case SectionType::positions: return sizeof(Float3);
+        case SectionType::normals: return sizeof(Float3);
+        case SectionType::colors: return sizeof(Rgba8);
+        case SectionType::radii: return sizeof(float);
+        case SectionType::material_ids: return sizeof(std::uint32_t);
+        case SectionType::octree_info: return sizeof(OctreeInfo);
+        case SectionType::octree_nodes: return sizeof(std::uint32_t);
+        case SectionType::leaf_info: return sizeof(std::uint32_t);
+        case SectionType::splats: return sizeof(Splat);
+    }
+    return 0;
+}
+
+bool is_per_point(SectionType t) {
+    return t == SectionType::positions || t == SectionType::normals || t == SectionType::colors ||
+           t == SectionType::radii || t == SectionType::material_ids;
+}
+
+}  // namespace
+
+PoolFile::PoolFile(PoolFile&& o) noexcept { *this = std::move(o); }
+
+PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
+    if (this == &o) return *this;
+    if (m_map) ::munmap(m_map, m_size);
+    m_label = std::move(o.m_label);
+    m_data = o.m_data;
+    m_size = o.m_size;
+    m_map = o.m_map;
+    m_owned = std::move(o.m_owned);
+    if (!m_map && !m_owned.empty()) m_data = m_owned.data();
+    o.m_data = nullptr;
+    o.m_size = 0;
+    o.m_map = nullptr;
+    return *this;
+}
+
+PoolFile::~PoolFile() {
+    if (m_map) ::munmap(m_map, m_size);
+}
+
+PoolFile PoolFile::open(const std::filesystem::path& path) {
+    PoolFile pool;
+    pool.m_label = path.string();
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(pool.m_label + ": cannot open: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw Error(pool.m_label + ": not a regular file");
+    }
+    pool.m_size = static_cast<std::uint64_t>(st.st_size);
+    if (pool.m_size < sizeof(PoolHeader)) {
+        ::close(fd);
+        throw Error(pool.m_label + ": header: file is " + std::to_string(pool.m_size) +
+                    " bytes, too short for a pool header (truncated or not a pool file)");
+    }
+    void* map = ::mmap(nullptr, pool.m_size, PROT_READ, MAP_PRIVATE, fd, 0);
+    ::close(fd);
+    if (map == MAP_FAILED) throw Error(pool.m_label + ": cannot map: " + std::strerror(errno));
+    pool.m_map = map;
+    pool.m_data = static_cast<const std::byte*>(map);
+    pool.validate();
+    return pool;
+}
+
+PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label) {
+    PoolFile pool;
+    pool.m_label = label;
+    pool.m_owned = std::move(bytes);
+    pool.m_data = pool.m_owned.data();
+    pool.m_size = pool.m_owned.size();
+    if (pool.m_size < sizeof(PoolHeader))
+        throw Error(label + ": header: " + std::to_string(pool.m_size) +
+                    " bytes, too short for a pool header (truncated or not a pool file)");
+    pool.validate();
+    return pool;
+}
+
+const PoolHeader& PoolFile::header() const { return *reinterpret_cast<const PoolHeader*>(m_data); }
+
+std::span<const SectionEntry> PoolFile::sections() const {
+    const PoolHeader& h = header();
+    return {reinterpret_cast<const SectionEntry*>(m_data + h.table_offset), h.section_count};
+}
+
+const SectionEntry* PoolFile::find(SectionType type) const {
+    for (const SectionEntry& e : sections())
+        if (e.type == static_cast<std::uint32_t>(type)) return &e;
+    return nullptr;
+}
+
+std::span<const std::byte> PoolFile::bytes(const SectionEntry& e) const {
+    return {m_data + e.offset, static_cast<std::size_t>(e.size)};
+}
+
+const ModelInfo& PoolFile::model_info() const {
+    return require<ModelInfo>(SectionType::model_info, "every pool")[0];
+}
+
+std::string PoolFile::provenance_json() const {
+    const SectionEntry* e = find(SectionType::provenance);
+    if (!e) return "[]";
+    const auto b = bytes(*e);
+    return {reinterpret_cast<const char*>(b.data()), b.size()};
+}
+
+void PoolFile::fail(const SectionEntry* entry, const std::string& what) const {
+    if (entry) throw Error(m_label + ": section " + entry_label(*entry) + ": " + what);
+    throw Error(m_label + ": " + what);
+}
+
+void PoolFile::check_element_size(const SectionEntry& e, std::size_t expected) const {
+    if (e.element_size != expected)
+        fail(&e, "element size " + std::to_string(e.element_size) + ", expected " + std::to_string(expected));
+}
+
+void PoolFile::throw_missing(SectionType type, const char* needed_by) const {
+    throw Error(m_label + ": section " + section_name(type) + ": missing (needed by " + needed_by + ")");
+}
+
+void PoolFile::validate() {
+    // -- header ------------------------------------------------------------------------------
+    const PoolHeader& h = header();
+    if (std::memcmp(h.magic, k_magic, sizeof k_magic) != 0)
+        fail(nullptr, "header: wrong magic (not a PointRT pool file)");
+    if (checksum({m_data, offsetof(PoolHeader, header_checksum)}) != h.header_checksum)
+        fail(nullptr, "header: bad checksum (file corrupted)");
+    if (h.format_major > k_format_major)
+        fail(nullptr, "header: format version " + std::to_string(h.format_major) + "." +
+                          std::to_string(h.format_minor) + " is newer than this build reads (" +
+                          std::to_string(k_format_major) + "." + std::to_string(k_format_minor) +
+                          "): update PointRT");
+    if (h.format_major < 1) fail(nullptr, "header: format version 0 is invalid");
+    if (h.file_size != m_size)
+        fail(nullptr, "header: file is " + std::to_string(m_size) + " bytes but the header says " +
+                          std::to_string(h.file_size) + (m_size < h.file_size ? " (truncated)" : ""));
+    if (h.section_count > k_max_sections)
+        fail(nullptr, "header: " + std::to_string(h.section_count) + " sections exceeds the limit of " +
+                          std::to_string(k_max_sections));
+    const std::uint64_t table_bytes = std::uint64_t(h.section_count) * sizeof(SectionEntry);
+    if (h.table_offset < sizeof(PoolHeader) || h.table_offset % alignof(SectionEntry) != 0 ||
+        h.table_offset > m_size || table_bytes > m_size - h.table_offset)
+        fail(nullptr, "header: section table out of bounds");
+    if (checksum({m_data + h.table_offset, static_cast<std::size_t>(table_bytes)}) != h.table_checksum)
+        fail(nullptr, "section table: bad checksum (file corrupted)");
+
+    // -- each section: bounds, alignment, sizes, version, checksum ----------------------------
+    std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
+    const auto table = sections();
+    for (std::size_t i = 0; i < table.size(); ++i) {
+        const SectionEntry& e = table[i];
+        const auto type = static_cast<SectionType>(e.type);
+        for (std::size_t j = 0; j < i; ++j)
+            if (table[j].type == e.type) fail(&e, "appears twice");
+        if (e.offset % k_alignment != 0) fail(&e, "payload not 256-byte aligned");
+        if (e.offset > m_size || e.size > m_size - e.offset)
+            fail(&e, "payload [" + std::to_string(e.offset) + ", +" + std::to_string(e.size) +
+                         ") out of bounds of the " + std::to_string(m_size) + "-byte file");
+        if (e.element_size == 0) fail(&e, "element size 0");
+        if (e.count > e.size / e.element_size || e.count * e.element_size != e.size)
+            fail(&e, "count " + std::to_string(e.count) + " x element size " + std::to_string(e.element_size) +
+                         " disagrees with size " + std::to_string(e.size));
+        const std::uint32_t known = section_version(type);
+        if (known != 0) {
+            if (e.version > known)
+                fail(&e, "version " + std::to_string(e.version) + " is newer than this build reads (" +
+                             std::to_string(known) + "): update PointRT");
+            if (e.version == 0) fail(&e, "version 0 is invalid");
+            const std::uint32_t size = expected_element_size(type);
+            if (size && e.element_size != size)
+                fail(&e, "element size " + std::to_string(e.element_size) + ", expected " + std::to_string(size));
+        }
+        if (checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
+        ranges.emplace_back(e.offset, e.size);
+    }
+    std::sort(ranges.begin(), ranges.end());
+    const std::uint64_t table_end = h.table_offset + table_bytes;
+    for (std::size_t i = 0; i < ranges.size(); ++i) {
+        if (ranges[i].second && ranges[i].first < table_end) fail(nullptr, "a section overlaps the header or table");
+        if (i + 1 < ranges.size() && ranges[i].second && ranges[i].first + ranges[i].second > ranges[i + 1].first)
+            fail(nullptr, "two sections overlap");
+    }
+
+    // -- counts that must agree ---------------------------------------------------------------
+    const SectionEntry* info_entry = find(SectionType::model_info);
+    if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
+    if (info_entry->count != 1) fail(info_entry, "must hold exactly one element");
+    const ModelInfo& info = model_info();
+    if (!find(SectionType::positions)) fail(nullptr, "section positions: missing (every pool has one)");
+    for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(info.origin[a]) || !std::isfinite(info.bounds_min[a]) ||
+            !std::isfinite(info.bounds_max[a]) || info.bounds_min[a] > info.bounds_max[a])
+            fail(info_entry, "origin or bounds not finite or inverted");
+    }
+    for (const SectionEntry& e : table)
+        if (is_per_point(static_cast<SectionType>(e.type)) && e.count != info.point_count)
+            fail(&e, std::to_string(e.count) + " elements but model_info says " +
+                         std::to_string(info.point_count) + " points");
+
+    // -- cross-references ---------------------------------------------------------------------
+    const SectionEntry* oi = find(SectionType::octree_info);
+    const SectionEntry* on = find(SectionType::octree_nodes);
+    const SectionEntry* li = find(SectionType::leaf_info);
+    const SectionEntry* sp = find(SectionType::splats);
+    const int octree_parts = (oi != nullptr) + (on != nullptr) + (li != nullptr) + (sp != nullptr);
+    if (octree_parts != 0 && octree_parts != 4)
+        fail(oi ? oi : on ? on : li ? li : sp, "the octree needs all of octree_info, octree_nodes, leaf_info, splats");
+    if (octree_parts == 4) {
+        if (oi->count != 1) fail(oi, "must hold exactly one element");
+        const OctreeInfo& o = array<OctreeInfo>(SectionType::octree_info)[0];
+        if (o.node_count != on->count) fail(on, std::to_string(on->count) + " nodes but octree_info says " + std::to_string(o.node_count));
+        if (std::uint64_t(o.filled_leaves) + 1 != li->count)
+            fail(li, std::to_string(li->count) + " entries but octree_info says " + std::to_string(o.filled_leaves) + " filled leaves (+1)");
+        if (o.splat_count != sp->count) fail(sp, std::to_string(sp->count) + " splats but octree_info says " + std::to_string(o.splat_count));
+        if (!(o.root_size > 0) || !std::isfinite(o.root_size)) fail(oi, "root size not positive and finite");
+        if (o.node_count == 0) fail(on, "empty node pool (no root)");
+        const auto nodes = array<std::uint32_t>(SectionType::octree_nodes);
+        const auto leaves = array<std::uint32_t>(SectionType::leaf_info);
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+            const std::uint32_t n = nodes[i];
+            const std::uint32_t a = node_address(n);
+            switch (node_type(n)) {
+                case NodeType::internal:
+                    // children come after their parent (breadth first) and all 8 are in range
+                    if (a <= i || std::uint64_t(a) + 8 > nodes.size())
+                        fail(on, "node " + std::to_string(i) + ": child address " + std::to_string(a) + " out of range");
+                    break;
+                case NodeType::filled_leaf:
+                    if (a >= o.filled_leaves)
+                        fail(on, "node " + std::to_string(i) + ": leaf address " + std::to_string(a) + " out of range");
+                    break;
+                case NodeType::empty_leaf: break;
+                default: fail(on, "node " + std::to_string(i) + ": invalid node type 3");
+            }
+        }
+        for (std::size_t i = 0; i + 1 < leaves.size(); ++i)
+            if (leaves[i] > leaves[i + 1]) fail(li, "leaf " + std::to_string(i) + ": begin after end");
+        if (!leaves.empty() && (leaves.front() != 0 || leaves.back() != sp->count))
+            fail(li, "leaf ranges do not cover the splats exactly");
+        const auto splats = array<Splat>(SectionType::splats);
+        const bool has_points = info.point_count > 0;
+        for (std::size_t i = 0; i < splats.size(); ++i)
+            if (has_points && splats[i].point >= info.point_count)
+                fail(sp, "splat " + std::to_string(i) + ": point index " + std::to_string(splats[i].point) + " out of range");
+    }
+    const SectionEntry* prov = find(SectionType::provenance);
+    if (prov && prov->size > 0) {
+        const auto b = bytes(*prov);
+        if (static_cast<char>(b[0]) != '[') fail(prov, "not a JSON array");
+    }
+}
+
+double bytes_per_point(const PoolFile& pool) {
+    const std::uint64_t n = pool.model_info().point_count;
+    return n ? static_cast<double>(pool.file_size()) / static_cast<double>(n) : 0.0;
+}
+
+}  // namespace prt::pool

@@ -1,0 +1,140 @@
+#include "point_cloud.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numeric>
+
+namespace prt::pre {
+
+std::string CleanReport::summary() const {
+    char buf[256];
+    std::snprintf(buf, sizeof buf,
+                  "%llu points read, %llu kept; dropped %llu non-finite, %llu zero normals, %llu duplicates",
+                  static_cast<unsigned long long>(input), static_cast<unsigned long long>(kept),
+                  static_cast<unsigned long long>(non_finite), static_cast<unsigned long long>(zero_normal),
+                  static_cast<unsigned long long>(duplicates));
+    return buf;
+}
+
+CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
+    CleanReport report;
+    const std::size_t n = cloud.size();
+    report.input = n;
+    std::vector<std::uint8_t> keep(n, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto& p = cloud.positions[i];
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+            keep[i] = 0;
+            ++report.non_finite;
+            continue;
+        }
+        if (cloud.has_normals()) {
+            auto& nn = cloud.normals[i];
+            const double len = std::sqrt(double(nn.x) * nn.x + double(nn.y) * nn.y + double(nn.z) * nn.z);
+            if (!std::isfinite(len) || len < 1e-20) {
+                keep[i] = 0;
+                ++report.zero_normal;
+                continue;
+            }
+            nn = {float(nn.x / len), float(nn.y / len), float(nn.z / len)};
+        }
+    }
+    if (drop_duplicates && n > 1) {
+        std::vector<std::uint32_t> order;
+        order.reserve(n);
+        for (std::size_t i = 0; i < n; ++i)
+            if (keep[i]) order.push_back(static_cast<std::uint32_t>(i));
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return cloud.positions[a] < cloud.positions[b];
+        });
+        for (std::size_t k = 1; k < order.size(); ++k) {
+            if (cloud.positions[order[k]] == cloud.positions[order[k - 1]]) {
+                // stable sort keeps equal positions in input order: drop the later one
+                keep[order[k]] = 0;
+                ++report.duplicates;
+            }
+        }
+    }
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!keep[i]) continue;
+        cloud.positions[out] = cloud.positions[i];
+        if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
+        if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
+        if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
+        ++out;
+    }
+    cloud.positions.resize(out);
+    if (cloud.has_normals()) cloud.normals.resize(out);
+    if (cloud.has_colors()) cloud.colors.resize(out);
+    if (cloud.has_radii()) cloud.radii.resize(out);
+    report.kept = out;
+    return report;
+}
+
+std::array<std::array<double, 3>, 2> bounds(const PointCloud& cloud) {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::array<std::array<double, 3>, 2> b{{{inf, inf, inf}, {-inf, -inf, -inf}}};
+    for (const auto& p : cloud.positions)
+        for (int a = 0; a < 3; ++a) {
+            b[0][a] = std::min(b[0][a], p[a]);
+            b[1][a] = std::max(b[1][a], p[a]);
+        }
+    return b;
+}
+
+void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
+    if (cloud.size() == 0) throw Error("no points to write (every input point was dropped or the input is empty)");
+    const auto b = bounds(cloud);
+    pool::ModelInfo info{};
+    for (int a = 0; a < 3; ++a) info.origin[a] = 0.5 * (b[0][a] + b[1][a]);
+    std::vector<pool::Float3> local(cloud.size());
+    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                   std::numeric_limits<float>::max()};
+    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const float v[3] = {float(cloud.positions[i][0] - info.origin[0]),
+                            float(cloud.positions[i][1] - info.origin[1]),
+                            float(cloud.positions[i][2] - info.origin[2])};
+        local[i] = {v[0], v[1], v[2]};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], v[a]);
+            hi[a] = std::max(hi[a], v[a]);
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        info.bounds_min[a] = lo[a];
+        info.bounds_max[a] = hi[a];
+    }
+    info.point_count = cloud.size();
+    info.flags = cloud.flags;
+    writer.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
+    writer.add_array(pool::SectionType::positions, std::move(local));
+    if (cloud.has_normals()) writer.add_array(pool::SectionType::normals, cloud.normals);
+    else writer.remove(pool::SectionType::normals);
+    if (cloud.has_colors()) writer.add_array(pool::SectionType::colors, cloud.colors);
+    else writer.remove(pool::SectionType::colors);
+    if (cloud.has_radii()) writer.add_array(pool::SectionType::radii, cloud.radii);
+    else writer.remove(pool::SectionType::radii);
+}
+
+PointCloud read_point_sections(const pool::PoolFile& pool) {
+    PointCloud cloud;
+    const pool::ModelInfo& info = pool.model_info();
+    const auto pos = pool.require<pool::Float3>(pool::SectionType::positions, "reading points");
+    cloud.positions.resize(pos.size());
+    for (std::size_t i = 0; i < pos.size(); ++i)
+        cloud.positions[i] = {info.origin[0] + pos[i].x, info.origin[1] + pos[i].y, info.origin[2] + pos[i].z};
+    const auto nrm = pool.array<pool::Float3>(pool::SectionType::normals);
+    cloud.normals.assign(nrm.begin(), nrm.end());
+    const auto col = pool.array<pool::Rgba8>(pool::SectionType::colors);
+    cloud.colors.assign(col.begin(), col.end());
+    const auto rad = pool.array<float>(pool::SectionType::radii);
+    cloud.radii.assign(rad.begin(), rad.end());
+    cloud.flags = info.flags;
+    return cloud;
+}
+
+}  // namespace prt::pre
