@@ -15,6 +15,10 @@ int run(int argc, char** argv, const std::string& tool, const std::string& descr
     CommonOptions common;
     app.add_flag("-q,--quiet", common.quiet, "No progress or statistics on stderr");
     app.set_version_flag("--version", std::string(PRT_VERSION));
+    // Usage errors on one line, named like runtime errors: "TOOL: error: MESSAGE (see --help)".
+    app.failure_message([tool](const CLI::App*, const CLI::Error& e) {
+        return tool + ": error: " + e.what() + " (see --help)\n";
+    });
     try {
         setup(app, common);
         app.parse(argc, argv);
