@@ -40,6 +40,7 @@ std::uint32_t expected_element_size(SectionType t) {
         case SectionType::octree_nodes: return sizeof(std::uint32_t);
         case SectionType::leaf_info: return sizeof(std::uint32_t);
         case SectionType::splats: return sizeof(Splat);
+        default: return 0;  // checked by the layout header that owns the type
     }
     return 0;
 }
@@ -220,7 +221,8 @@ void PoolFile::validate() {
     if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
     if (info_entry->count != 1) fail(info_entry, "must hold exactly one element");
     const ModelInfo& info = model_info();
-    if (!find(SectionType::positions)) fail(nullptr, "section positions: missing (every pool has one)");
+    if (info.point_count > 0 && !find(SectionType::positions))
+        fail(nullptr, "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
     for (int a = 0; a < 3; ++a) {
         if (!std::isfinite(info.origin[a]) || !std::isfinite(info.bounds_min[a]) ||
             !std::isfinite(info.bounds_max[a]) || info.bounds_min[a] > info.bounds_max[a])

@@ -101,7 +101,8 @@ std::vector<std::byte> PoolWriter::serialize() const {
         e.count = p.count;
         e.element_size = p.element_size;
         e.checksum = checksum(p.payload);
-        std::strncpy(e.name, section_name(p.type), sizeof e.name - 1);
+        const char* name = section_name(p.type);  // informative; long names are cut to 15 bytes
+        std::memcpy(e.name, name, std::min(std::strlen(name), sizeof e.name - 1));
         offset = align_up(offset + e.size);
     }
     header.file_size = offset;

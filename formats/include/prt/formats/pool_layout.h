@@ -48,6 +48,16 @@ enum class SectionType : std::uint32_t {
     octree_nodes = 17, ///< uint32 per node: 2-bit type + 30-bit address (OctreeNode helpers)
     leaf_info = 18,    ///< uint32 per filled leaf + 1: begin index into splats (thesis 3.2)
     splats = 19,       ///< Splat per stored splat, leaf-contiguous, replicas included
+    // 48-63: exact MLS kd-tree (prt-mls, Wald-Seidel 2005); layouts in mls_layout.h
+    mls_info = 48,     ///< one MlsInfo
+    mls_nodes = 49,    ///< MlsNode per kd-tree node
+    mls_refs = 50,     ///< uint32 splat indices referenced by the kd-tree leaves
+    mls_splats = 51,   ///< MlsSplat per unique splat
+    // 112-127: Bezier patches (prt-patches, seed 002); layouts in patch_layout.h
+    patch_info = 112,           ///< one PatchInfo
+    patch_control_points = 113, ///< 16 control points per patch
+    patch_bvh = 114,            ///< BVH nodes over patch bounding boxes, depth first with skips
+    patch_subpatch_boxes = 115, ///< fixed-depth subpatch tree boxes per patch
 };
 
 /// Current version of each section type's payload layout; bump on any change.
@@ -64,6 +74,14 @@ inline constexpr std::uint32_t section_version(SectionType type) {
         case SectionType::octree_nodes: return 1;
         case SectionType::leaf_info: return 1;
         case SectionType::splats: return 1;
+        case SectionType::mls_info:
+        case SectionType::mls_nodes:
+        case SectionType::mls_refs:
+        case SectionType::mls_splats:
+        case SectionType::patch_info:
+        case SectionType::patch_control_points:
+        case SectionType::patch_bvh:
+        case SectionType::patch_subpatch_boxes: return 1;
     }
     return 0;
 }
@@ -82,6 +100,14 @@ inline constexpr const char* section_name(SectionType type) {
         case SectionType::octree_nodes: return "octree_nodes";
         case SectionType::leaf_info: return "leaf_info";
         case SectionType::splats: return "splats";
+        case SectionType::mls_info: return "mls_info";
+        case SectionType::mls_nodes: return "mls_nodes";
+        case SectionType::mls_refs: return "mls_refs";
+        case SectionType::mls_splats: return "mls_splats";
+        case SectionType::patch_info: return "patch_info";
+        case SectionType::patch_control_points: return "patch_control_points";
+        case SectionType::patch_bvh: return "patch_bvh";
+        case SectionType::patch_subpatch_boxes: return "patch_subpatch_boxes";
     }
     return "unknown";
 }
