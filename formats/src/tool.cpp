@@ -46,7 +46,7 @@ Progress::Progress(std::string label, std::uint64_t total, bool quiet)
       m_start(std::chrono::steady_clock::now()), m_last(m_start) {}
 
 Progress::~Progress() {
-    if (!m_finished && !m_quiet) std::fputc('\n', stderr);
+    if (!m_finished && m_printed) std::fputc('\n', stderr);
 }
 
 void Progress::update(std::uint64_t done) {
@@ -56,6 +56,7 @@ void Progress::update(std::uint64_t done) {
     m_last = now;
     const double pct = m_total ? 100.0 * static_cast<double>(done) / static_cast<double>(m_total) : 100.0;
     std::fprintf(stderr, "\r%s: %5.1f%%", m_label.c_str(), pct);
+    m_printed = true;
     std::fflush(stderr);
 }
 

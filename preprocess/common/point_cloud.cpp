@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -42,19 +43,41 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
         }
     }
     if (drop_duplicates && n > 1) {
-        std::vector<std::uint32_t> order;
-        order.reserve(n);
-        for (std::size_t i = 0; i < n; ++i)
-            if (keep[i]) order.push_back(static_cast<std::uint32_t>(i));
-        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-            return cloud.positions[a] < cloud.positions[b];
-        });
-        for (std::size_t k = 1; k < order.size(); ++k) {
-            if (cloud.positions[order[k]] == cloud.positions[order[k - 1]]) {
-                // stable sort keeps equal positions in input order: drop the later one
-                keep[order[k]] = 0;
-                ++report.duplicates;
+        // Exact duplicates: sort (hash of the coordinate bits, index) pairs, then compare real
+        // coordinates inside runs of equal hashes. Keeps the first occurrence in input order.
+        struct Key {
+            std::uint64_t hash;
+            std::uint32_t index;
+        };
+        std::vector<Key> keys;
+        keys.reserve(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!keep[i]) continue;
+            std::uint64_t h = 0x9E3779B97F4A7C15ull;
+            for (int a = 0; a < 3; ++a) {
+                const double v = cloud.positions[i][a] == 0.0 ? 0.0 : cloud.positions[i][a];  // -0 == +0
+                std::uint64_t bits;
+                std::memcpy(&bits, &v, sizeof bits);
+                h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
+                h ^= h >> 31;
             }
+            keys.push_back({h, static_cast<std::uint32_t>(i)});
+        }
+        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+            return a.hash != b.hash ? a.hash < b.hash : a.index < b.index;
+        });
+        for (std::size_t run = 0; run < keys.size();) {
+            std::size_t end = run + 1;
+            while (end < keys.size() && keys[end].hash == keys[run].hash) ++end;
+            for (std::size_t a = run; a < end; ++a) {
+                if (!keep[keys[a].index]) continue;
+                for (std::size_t b = a + 1; b < end; ++b)
+                    if (keep[keys[b].index] && cloud.positions[keys[b].index] == cloud.positions[keys[a].index]) {
+                        keep[keys[b].index] = 0;
+                        ++report.duplicates;
+                    }
+            }
+            run = end;
         }
     }
     std::size_t out = 0;

@@ -40,6 +40,7 @@ private:
     std::uint64_t m_total;
     bool m_quiet;
     bool m_finished = false;
+    bool m_printed = false;  ///< a partial line is on stderr
     std::chrono::steady_clock::time_point m_start;
     std::chrono::steady_clock::time_point m_last;
 };

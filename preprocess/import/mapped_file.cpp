@@ -1,0 +1,74 @@
+#include "mapped_file.h"
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+#include "prt/error.h"
+
+namespace prt::pre::import {
+
+MappedFile MappedFile::open(const std::filesystem::path& path) {
+    MappedFile file;
+    file.m_label = path.string();
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(file.m_label + ": cannot open: " + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0) {
+        const int err = errno;
+        ::close(fd);
+        throw Error(file.m_label + ": cannot stat: " + std::strerror(err));
+    }
+    if (S_ISDIR(st.st_mode)) {
+        ::close(fd);
+        throw Error(file.m_label + ": is a directory, not a file");
+    }
+    file.m_size = static_cast<std::size_t>(st.st_size);
+    if (file.m_size > 0) {
+        void* map = ::mmap(nullptr, file.m_size, PROT_READ, MAP_PRIVATE, fd, 0);
+        if (map == MAP_FAILED) {
+            const int err = errno;
+            ::close(fd);
+            throw Error(file.m_label + ": cannot map: " + std::strerror(err));
+        }
+        // The readers walk the file front to back once: ask for aggressive read-ahead.
+        // (advice values are not flags: two calls).
+        ::madvise(map, file.m_size, MADV_SEQUENTIAL);
+        ::madvise(map, file.m_size, MADV_WILLNEED);
+        file.m_data = static_cast<const char*>(map);
+    }
+    ::close(fd);
+    return file;
+}
+
+MappedFile::MappedFile(MappedFile&& other) noexcept
+    : m_data(std::exchange(other.m_data, nullptr)),
+      m_size(std::exchange(other.m_size, 0)),
+      m_label(std::move(other.m_label)) {}
+
+MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
+    if (this != &other) {
+        release();
+        m_data = std::exchange(other.m_data, nullptr);
+        m_size = std::exchange(other.m_size, 0);
+        m_label = std::move(other.m_label);
+    }
+    return *this;
+}
+
+MappedFile::~MappedFile() {
+    release();
+}
+
+void MappedFile::release() {
+    if (m_data) ::munmap(const_cast<char*>(m_data), m_size);
+    m_data = nullptr;
+    m_size = 0;
+}
+
+}  // namespace prt::pre::import

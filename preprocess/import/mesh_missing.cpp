@@ -1,0 +1,18 @@
+// Built instead of mesh_openmesh.cpp when OpenMesh is absent (PRT_WITH_OPENMESH=OFF or not found).
+#include "mesh.h"
+#include "prt/error.h"
+
+namespace prt::pre::import {
+
+bool have_openmesh() {
+    return false;
+}
+
+MeshData read_mesh(const std::filesystem::path& path, Report&, bool) {
+    throw Error(path.string() +
+                ": mesh import needs OpenMesh, and this build of prt-import has no OpenMesh "
+                "(rebuild with PRT_WITH_OPENMESH=ON, or import a PLY's vertices with "
+                "--mesh-mode points)");
+}
+
+}  // namespace prt::pre::import

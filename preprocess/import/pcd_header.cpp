@@ -1,0 +1,171 @@
+#include "pcd_header.h"
+
+#include <charconv>
+#include <cstring>
+
+#include "mapped_file.h"
+#include "prt/error.h"
+#include "quote.h"
+
+namespace prt::pre::import {
+
+namespace {
+
+std::vector<std::string_view> words_of(std::string_view line) {
+    std::vector<std::string_view> out;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+        const std::size_t b = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+        if (i > b) out.push_back(line.substr(b, i - b));
+    }
+    return out;
+}
+
+bool to_u64(std::string_view s, std::uint64_t& v) {
+    const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    return ec == std::errc() && p == s.data() + s.size();
+}
+
+}  // namespace
+
+PcdHeader check_pcd(const MappedFile& file, Report& report) {
+    const std::string& label = file.label();
+    const std::string_view bytes = file.view();
+    if (bytes.empty()) throw Error(label + ": file is empty");
+    constexpr std::size_t k_max_header = 1u << 16;  // a real PCD header is a few hundred bytes
+    PcdHeader h;
+    bool have_width = false, have_height = false, have_points = false, have_count = false;
+    std::size_t pos = 0, line_no = 0;
+    auto fail = [&](const std::string& what) -> void {
+        throw Error(label + ": not a valid PCD file: line " + std::to_string(line_no) + ": " + what);
+    };
+    while (h.data.empty()) {
+        if (pos >= bytes.size() || pos > k_max_header)
+            throw Error(label + ": not a valid PCD file (no DATA line in the header)");
+        const std::size_t eol = bytes.find('\n', pos);
+        const std::string_view line =
+            bytes.substr(pos, (eol == std::string_view::npos ? bytes.size() : eol) - pos);
+        pos = eol == std::string_view::npos ? bytes.size() : eol + 1;
+        ++line_no;
+        if (line.find('\0') != std::string_view::npos) fail("binary bytes in the header");
+        const auto w = words_of(line);
+        if (w.empty() || w[0][0] == '#') continue;
+        const std::string_view key = w[0];
+        auto unsigned_list = [&](std::vector<std::uint32_t>& out) {
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                std::uint64_t v = 0;
+                if (!to_u64(w[i], v) || v > 0xFFFFFFFFu) fail(quoted(w[i], 20) + " is not a count");
+                out.push_back(static_cast<std::uint32_t>(v));
+            }
+        };
+        auto single = [&](std::uint64_t& out, bool& seen) {
+            if (w.size() != 2 || !to_u64(w[1], out)) fail(std::string(key) + " needs one unsigned number");
+            seen = true;
+        };
+        if (key == "VERSION") {
+        } else if (key == "FIELDS" || key == "COLUMNS") {
+            for (std::size_t i = 1; i < w.size(); ++i) h.fields.emplace_back(w[i]);
+        } else if (key == "SIZE") {
+            unsigned_list(h.size);
+        } else if (key == "TYPE") {
+            for (std::size_t i = 1; i < w.size(); ++i) {
+                if (w[i].size() != 1 || std::strchr("IUF", w[i][0]) == nullptr)
+                    fail("TYPE " + quoted(w[i], 20) + " is not I, U or F");
+                h.type.push_back(w[i][0]);
+            }
+        } else if (key == "COUNT") {
+            unsigned_list(h.count);
+            have_count = true;
+        } else if (key == "WIDTH") {
+            single(h.width, have_width);
+        } else if (key == "HEIGHT") {
+            single(h.height, have_height);
+        } else if (key == "POINTS") {
+            single(h.points, have_points);
+        } else if (key == "VIEWPOINT") {
+        } else if (key == "DATA") {
+            if (w.size() != 2 || (w[1] != "ascii" && w[1] != "binary" && w[1] != "binary_compressed"))
+                fail("DATA must be ascii, binary or binary_compressed");
+            h.data = std::string(w[1]);
+        } else {
+            fail("unknown header keyword " + quoted(key));
+        }
+    }
+    h.data_offset = pos;
+    if (h.fields.empty()) throw Error(label + ": not a valid PCD file (no FIELDS line)");
+    if (!have_count) h.count.assign(h.fields.size(), 1);
+    if (h.size.size() != h.fields.size() || h.type.size() != h.fields.size() ||
+        h.count.size() != h.fields.size())
+        throw Error(label + ": not a valid PCD file (FIELDS, SIZE, TYPE and COUNT list " +
+                    std::to_string(h.fields.size()) + ", " + std::to_string(h.size.size()) + ", " +
+                    std::to_string(h.type.size()) + " and " + std::to_string(h.count.size()) + " entries)");
+    for (std::size_t i = 0; i < h.fields.size(); ++i) {
+        const std::uint32_t s = h.size[i];
+        if (s != 1 && s != 2 && s != 4 && s != 8)
+            throw Error(label + ": not a valid PCD file (field " + h.fields[i] + " has SIZE " +
+                        std::to_string(s) + ")");
+        if (h.type[i] == 'F' && s != 4 && s != 8)
+            throw Error(label + ": not a valid PCD file (float field " + h.fields[i] + " has SIZE " +
+                        std::to_string(s) + ")");
+        h.point_step += static_cast<std::uint64_t>(s) * h.count[i];
+    }
+    if (!have_width) throw Error(label + ": not a valid PCD file (no WIDTH line)");
+    if (!have_height) h.height = 1;
+    if (!have_points) h.points = h.width * h.height;
+    if (h.width == 0 || h.height == 0 || h.width > (1ull << 32) || h.height > (1ull << 32) ||
+        h.points != h.width * h.height)
+        throw Error(label + ": not a valid PCD file (POINTS " + std::to_string(h.points) + " is not WIDTH " +
+                    std::to_string(h.width) + " x HEIGHT " + std::to_string(h.height) + ")");
+
+    const std::uint64_t available = bytes.size() - h.data_offset;
+    if (h.data == "binary") {
+        const std::uint64_t need = h.points * h.point_step;
+        if (h.point_step == 0 || available < need)
+            throw Error(label + ": header declares " + std::to_string(h.points) +
+                        " points but the data ends after " +
+                        std::to_string(h.point_step ? available / h.point_step : 0));
+        if (available > need)
+            report.notes.push_back(
+                label + ": warning: " + std::to_string(available - need) +
+                " bytes after the declared points (the header may declare fewer points than the "
+                "file holds; not read)");
+    } else if (h.data == "binary_compressed") {
+        if (available < 8) throw Error(label + ": binary_compressed data is truncated (no size words)");
+        std::uint32_t compressed = 0, uncompressed = 0;
+        std::memcpy(&compressed, bytes.data() + h.data_offset, 4);
+        std::memcpy(&uncompressed, bytes.data() + h.data_offset + 4, 4);
+        if (uncompressed != h.points * h.point_step)
+            throw Error(label + ": binary_compressed data unpacks to " + std::to_string(uncompressed) +
+                        " bytes but the header declares " + std::to_string(h.points) + " points of " +
+                        std::to_string(h.point_step) + " bytes");
+        // LZF cannot compress better than about 1:130 (a 3-byte back-reference covers at most
+        // 264 bytes): a larger claim is a lie, and PCL would allocate it before finding out.
+        if (uncompressed > 150ull * compressed + 4096)
+            throw Error(label + ": binary_compressed data claims " + std::to_string(uncompressed) +
+                        " bytes from " + std::to_string(compressed) + " compressed bytes");
+        if (available - 8 < compressed)
+            throw Error(label + ": binary_compressed data is truncated (" + std::to_string(available - 8) +
+                        " of " + std::to_string(compressed) + " bytes)");
+    } else {
+        // ascii: one point per non-blank line.
+        std::uint64_t lines = 0;
+        std::size_t p = h.data_offset;
+        while (p < bytes.size()) {
+            std::size_t e = bytes.find('\n', p);
+            if (e == std::string_view::npos) e = bytes.size();
+            if (bytes.substr(p, e - p).find_first_not_of(" \t\r") != std::string_view::npos) ++lines;
+            p = e + 1;
+        }
+        if (lines < h.points)
+            throw Error(label + ": header declares " + std::to_string(h.points) +
+                        " points but the data has " + std::to_string(lines) + " lines");
+        if (lines > h.points)
+            report.notes.push_back(label + ": warning: " + std::to_string(lines - h.points) +
+                                   " lines after the declared points (not read)");
+    }
+    return h;
+}
+
+}  // namespace prt::pre::import

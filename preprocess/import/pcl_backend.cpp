@@ -1,0 +1,299 @@
+// The one translation unit that includes PCL (its headers are heavy): PCD reading and PCA normals.
+#include "pcl_backend.h"
+
+#include <pcl/PCLPointCloud2.h>
+#include <pcl/console/print.h>
+#include <pcl/features/normal_3d_omp.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_types.h>
+#include <pcl/search/kdtree.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+
+#include "mapped_file.h"
+#include "pcd_header.h"
+#include "progress.h"
+#include "prt/error.h"
+
+namespace prt::pre::import {
+
+namespace {
+
+/// PCL prints its own errors on stderr; we report one line of our own instead.
+void silence_pcl() {
+    pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
+}
+
+double load_field(const std::uint8_t* p, std::uint8_t datatype) {
+    switch (datatype) {
+        case pcl::PCLPointField::INT8: {
+            std::int8_t v;
+            std::memcpy(&v, p, 1);
+            return v;
+        }
+        case pcl::PCLPointField::UINT8:
+            return *p;
+        case pcl::PCLPointField::INT16: {
+            std::int16_t v;
+            std::memcpy(&v, p, 2);
+            return v;
+        }
+        case pcl::PCLPointField::UINT16: {
+            std::uint16_t v;
+            std::memcpy(&v, p, 2);
+            return v;
+        }
+        case pcl::PCLPointField::INT32: {
+            std::int32_t v;
+            std::memcpy(&v, p, 4);
+            return v;
+        }
+        case pcl::PCLPointField::UINT32: {
+            std::uint32_t v;
+            std::memcpy(&v, p, 4);
+            return v;
+        }
+        case pcl::PCLPointField::INT64: {
+            std::int64_t v;
+            std::memcpy(&v, p, 8);
+            return static_cast<double>(v);
+        }
+        case pcl::PCLPointField::UINT64: {
+            std::uint64_t v;
+            std::memcpy(&v, p, 8);
+            return static_cast<double>(v);
+        }
+        case pcl::PCLPointField::FLOAT32: {
+            float v;
+            std::memcpy(&v, p, 4);
+            return v;
+        }
+        case pcl::PCLPointField::FLOAT64: {
+            double v;
+            std::memcpy(&v, p, 8);
+            return v;
+        }
+        default:
+            return std::numeric_limits<double>::quiet_NaN();
+    }
+}
+
+std::size_t field_size(std::uint8_t datatype) {
+    switch (datatype) {
+        case pcl::PCLPointField::INT8:
+        case pcl::PCLPointField::UINT8:
+            return 1;
+        case pcl::PCLPointField::INT16:
+        case pcl::PCLPointField::UINT16:
+            return 2;
+        case pcl::PCLPointField::INT32:
+        case pcl::PCLPointField::UINT32:
+        case pcl::PCLPointField::FLOAT32:
+            return 4;
+        case pcl::PCLPointField::INT64:
+        case pcl::PCLPointField::UINT64:
+        case pcl::PCLPointField::FLOAT64:
+            return 8;
+        default:
+            return 0;
+    }
+}
+
+}  // namespace
+
+bool have_pcl() {
+    return true;
+}
+
+PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quiet) {
+    silence_pcl();
+    const std::string label = path.string();
+    // Our own header and size check first: PCL trusts headers and can crash on garbage.
+    const PcdHeader checked = [&] {
+        const MappedFile file = MappedFile::open(path);
+        return check_pcd(file, report);
+    }();
+
+    pcl::PCDReader reader;
+    pcl::PCLPointCloud2 blob;
+    Eigen::Vector4f origin;
+    Eigen::Quaternionf orientation;
+    int version = 0;
+    int data_type = 0;
+    unsigned int data_index = 0;
+    int rc = -1;
+    try {
+        rc = reader.readHeader(label, blob, origin, orientation, version, data_type, data_index);
+    } catch (const std::exception& e) {
+        throw Error(label + ": not a valid PCD file (" + e.what() + ")");
+    }
+    if (rc < 0) throw Error(label + ": not a valid PCD file (PCL could not parse the header)");
+    const std::uint64_t declared = static_cast<std::uint64_t>(blob.width) * blob.height;
+    LazyProgress progress("reading " + label, 1, quiet);
+    try {
+        rc = reader.read(label, blob, origin, orientation, version);
+    } catch (const std::exception& e) {
+        throw Error(label + ": PCD data unreadable (" + e.what() + ")");
+    }
+    if (rc < 0)
+        throw Error(label + ": PCD data unreadable: truncated or corrupt, or the header's " +
+                    std::to_string(declared) + " points (WIDTH x HEIGHT) disagree with the data");
+    progress.finish();
+
+    const std::uint64_t n = static_cast<std::uint64_t>(blob.width) * blob.height;
+    if (n != checked.points)
+        throw Error(label + ": PCL read " + std::to_string(n) + " points but the header declares " +
+                    std::to_string(checked.points));
+    if (blob.data.size() < n * blob.point_step)
+        throw Error(label + ": PCD data holds " +
+                    std::to_string(blob.point_step ? blob.data.size() / blob.point_step : 0) +
+                    " points but the header declares " + std::to_string(n));
+    const pcl::PCLPointField* fx = nullptr;
+    const pcl::PCLPointField* fy = nullptr;
+    const pcl::PCLPointField* fz = nullptr;
+    const pcl::PCLPointField* fn[3] = {nullptr, nullptr, nullptr};
+    const pcl::PCLPointField* frgb = nullptr;
+    bool rgba = false;
+    std::string skipped;
+    for (const pcl::PCLPointField& f : blob.fields) {
+        const std::size_t fs = field_size(f.datatype);
+        if (fs == 0 || f.offset + fs > blob.point_step) {
+            skipped += (skipped.empty() ? "" : ", ") + f.name;
+            continue;
+        }
+        if (f.name == "x")
+            fx = &f;
+        else if (f.name == "y")
+            fy = &f;
+        else if (f.name == "z")
+            fz = &f;
+        else if (f.name == "normal_x")
+            fn[0] = &f;
+        else if (f.name == "normal_y")
+            fn[1] = &f;
+        else if (f.name == "normal_z")
+            fn[2] = &f;
+        else if ((f.name == "rgb" || f.name == "rgba") && fs == 4 && !frgb) {
+            frgb = &f;
+            rgba = f.name == "rgba";
+        } else if (f.name != "_") {  // "_" is PCL's padding
+            skipped += (skipped.empty() ? "" : ", ") + f.name;
+        }
+    }
+    if (!fx || !fy || !fz) throw Error(label + ": PCD file has no x, y and z fields");
+    const bool normals = fn[0] && fn[1] && fn[2];
+    if (!normals && (fn[0] || fn[1] || fn[2]))
+        report.notes.push_back(label +
+                               ": normals incomplete (needs normal_x, normal_y and normal_z): ignored");
+    if (!skipped.empty()) report.notes.push_back(label + ": skipped PCD fields: " + skipped);
+
+    PointCloud cloud;
+    cloud.positions.reserve(n);
+    if (normals) cloud.normals.reserve(n);
+    if (frgb) cloud.colors.reserve(n);
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const std::uint8_t* row = blob.data.data() + i * blob.point_step;
+        const double x = load_field(row + fx->offset, fx->datatype);
+        const double y = load_field(row + fy->offset, fy->datatype);
+        const double z = load_field(row + fz->offset, fz->datatype);
+        if (std::isnan(x) || std::isnan(y) || std::isnan(z)) {
+            ++report.nan_entries;  // an organized cloud's hole: no measurement there
+            continue;
+        }
+        cloud.positions.push_back({x, y, z});
+        if (normals)
+            cloud.normals.push_back({static_cast<float>(load_field(row + fn[0]->offset, fn[0]->datatype)),
+                                     static_cast<float>(load_field(row + fn[1]->offset, fn[1]->datatype)),
+                                     static_cast<float>(load_field(row + fn[2]->offset, fn[2]->datatype))});
+        if (frgb) {
+            // PCL packs colors as 0xAARRGGBB in the bytes of a float or uint32.
+            std::uint32_t packed;
+            std::memcpy(&packed, row + frgb->offset, 4);
+            cloud.colors.push_back({static_cast<std::uint8_t>((packed >> 16) & 0xFF),
+                                    static_cast<std::uint8_t>((packed >> 8) & 0xFF),
+                                    static_cast<std::uint8_t>(packed & 0xFF),
+                                    rgba ? static_cast<std::uint8_t>(packed >> 24) : std::uint8_t{255}});
+        }
+    }
+    const char* encodings[] = {"ascii", "binary", "binary_compressed"};
+    report.reader =
+        std::string("pcd (PCL, ") + (data_type >= 0 && data_type <= 2 ? encodings[data_type] : "?") +
+        (blob.height > 1 ? ", organized " + std::to_string(blob.width) + "x" + std::to_string(blob.height)
+                         : "") +
+        ")";
+    report.records = n;
+    return cloud;
+}
+
+void estimate_normals(const PointCloud& cloud, int k, std::vector<pool::Float3>& normals, KnnGraph* graph,
+                      bool quiet) {
+    silence_pcl();
+    const std::size_t n = cloud.size();
+    if (k < 3) throw Error("--k must be at least 3 for PCA normals");
+    if (n < 3) throw Error("too few points (" + std::to_string(n) + ") to estimate normals");
+    const auto b = bounds(cloud);
+    const double centre[3] = {0.5 * (b[0][0] + b[1][0]), 0.5 * (b[0][1] + b[1][1]),
+                              0.5 * (b[0][2] + b[1][2])};
+    auto points = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
+    points->resize(n);
+    for (std::size_t i = 0; i < n; ++i)
+        (*points)[i] = pcl::PointXYZ(static_cast<float>(cloud.positions[i][0] - centre[0]),
+                                     static_cast<float>(cloud.positions[i][1] - centre[1]),
+                                     static_cast<float>(cloud.positions[i][2] - centre[2]));
+    auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
+    tree->setInputCloud(points);  // built once: NormalEstimation reuses a tree already on its cloud
+
+    const int kk = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(k), n));
+    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> estimator(0);  // 0: all cores
+    estimator.setInputCloud(points);
+    estimator.setSearchMethod(tree);
+    estimator.setKSearch(kk);
+    normals.assign(n, {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
+    constexpr std::size_t k_chunk = 1u << 16;  // progress granularity
+    LazyProgress progress("estimating normals (PCA, k=" + std::to_string(kk) + ")", n, quiet);
+    pcl::PointCloud<pcl::Normal> out;
+    for (std::size_t start = 0; start < n; start += k_chunk) {
+        const std::size_t end = std::min(n, start + k_chunk);
+        auto indices = std::make_shared<pcl::Indices>(end - start);
+        for (std::size_t i = start; i < end; ++i) (*indices)[i - start] = static_cast<pcl::index_t>(i);
+        estimator.setIndices(indices);
+        estimator.compute(out);
+        if (out.size() != end - start) throw Error("PCL normal estimation returned an unexpected count");
+        for (std::size_t i = start; i < end; ++i) {
+            const pcl::Normal& nn = out[i - start];
+            if (std::isfinite(nn.normal_x) && std::isfinite(nn.normal_y) && std::isfinite(nn.normal_z))
+                normals[i] = {nn.normal_x, nn.normal_y, nn.normal_z};
+        }
+        progress.update(end);
+    }
+    progress.finish();
+
+    if (!graph) return;
+    graph->k = static_cast<std::uint32_t>(k);
+    graph->neighbours.assign(n * graph->k, k_no_neighbour);
+    const int query = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(k) + 1, n));
+    LazyProgress graph_progress("k-NN graph (k=" + std::to_string(k) + ")", n, quiet);
+    for (std::size_t start = 0; start < n; start += k_chunk) {
+        const std::size_t end = std::min(n, start + k_chunk);
+#pragma omp parallel
+        {
+            pcl::Indices found;
+            std::vector<float> distances;
+#pragma omp for schedule(dynamic, 1024)
+            for (std::int64_t i = static_cast<std::int64_t>(start); i < static_cast<std::int64_t>(end); ++i) {
+                tree->nearestKSearch(static_cast<pcl::index_t>(i), query, found, distances);
+                std::uint32_t* row = graph->neighbours.data() + static_cast<std::size_t>(i) * graph->k;
+                std::uint32_t m = 0;
+                for (const pcl::index_t j : found)
+                    if (j != i && m < graph->k) row[m++] = static_cast<std::uint32_t>(j);
+            }
+        }
+        graph_progress.update(end);
+    }
+    graph_progress.finish();
+}
+
+}  // namespace prt::pre::import

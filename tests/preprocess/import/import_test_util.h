@@ -1,0 +1,80 @@
+// Helpers for the prt-import tests: a per-test temporary folder and byte-exact fixture writers.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "import.h"
+
+namespace prt_import_test {
+
+namespace fs = std::filesystem;
+
+/// A fresh folder per test, removed afterwards.
+class TempDirTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        m_dir = fs::temp_directory_path() / ("prt_import_" + std::to_string(::getpid()) + "_" +
+                                             info->test_suite_name() + "_" + info->name());
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+
+    fs::path path(const std::string& name) const { return m_dir / name; }
+
+    fs::path write(const std::string& name, const std::string& bytes) const {
+        const fs::path p = path(name);
+        std::ofstream out(p, std::ios::binary);
+        out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+        return p;
+    }
+
+    fs::path m_dir;
+};
+
+/// Appends the bytes of a value, little or big endian.
+template <class T>
+void put(std::string& out, T value, bool big_endian = false) {
+    unsigned char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    if (big_endian == (std::endian::native == std::endian::little))
+        for (std::size_t i = 0; i < sizeof(T) / 2; ++i) std::swap(bytes[i], bytes[sizeof(T) - 1 - i]);
+    out.append(reinterpret_cast<const char*>(bytes), sizeof(T));
+}
+
+/// Imports with quiet options unless given; the Report comes back through `report`.
+inline prt::pre::PointCloud import(const fs::path& p, prt::pre::import::Report& report,
+                                   prt::pre::import::Options options = {}) {
+    options.quiet = true;
+    return prt::pre::import::import_file(p, options, report);
+}
+
+/// The message of the prt::Error `fn` throws ("" when it throws none).
+template <class Fn>
+std::string error_of(Fn&& fn) {
+    try {
+        fn();
+    } catch (const std::exception& e) {
+        return e.what();
+    }
+    return "";
+}
+
+/// Whether any note contains `text`.
+inline bool has_note(const prt::pre::import::Report& r, const std::string& text) {
+    for (const std::string& n : r.notes)
+        if (n.find(text) != std::string::npos) return true;
+    return false;
+}
+
+}  // namespace prt_import_test
