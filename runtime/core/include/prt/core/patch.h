@@ -1,0 +1,691 @@
+// PointRT core: ray tracing bicubic Bezier patches through the mixed hierarchy of seed 002
+// (a BVH over patches, a fixed-depth subpatch tree under each, Newton iteration in double
+// precision from the chosen subpatch's centre). Host and device (PRT_HD): plain functions over a
+// PatchView of the pool's sections; no allocation, recursion, exceptions or virtual calls. Every
+// loop is bounded: traversal stacks by the validated tree depths, Newton by max_iterations.
+//
+// Per ray (CPU, seed 002, 5.4; also usable one thread per ray in a kernel):
+//     PatchRay ray = make_patch_ray(origin_local, dir_local, t_max, inside);
+//     PatchHit hit;
+//     if (trace_patches(view, ray, params, hit)) ... hit.t, hit.position, hit.normal, hit.front
+//     bool shadowed = patches_occluded(view, shadow_ray, params);
+// Data-parallel split of seed 002, 5.3 (traverse / recheck + newton kernels):
+//     patch_bvh_candidates() per ray -> (ray, patch) pairs -> intersect_patch() per pair.
+// Back-face culling per view (5.2), oriented pools only (PatchInfo::flags & k_patch_oriented):
+//     mark_backfacing_patch() per patch, then mark_backfacing_bvh(), once per eye position.
+// Beyond the paper: leaves along a collapsed patch edge (the teapot's lid top and bottom centre)
+// fall back to patch_apex_newton(), where Newton from the leaf centre loses the polar angle.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "prt/core/bezier.h"
+#include "prt/core/config.h"
+#include "prt/core/math.h"
+#include "prt/formats/patch_layout.h"
+
+namespace prt::core {
+
+/// The patch sections of one pool as the core reads them (built and validated on the host by
+/// prt::patches::load_patch_view; the pointers may be device pointers to the same bytes).
+struct PatchView {
+    const pool::PatchControlNet* nets = nullptr;  ///< patch_count nets, local frame
+    const pool::PatchBvhNode* bvh = nullptr;      ///< bvh_node_count nodes, depth first with skips
+    const pool::SubpatchNode* nodes = nullptr;    ///< patch_count * subpatch_nodes, per patch level order
+    std::uint32_t patch_count = 0;
+    std::uint32_t bvh_node_count = 0;
+    std::uint32_t subpatch_depth = 0;  ///< leaves are at this level of every subpatch tree
+    std::uint32_t subpatch_nodes = 1;  ///< 2^(subpatch_depth + 1) - 1
+    std::uint32_t flags = 0;           ///< pool::PatchFlags
+    double extent = 1.0;               ///< largest side of the model's box: scales the tolerances
+};
+
+/// Marks "no patch" (PatchHit::patch of a miss, PatchTraceParams::skip_patch unused).
+inline constexpr std::uint32_t k_no_patch = 0xffffffffu;
+
+/// A ray in the model's local frame, in double precision. `dir` need not be unit length: t is the
+/// ray parameter (origin + t * dir), so it is the same in every frame (see prt/core/ray.h).
+struct PatchRay {
+    DVec3 origin;
+    DVec3 dir;
+    double t_max;          ///< hits at t >= t_max are ignored (a light's distance for shadow rays)
+    std::uint32_t inside;  ///< thesis 3.6 seamless flag (RayFlags k_ray_inside): expects back faces
+};
+
+/// A PatchRay from the core's float ray fields (Ray::origin, dir, t_max, ray_inside()).
+PRT_HD PRT_INLINE PatchRay make_patch_ray(Vec3 origin, Vec3 dir, float t_max, bool inside) {
+    return PatchRay{dvec3(origin), dvec3(dir), static_cast<double>(t_max), inside ? 1u : 0u};
+}
+
+/// Which faces a hit may be on.
+enum PatchFaces : std::uint32_t {
+    /// Both faces (default): the data's u/v orientation is not consistent, shade two-sided.
+    k_patch_faces_both = 0,
+    /// The seamless rule of prt/core/ray.h: outside rays keep front faces (dot(dir, n) < 0), inside
+    /// rays back faces. Meaningful only for oriented pools (k_patch_oriented); replaces any minimum
+    /// hit distance for secondary rays.
+    k_patch_faces_by_ray = 1,
+};
+
+/// Settings of the intersection (seed 002, 3 and 6).
+struct PatchTraceParams {
+    std::uint32_t max_iterations = 16;  ///< seed 002, 3: at most 16 Newton steps
+    /// Convergence: both plane residuals |n_i . Q + d_i| <= tolerance * PatchView::extent (seed 002
+    /// uses 1e-15 absolute on models ~3 units across; relative here so any scale works).
+    double tolerance = 1e-12;
+    /// Newton iterates outside [-margin, 1 + margin]^2 have left the patch: no hit from that start.
+    double domain_margin = 0.25;
+    /// Roots within [-edge_tolerance, 1 + edge_tolerance]^2 are hits (clamped into [0,1]^2), so a
+    /// ray through a shared edge is not lost to rounding on both patches (no cracks).
+    double edge_tolerance = 1e-7;
+    /// The residual growing this many steps in a row means divergence (seed 002, 3).
+    std::uint32_t max_residual_increases = 3;
+    std::uint32_t faces = k_patch_faces_both;  ///< PatchFaces
+    /// Self-intersection guard for secondary rays on unoriented pools: roots on patch skip_patch
+    /// within skip_radius (parameter space, max norm) of (skip_u, skip_v) are ignored.
+    std::uint32_t skip_patch = k_no_patch;
+    double skip_u = 0.0, skip_v = 0.0;
+    double skip_radius = 1e-6;
+};
+
+/// Where and how a ray met a patch.
+struct PatchHit {
+    double t = 0.0;           ///< ray parameter
+    double u = 0.0, v = 0.0;  ///< patch parameters of the hit, in [0,1]^2
+    std::uint32_t patch = k_no_patch;
+    std::uint32_t front = 0;  ///< 1 when dot(dir, normal) < 0 (the ray sees dQ/du x dQ/dv's side)
+    DVec3 position{0, 0, 0};  ///< Q(u, v), local frame
+    DVec3 normal{0, 0, 1};  ///< unit dQ/du x dQ/dv (exact, seed 002, 3); flip when !front to shade two-sided
+    std::uint32_t iterations = 0;  ///< Newton steps of the accepted root
+};
+
+/// Work counters of one query (per ray; sum them for statistics).
+struct PatchStats {
+    std::uint32_t bvh_nodes = 0;       ///< BVH boxes tested
+    std::uint32_t patches = 0;         ///< patches whose subpatch tree was entered
+    std::uint32_t subpatch_boxes = 0;  ///< subpatch boxes tested
+    std::uint32_t newton_runs = 0;     ///< Newton iterations started (one per candidate leaf, + apex solves)
+    std::uint32_t newton_iterations = 0;  ///< Newton steps, all runs
+};
+
+/// Back-face culling bits (seed 002, 5.2) for one eye position: a set bit culls that node.
+/// node_words: patch_cull_words(view) words per patch, bit k = subpatch node k;
+/// bvh_words: bit i = BVH node i. Built by mark_backfacing_patch / mark_backfacing_bvh.
+struct PatchCullMask {
+    const std::uint32_t* node_words = nullptr;
+    const std::uint32_t* bvh_words = nullptr;
+};
+
+// ---- Ray as two planes (seed 002, 3 and 5.2) ------------------------------------------------------
+
+/// The ray as the intersection of two planes n1.x + d1 = 0 and n2.x + d2 = 0 (unit, orthogonal).
+struct RayPlanes {
+    DVec3 n1;
+    double d1;
+    DVec3 n2;
+    double d2;
+};
+
+/// seed 002, 5.2: n1 = e_k x dir for the axis k of dir's smallest component, n2 = dir x n1.
+PRT_HD inline RayPlanes make_ray_planes(DVec3 origin, DVec3 dir) {
+    const double ax = fabs(dir.x), ay = fabs(dir.y), az = fabs(dir.z);
+    const DVec3 e = (ax <= ay && ax <= az) ? DVec3{1, 0, 0} : (ay <= az ? DVec3{0, 1, 0} : DVec3{0, 0, 1});
+    DVec3 n1 = cross(e, dir);
+    n1 = n1 * (1.0 / length(n1));
+    DVec3 n2 = cross(dir, n1);
+    n2 = n2 * (1.0 / length(n2));
+    return RayPlanes{n1, -dot(n1, origin), n2, -dot(n2, origin)};
+}
+
+// ---- Newton iteration (seed 002, eq. 2-4) ---------------------------------------------------------
+
+enum class NewtonStatus : std::uint32_t {
+    converged = 0,       ///< residual below the tolerance (the root may still lie outside [0,1]^2)
+    no_convergence = 1,  ///< max_iterations reached
+    diverged = 2,        ///< residual kept growing, or became NaN
+    left_domain = 3,     ///< an iterate left [-margin, 1 + margin]^2
+    singular = 4,        ///< the Jacobian cannot be inverted (ray parallel to the surface there)
+};
+
+struct NewtonResult {
+    double u, v;
+    std::uint32_t iterations;  ///< Newton steps taken
+    NewtonStatus status;
+};
+
+/// seed 002, eq. 3-4: (u, v) <- (u, v) - J^-1 R(u, v), R = (n1.Q + d1, n2.Q + d2), from (u0, v0),
+/// in double precision. `tolerance` is absolute (local units).
+PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const RayPlanes& planes, double u0,
+                                        double v0, const PatchTraceParams& params, double tolerance) {
+    NewtonResult r{u0, v0, 0, NewtonStatus::no_convergence};
+    double u = u0, v = v0;
+    double previous = 0.0;
+    std::uint32_t increases = 0;
+    const double lo = -params.domain_margin, hi = 1.0 + params.domain_margin;
+    for (std::uint32_t it = 0;; ++it) {
+        const PatchEval e = patch_eval(net, u, v);
+        const double r1 = dot(planes.n1, e.q) + planes.d1;
+        const double r2 = dot(planes.n2, e.q) + planes.d2;
+        const double err = dmax(fabs(r1), fabs(r2));  // NaN: caught just below (err == err)
+        r.u = u;
+        r.v = v;
+        r.iterations = it;
+        if (!(err == err)) {
+            r.status = NewtonStatus::diverged;
+            return r;
+        }
+        if (err <= tolerance) {
+            r.status = NewtonStatus::converged;
+            return r;
+        }
+        if (it >= params.max_iterations) {
+            r.status = NewtonStatus::no_convergence;
+            return r;
+        }
+        if (it > 0 && err > previous) {
+            if (++increases >= params.max_residual_increases) {
+                r.status = NewtonStatus::diverged;
+                return r;
+            }
+        } else {
+            increases = 0;
+        }
+        previous = err;
+        const double j11 = dot(planes.n1, e.qu), j12 = dot(planes.n1, e.qv);
+        const double j21 = dot(planes.n2, e.qu), j22 = dot(planes.n2, e.qv);
+        const double det = j11 * j22 - j12 * j21;
+        // Relative to the terms it is made of: a determinant lost to cancellation is singular.
+        if (!(fabs(det) > 1e-14 * (fabs(j11 * j22) + fabs(j12 * j21)))) {
+            r.status = NewtonStatus::singular;
+            return r;
+        }
+        const double inv = 1.0 / det;
+        u -= (j22 * r1 - j12 * r2) * inv;
+        v -= (j11 * r2 - j21 * r1) * inv;
+        if (!(u >= lo && u <= hi && v >= lo && v <= hi)) {  // NaN leaves too
+            r.u = u;
+            r.v = v;
+            r.iterations = it + 1;
+            r.status = NewtonStatus::left_domain;
+            return r;
+        }
+    }
+}
+
+// ---- Boxes (single precision, seed 002, 6) --------------------------------------------------------
+
+/// A ray prepared for slab tests in float.
+struct BoxRay {
+    float ox, oy, oz;
+    float ix, iy, iz;  ///< 1 / dir, with |dir| components below 1e-30 raised to +-1e-30 (no 0 * inf NaN)
+};
+
+/// 1 / d for the slab test: finite for every d (a zero component becomes +-1e30).
+PRT_HD PRT_INLINE float safe_inverse(double d) {
+    const double a = fabs(d) < 1e-30 ? (d < 0.0 ? -1e-30 : 1e-30) : d;
+    return static_cast<float>(1.0 / a);
+}
+
+PRT_HD PRT_INLINE BoxRay make_box_ray(const PatchRay& r) {
+    return BoxRay{static_cast<float>(r.origin.x), static_cast<float>(r.origin.y),
+                  static_cast<float>(r.origin.z), safe_inverse(r.dir.x),
+                  safe_inverse(r.dir.y),          safe_inverse(r.dir.z)};
+}
+
+// Plain comparisons (minss / maxss; fminf is a library call on the host without -ffast-math).
+// Slab distances are never NaN (safe_inverse), so NaN semantics do not matter here.
+PRT_HD PRT_INLINE float min_f(float a, float b) {
+    return a < b ? a : b;
+}
+PRT_HD PRT_INLINE float max_f(float a, float b) {
+    return a > b ? a : b;
+}
+
+/// Slab test against [lo, hi] for t in [0, t_limit]; t_near = entry parameter (0 when inside).
+/// The far distance is scaled by 1 + 2 gamma(3) so rounding never loses a hit (Ize 2013).
+PRT_HD PRT_INLINE bool box_hit(const BoxRay& r, const float* lo, const float* hi, float t_limit,
+                               float& t_near) {
+    const float tx0 = (lo[0] - r.ox) * r.ix, tx1 = (hi[0] - r.ox) * r.ix;
+    const float ty0 = (lo[1] - r.oy) * r.iy, ty1 = (hi[1] - r.oy) * r.iy;
+    const float tz0 = (lo[2] - r.oz) * r.iz, tz1 = (hi[2] - r.oz) * r.iz;
+    const float t0 = max_f(max_f(min_f(tx0, tx1), min_f(ty0, ty1)), max_f(min_f(tz0, tz1), 0.0f));
+    const float t1 = min_f(min_f(max_f(tx0, tx1), max_f(ty0, ty1)), max_f(tz0, tz1)) * 1.00000036f;
+    t_near = t0;
+    return t0 <= t1 && t0 <= t_limit;
+}
+
+// ---- One (ray, patch) pair: subpatch tree + Newton (seed 002, 5.3.2-5.3.3, 5.4) --------------------
+
+/// Per-ray state shared by the per-patch steps: planes, box ray, the nearest hit so far.
+struct PatchQuery {
+    PatchRay ray;
+    RayPlanes planes;
+    BoxRay box;
+    double tolerance;   ///< absolute Newton tolerance (params.tolerance * view.extent)
+    double best_t;      ///< nearest accepted hit so far (ray.t_max initially)
+    std::uint32_t any;  ///< stop at the first accepted hit (shadow rays)
+};
+
+/// Prepares a query; false for a ray whose direction is zero or not finite (it hits nothing).
+PRT_HD PRT_INLINE bool make_patch_query(const PatchView& view, const PatchRay& ray,
+                                        const PatchTraceParams& params, bool any_hit, PatchQuery& q) {
+    const double l2 = dot(ray.dir, ray.dir);
+    if (!(l2 > 0.0) || !is_finite(ray.dir) || !is_finite(ray.origin) || !(ray.t_max > 0.0)) return false;
+    q.ray = ray;
+    q.planes = make_ray_planes(ray.origin, ray.dir);
+    q.box = make_box_ray(ray);
+    q.tolerance = params.tolerance * view.extent;
+    q.best_t = ray.t_max;
+    q.any = any_hit ? 1u : 0u;
+    return true;
+}
+
+/// Whether culling bit `bit` is set in `words`.
+PRT_HD PRT_INLINE bool cull_bit(const std::uint32_t* words, std::size_t bit) {
+    return (words[bit >> 5] >> (bit & 31u)) & 1u;
+}
+
+/// Words of culling bits per patch (bits for its subpatch_nodes nodes, rounded up to whole words so
+/// patches never share a word: one thread per patch may write them without atomics).
+PRT_HD PRT_INLINE std::uint32_t patch_cull_words(const PatchView& view) {
+    return (view.subpatch_nodes + 31u) / 32u;
+}
+/// Words of culling bits for the BVH.
+PRT_HD PRT_INLINE std::uint32_t bvh_cull_words(const PatchView& view) {
+    return (view.bvh_node_count + 31u) / 32u;
+}
+
+/// Accepts a Newton result as a hit if it converged inside the patch (within edge_tolerance), is
+/// not the skipped start point, lies in (0, q.best_t) and faces the right way; then updates
+/// q.best_t and `hit`.
+PRT_HD inline bool accept_root(const PatchView& view, std::uint32_t patch, const NewtonResult& nr,
+                               PatchQuery& q, const PatchTraceParams& params, PatchHit& hit) {
+    if (nr.status != NewtonStatus::converged) return false;
+    const double e = params.edge_tolerance;
+    if (!(nr.u >= -e && nr.u <= 1.0 + e && nr.v >= -e && nr.v <= 1.0 + e)) return false;
+    const double u = dmin(dmax(nr.u, 0.0), 1.0), v = dmin(dmax(nr.v, 0.0), 1.0);
+    if (patch == params.skip_patch && fabs(u - params.skip_u) <= params.skip_radius &&
+        fabs(v - params.skip_v) <= params.skip_radius)
+        return false;
+    const pool::PatchControlNet& net = view.nets[patch];
+    const PatchEval ev = patch_eval(net, u, v);
+    const double t = dot(ev.q - q.ray.origin, q.ray.dir) / dot(q.ray.dir, q.ray.dir);
+    if (!(t > 0.0 && t < q.best_t)) return false;
+    const DVec3 dir_unit = q.ray.dir * (1.0 / length(q.ray.dir));
+    const DVec3 n = patch_normal(net, u, v, ev, -dir_unit);
+    const double dn = dot(q.ray.dir, n);
+    if (params.faces == k_patch_faces_by_ray && !(q.ray.inside ? dn > 0.0 : dn < 0.0)) return false;
+    q.best_t = t;
+    hit.t = t;
+    hit.u = u;
+    hit.v = v;
+    hit.patch = patch;
+    hit.front = dn < 0.0 ? 1u : 0u;
+    hit.position = ev.q;
+    hit.normal = n;
+    hit.iterations = nr.iterations;
+    return true;
+}
+
+/// Collapsed edges of a net (all four control points equal): bit 0 u = 0, bit 1 u = 1,
+/// bit 2 v = 0, bit 3 v = 1. The teapot's lid top and bottom centre are such edges.
+PRT_HD inline std::uint32_t collapsed_edges(const pool::PatchControlNet& net) {
+    const auto same = [](const pool::PatchPoint& a, const pool::PatchPoint& b) {
+        return a.x == b.x && a.y == b.y && a.z == b.z;
+    };
+    std::uint32_t mask = 0;
+    const int first[4] = {0, 12, 0, 3}, stride[4] = {1, 1, 4, 4};
+    for (int e = 0; e < 4; ++e) {
+        const pool::PatchPoint& a = net.p[first[e]];
+        if (same(a, net.p[first[e] + stride[e]]) && same(a, net.p[first[e] + 2 * stride[e]]) &&
+            same(a, net.p[first[e] + 3 * stride[e]]))
+            mask |= 1u << e;
+    }
+    return mask;
+}
+
+/// Near a collapsed edge the patch is parametrized like polar coordinates around the apex A: the
+/// parameter along the edge is an angle whose derivative vanishes at the apex, so Newton from a
+/// leaf centre (seed 002, 5.3.2) overshoots towards the apex and loses the angle for rays passing
+/// within ~1e-4 of A. This solves that case directly: to first order Q = A + s D(w), with D(w) the
+/// derivative across the edge at edge parameter w, so the ray's planes give s D_p(w) = -R(A) (D_p
+/// projected on the two plane normals): find w where D_p(w) is parallel to -R(A) (sign changes on
+/// 17 samples, then bisection), take s from it and polish with Newton. At most 2 roots per edge.
+PRT_HD inline NewtonResult patch_apex_newton(const pool::PatchControlNet& net, std::uint32_t edge,
+                                             const RayPlanes& planes, const PatchTraceParams& params,
+                                             double tolerance, double max_s) {
+    NewtonResult none{0.0, 0.0, 0, NewtonStatus::no_convergence};
+    const int first[4] = {0, 12, 0, 3};
+    const DVec3 apex = dvec3(net.p[first[edge]]);
+    const double gx = -(dot(planes.n1, apex) + planes.d1), gy = -(dot(planes.n2, apex) + planes.d2);
+    // (u, v) of edge parameter w at distance s from the edge, and the inward derivative there.
+    const auto param = [edge](double w, double s, double& u, double& v) {
+        u = edge == 0 ? s : (edge == 1 ? 1.0 - s : w);
+        v = edge == 2 ? s : (edge == 3 ? 1.0 - s : w);
+    };
+    const auto inward = [&](double w, double& px, double& py) {
+        double u, v;
+        param(w, 0.0, u, v);
+        const PatchEval e = patch_eval(net, u, v);
+        const DVec3 d = edge < 2 ? e.qu * (edge == 0 ? 1.0 : -1.0) : e.qv * (edge == 2 ? 1.0 : -1.0);
+        px = dot(planes.n1, d);
+        py = dot(planes.n2, d);
+    };
+    if (dmax(fabs(gx), fabs(gy)) <= tolerance) {  // the ray passes through the apex itself
+        NewtonResult r{0.0, 0.0, 0, NewtonStatus::converged};
+        param(0.5, 0.0, r.u, r.v);
+        return r;
+    }
+    constexpr int k_samples = 16;
+    double px, py;
+    inward(0.0, px, py);
+    double w0 = 0.0, c0 = px * gy - py * gx;
+    int found = 0;
+    NewtonResult best = none;
+    for (int k = 1; k <= k_samples && found < 2; ++k) {
+        const double w1 = static_cast<double>(k) / k_samples;
+        inward(w1, px, py);
+        const double c1 = px * gy - py * gx;
+        if (c0 * c1 <= 0.0) {
+            double a = w0, b = w1, ca = c0;
+            for (int it = 0; it < 24; ++it) {  // bisection to ~1e-8 of the sample spacing
+                const double m = 0.5 * (a + b);
+                inward(m, px, py);
+                const double cm = px * gy - py * gx;
+                if ((cm <= 0.0) == (ca <= 0.0)) {
+                    a = m;
+                    ca = cm;
+                } else {
+                    b = m;
+                }
+            }
+            const double w = 0.5 * (a + b);
+            inward(w, px, py);
+            const double p2 = px * px + py * py;
+            const double s = (px * gx + py * gy) / p2;  // > 0: the apex side the ray passes
+            if (p2 > 0.0 && s > 0.0 && s <= max_s) {
+                ++found;
+                double u, v;
+                param(w, s, u, v);
+                const NewtonResult r = patch_newton(net, planes, u, v, params, tolerance);
+                if (r.status == NewtonStatus::converged) return r;
+                best = r;
+            }
+        }
+        w0 = w1;
+        c0 = c1;
+    }
+    return best;
+}
+
+/// Per (ray, patch) scratch state of intersect_patch.
+struct PatchScratch {
+    std::uint32_t collapsed = 0xffffffffu;  ///< collapsed_edges(), computed when first needed
+    std::uint32_t apex_tried = 0;           ///< edges whose apex solve already ran
+};
+
+/// Tries Newton from the centre of subpatch leaf `k` of patch `patch` (and, where the leaf touches
+/// a collapsed edge and that fails, the apex solve once per edge); on a valid root nearer than
+/// q.best_t updates q.best_t and `hit` and returns true.
+PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch, std::uint32_t k,
+                                     PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
+                                     PatchStats* stats, PatchScratch* scratch = nullptr) {
+    const pool::PatchControlNet& net = view.nets[patch];
+    const PatchDomain d = subpatch_domain(k);
+    // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch.
+    const NewtonResult nr =
+        patch_newton(net, q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance);
+    if (stats) {
+        ++stats->newton_runs;
+        stats->newton_iterations += nr.iterations;
+    }
+    if (accept_root(view, patch, nr, q, params, hit)) return true;
+    if (!scratch) return false;
+    const bool touches[4] = {d.u0 == 0.0, d.u1 == 1.0, d.v0 == 0.0, d.v1 == 1.0};
+    if (!(touches[0] || touches[1] || touches[2] || touches[3])) return false;
+    if (scratch->collapsed == 0xffffffffu) scratch->collapsed = collapsed_edges(net);
+    bool found = false;
+    for (std::uint32_t e = 0; e < 4; ++e) {
+        if (!touches[e] || !((scratch->collapsed >> e) & 1u) || ((scratch->apex_tried >> e) & 1u)) continue;
+        scratch->apex_tried |= 1u << e;
+        // only roots within the leaves along the edge: s up to the leaf's extent across it
+        const double max_s = e < 2 ? d.u1 - d.u0 : d.v1 - d.v0;
+        const NewtonResult ar = patch_apex_newton(net, e, q.planes, params, q.tolerance, max_s);
+        if (stats) {
+            ++stats->newton_runs;
+            stats->newton_iterations += ar.iterations;
+        }
+        found = accept_root(view, patch, ar, q, params, hit) || found;
+    }
+    return found;
+}
+
+/// seed 002, 5.3.2 and 5.4: descends the subpatch tree of `patch` front to back, skipping boxes
+/// beyond the nearest hit so far, and runs Newton from every leaf reached. `root_t_near` is the
+/// entry distance of the patch's box (already tested in the BVH). Returns true if a hit was
+/// accepted (q.best_t and `hit` updated).
+PRT_HD inline bool intersect_patch(const PatchView& view, std::uint32_t patch, float root_t_near,
+                                   PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
+                                   PatchStats* stats, const PatchCullMask* cull = nullptr) {
+    if (stats) ++stats->patches;
+    const pool::SubpatchNode* nodes = view.nodes + static_cast<std::size_t>(patch) * view.subpatch_nodes;
+    const std::size_t cull_base = static_cast<std::size_t>(patch) * patch_cull_words(view) * 32u;
+    const bool use_cull = cull && cull->node_words && !q.ray.inside;
+    // Ordered descent: at most one pending sibling per level, so depth + 1 entries suffice.
+    std::uint32_t stack_node[pool::k_max_subpatch_depth + 2];
+    float stack_t[pool::k_max_subpatch_depth + 2];
+    std::uint32_t sp = 0;
+    stack_node[sp] = 0;
+    stack_t[sp++] = root_t_near;
+    const std::uint32_t first_leaf = (1u << view.subpatch_depth) - 1u;
+    PatchScratch scratch;
+    bool found = false;
+    while (sp > 0) {
+        --sp;
+        const std::uint32_t k = stack_node[sp];
+        if (static_cast<double>(stack_t[sp]) > q.best_t) continue;  // beyond the nearest hit (5.4)
+        if (k >= first_leaf) {
+            if (patch_leaf_newton(view, patch, k, q, params, hit, stats, &scratch)) {
+                found = true;
+                if (q.any) return true;
+            }
+            continue;
+        }
+        const float limit = static_cast<float>(q.best_t);
+        std::uint32_t c[2] = {2 * k + 1, 2 * k + 2};
+        float tc[2] = {0.0f, 0.0f};
+        bool h[2];
+        for (int i = 0; i < 2; ++i) {
+            if (use_cull && cull_bit(cull->node_words, cull_base + c[i])) {
+                h[i] = false;
+                continue;
+            }
+            h[i] = box_hit(q.box, nodes[c[i]].lo, nodes[c[i]].hi, limit, tc[i]);
+            if (stats) ++stats->subpatch_boxes;
+        }
+        // Push the far child first so the near one is popped next.
+        const int near_i = (h[0] && h[1]) ? (tc[1] < tc[0] ? 1 : 0) : (h[0] ? 0 : 1);
+        if (h[0] && h[1] && sp < pool::k_max_subpatch_depth + 2) {
+            stack_node[sp] = c[1 - near_i];
+            stack_t[sp++] = tc[1 - near_i];
+        }
+        if (h[near_i] && sp < pool::k_max_subpatch_depth + 2) {
+            stack_node[sp] = c[near_i];
+            stack_t[sp++] = tc[near_i];
+        }
+    }
+    return found;
+}
+
+// ---- Whole rays: BVH traversal with early termination (seed 002, 5.1 and 5.4) ----------------------
+
+/// Traversal stack entries for the BVH (a valid pool's BVH is at most k_max_patch_bvh_depth deep,
+/// and ordered traversal keeps at most one pending sibling per level).
+inline constexpr std::uint32_t k_patch_bvh_stack = pool::k_max_patch_bvh_depth + 2;
+
+/// Runs a prepared query through the BVH front to back: children are visited nearest box first,
+/// boxes beyond the nearest hit are skipped (early termination), and each patch leaf goes through
+/// intersect_patch. The right child of interior node i is bvh[i + 1].skip.
+PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const PatchTraceParams& params,
+                                     PatchHit& hit, PatchStats* stats, const PatchCullMask* cull) {
+    if (view.bvh_node_count == 0) return false;
+    const bool use_cull = cull && cull->bvh_words && !q.ray.inside;
+    if (use_cull && cull_bit(cull->bvh_words, 0)) return false;
+    float t_root = 0.0f;
+    if (stats) ++stats->bvh_nodes;
+    if (!box_hit(q.box, view.bvh[0].lo, view.bvh[0].hi, static_cast<float>(q.best_t), t_root)) return false;
+    std::uint32_t stack_node[k_patch_bvh_stack];
+    float stack_t[k_patch_bvh_stack];
+    std::uint32_t sp = 0;
+    stack_node[sp] = 0;
+    stack_t[sp++] = t_root;
+    bool found = false;
+    while (sp > 0) {
+        --sp;
+        const std::uint32_t i = stack_node[sp];
+        const float t_near = stack_t[sp];
+        if (static_cast<double>(t_near) > q.best_t) continue;
+        const pool::PatchBvhNode& node = view.bvh[i];
+        if (node.patch >= 0) {
+            if (intersect_patch(view, static_cast<std::uint32_t>(node.patch), t_near, q, params, hit, stats,
+                                cull)) {
+                found = true;
+                if (q.any) return true;
+            }
+            continue;
+        }
+        const std::uint32_t c[2] = {i + 1, view.bvh[i + 1].skip};
+        const float limit = static_cast<float>(q.best_t);
+        float tc[2] = {0.0f, 0.0f};
+        bool h[2];
+        for (int j = 0; j < 2; ++j) {
+            if (use_cull && cull_bit(cull->bvh_words, c[j])) {
+                h[j] = false;
+                continue;
+            }
+            h[j] = box_hit(q.box, view.bvh[c[j]].lo, view.bvh[c[j]].hi, limit, tc[j]);
+            if (stats) ++stats->bvh_nodes;
+        }
+        const int near_j = (h[0] && h[1]) ? (tc[1] < tc[0] ? 1 : 0) : (h[0] ? 0 : 1);
+        if (h[0] && h[1] && sp < k_patch_bvh_stack) {
+            stack_node[sp] = c[1 - near_j];
+            stack_t[sp++] = tc[1 - near_j];
+        }
+        if (h[near_j] && sp < k_patch_bvh_stack) {
+            stack_node[sp] = c[near_j];
+            stack_t[sp++] = tc[near_j];
+        }
+    }
+    return found;
+}
+
+/// The nearest hit of `ray` with the patches (t in (0, ray.t_max)). `cull` (optional) holds the
+/// back-face bits built for this ray's origin; it is ignored for inside rays.
+PRT_HD inline bool trace_patches(const PatchView& view, const PatchRay& ray, const PatchTraceParams& params,
+                                 PatchHit& hit, PatchStats* stats = nullptr,
+                                 const PatchCullMask* cull = nullptr) {
+    PatchQuery q;
+    if (!make_patch_query(view, ray, params, false, q)) return false;
+    return trace_patch_query(view, q, params, hit, stats, cull);
+}
+
+/// Whether any patch meets `ray` at t in (0, ray.t_max) (shadow rays: stops at the first hit, 5.4).
+PRT_HD inline bool patches_occluded(const PatchView& view, const PatchRay& ray,
+                                    const PatchTraceParams& params, PatchStats* stats = nullptr) {
+    PatchQuery q;
+    if (!make_patch_query(view, ray, params, true, q)) return false;
+    PatchHit hit;
+    return trace_patch_query(view, q, params, hit, stats, nullptr);
+}
+
+/// seed 002, 5.3.1 (traverse kernel): the stackless depth-first walk with skip pointers, writing
+/// the patches whose boxes `ray` meets before t_limit into out[0..max_out) and their box entry
+/// distances into t_out (may be null). Returns how many patches were met (may exceed max_out: the
+/// caller then retries with more room).
+PRT_HD inline std::uint32_t patch_bvh_candidates(const PatchView& view, const PatchRay& ray, double t_limit,
+                                                 std::uint32_t* out, float* t_out, std::uint32_t max_out,
+                                                 PatchStats* stats = nullptr) {
+    if (view.bvh_node_count == 0 || !is_finite(ray.dir) || !(dot(ray.dir, ray.dir) > 0.0)) return 0;
+    const BoxRay br = make_box_ray(ray);
+    const float limit = static_cast<float>(t_limit);
+    std::uint32_t count = 0;
+    std::uint32_t i = 0;
+    while (i < view.bvh_node_count) {  // skips only move forward: at most bvh_node_count steps
+        const pool::PatchBvhNode& node = view.bvh[i];
+        float t_near = 0.0f;
+        if (stats) ++stats->bvh_nodes;
+        if (!box_hit(br, node.lo, node.hi, limit, t_near)) {
+            i = node.skip;
+            continue;
+        }
+        if (node.patch >= 0) {
+            if (count < max_out) {
+                out[count] = static_cast<std::uint32_t>(node.patch);
+                if (t_out) t_out[count] = t_near;
+            }
+            ++count;
+        }
+        ++i;
+    }
+    return count;
+}
+
+// ---- Back-face culling per view (seed 002, 5.2) ------------------------------------------------------
+
+/// Whether every point of subpatch node `n` faces away from `eye`: for all p in the node's box and
+/// every normal m in its cone, (p - eye) . m > 0. Conservative (the cone bounds all normals,
+/// the bounding sphere of the box all directions from the eye):
+///   angle(c - eye, axis) + asin(r / |c - eye|) + cone half-angle < 90 degrees.
+/// seed 002 tests only the four corner normals; this test never culls a visible front face.
+PRT_HD inline bool subpatch_backfacing(const pool::SubpatchNode& n, DVec3 eye) {
+    if (!(n.cone_cos > 0.0f)) return false;
+    const DVec3 lo{n.lo[0], n.lo[1], n.lo[2]}, hi{n.hi[0], n.hi[1], n.hi[2]};
+    const DVec3 c = (lo + hi) * 0.5;
+    const double r = 0.5 * length(hi - lo);
+    const DVec3 w = c - eye;
+    const double d = length(w);
+    if (!(d > r)) return false;
+    const DVec3 axis = octahedral_decode(n.cone_axis);
+    const double alpha = acos(fmin(fmax(dot(w, axis) / d, -1.0), 1.0));
+    const double beta = asin(fmin(r / d, 1.0));
+    const double theta = acos(fmin(static_cast<double>(n.cone_cos), 1.0));
+    return alpha + beta + theta < 1.5707963267948966 - 1e-6;
+}
+
+/// Marks the back-facing nodes of one patch's subpatch tree for eye position `eye` (one thread per
+/// patch): node k is culled when it is back-facing itself or both its children are (5.2: "the
+/// flags of the subpatches are propagated up using an AND operation"). Writes words
+/// [patch * patch_cull_words, +patch_cull_words) of node_words.
+PRT_HD inline void mark_backfacing_patch(const PatchView& view, std::uint32_t patch, DVec3 eye,
+                                         std::uint32_t* node_words) {
+    const std::uint32_t words = patch_cull_words(view);
+    std::uint32_t* w = node_words + static_cast<std::size_t>(patch) * words;
+    for (std::uint32_t i = 0; i < words; ++i) w[i] = 0;
+    const pool::SubpatchNode* nodes = view.nodes + static_cast<std::size_t>(patch) * view.subpatch_nodes;
+    const std::uint32_t first_leaf = (1u << view.subpatch_depth) - 1u;
+    for (std::uint32_t k = view.subpatch_nodes; k-- > 0;) {  // children (2k+1, 2k+2) before parents
+        bool culled = subpatch_backfacing(nodes[k], eye);
+        if (!culled && k < first_leaf) culled = cull_bit(w, 2 * k + 1) && cull_bit(w, 2 * k + 2);
+        if (culled) w[k >> 5] |= 1u << (k & 31u);
+    }
+}
+
+/// Propagates the patches' root bits up the BVH (after mark_backfacing_patch for every patch): a
+/// leaf is culled with its patch's root, an interior node when both children are. Sequential over
+/// the nodes (children follow their parent in the depth-first layout, so walk backwards).
+PRT_HD inline void mark_backfacing_bvh(const PatchView& view, const std::uint32_t* node_words,
+                                       std::uint32_t* bvh_words) {
+    const std::uint32_t words = bvh_cull_words(view);
+    for (std::uint32_t i = 0; i < words; ++i) bvh_words[i] = 0;
+    const std::size_t patch_bits = static_cast<std::size_t>(patch_cull_words(view)) * 32u;
+    for (std::uint32_t i = view.bvh_node_count; i-- > 0;) {
+        const pool::PatchBvhNode& node = view.bvh[i];
+        const bool culled = node.patch >= 0
+                                ? cull_bit(node_words, static_cast<std::size_t>(node.patch) * patch_bits)
+                                : cull_bit(bvh_words, i + 1) && cull_bit(bvh_words, view.bvh[i + 1].skip);
+        if (culled) bvh_words[i >> 5] |= 1u << (i & 31u);
+    }
+}
+
+}  // namespace prt::core
