@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -12,9 +13,27 @@
 namespace prt::pre {
 
 struct OctreeParams {
-    std::uint32_t max_leaf_splats = 16;  ///< X of thesis 3.2: a leaf holding more is split
+    /// X of thesis 3.2: a leaf overlapped by more splats is split. 48 from measurement (1M-point
+    /// sphere, k = 9 radii: X = 16 stores each splat 63 times and misses the 2 s build target,
+    /// X = 32 10 times, X = 48 6.5 times in 1.4 s; scripts/bench-splat.sh).
+    std::uint32_t max_leaf_splats = 48;
     std::uint32_t max_depth = 24;        ///< leaves at this level are never split
     bool replicate = true;               ///< store each splat in every leaf its disk overlaps
+    // Added by prt-octree (issue 3); the fields above are the agreed interface.
+    /// A node whose edge is shorter than min_cell_ratio x the mean radius of the splats overlapping
+    /// it is not split: once cells are smaller than the disks, every cell keeps the disks that
+    /// cover it (with k-NN radii, thesis 3.1, about k disks cover each surface point), so splitting
+    /// no longer reduces the splats per leaf and only adds nodes. 0 disables the rule.
+    float min_cell_ratio = 0.25f;
+    unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
+    /// What is compared with X to decide a split. false (default, issue 3): every splat overlapping
+    /// the node, replicas included, so X bounds the splats a ray tests per leaf. true: only the
+    /// splats whose centre lies in the node (half-open cell), as in thesis 3.2/3.4 after [LMR07],
+    /// where the tree is built on centres and replication does not change its structure.
+    bool split_by_centres = false;
+    /// Progress of the subtree phase, called from one thread with (splats done, splats in all
+    /// subtrees); may be empty.
+    std::function<void(std::uint64_t, std::uint64_t)> progress;
 };
 
 struct OctreeStats {
@@ -22,6 +41,10 @@ struct OctreeStats {
     std::uint64_t unique_splats = 0, stored_splats = 0;
     double replication_factor = 0;  ///< stored / unique
     double seconds = 0;
+    // Added by prt-octree (issue 3):
+    std::uint64_t skipped_splats = 0;  ///< points left out: radius not finite and positive, or no normal
+    std::uint64_t max_leaf_count = 0;  ///< most splats in one leaf (> X where a stop rule held)
+    std::uint64_t bytes = 0;           ///< payload bytes of the four octree sections
 };
 
 /// A built octree, ready to be added to a pool (add_octree_sections()).
@@ -35,11 +58,30 @@ struct SplatOctree {
 /// Builds the octree over splats given in the model's local frame. Points whose radius is not
 /// finite and positive are skipped (and counted in stats). Throws prt::Error if the node count
 /// would exceed the 30-bit address range.
+/// Details (issue 3): the root is a cube enclosing every disk (centre +- radius), enlarged by about
+/// 1/1000. Node boxes are node_box() of the root, closed: a disk touching a face is stored on both
+/// sides. Filled leaves are numbered, and their splats stored, in depth-first (Morton) order; in
+/// each leaf the splats whose centre lies in the leaf come first, then the replicas. The output
+/// does not depend on params.threads. Points with a zero or non-finite normal are skipped too.
 SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
                          std::span<const float> radii, const OctreeParams& params,
                          OctreeStats* stats = nullptr);
 
 /// Adds (replacing) the four octree sections to a writer.
 void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer);
+
+// ---- Added by prt-octree (issue 3) -------------------------------------------------------------
+
+/// Throws prt::Error when an octree of this size cannot be encoded: more than 2^30 nodes (30-bit
+/// child addresses), more than 2^30 filled leaves (30-bit leaf addresses) or more than 2^32 - 1
+/// stored splats (32-bit leaf_info entries). The builder calls it while building, before the
+/// memory for such a tree is allocated.
+void check_octree_limits(std::uint64_t nodes, std::uint64_t filled_leaves, std::uint64_t stored_splats);
+
+/// The box of the node at `level` with integer cell coordinates `cell` (each < 2^level), in the
+/// root's frame: root_min + root_size * cell / 2^level in double precision (the product is exact for
+/// level <= 29); neighbouring cells share their face coordinates exactly.
+void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint32_t cell[3], double lo[3],
+              double hi[3]);
 
 }  // namespace prt::pre

@@ -1,0 +1,608 @@
+// PointRT preprocess: the splat octree builder (thesis 2.2, 3.1, 3.2, 3.4).
+//
+// Build plan:
+//  1. Gather the splats with a finite positive radius; compute the root cube enclosing every disk.
+//  2. Top phase (serial control, parallel classification): split nodes holding more than a task's
+//     worth of splats, depth first, so that the remaining subtrees are independent tasks in Morton
+//     (depth-first, Z-curve) order.
+//  3. Build each task's subtree depth first on the worker threads into task-local arrays.
+//  4. Lay the nodes out breadth first (thesis 2.2.3: level by level, so the first levels share the
+//     cache), the 8 children of a node together in Morton order; number filled leaves and store
+//     their splats in depth-first order (spatially adjacent leaves get adjacent data).
+#include "octree_build.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <string>
+
+#include "disk_box.h"
+#include "parallel.h"
+#include "prt/tool.h"
+
+namespace prt::pre {
+
+namespace {
+
+using pool::make_node;
+using pool::NodeType;
+
+constexpr std::uint32_t k_max_supported_depth = 30;  // cell coordinates fit 30 bits
+constexpr std::uint32_t k_local_task_ref = 3;        // top-tree node type: "subtree built by task"
+
+/// A splat prepared for building: the disk plus its axis-aligned bounding box, rounded outward to
+/// float so that rejecting a child by the box is always safe.
+struct BuildSplat {
+    float c[3];
+    float r;
+    float n[3];  // unit (normalised in double, then rounded)
+    std::uint32_t point;
+    float box_lo[3];
+    float box_hi[3];
+};
+
+/// A subtree under construction: nodes in local numbering (children of a node contiguous, the
+/// internal nodes' address = local index of the first child), leaves in depth-first order.
+struct LocalTree {
+    std::vector<std::uint32_t> nodes;
+    std::vector<std::uint32_t> leaf_begin;  // into ids
+    std::vector<std::uint32_t> ids;         // splat indices, leaf-contiguous
+    std::uint32_t depth = 0;
+    std::uint64_t empty_leaves = 0;
+    std::uint64_t max_leaf = 0;
+    std::uint64_t reported_nodes = 0, reported_ids = 0;  // already added to the global counters
+};
+
+struct Task {
+    std::uint32_t level = 0;
+    std::uint32_t cell[3] = {0, 0, 0};
+    std::vector<std::uint32_t> list;
+    LocalTree tree;
+};
+
+/// Per-worker scratch: the stack of splat lists of the nodes on the current path, child masks.
+struct Scratch {
+    std::vector<std::uint32_t> stack;
+    std::vector<std::uint8_t> masks;
+};
+
+class Builder {
+public:
+    Builder(std::vector<BuildSplat> splats, const pool::OctreeInfo& info, const OctreeParams& params)
+        : m_splats(std::move(splats)), m_info(info), m_params(params) {}
+
+    /// Would a node at this level holding these splats be split (thesis 3.2: more than X)?
+    bool should_split(std::uint32_t level, const std::uint32_t cell[3], const std::uint32_t* list,
+                      std::size_t count) const {
+        if (count <= m_params.max_leaf_splats || level >= m_params.max_depth) return false;
+        if (m_params.split_by_centres && m_params.replicate) {
+            // count only the centres in the node's half-open cell (the others are replicas)
+            double lo[3], hi[3];
+            node_box(m_info, level, cell, lo, hi);
+            std::size_t centres = 0;
+            for (std::size_t k = 0; k < count; ++k) {
+                const BuildSplat& s = m_splats[list[k]];
+                bool inside = true;
+                for (int a = 0; a < 3; ++a)
+                    inside = inside && double(s.c[a]) >= lo[a] && double(s.c[a]) < hi[a];
+                centres += inside;
+            }
+            if (centres <= m_params.max_leaf_splats) return false;
+        }
+        if (m_params.min_cell_ratio > 0) {
+            double sum = 0;
+            for (std::size_t k = 0; k < count; ++k) sum += m_splats[list[k]].r;
+            const double edge = double(m_info.root_size) / double(std::uint64_t(1) << level);
+            if (edge < double(m_params.min_cell_ratio) * (sum / double(count))) return false;
+        }
+        return true;
+    }
+
+    /// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell):
+    /// replication mode: the disk overlaps the child's closed box (thesis 3.4); otherwise the child
+    /// holding the centre (half-open cells: a centre on a mid-plane goes to the upper child).
+    std::uint8_t classify(const BuildSplat& s, const double mid[3], const double child_lo[8][3],
+                          const double child_hi[8][3]) const {
+        if (!m_params.replicate) {
+            return static_cast<std::uint8_t>(1u << ((double(s.c[0]) >= mid[0] ? 1 : 0) |
+                                                    (double(s.c[1]) >= mid[1] ? 2 : 0) |
+                                                    (double(s.c[2]) >= mid[2] ? 4 : 0)));
+        }
+        // Per axis, which halves the disk's bounding box reaches (closed halves share the mid-plane).
+        unsigned lower = 0, upper = 0;
+        for (int a = 0; a < 3; ++a) {
+            if (double(s.box_lo[a]) <= mid[a]) lower |= 1u << a;
+            if (double(s.box_hi[a]) >= mid[a]) upper |= 1u << a;
+        }
+        const unsigned both = lower & upper;
+        if (both == 0) {
+            // One candidate child: the disk overlaps this node (invariant) and the node is the union
+            // of its children, so the disk overlaps that child without an exact test.
+            return static_cast<std::uint8_t>(1u << upper);
+        }
+        const double c[3] = {s.c[0], s.c[1], s.c[2]};
+        const double n[3] = {s.n[0], s.n[1], s.n[2]};
+        std::uint8_t mask = 0;
+        for (unsigned child = 0; child < 8; ++child) {
+            // candidate iff on every axis the child's half is reached by the bounding box
+            bool candidate = true;
+            for (int a = 0; a < 3 && candidate; ++a)
+                candidate = (child >> a & 1u) ? (upper >> a & 1u) : (lower >> a & 1u);
+            if (candidate && disk_overlaps_box(c, n, double(s.r), child_lo[child], child_hi[child]))
+                mask |= static_cast<std::uint8_t>(1u << child);
+        }
+        return mask;
+    }
+
+    void child_boxes(std::uint32_t level, const std::uint32_t cell[3], double mid[3], double lo[8][3],
+                     double hi[8][3]) const {
+        for (unsigned child = 0; child < 8; ++child) {
+            const std::uint32_t cc[3] = {2 * cell[0] + (child & 1u), 2 * cell[1] + (child >> 1 & 1u),
+                                         2 * cell[2] + (child >> 2 & 1u)};
+            node_box(m_info, level + 1, cc, lo[child], hi[child]);
+        }
+        for (int a = 0; a < 3; ++a) mid[a] = hi[0][a];  // child 0 is the lower half on every axis
+    }
+
+    /// Emits a leaf for list[0, count): splats whose centre lies in the leaf's closed box first
+    /// (the leaf's "original" splats, thesis 3.4), then the replicas, each group in Morton order
+    /// of the centres (ties in input order).
+    void emit_leaf(LocalTree& out, std::uint32_t node, std::uint32_t level, const std::uint32_t cell[3],
+                   const std::uint32_t* list, std::size_t count) const {
+        out.depth = std::max(out.depth, level);
+        if (count == 0) {
+            out.nodes[node] = make_node(NodeType::empty_leaf, 0);
+            ++out.empty_leaves;
+            return;
+        }
+        double lo[3], hi[3];
+        node_box(m_info, level, cell, lo, hi);
+        const std::uint32_t leaf = static_cast<std::uint32_t>(out.leaf_begin.size());
+        out.leaf_begin.push_back(static_cast<std::uint32_t>(out.ids.size()));
+        auto centre_inside = [&](std::uint32_t id) {
+            const BuildSplat& s = m_splats[id];
+            for (int a = 0; a < 3; ++a)
+                if (!(double(s.c[a]) >= lo[a] && double(s.c[a]) <= hi[a])) return false;
+            return true;
+        };
+        for (std::size_t k = 0; k < count; ++k)
+            if (centre_inside(list[k])) out.ids.push_back(list[k]);
+        for (std::size_t k = 0; k < count; ++k)
+            if (!centre_inside(list[k])) out.ids.push_back(list[k]);
+        out.max_leaf = std::max<std::uint64_t>(out.max_leaf, count);
+        out.nodes[node] = make_node(NodeType::filled_leaf, leaf);
+    }
+
+    /// Splits list[b, e) of scratch.stack into the 8 children's lists, appended to the stack in
+    /// child order; returns the children's [begin, end) offsets.
+    void split_lists(Scratch& s, std::size_t b, std::size_t e, std::uint32_t level,
+                     const std::uint32_t cell[3], std::size_t child_begin[8],
+                     std::size_t child_end[8]) const {
+        double mid[3], lo[8][3], hi[8][3];
+        child_boxes(level, cell, mid, lo, hi);
+        const std::size_t count = e - b;
+        if (s.masks.size() < count) s.masks.resize(count);
+        const std::size_t parallel_min = 1u << 16;
+        if (count >= parallel_min && m_threads > 1 && m_top_phase) {
+            parallel_chunks(count, 1u << 14, m_threads, [&](std::size_t cb, std::size_t ce, unsigned) {
+                for (std::size_t k = cb; k < ce; ++k)
+                    s.masks[k] = classify(m_splats[s.stack[b + k]], mid, lo, hi);
+            });
+        } else {
+            for (std::size_t k = 0; k < count; ++k)
+                s.masks[k] = classify(m_splats[s.stack[b + k]], mid, lo, hi);
+        }
+        std::size_t counts[8] = {};
+        for (std::size_t k = 0; k < count; ++k)
+            for (unsigned m = s.masks[k]; m; m &= m - 1) ++counts[__builtin_ctz(m)];
+        const std::size_t base = s.stack.size();
+        std::size_t total = 0;
+        for (int c = 0; c < 8; ++c) {
+            child_begin[c] = base + total;
+            total += counts[c];
+            child_end[c] = base + total;
+        }
+        s.stack.resize(base + total);
+        std::size_t fill[8];
+        std::copy(child_begin, child_begin + 8, fill);
+        for (std::size_t k = 0; k < count; ++k) {
+            const std::uint32_t id = s.stack[b + k];
+            for (unsigned m = s.masks[k]; m; m &= m - 1) s.stack[fill[__builtin_ctz(m)]++] = id;
+        }
+    }
+
+    /// Builds the subtree of local node `node` (already allocated) depth first.
+    void build(LocalTree& out, Scratch& s, std::uint32_t node, std::uint32_t level,
+               const std::uint32_t cell[3], std::size_t b, std::size_t e) {
+        const std::size_t count = e - b;
+        if (!should_split(level, cell, s.stack.data() + b, count)) {
+            emit_leaf(out, node, level, cell, s.stack.data() + b, count);
+            report(out, false);
+            return;
+        }
+        std::size_t cb[8], ce[8];
+        split_lists(s, b, e, level, cell, cb, ce);
+        const std::size_t first = out.nodes.size();
+        out.nodes.resize(first + 8);
+        out.nodes[node] = make_node(NodeType::internal, static_cast<std::uint32_t>(first));
+        report(out, false);
+        const std::size_t mark = cb[0];
+        for (unsigned c = 0; c < 8; ++c) {
+            const std::uint32_t cc[3] = {2 * cell[0] + (c & 1u), 2 * cell[1] + (c >> 1 & 1u),
+                                         2 * cell[2] + (c >> 2 & 1u)};
+            build(out, s, static_cast<std::uint32_t>(first + c), level + 1, cc, cb[c], ce[c]);
+        }
+        s.stack.resize(mark);
+    }
+
+    /// Adds a subtree's growth to the global counters every so often and checks the encodable
+    /// limits, so that an oversized tree fails early instead of exhausting memory.
+    void report(LocalTree& out, bool final) {
+        const std::uint64_t dn = out.nodes.size() - out.reported_nodes;
+        const std::uint64_t di = out.ids.size() - out.reported_ids;
+        if (!final && dn < (1u << 16) && di < (1u << 20)) return;
+        out.reported_nodes = out.nodes.size();
+        out.reported_ids = out.ids.size();
+        const std::uint64_t nodes = m_global_nodes.fetch_add(dn) + dn;
+        const std::uint64_t ids = m_global_ids.fetch_add(di) + di;
+        check_octree_limits(nodes, 0, ids);
+    }
+
+    /// Top phase: splits large nodes (depth first) and turns every other node into a task.
+    void build_top(Scratch& s, std::uint32_t node, std::uint32_t level, const std::uint32_t cell[3],
+                   std::size_t b, std::size_t e, std::size_t task_threshold) {
+        const std::size_t count = e - b;
+        if (count <= task_threshold || !should_split(level, cell, s.stack.data() + b, count)) {
+            Task task;
+            task.level = level;
+            std::copy(cell, cell + 3, task.cell);
+            task.list.assign(s.stack.begin() + static_cast<std::ptrdiff_t>(b),
+                             s.stack.begin() + static_cast<std::ptrdiff_t>(e));
+            m_top.nodes[node] =
+                (k_local_task_ref << pool::k_node_address_bits) | static_cast<std::uint32_t>(m_tasks.size());
+            m_tasks.push_back(std::move(task));
+            return;
+        }
+        std::size_t cb[8], ce[8];
+        split_lists(s, b, e, level, cell, cb, ce);
+        const std::size_t first = m_top.nodes.size();
+        m_top.nodes.resize(first + 8);
+        m_top.nodes[node] = make_node(NodeType::internal, static_cast<std::uint32_t>(first));
+        m_top.depth = std::max(m_top.depth, level);
+        report(m_top, false);
+        const std::size_t mark = cb[0];
+        for (unsigned c = 0; c < 8; ++c) {
+            const std::uint32_t cc[3] = {2 * cell[0] + (c & 1u), 2 * cell[1] + (c >> 1 & 1u),
+                                         2 * cell[2] + (c >> 2 & 1u)};
+            build_top(s, static_cast<std::uint32_t>(first + c), level + 1, cc, cb[c], ce[c], task_threshold);
+        }
+        s.stack.resize(mark);
+    }
+
+    SplatOctree run(unsigned threads, OctreeStats& stats) {
+        m_threads = threads;
+        const std::size_t n = m_splats.size();
+        // -- top phase --------------------------------------------------------------------------
+        Scratch top_scratch;
+        top_scratch.stack.resize(n);
+        std::iota(top_scratch.stack.begin(), top_scratch.stack.end(), 0u);
+        const std::size_t task_threshold = std::max<std::size_t>(2048, n / (std::size_t(threads) * 32));
+        m_top.nodes.resize(1);
+        const std::uint32_t root_cell[3] = {0, 0, 0};
+        m_top_phase = true;
+        build_top(top_scratch, 0, 0, root_cell, 0, n, task_threshold);
+        m_top_phase = false;
+        top_scratch = Scratch{};
+
+        // -- subtrees, largest first for load balance -------------------------------------------
+        std::vector<std::size_t> order(m_tasks.size());
+        std::iota(order.begin(), order.end(), std::size_t(0));
+        std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+            return m_tasks[a].list.size() > m_tasks[b].list.size();
+        });
+        std::vector<Scratch> scratch(threads);
+        std::uint64_t task_total = 0;
+        for (const Task& t : m_tasks) task_total += t.list.size();
+        std::atomic<std::uint64_t> task_done{0};
+        parallel_chunks(order.size(), 1, threads, [&](std::size_t tb, std::size_t te, unsigned worker) {
+            for (std::size_t k = tb; k < te; ++k) {
+                Task& task = m_tasks[order[k]];
+                Scratch& s = scratch[worker];
+                const std::uint64_t size = task.list.size();
+                s.stack.assign(task.list.begin(), task.list.end());
+                std::vector<std::uint32_t>().swap(task.list);
+                task.tree.nodes.resize(1);
+                build(task.tree, s, 0, task.level, task.cell, 0, s.stack.size());
+                report(task.tree, true);
+                const std::uint64_t done = task_done.fetch_add(size) + size;
+                if (worker == 0 && m_params.progress) m_params.progress(done, task_total);
+            }
+        });
+        scratch.clear();
+        return assemble(threads, stats);
+    }
+
+private:
+    SplatOctree assemble(unsigned threads, OctreeStats& stats) {
+        const std::size_t task_count = m_tasks.size();
+        std::vector<std::uint64_t> leaf_base(task_count + 1, 0), id_base(task_count + 1, 0);
+        std::uint64_t nodes_total = m_top.nodes.size() - task_count;  // placeholders become task roots
+        std::uint32_t depth = m_top.depth;
+        std::uint64_t empty = 0, max_leaf = 0;
+        for (std::size_t t = 0; t < task_count; ++t) {
+            const LocalTree& tree = m_tasks[t].tree;
+            leaf_base[t + 1] = leaf_base[t] + tree.leaf_begin.size();
+            id_base[t + 1] = id_base[t] + tree.ids.size();
+            nodes_total += tree.nodes.size();
+            depth = std::max(depth, tree.depth);
+            empty += tree.empty_leaves;
+            max_leaf = std::max(max_leaf, tree.max_leaf);
+        }
+        const std::uint64_t filled = leaf_base[task_count];
+        const std::uint64_t stored = id_base[task_count];
+        check_octree_limits(nodes_total, filled, stored);
+
+        SplatOctree octree;
+        // -- nodes, breadth first (thesis 2.2.3), children together in Morton order ---------------
+        struct Handle {
+            std::uint32_t tree;  // 0 = top tree, t + 1 = task t
+            std::uint32_t index;
+        };
+        auto resolve = [&](Handle h) {
+            if (h.tree == 0 && (m_top.nodes[h.index] >> pool::k_node_address_bits) == k_local_task_ref)
+                return Handle{pool::node_address(m_top.nodes[h.index]) + 1, 0};
+            return h;
+        };
+        octree.nodes.reserve(nodes_total);
+        std::vector<Handle> level_nodes{resolve(Handle{0, 0})}, next;
+        while (!level_nodes.empty()) {
+            next.clear();
+            const std::uint64_t next_level_start = octree.nodes.size() + level_nodes.size();
+            for (const Handle h : level_nodes) {
+                const LocalTree& tree = h.tree == 0 ? m_top : m_tasks[h.tree - 1].tree;
+                const std::uint32_t local = tree.nodes[h.index];
+                switch (pool::node_type(local)) {
+                    case NodeType::internal: {
+                        const std::uint64_t address = next_level_start + next.size();
+                        octree.nodes.push_back(
+                            make_node(NodeType::internal, static_cast<std::uint32_t>(address)));
+                        const std::uint32_t first = pool::node_address(local);
+                        for (std::uint32_t c = 0; c < 8; ++c)
+                            next.push_back(resolve(Handle{h.tree, first + c}));
+                        break;
+                    }
+                    case NodeType::filled_leaf: {
+                        const std::uint64_t leaf = leaf_base[h.tree - 1] + pool::node_address(local);
+                        octree.nodes.push_back(
+                            make_node(NodeType::filled_leaf, static_cast<std::uint32_t>(leaf)));
+                        break;
+                    }
+                    default:
+                        octree.nodes.push_back(make_node(NodeType::empty_leaf, 0));
+                        break;
+                }
+            }
+            std::swap(level_nodes, next);
+        }
+
+        // -- leaf ranges and leaf-contiguous splats (depth-first leaf order) ---------------------
+        octree.leaf_info.resize(filled + 1);
+        octree.splats.resize(stored);
+        parallel_chunks(task_count, 1, threads, [&](std::size_t tb, std::size_t te, unsigned) {
+            for (std::size_t t = tb; t < te; ++t) {
+                LocalTree& tree = m_tasks[t].tree;
+                for (std::size_t j = 0; j < tree.leaf_begin.size(); ++j)
+                    octree.leaf_info[leaf_base[t] + j] =
+                        static_cast<std::uint32_t>(id_base[t] + tree.leaf_begin[j]);
+                pool::Splat* out = octree.splats.data() + id_base[t];
+                for (const std::uint32_t id : tree.ids) {
+                    const BuildSplat& s = m_splats[id];
+                    *out++ = pool::Splat{{s.c[0], s.c[1], s.c[2]}, s.r, {s.n[0], s.n[1], s.n[2]}, s.point};
+                }
+                tree = LocalTree{};
+            }
+        });
+        octree.leaf_info[filled] = static_cast<std::uint32_t>(stored);
+
+        octree.info = m_info;
+        octree.info.depth = depth;
+        octree.info.max_leaf_splats = m_params.max_leaf_splats;
+        octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
+        octree.info.filled_leaves = static_cast<std::uint32_t>(filled);
+        octree.info.splat_count = stored;
+        octree.info.unique_splats = m_splats.size();
+        octree.info.flags = m_params.replicate ? pool::k_octree_replicated : 0u;
+
+        stats.nodes = octree.info.node_count;
+        stats.depth = depth;
+        stats.filled_leaves = octree.info.filled_leaves;
+        stats.empty_leaves = static_cast<std::uint32_t>(empty);
+        stats.unique_splats = m_splats.size();
+        stats.stored_splats = stored;
+        stats.replication_factor = m_splats.empty() ? 0.0 : double(stored) / double(m_splats.size());
+        stats.max_leaf_count = max_leaf;
+        stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
+                      octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+        return octree;
+    }
+
+    std::vector<BuildSplat> m_splats;
+    pool::OctreeInfo m_info;
+    OctreeParams m_params;
+    unsigned m_threads = 1;
+    bool m_top_phase = false;  // only the (serial) top phase classifies large lists in parallel
+    LocalTree m_top;
+    std::vector<Task> m_tasks;
+    std::atomic<std::uint64_t> m_global_nodes{1};
+    std::atomic<std::uint64_t> m_global_ids{0};
+};
+
+std::uint64_t spread_bits_3d(std::uint64_t v) {  // 21 bits -> every third bit of 63
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+}
+
+float round_down(double v) {
+    float f = static_cast<float>(v);
+    if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
+    return f;
+}
+float round_up(double v) {
+    float f = static_cast<float>(v);
+    if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
+    return f;
+}
+
+}  // namespace
+
+void check_octree_limits(std::uint64_t nodes, std::uint64_t filled_leaves, std::uint64_t stored_splats) {
+    const std::uint64_t max_nodes = std::uint64_t(pool::k_node_address_max) + 1;  // child address <= 2^30 - 8
+    if (nodes > max_nodes)
+        throw Error("octree too large: " + std::to_string(nodes) +
+                    " nodes exceed the 30-bit node address range (" + std::to_string(max_nodes) +
+                    "); raise --leaf-size or lower --max-depth");
+    if (filled_leaves > max_nodes)
+        throw Error("octree too large: " + std::to_string(filled_leaves) +
+                    " filled leaves exceed the 30-bit leaf address range (" + std::to_string(max_nodes) +
+                    "); raise --leaf-size or lower --max-depth");
+    if (stored_splats > std::numeric_limits<std::uint32_t>::max())
+        throw Error(
+            "octree too large: " + std::to_string(stored_splats) +
+            " stored splats exceed the 32-bit leaf_info range; raise --leaf-size or use --no-replicate");
+}
+
+void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint32_t cell[3], double lo[3],
+              double hi[3]) {
+    const double scale = double(info.root_size) / double(std::uint64_t(1) << level);
+    for (int a = 0; a < 3; ++a) {
+        lo[a] = double(info.root_min[a]) + scale * double(cell[a]);
+        hi[a] = double(info.root_min[a]) + scale * double(std::uint64_t(cell[a]) + 1);
+    }
+}
+
+SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                         std::span<const float> radii, const OctreeParams& params, OctreeStats* stats_out) {
+    const double start = tool::now_seconds();
+    if (normals.size() != positions.size() || radii.size() != positions.size())
+        throw Error("octree build: " + std::to_string(positions.size()) + " positions but " +
+                    std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
+                    " radii");
+    if (params.max_leaf_splats == 0) throw Error("octree build: the leaf size (X) must be at least 1");
+    if (params.max_depth > k_max_supported_depth)
+        throw Error("octree build: maximum depth " + std::to_string(params.max_depth) + " exceeds " +
+                    std::to_string(k_max_supported_depth));
+    if (!(params.min_cell_ratio >= 0) || !std::isfinite(params.min_cell_ratio))
+        throw Error("octree build: the minimum cell ratio must be finite and >= 0");
+    if (positions.size() > std::numeric_limits<std::uint32_t>::max())
+        throw Error("octree build: more than 2^32 - 1 points");
+    const unsigned threads = resolve_threads(params.threads);
+
+    // -- 1. the splats: disks with a finite positive radius and a usable normal (thesis 3.1) ------
+    OctreeStats stats;
+    std::vector<BuildSplat> splats;
+    splats.reserve(positions.size());
+    double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
+                    std::numeric_limits<double>::infinity()};
+    double hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        const float r = radii[i];
+        const double c[3] = {positions[i].x, positions[i].y, positions[i].z};
+        double n[3] = {normals[i].x, normals[i].y, normals[i].z};
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        if (!(r > 0) || !std::isfinite(r) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
+            !std::isfinite(c[2]) || !(len > 0) || !std::isfinite(len)) {
+            ++stats.skipped_splats;
+            continue;
+        }
+        BuildSplat s{};
+        for (int a = 0; a < 3; ++a) {
+            n[a] /= len;
+            s.c[a] = static_cast<float>(c[a]);
+            s.n[a] = static_cast<float>(n[a]);
+        }
+        s.r = r;
+        s.point = static_cast<std::uint32_t>(i);
+        for (int a = 0; a < 3; ++a) {
+            // the exact test uses the stored float normal: bound the box with it, renormalised
+            const double na = double(s.n[a]);
+            // + 1e-6 r: the stored normal is unit only to float precision; the box must stay a superset
+            const double e = disk_half_extent(double(r), std::min(1.0, std::fabs(na))) + 1e-6 * double(r);
+            s.box_lo[a] = round_down(c[a] - e);
+            s.box_hi[a] = round_up(c[a] + e);
+            lo[a] = std::min(lo[a], c[a] - r);
+            hi[a] = std::max(hi[a], c[a] + r);
+        }
+        splats.push_back(s);
+    }
+    if (splats.empty())
+        throw Error("octree build: no point has a finite positive radius and a normal (" +
+                    std::to_string(positions.size()) + " points)");
+
+    // -- the root: a cube enclosing every disk (centre +- radius), enlarged by 1/1024 ----------------
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
+    const double size = extent * (1.0 + 1.0 / 1024.0);
+    pool::OctreeInfo info{};
+    double root_size = 0;
+    for (int a = 0; a < 3; ++a) {
+        info.root_min[a] = round_down(0.5 * (lo[a] + hi[a]) - 0.5 * size);
+        root_size = std::max(root_size, hi[a] - double(info.root_min[a]));
+    }
+    info.root_size = round_up(root_size * (1.0 + 1.0 / 4096.0));
+    for (int a = 0; a < 3; ++a)
+        if (!(double(info.root_min[a]) + double(info.root_size) > hi[a]) ||
+            !(double(info.root_min[a]) < lo[a]))
+            throw Error("octree build: the root cube cannot enclose the model in float precision");
+
+    // Morton (Z-curve) order of the centres: the builder's lists then touch nearby memory, whatever
+    // the input order (a random-order input otherwise makes every access a cache miss). Ties keep
+    // the input order, so the result does not depend on the thread count.
+    {
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(splats.size());
+        const double scale = 2097151.0 / double(info.root_size);
+        parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i) {
+                std::uint64_t key = 0;
+                for (int a = 0; a < 3; ++a) {
+                    const double t =
+                        std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0);
+                    key |= spread_bits_3d(static_cast<std::uint64_t>(t)) << a;
+                }
+                keys[i] = {key, static_cast<std::uint32_t>(i)};
+            }
+        });
+        std::sort(keys.begin(), keys.end());
+        std::vector<BuildSplat> sorted(splats.size());
+        for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = splats[keys[i].second];
+        splats = std::move(sorted);
+    }
+
+    Builder builder(std::move(splats), info, params);
+    SplatOctree octree = builder.run(threads, stats);
+    stats.seconds = tool::now_seconds() - start;
+    if (stats_out) *stats_out = stats;
+    return octree;
+}
+
+void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer) {
+    check_octree_limits(octree.nodes.size(), octree.leaf_info.empty() ? 0 : octree.leaf_info.size() - 1,
+                        octree.splats.size());
+    if (octree.info.node_count != octree.nodes.size() ||
+        octree.leaf_info.size() != std::size_t(octree.info.filled_leaves) + 1 ||
+        octree.info.splat_count != octree.splats.size())
+        throw Error("octree: octree_info counts disagree with the node, leaf and splat arrays");
+    writer.add_array(pool::SectionType::octree_info, std::vector<pool::OctreeInfo>{octree.info});
+    writer.add_array(pool::SectionType::octree_nodes, std::move(octree.nodes));
+    writer.add_array(pool::SectionType::leaf_info, std::move(octree.leaf_info));
+    writer.add_array(pool::SectionType::splats, std::move(octree.splats));
+}
+
+}  // namespace prt::pre

@@ -1,0 +1,533 @@
+// PointRT core: ray tracing the exact MLS point-set surface of Wald & Seidel 2005 ("WS05"):
+// Adamson and Alexa's implicit surface F(x) = W^2(x) f(x) = 0 (WS05 3.1.1, eq. 1-2), found per
+// kd-tree cell by k regular samples and a sign change (WS05 3.2.1), with a kd-tree whose leaves
+// reference every splat whose support overlaps them (WS05 3.4, built by prt-mls).
+// Host and device (PRT_HD): plain functions over an MlsView of the pool's sections; no allocation,
+// recursion, exceptions or virtual calls. Every loop is bounded: the traversal stack by the
+// validated tree depth (pool::k_max_mls_depth), the walk by MlsParams::max_steps, sampling by
+// MlsParams::samples and refinement by MlsParams::refine_steps.
+//
+// Per ray, in the model's local frame (CPU loop or one CUDA thread per ray):
+//     MlsHit hit; MlsStats stats;
+//     if (trace_mls(view, o, d, t_max, inside, params, hit, stats)) ... hit.t, hit.position, hit.normal
+//     bool shadowed = mls_occluded(view, o, d, t_max, inside, params, stats);
+//     Vec3 srgb = mls_blend_color(view, colors, hit);   // optional: weighted point colors at the hit
+// Host setup: prt::mls::load_mls_view(pool) (preprocess/mls/mls_pool.h) validates the sections.
+//
+// The function (eq. 2): with w_i(x) = W(|x - p_i| / R_i), W(r) = max(0, 1 - r) (eq. 1's hat),
+//     F(x) = (W(x) x - sum w_i p_i) . sum w_i n_i = (sum w_i (x - p_i)) . (sum w_i n_i)
+// The second form is what this file evaluates: the same value, but each x - p_i is a short vector
+// (|x - p_i| < R_i), so float sums do not cancel the model's position away (WS05's W x - P loses
+// the bits of |x| to rounding; the MLS tests measure both forms against double precision).
+// F > 0 on the side the normals point to (outside), F < 0 inside, F = 0 where no support reaches.
+#pragma once
+
+#include <cstdint>
+
+#include "prt/core/config.h"
+#include "prt/core/math.h"
+#include "prt/formats/mls_layout.h"
+
+namespace prt::core {
+
+/// The MLS sections of one pool as the core reads them (built and validated on the host by
+/// prt::mls::load_mls_view; the pointers may be device pointers to the same bytes).
+struct MlsView {
+    const pool::MlsNode* nodes = nullptr;    ///< node_count nodes, node 0 the root
+    const std::uint32_t* refs = nullptr;     ///< ref_count splat indices, leaf after leaf
+    const pool::MlsSplat* splats = nullptr;  ///< splat_count splats, local frame
+    std::uint32_t node_count = 0;
+    std::uint32_t ref_count = 0;
+    std::uint32_t splat_count = 0;
+    std::uint32_t depth = 0;  ///< deepest level (<= pool::k_max_mls_depth): bounds the stack
+    Vec3 root_lo{0, 0, 0};    ///< root cell, local frame
+    Vec3 root_hi{0, 0, 0};
+};
+
+/// Which sign changes of F count as hits.
+enum MlsFaces : std::uint32_t {
+    /// Any sign change (the first root along the ray): the reference surface, primary rays.
+    k_mls_faces_both = 0,
+    /// thesis 3.6 seamless rule (prt/core/ray.h): outside rays accept only F going from + to -
+    /// (entering, a front face), inside rays only - to + (leaving). Secondary and shadow rays
+    /// leaving the surface then never re-hit the root they start on: no minimum hit distance.
+    k_mls_faces_by_ray = 1,
+};
+
+/// Settings of the intersection (WS05 3.2).
+struct MlsParams {
+    /// WS05 3.2.1-3.2.2: regular samples per cell interval, both ends included (k; at least 2).
+    /// WS05 uses 4 with a well-shrunk tree; MlsInfo::samples records what the tree was built for.
+    std::uint32_t samples = 4;
+    /// Regula falsi (Illinois) steps after the sign change, each one more evaluation of F; 0 is
+    /// WS05's single linear interpolation between the two bracketing samples.
+    std::uint32_t refine_steps = 0;
+    std::uint32_t faces = k_mls_faces_both;  ///< MlsFaces
+    /// Nodes one ray may visit before the walk stops (MlsStats::truncated): a bound on every walk
+    /// even for a corrupted view (a valid tree visits each node at most once per ray).
+    std::uint32_t max_steps = 1u << 20;
+};
+
+/// Where a ray met the MLS surface.
+struct MlsHit {
+    float t = 0.0f;            ///< ray parameter (origin + t dir, t in [0, t_max))
+    Vec3 position{0, 0, 0};    ///< local frame
+    Vec3 normal{0, 0, 1};      ///< unit sum w_i n_i at the hit (WS05 3.2.1: "same loop"), outward
+    std::uint32_t front = 0;   ///< 1 when F went from + to - (the ray entered: a front face)
+    std::uint32_t point = 0;   ///< source point of the splat with the largest weight at the hit
+    std::uint32_t leaf_first = 0;  ///< refs of the leaf holding the hit (for mls_blend_color)
+    std::uint32_t leaf_count = 0;
+};
+
+/// Work counters of one query, WS05 4.3's per-ray statistics (sum them over rays).
+struct MlsStats {
+    std::uint32_t traversal_steps = 0;  ///< kd-tree nodes visited, inner and leaf
+    std::uint32_t cells = 0;            ///< leaves visited, empty ones included
+    std::uint32_t intersections = 0;    ///< non-empty leaves whose interval was sampled
+    std::uint32_t splats = 0;           ///< refs of those leaves ("splats visited")
+    std::uint32_t evaluations = 0;      ///< evaluations of F (samples and refinement steps)
+    std::uint32_t truncated = 0;        ///< walks stopped by max_steps or a full stack
+};
+
+/// The weighted sums at one point (WS05 eq. 2): F = dot(a, n).
+template <class Real>
+struct MlsSums {
+    Real w = 0;                ///< W(x) = sum w_i
+    Real ax = 0, ay = 0, az = 0;  ///< sum w_i (x - p_i)
+    Real nx = 0, ny = 0, nz = 0;  ///< sum w_i n_i
+    Real w_max = 0;            ///< largest single weight (tracked only when asked)
+    std::uint32_t heaviest = 0;  ///< MlsSplat::point of that splat
+    PRT_HD PRT_INLINE Real f() const { return ax * nx + ay * ny + az * nz; }
+};
+
+namespace detail {
+
+PRT_HD PRT_INLINE float mls_sqrt(float v) {
+    return sqrtf(v);
+}
+PRT_HD PRT_INLINE double mls_sqrt(double v) {
+    return sqrt(v);
+}
+PRT_HD PRT_INLINE float mls_abs(float v) {
+    return fabsf(v);
+}
+PRT_HD PRT_INLINE double mls_abs(double v) {
+    return fabs(v);
+}
+
+/// Reads a splat (two 16-byte read-only loads on the GPU: payloads are 256-byte aligned and an
+/// MlsSplat is 32 bytes).
+PRT_HD PRT_INLINE pool::MlsSplat load_mls_splat(const pool::MlsSplat* p) {
+#if PRT_DEVICE_CODE
+    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
+    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
+    pool::MlsSplat s;
+    s.position = pool::Float3{a.x, a.y, a.z};
+    s.inv_support = a.w;
+    s.normal = pool::Float3{b.x, b.y, b.z};
+    s.point = __float_as_uint(b.w);
+    return s;
+#else
+    return *p;
+#endif
+}
+
+PRT_HD PRT_INLINE float mls_split_value(const pool::MlsNode& n) {
+#if PRT_DEVICE_CODE
+    return __uint_as_float(n.payload);
+#else
+    float f;
+    static_assert(sizeof(f) == sizeof(n.payload));
+    __builtin_memcpy(&f, &n.payload, sizeof(f));
+    return f;
+#endif
+}
+
+}  // namespace detail
+
+/// Split position of an inner node.
+PRT_HD PRT_INLINE float mls_node_split(const pool::MlsNode& n) {
+    return detail::mls_split_value(n);
+}
+
+/// WS05 3.1.1, eq. 1-2: the weighted sums over refs[first, first + count) at x. Per splat
+/// w = 1 - |x - p| / R for |x - p| < R, else 0. Real is the accumulation (and per-splat) precision:
+/// float on the GPU, double for host references. `track` also records the heaviest splat.
+template <class Real, bool track = false>
+PRT_HD inline MlsSums<Real> mls_sums(const MlsView& v, std::uint32_t first, std::uint32_t count, Real x,
+                                     Real y, Real z) {
+    MlsSums<Real> s;
+    const std::uint32_t end = first + count;
+    for (std::uint32_t k = first; k < end; ++k) {
+        const pool::MlsSplat sp = detail::load_mls_splat(v.splats + v.refs[k]);
+        const Real dx = x - Real(sp.position.x);
+        const Real dy = y - Real(sp.position.y);
+        const Real dz = z - Real(sp.position.z);
+        const Real inv = Real(sp.inv_support);
+        const Real q = (dx * dx + dy * dy + dz * dz) * (inv * inv);
+        if (!(q < Real(1))) continue;  // outside the support (also NaN)
+        const Real w = Real(1) - detail::mls_sqrt(q);
+        s.w += w;
+        s.ax += w * dx;
+        s.ay += w * dy;
+        s.az += w * dz;
+        s.nx += w * Real(sp.normal.x);
+        s.ny += w * Real(sp.normal.y);
+        s.nz += w * Real(sp.normal.z);
+        if constexpr (track) {
+            if (w > s.w_max) {
+                s.w_max = w;
+                s.heaviest = sp.point;
+            }
+        }
+    }
+    return s;
+}
+
+/// The leaf whose cell holds x (points on a split plane go left); returns its node index, or
+/// node_count when x is outside the root cell or the walk is cut short.
+PRT_HD inline std::uint32_t mls_locate_leaf(const MlsView& v, Vec3 x) {
+    if (v.node_count == 0) return v.node_count;
+    if (!(x.x >= v.root_lo.x && x.x <= v.root_hi.x && x.y >= v.root_lo.y && x.y <= v.root_hi.y &&
+          x.z >= v.root_lo.z && x.z <= v.root_hi.z))
+        return v.node_count;
+    std::uint32_t node = 0;
+    for (std::uint32_t level = 0; level <= pool::k_max_mls_depth; ++level) {  // bound: tree depth
+        const pool::MlsNode n = v.nodes[node];
+        if (pool::mls_node_is_leaf(n)) return node;
+        const std::uint32_t axis = pool::mls_node_axis(n);
+        node = pool::mls_node_left(n) + (component(x, static_cast<int>(axis)) <= mls_node_split(n) ? 0u : 1u);
+        if (node >= v.node_count) return v.node_count;
+    }
+    return v.node_count;
+}
+
+/// F, W and the normal sum at x through the tree (the leaf holding x). Outside the root cell
+/// every sum is 0.
+template <class Real = float>
+PRT_HD inline MlsSums<Real> mls_eval(const MlsView& v, Vec3 x) {
+    const std::uint32_t leaf = mls_locate_leaf(v, x);
+    if (leaf >= v.node_count) return MlsSums<Real>{};
+    const pool::MlsNode n = v.nodes[leaf];
+    return mls_sums<Real>(v, pool::mls_leaf_first(n), pool::mls_leaf_count(n), Real(x.x), Real(x.y), Real(x.z));
+}
+
+namespace detail {
+
+/// Fully unrolls a loop over the k_mls_lanes lanes (on the host too: GCC then keeps the lane
+/// accumulators in registers and vectorizes them).
+#if defined(__CUDACC__)
+#define PRT_MLS_UNROLL_LANES _Pragma("unroll")
+#elif defined(__clang__)
+#define PRT_MLS_UNROLL_LANES _Pragma("clang loop unroll(full)")
+#elif defined(__GNUC__)
+#define PRT_MLS_UNROLL_LANES _Pragma("GCC unroll 4")
+#else
+#define PRT_MLS_UNROLL_LANES
+#endif
+
+/// Samples evaluated per sweep over a leaf's splats (WS05 3.2.2: "computing all four samples in a
+/// single sweep"): each splat is loaded once for four points, and the four lanes are independent
+/// (SIMD on the CPU, instruction-level parallelism on the GPU).
+inline constexpr std::uint32_t k_mls_lanes = 4;
+
+/// The weighted sums at k_mls_lanes points in one sweep over refs[first, first + count).
+template <class Real>
+struct MlsLanes {
+    Real w[k_mls_lanes], ax[k_mls_lanes], ay[k_mls_lanes], az[k_mls_lanes];
+    Real nx[k_mls_lanes], ny[k_mls_lanes], nz[k_mls_lanes];
+};
+
+template <class Real>
+PRT_HD inline void mls_sums_lanes(const MlsView& v, std::uint32_t first, std::uint32_t count, const Real* xs,
+                                  const Real* ys, const Real* zs, MlsLanes<Real>& out) {
+    // Local accumulators (not `out`'s): they cannot alias the splat loads, so they stay in
+    // registers and the four lanes vectorize.
+    Real w[k_mls_lanes] = {}, ax[k_mls_lanes] = {}, ay[k_mls_lanes] = {}, az[k_mls_lanes] = {};
+    Real sx[k_mls_lanes] = {}, sy[k_mls_lanes] = {}, sz[k_mls_lanes] = {};
+    Real x[k_mls_lanes], y[k_mls_lanes], z[k_mls_lanes];
+    PRT_MLS_UNROLL_LANES
+    for (std::uint32_t l = 0; l < k_mls_lanes; ++l) {
+        x[l] = xs[l];
+        y[l] = ys[l];
+        z[l] = zs[l];
+    }
+    const std::uint32_t end = first + count;
+    for (std::uint32_t k = first; k < end; ++k) {
+        const pool::MlsSplat sp = load_mls_splat(v.splats + v.refs[k]);
+        const Real px = Real(sp.position.x), py = Real(sp.position.y), pz = Real(sp.position.z);
+        const Real inv2 = Real(sp.inv_support) * Real(sp.inv_support);
+        const Real nx = Real(sp.normal.x), ny = Real(sp.normal.y), nz = Real(sp.normal.z);
+        PRT_MLS_UNROLL_LANES
+        for (std::uint32_t l = 0; l < k_mls_lanes; ++l) {
+            const Real dx = x[l] - px, dy = y[l] - py, dz = z[l] - pz;
+            const Real q = (dx * dx + dy * dy + dz * dz) * inv2;
+            // w = max(0, 1 - sqrt(q)) without a branch or select: (r + |r|) / 2 is r for r > 0
+            // and 0 otherwise, exactly, so the lanes vectorize (with -fno-math-errno on the host)
+            // and outside the support (q >= 1) the weight is 0 and adds nothing.
+            const Real r = Real(1) - mls_sqrt(q);
+            const Real wl = Real(0.5) * (r + mls_abs(r));
+            w[l] += wl;
+            ax[l] += wl * dx;
+            ay[l] += wl * dy;
+            az[l] += wl * dz;
+            sx[l] += wl * nx;
+            sy[l] += wl * ny;
+            sz[l] += wl * nz;
+        }
+    }
+    PRT_MLS_UNROLL_LANES
+    for (std::uint32_t l = 0; l < k_mls_lanes; ++l) {
+        out.w[l] = w[l];
+        out.ax[l] = ax[l];
+        out.ay[l] = ay[l];
+        out.az[l] = az[l];
+        out.nx[l] = sx[l];
+        out.ny[l] = sy[l];
+        out.nz[l] = sz[l];
+    }
+}
+
+/// WS05 3.2.1 INTERSECT over one cell interval [t0, t1] of the ray, with the leaf's refs: k
+/// regular samples (both ends included), evaluated k_mls_lanes at a time; the first accepted sign
+/// change is interpolated (and refined). Returns true on a root with t < t_max (fills `hit`
+/// unless any_hit).
+template <class Real, bool any_hit>
+PRT_HD inline bool mls_intersect_leaf(const MlsView& v, std::uint32_t first, std::uint32_t count, Vec3 o,
+                                      Vec3 d, float t0, float t1, float t_max, bool inside,
+                                      const MlsParams& p, MlsHit* hit, MlsStats& st) {
+    const std::uint32_t k = p.samples < 2u ? 2u : p.samples;
+    const float inv_k = 1.0f / static_cast<float>(k - 1u);
+    bool prev_valid = false;
+    Real prev_f = 0;
+    float prev_t = t0;
+    Vec3 prev_n{0, 0, 0};
+    for (std::uint32_t base = 0; base < k; base += k_mls_lanes) {  // bound: k / 4 sweeps
+        float ts[k_mls_lanes];
+        Real xs[k_mls_lanes], ys[k_mls_lanes], zs[k_mls_lanes];
+        PRT_UNROLL
+        for (std::uint32_t l = 0; l < k_mls_lanes; ++l) {
+            const std::uint32_t i = base + l < k ? base + l : k - 1u;  // spare lanes repeat the last sample
+            // Both ends exactly (t1 is shared with the next cell: no root falls between cells).
+            ts[l] = i + 1u == k ? t1 : t0 + (t1 - t0) * (static_cast<float>(i) * inv_k);
+            const Vec3 x = o + d * ts[l];
+            xs[l] = Real(x.x);
+            ys[l] = Real(x.y);
+            zs[l] = Real(x.z);
+        }
+        MlsLanes<Real> s;
+        mls_sums_lanes<Real>(v, first, count, xs, ys, zs, s);
+        const std::uint32_t lanes = k - base < k_mls_lanes ? k - base : k_mls_lanes;
+        st.evaluations += lanes;
+        for (std::uint32_t l = 0; l < lanes; ++l) {
+            const float t = ts[l];
+            if (!(s.w[l] > Real(0))) {  // no support here: f undefined, never interpolate across the gap
+                prev_valid = false;
+                continue;
+            }
+            const Real f = s.ax[l] * s.nx[l] + s.ay[l] * s.ny[l] + s.az[l] * s.nz[l];
+            const Vec3 n_here = vec3(float(s.nx[l]), float(s.ny[l]), float(s.nz[l]));
+            if (prev_valid) {
+                const bool entering = prev_f > Real(0) && f <= Real(0);
+                const bool leaving = prev_f < Real(0) && f >= Real(0);
+                const bool accept = p.faces == k_mls_faces_by_ray ? (inside ? leaving : entering)
+                                                                  : (entering || leaving);
+                if (accept) {
+                    // WS05 3.2.1: linear interpolation between the bracketing samples, optionally
+                    // refined by regula falsi (Illinois variant: the bracket always holds the root).
+                    float ta = prev_t, tb = t;
+                    Real fa = prev_f, fb = f;
+                    int kept = 0;  // > 0: a kept that many times in a row, < 0: b
+                    for (std::uint32_t r = 0; r < p.refine_steps; ++r) {
+                        const float tm = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
+                        if (!(tm > ta && tm < tb)) break;  // converged to float resolution
+                        const Vec3 xm = o + d * tm;
+                        const MlsSums<Real> sm =
+                            mls_sums<Real>(v, first, count, Real(xm.x), Real(xm.y), Real(xm.z));
+                        ++st.evaluations;
+                        if (!(sm.w > Real(0))) break;
+                        const Real fm = sm.f();
+                        if (fm == Real(0)) {
+                            ta = tb = tm;
+                            fa = Real(1);
+                            fb = Real(-1);
+                            break;
+                        }
+                        if ((fm > Real(0)) == (fa > Real(0))) {
+                            ta = tm;
+                            fa = fm;
+                            if (kept > 0) fb *= Real(0.5);
+                            kept = kept > 0 ? kept + 1 : 1;
+                        } else {
+                            tb = tm;
+                            fb = fm;
+                            if (kept < 0) fa *= Real(0.5);
+                            kept = kept < 0 ? kept - 1 : -1;
+                        }
+                    }
+                    float th = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
+                    th = fminf(fmaxf(th, ta), tb);
+                    if (th < t_max) {
+                        if constexpr (!any_hit) {
+                            // WS05 3.2.1: the normal from the same weighted sums, at the hit.
+                            const Vec3 xh = o + d * th;
+                            const MlsSums<Real> sh =
+                                mls_sums<Real, true>(v, first, count, Real(xh.x), Real(xh.y), Real(xh.z));
+                            ++st.evaluations;
+                            hit->t = th;
+                            hit->position = xh;
+                            hit->normal = normalize_or(vec3(float(sh.nx), float(sh.ny), float(sh.nz)),
+                                                       normalize_or(n_here + prev_n, -normalize(d)));
+                            hit->front = entering ? 1u : 0u;
+                            hit->point = sh.w > Real(0) ? sh.heaviest : 0u;
+                            hit->leaf_first = first;
+                            hit->leaf_count = count;
+                        }
+                        return true;
+                    }
+                }
+            }
+            prev_valid = f != Real(0);
+            prev_f = f;
+            prev_t = t;
+            prev_n = n_here;
+        }
+    }
+    return false;
+}
+
+/// Front-to-back kd-tree walk (WS05 3.2, [Wal04]): each leaf is intersected over the ray interval
+/// inside its cell, so the first accepted root is the closest. Split planes are crossed at
+/// t = (split - o) / d, computed once per node, so the two children's intervals meet exactly: no
+/// epsilon, and a ray lying in a plane or starting on it goes to the side it moves into.
+template <class Real, bool any_hit>
+PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
+                            MlsHit* hit, MlsStats& st) {
+    if (v.node_count == 0 || !(t_max > 0.0f)) return false;
+    // Clip to the root cell (slab test; zero direction components test the slab directly).
+    float t0 = 0.0f, t1 = t_max;
+    float inv_d[3];
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float oa = component(o, a), da = component(d, a);
+        const float lo = component(v.root_lo, a), hi = component(v.root_hi, a);
+        if (da == 0.0f) {
+            inv_d[a] = 0.0f;
+            if (!(oa >= lo && oa <= hi)) return false;
+            continue;
+        }
+        inv_d[a] = 1.0f / da;
+        float ta = (lo - oa) * inv_d[a], tb = (hi - oa) * inv_d[a];
+        if (ta > tb) {
+            const float s = ta;
+            ta = tb;
+            tb = s;
+        }
+        t0 = fmaxf(t0, ta);
+        t1 = fminf(t1, tb);
+    }
+    if (!(t0 <= t1)) return false;  // also NaN
+
+    struct Entry {
+        std::uint32_t node;
+        float t_near, t_far;
+    };
+    Entry stack[pool::k_max_mls_depth + 1];
+    std::uint32_t sp = 0;
+    std::uint32_t node = 0;
+    float tn = t0, tf = t1;
+    for (std::uint32_t step = 0;; ++step) {
+        if (step >= p.max_steps || node >= v.node_count) {
+            ++st.truncated;
+            return false;
+        }
+        ++st.traversal_steps;
+        const pool::MlsNode n = v.nodes[node];
+        if (pool::mls_node_is_leaf(n)) {
+            ++st.cells;
+            const std::uint32_t count = pool::mls_leaf_count(n);
+            if (count > 0u) {
+                ++st.intersections;
+                st.splats += count;
+                if (mls_intersect_leaf<Real, any_hit>(v, pool::mls_leaf_first(n), count, o, d, tn, tf, t_max,
+                                                      inside, p, hit, st))
+                    return true;
+            }
+            if (sp == 0) return false;
+            --sp;
+            node = stack[sp].node;
+            tn = stack[sp].t_near;
+            tf = stack[sp].t_far;
+            continue;
+        }
+        const std::uint32_t axis = pool::mls_node_axis(n);
+        const std::uint32_t left = pool::mls_node_left(n);
+        const float split = mls_node_split(n);
+        const float oa = component(o, static_cast<int>(axis));
+        const float da = component(d, static_cast<int>(axis));
+        const bool left_first = oa < split || (oa == split && da <= 0.0f);
+        const std::uint32_t near_child = left_first ? left : left + 1u;
+        const std::uint32_t far_child = left_first ? left + 1u : left;
+        if (da == 0.0f) {  // parallel to the plane: one side only
+            node = near_child;
+            continue;
+        }
+        const float ts = (split - oa) * inv_d[axis];
+        if (ts >= tf || ts <= 0.0f) {
+            node = near_child;
+        } else if (ts <= tn) {
+            node = far_child;
+        } else {
+            if (sp > pool::k_max_mls_depth) {  // deeper than any valid tree: never for a valid view
+                ++st.truncated;
+                return false;
+            }
+            stack[sp++] = Entry{far_child, ts, tf};
+            node = near_child;
+            tf = ts;
+        }
+    }
+}
+
+}  // namespace detail
+
+/// Closest root of F along o + t d with t in [0, t_max) (model local frame; d need not be unit).
+/// Real: float (GPU, renderer) or double (host references). Returns false on a miss.
+template <class Real = float>
+PRT_HD inline bool trace_mls(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
+                             MlsHit& hit, MlsStats& stats) {
+    return detail::mls_walk<Real, false>(v, o, d, t_max, inside, p, &hit, stats);
+}
+
+/// Shadow rays: whether any accepted root lies in t in [0, t_max) (stops at the first one found).
+template <class Real = float>
+PRT_HD inline bool mls_occluded(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
+                                MlsStats& stats) {
+    return detail::mls_walk<Real, true>(v, o, d, t_max, inside, p, nullptr, stats);
+}
+
+/// Point colors blended with the MLS weights at the hit (display-encoded RGB in [0,1], as
+/// stored); (1,1,1) without colors. Uses the refs of the leaf that held the hit.
+PRT_HD inline Vec3 mls_blend_color(const MlsView& v, const pool::Rgba8* colors, const MlsHit& hit) {
+    if (colors == nullptr) return Vec3{1.0f, 1.0f, 1.0f};
+    float wsum = 0.0f;
+    Vec3 c{0, 0, 0};
+    const std::uint32_t end = hit.leaf_first + hit.leaf_count;
+    for (std::uint32_t k = hit.leaf_first; k < end; ++k) {
+        const pool::MlsSplat sp = detail::load_mls_splat(v.splats + v.refs[k]);
+        const Vec3 dx = hit.position - vec3(sp.position);
+        const float q = length2(dx) * sp.inv_support * sp.inv_support;
+        if (!(q < 1.0f)) continue;
+        const float w = 1.0f - sqrtf(q);
+        const pool::Rgba8 col = colors[sp.point];
+        c += Vec3{float(col.r), float(col.g), float(col.b)} * w;
+        wsum += w;
+    }
+    if (!(wsum > 0.0f)) {
+        const pool::Rgba8 col = colors[hit.point];
+        return Vec3{float(col.r), float(col.g), float(col.b)} * (1.0f / 255.0f);
+    }
+    return c * (1.0f / (255.0f * wsum));
+}
+
+}  // namespace prt::core

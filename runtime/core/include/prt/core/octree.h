@@ -1,0 +1,325 @@
+// PointRT core: the splat octree as seen by a ray (thesis 2.2).
+//
+// The pool stores the octree as 32-bit node words (pool_layout.h): node 0 is the root, the 8
+// children of an internal node are contiguous in Morton order c = x | y<<1 | z<<2. A ray walks the
+// leaves it crosses, front to back:
+//
+//   thesis 2.2.1: find the leaf holding the current point, test its splats, move to the point
+//                 where the ray leaves that leaf, repeat until the ray leaves the root;
+//   thesis 2.2.2: each lookup descends top-down, in the root's normalized coordinates, picking
+//                 the child from the next bit of the point's coordinates. The walk keeps the
+//                 path of node indices to the current leaf and starts the next descent at the
+//                 deepest node that path shares with the next cell (the level above the highest
+//                 fixed-point bit that changed) instead of at the root: the same leaf, with fewer
+//                 dependent memory reads (measured: see runtime/README.md).
+//
+// Robustness (DESIGN.md, numerical robustness): the thesis nudges the exit point by a small
+// epsilon; here there is none. The current point is held in 30-bit fixed point per axis
+// (k_fixed_bits), the exit axis is the nearest of the three axis-plane crossings, and the
+// neighbour is entered by integer cell arithmetic: the exit-axis coordinate is set to the first
+// (or last) fixed-point value of the neighbouring cell, the other two are the ray's float position
+// at the exit clamped into the current cell and never moved backwards along the ray. Every step
+// therefore moves the point by at least one fixed-point unit along some axis, strictly forward,
+// whatever the model's scale, offset or depth, and for rays that graze faces, edges and corners.
+// Ray parameters t (used only to order hits) come from floats; correctness of the walk does not.
+// The number of steps per ray is bounded (RenderParams::max_steps) and truncation is counted.
+#pragma once
+
+#include <cstdint>
+
+#include "prt/core/math.h"
+#include "prt/core/ray.h"
+#include "prt/formats/pool_layout.h"
+
+namespace prt::core {
+
+/// Bits of the fixed-point coordinates: the deepest level the walk can resolve. Pool positions are
+/// floats (24-bit mantissa), so deeper trees carry no extra information.
+inline constexpr std::uint32_t k_fixed_bits = 30;
+inline constexpr std::uint32_t k_fixed_one = 1u << k_fixed_bits;
+inline constexpr std::uint32_t k_fixed_max = k_fixed_one - 1;
+
+/// A non-owning view of a model's octree sections (pool section types 16-19).
+struct OctreeView {
+    const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words
+    std::uint32_t node_count = 0;
+    const std::uint32_t* leaf_info = nullptr;  ///< filled_leaves + 1 begin indices into splats
+    std::uint32_t filled_leaves = 0;
+    const pool::Splat* splats = nullptr;  ///< leaf-contiguous splats
+    std::uint32_t splat_count = 0;
+    Vec3 root_min{0, 0, 0};  ///< root cube corner, model local frame
+    float root_size = 1.0f;  ///< root cube edge
+    float inv_root_size = 1.0f;
+    std::uint32_t flags = 0;  ///< pool::OctreeFlags
+};
+
+/// Node word decoding (pool_layout.h encoding), callable from device code.
+PRT_HD PRT_INLINE bool node_is_internal(std::uint32_t node) {
+    return (node >> pool::k_node_address_bits) == static_cast<std::uint32_t>(pool::NodeType::internal);
+}
+PRT_HD PRT_INLINE bool node_is_filled(std::uint32_t node) {
+    return (node >> pool::k_node_address_bits) == static_cast<std::uint32_t>(pool::NodeType::filled_leaf);
+}
+PRT_HD PRT_INLINE std::uint32_t node_addr(std::uint32_t node) {
+    return node & pool::k_node_address_max;
+}
+inline constexpr std::uint32_t k_empty_leaf_node = static_cast<std::uint32_t>(pool::NodeType::empty_leaf)
+                                                   << pool::k_node_address_bits;
+
+/// Fixed-point coordinates of the walk's current point.
+struct Fixed3 {
+    std::uint32_t x, y, z;
+};
+
+PRT_HD PRT_INLINE std::uint32_t fixed_get(const Fixed3& p, int axis) {
+    return axis == 0 ? p.x : (axis == 1 ? p.y : p.z);
+}
+PRT_HD PRT_INLINE void fixed_set(Fixed3& p, int axis, std::uint32_t v) {
+    if (axis == 0)
+        p.x = v;
+    else if (axis == 1)
+        p.y = v;
+    else
+        p.z = v;
+}
+
+/// Normalized coordinate q in [0,1] to fixed point, clamped to [0, k_fixed_max] (NaN gives 0).
+PRT_HD PRT_INLINE std::uint32_t to_fixed(float q) {
+    if (!(q > 0.0f)) return 0;
+    if (q >= 1.0f) return k_fixed_max;
+    const float s = q * static_cast<float>(k_fixed_one);  // exact scaling by a power of two
+    const std::uint32_t v = static_cast<std::uint32_t>(s);
+    return v > k_fixed_max ? k_fixed_max : v;
+}
+
+/// One leaf the ray crosses, with the ray parameter range inside the leaf's cell.
+struct OctreeLeaf {
+    std::uint32_t node;   ///< the node word (filled or empty leaf)
+    std::uint32_t level;  ///< root = 0
+    Fixed3 cell;          ///< the leaf's integer cell coordinates at its level
+    float t0, t1;         ///< t0 <= t1
+};
+
+/// The state of one ray's walk through one octree.
+struct OctreeWalk {
+    Vec3 o;       ///< ray origin in normalized root coordinates
+    Vec3 d;       ///< ray direction in normalized root coordinates (same t as the ray)
+    Fixed3 p;     ///< current point (inside the next cell to visit)
+    float t;      ///< ray parameter where the next cell is entered
+    float t_end;  ///< min(t_max, the root's exit)
+    std::uint32_t steps_left;
+    std::uint32_t restart;                 ///< level of the deepest node shared with the next cell
+    std::uint32_t path[k_fixed_bits + 1];  ///< node indices from the root to the current leaf
+    bool active;
+    bool truncated;  ///< the step bound ended the walk
+};
+
+/// Index of the lowest set bit (32 for 0), host and device.
+PRT_HD PRT_INLINE std::uint32_t count_trailing_zeros(std::uint32_t v) {
+#if PRT_DEVICE_CODE
+    return v == 0 ? 32u : static_cast<std::uint32_t>(__ffs(static_cast<int>(v))) - 1u;
+#else
+    return v == 0 ? 32u : static_cast<std::uint32_t>(__builtin_ctz(v));
+#endif
+}
+
+/// Index of the highest set bit's distance from bit 31 (32 for 0), host and device.
+PRT_HD PRT_INLINE std::uint32_t count_leading_zeros(std::uint32_t v) {
+#if PRT_DEVICE_CODE
+    return static_cast<std::uint32_t>(__clz(static_cast<int>(v)));
+#else
+    return v == 0 ? 32u : static_cast<std::uint32_t>(__builtin_clz(v));
+#endif
+}
+
+/// Starts a walk for the ray o + t d (model local frame), t in [t_min, t_max). Returns false when
+/// the ray misses the root cube or is not finite.
+PRT_HD inline bool walk_begin(const OctreeView& v, Vec3 o_local, Vec3 d_local, float t_min, float t_max,
+                              std::uint32_t max_steps, OctreeWalk& w) {
+    w.active = false;
+    w.truncated = false;
+    if (!is_finite(o_local) || !is_finite(d_local) || v.nodes == nullptr || v.node_count == 0) return false;
+    w.o = (o_local - v.root_min) * v.inv_root_size;
+    w.d = d_local * v.inv_root_size;
+    // Slab test against the unit cube [0,1]^3 (closed).
+    float t_enter = t_min;
+    float t_exit = t_max;
+    int enter_axis = -1;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float o = component(w.o, a);
+        const float d = component(w.d, a);
+        if (d == 0.0f) {
+            if (!(o >= 0.0f && o <= 1.0f)) return false;
+            continue;
+        }
+        const float inv = 1.0f / d;
+        const float ta = (0.0f - o) * inv;
+        const float tb = (1.0f - o) * inv;
+        const float near = fminf(ta, tb);
+        const float far = fmaxf(ta, tb);
+        if (near > t_enter) {
+            t_enter = near;
+            enter_axis = a;
+        }
+        t_exit = fminf(t_exit, far);
+    }
+    if (!(t_enter <= t_exit)) return false;
+    const Vec3 q = w.o + w.d * t_enter;
+    w.p = Fixed3{to_fixed(q.x), to_fixed(q.y), to_fixed(q.z)};
+    if (enter_axis >= 0) {
+        // Entering through a root face: that coordinate is exactly on the face.
+        fixed_set(w.p, enter_axis, component(w.d, enter_axis) > 0.0f ? 0u : k_fixed_max);
+    }
+    w.t = t_enter;
+    w.t_end = t_exit;
+    w.steps_left = max_steps;
+    w.restart = 0;
+    w.path[0] = 0;
+    w.active = true;
+    return true;
+}
+
+/// Reads a node word (through the read-only data cache on the GPU).
+PRT_HD PRT_INLINE std::uint32_t load_node(const OctreeView& v, std::uint32_t index) {
+#if PRT_DEVICE_CODE
+    return __ldg(v.nodes + index);
+#else
+    return v.nodes[index];
+#endif
+}
+
+/// thesis 2.2.2: descends top-down to the leaf holding fixed-point point `p`, starting at the
+/// node path[level] (path[0] = 0 is the root) and recording the nodes passed in `path`. Returns
+/// the leaf's node word and sets `level` to its level. Corrupt addresses and trees deeper than
+/// k_fixed_bits end in an empty leaf instead of reading out of bounds (the pool reader validates
+/// addresses already).
+PRT_HD PRT_INLINE std::uint32_t descend(const OctreeView& v, const Fixed3& p, std::uint32_t* path,
+                                        std::uint32_t& level) {
+    std::uint32_t l = level;
+    std::uint32_t node = load_node(v, path[l]);
+    while (node_is_internal(node)) {  // bounded: l < k_fixed_bits
+        const std::uint32_t addr = node_addr(node);
+        if (l >= k_fixed_bits || addr >= v.node_count || v.node_count - addr < 8u) {
+            node = k_empty_leaf_node;
+            break;
+        }
+        const std::uint32_t shift = k_fixed_bits - 1u - l;
+        const std::uint32_t c =
+            ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
+        path[++l] = addr + c;
+        node = load_node(v, addr + c);
+    }
+    level = l;
+    return node;
+}
+
+/// thesis 2.2.2: the leaf holding fixed-point point `p`, descending from the root.
+PRT_HD PRT_INLINE std::uint32_t find_leaf(const OctreeView& v, const Fixed3& p, std::uint32_t& level) {
+    std::uint32_t path[k_fixed_bits + 1];
+    path[0] = 0;
+    level = 0;
+    return descend(v, p, path, level);
+}
+
+/// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
+/// root, passed t_max or used up its steps.
+PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+    if (!w.active) return false;
+    if (w.steps_left == 0) {
+        w.active = false;
+        w.truncated = true;
+        return false;
+    }
+    --w.steps_left;
+    // Top-down descent (thesis 2.2.2), from the deepest node the previous leaf's path shares with
+    // this cell rather than from the root: the same leaf, found with fewer dependent reads.
+    std::uint32_t level = w.restart;
+    const std::uint32_t node = descend(v, w.p, w.path, level);
+    const std::uint32_t shift = k_fixed_bits - level;
+    const Fixed3 cell{w.p.x >> shift, w.p.y >> shift, w.p.z >> shift};
+    const float size = exp2_neg(level);
+    // Where the ray leaves the cell: the nearest of the three axis-plane crossings.
+    float t1 = k_inf;
+    int axis = 0;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float d = component(w.d, a);
+        if (d == 0.0f) continue;
+        const float c = static_cast<float>(fixed_get(cell, a));
+        const float plane = (d > 0.0f ? c + 1.0f : c) * size;
+        const float ta = (plane - component(w.o, a)) / d;
+        if (ta < t1) {
+            t1 = ta;
+            axis = a;
+        }
+    }
+    const float t0 = w.t;
+    if (!(t1 >= t0)) t1 = t0;  // rounding in tiny cells: keep t monotone
+    leaf.node = node;
+    leaf.level = level;
+    leaf.cell = cell;
+    leaf.t0 = t0;
+    leaf.t1 = fminf(t1, w.t_end);
+    if (t1 >= w.t_end) {
+        w.active = false;
+        return true;
+    }
+    // Step into the neighbour across the exit face by integer arithmetic.
+    const Fixed3 old = w.p;
+    const std::uint32_t ca = fixed_get(cell, axis);
+    if (component(w.d, axis) > 0.0f) {
+        const std::uint32_t next = (ca + 1u) << shift;  // level 0: 1 << 30 = outside
+        if (level == 0 || next > k_fixed_max) {
+            w.active = false;
+            return true;
+        }
+        fixed_set(w.p, axis, next);
+    } else {
+        if (ca == 0u) {
+            w.active = false;
+            return true;
+        }
+        fixed_set(w.p, axis, (ca << shift) - 1u);
+    }
+    PRT_UNROLL
+    for (int b = 0; b < 3; ++b) {
+        if (b == axis) continue;
+        const float d = component(w.d, b);
+        if (d == 0.0f) continue;  // axis-parallel: the coordinate never changes
+        std::uint32_t f = to_fixed(component(w.o, b) + d * t1);
+        const std::uint32_t old = fixed_get(w.p, b);
+        const std::uint32_t lo = fixed_get(cell, b) << shift;
+        const std::uint32_t hi = lo + ((k_fixed_one >> level) - 1u);
+        if (d > 0.0f) {
+            f = f < old ? old : f;  // never backwards along the ray
+            f = f > hi ? hi : f;    // stay within the current cell's extent
+        } else {
+            f = f > old ? old : f;
+            f = f < lo ? lo : f;
+        }
+        fixed_set(w.p, b, f);
+    }
+    // The child choices at levels above the highest changed bit are the same as before: the next
+    // descent may start at that ancestor (bit k_fixed_bits-1-l picks the child at level l).
+    const std::uint32_t changed = (old.x ^ w.p.x) | (old.y ^ w.p.y) | (old.z ^ w.p.z);
+    const std::uint32_t shared = count_leading_zeros(changed) - (32u - k_fixed_bits);
+    w.restart = shared < level ? shared : level;
+    w.t = t1;
+    return true;
+}
+
+/// The splat index range [begin, end) of a filled leaf, clamped to the arrays (empty if invalid).
+PRT_HD PRT_INLINE void leaf_splats(const OctreeView& v, std::uint32_t node, std::uint32_t& begin,
+                                   std::uint32_t& end) {
+    begin = end = 0;
+    if (!node_is_filled(node)) return;
+    const std::uint32_t a = node_addr(node);
+    if (a >= v.filled_leaves) return;
+    begin = v.leaf_info[a];
+    end = v.leaf_info[a + 1];
+    if (end > v.splat_count) end = v.splat_count;
+    if (begin > end) begin = end;
+}
+
+}  // namespace prt::core

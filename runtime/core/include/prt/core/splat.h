@@ -1,0 +1,228 @@
+// PointRT core: ray-splat intersection and weighted blending (thesis 3.3, 3.5, 3.6).
+//
+// A splat is an oriented disk (centre, normal, radius). A ray crossing an overlapping splat
+// surface hits several disks; thesis 3.3 blends their hit positions, normals and colors with
+// weights 1 - x_i/R_i (x_i: distance of the hit from disk i's centre, eq. 3.1).
+//
+// Which hits are blended: the nearest accepted hit fixes the surface; every accepted hit with
+// t in [t_near, t_near + window * R_near / |d|] is blended (window = RenderParams::blend_window).
+// Without deep blending only the leaf holding the nearest hit contributes (thesis 3.3); with deep
+// blending (thesis 3.5) the walk goes on through the following leaves while they overlap the
+// window, so splats of the same surface stored in the next leaf blend too. The thesis anchors
+// that interval at the "reference splat" (the hit closest to its centre); this code anchors it
+// at the nearest hit instead, so a second surface just behind the first can never win.
+//
+// Which hits are accepted: thesis 3.6 (seamless ray tracing): only faces of the kind the ray
+// expects (front for outside rays, back for inside rays) and t in [0, t_max): no minimum-distance
+// epsilon. In a replicated octree every disk is stored in every leaf it overlaps, so a leaf only
+// accepts hits inside its own t range [t0, t1] and no replica is blended twice.
+#pragma once
+
+#include <cstdint>
+
+#include "prt/core/math.h"
+#include "prt/core/octree.h"
+#include "prt/core/ray.h"
+#include "prt/formats/pool_layout.h"
+
+namespace prt::core {
+
+/// Walk statistics a backend sums up (for benchmarks and the "never silent" rule).
+struct WalkStats {
+    std::uint32_t leaves = 0;  ///< leaves visited
+    std::uint32_t splat_tests = 0;
+    std::uint32_t truncated = 0;  ///< walks ended by the step bound
+};
+
+/// Reads a splat (two 16-byte read-only loads on the GPU: pool payloads are 256-byte aligned and a
+/// Splat is 32 bytes).
+PRT_HD PRT_INLINE pool::Splat load_splat(const pool::Splat* p) {
+#if PRT_DEVICE_CODE
+    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
+    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
+    pool::Splat s;
+    s.position = pool::Float3{a.x, a.y, a.z};
+    s.radius = a.w;
+    s.normal = pool::Float3{b.x, b.y, b.z};
+    s.point = __float_as_uint(b.w);
+    return s;
+#else
+    return *p;
+#endif
+}
+
+/// thesis 3.3: intersects the ray o + t d with one splat. On a hit with t in [t_lo, t_hi] (and the
+/// expected face, thesis 3.6), returns true with t and x/R (distance from the centre over radius).
+PRT_HD PRT_INLINE bool intersect_splat(const pool::Splat& s, Vec3 o, Vec3 d, bool inside, float t_lo,
+                                       float t_hi, float& t, float& x_over_r) {
+    const Vec3 n = vec3(s.normal);
+    const float dn = dot(d, n);
+    if (!face_expected(dn, inside)) return false;
+    const Vec3 oc = o - vec3(s.position);
+    const float th = -dot(oc, n) / dn;
+    if (!(th >= t_lo && th <= t_hi)) return false;  // also rejects NaN
+    const Vec3 pc = oc + d * th;                    // hit point relative to the centre
+    const float x2 = length2(pc);
+    const float r2 = s.radius * s.radius;
+    if (!(x2 <= r2) || !(r2 > 0.0f)) return false;
+    t = th;
+    x_over_r = sqrtf(x2 / r2);
+    return true;
+}
+
+/// thesis 3.3, eq. 3.1: blending weight of a hit at x/R from its disk's centre. Floored at a
+/// relative 1e-4 so hits exactly on rims still give a defined (not 0/0) blend.
+PRT_HD PRT_INLINE float blend_weight(float x_over_r) {
+    return fmaxf(1.0f - x_over_r, 1e-4f);
+}
+
+/// The blended surface sample of a closest-hit query, in the model's local frame.
+struct SplatSample {
+    float t;              ///< blended ray parameter (eq. 3.1 applied to positions on the ray)
+    Vec3 normal;          ///< blended unit normal, as stored (outward)
+    Vec3 color;           ///< blended point color in [0,1] (display-encoded, as stored); 1 without colors
+    std::uint32_t point;  ///< source point of the nearest splat (material id lookup, thesis 3.3)
+};
+
+/// Blending options.
+struct BlendOptions {
+    float window = 1.0f;  ///< blending interval after the nearest hit, in units of its radius
+    bool deep = false;    ///< thesis 3.5: blend across following leaves too
+};
+
+namespace detail {
+struct BlendAccumulator {
+    float w = 0.0f, wt = 0.0f;
+    Vec3 wn{0, 0, 0};
+    Vec3 wc{0, 0, 0};
+};
+
+PRT_HD PRT_INLINE Vec3 point_color(const pool::Rgba8* colors, std::uint32_t point) {
+    if (colors == nullptr) return Vec3{1.0f, 1.0f, 1.0f};
+    const pool::Rgba8 c = colors[point];
+    constexpr float k = 1.0f / 255.0f;
+    return Vec3{c.r * k, c.g * k, c.b * k};
+}
+
+PRT_HD PRT_INLINE void blend_one(const pool::Splat& s, const pool::Rgba8* colors, Vec3 o, Vec3 d, bool inside,
+                                 float lo, float hi, BlendAccumulator& acc, WalkStats& stats) {
+    float t, xr;
+    PRT_COUNT(stats.splat_tests);
+    if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) return;
+    const float w = blend_weight(xr);
+    acc.w += w;
+    acc.wt += w * t;
+    acc.wn += vec3(s.normal) * w;
+    acc.wc += point_color(colors, s.point) * w;
+}
+
+/// Blends the hits of splats [begin, end) with t in [lo, hi]; of the first 32 splats only those
+/// whose bit is set in `mask` can hit (pass 1 found the others missing).
+PRT_HD PRT_INLINE void blend_leaf(const OctreeView& v, const pool::Rgba8* colors, std::uint32_t begin,
+                                  std::uint32_t end, std::uint32_t mask, Vec3 o, Vec3 d, bool inside,
+                                  float lo, float hi, BlendAccumulator& acc, WalkStats& stats) {
+    const std::uint32_t n = end - begin;
+    if (n < 32u) mask &= (1u << n) - 1u;
+    while (mask != 0) {  // bounded: one bit cleared per iteration
+        const std::uint32_t bit = count_trailing_zeros(mask);
+        mask &= mask - 1u;
+        blend_one(load_splat(v.splats + begin + bit), colors, o, d, inside, lo, hi, acc, stats);
+    }
+    for (std::uint32_t i = begin + 32u; i < end; ++i) {
+        blend_one(load_splat(v.splats + i), colors, o, d, inside, lo, hi, acc, stats);
+    }
+}
+}  // namespace detail
+
+/// Closest hit of a ray with a model's splats (model local frame; d need not be unit). Hits are
+/// searched in t in [0, t_max). `colors` may be null. Returns false on a miss.
+PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* colors, Vec3 o, Vec3 d,
+                                      bool inside, float t_max, const BlendOptions& blend,
+                                      std::uint32_t max_steps, SplatSample& out, WalkStats& stats) {
+    OctreeWalk walk;
+    if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
+    const bool replicated = (v.flags & pool::k_octree_replicated) != 0;
+    const float inv_dlen = 1.0f / length(d);
+    bool found = false;
+    float t_near = k_inf, window_end = k_inf;
+    std::uint32_t near_point = 0;
+    Vec3 near_normal{0, 0, 1};
+    detail::BlendAccumulator acc;
+    OctreeLeaf leaf;
+    while (walk_next(v, walk, leaf)) {  // bounded by max_steps
+        PRT_COUNT(stats.leaves);
+        if (found && leaf.t0 > window_end) break;
+        std::uint32_t begin, end;
+        leaf_splats(v, leaf.node, begin, end);
+        if (begin == end) continue;
+        // A replicated tree holds every disk in every leaf it overlaps: accept only this leaf's
+        // t range. A tree without replicas keeps each disk in one leaf only: accept any t.
+        const float lo = replicated ? leaf.t0 : 0.0f;
+        const float hi = fminf(leaf.t1, t_max);
+        // Pass 1 (first leaf with hits only): the nearest accepted hit fixes the surface and the
+        // blending window; the hits of the leaf's first 32 splats are remembered in a bit mask so
+        // pass 2 revisits only those (and every splat past the 32nd).
+        std::uint32_t mask = 0xffffffffu;
+        if (!found) {
+            mask = 0;
+            for (std::uint32_t i = begin; i < end; ++i) {
+                const pool::Splat s = load_splat(v.splats + i);
+                float t, xr;
+                PRT_COUNT(stats.splat_tests);
+                if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) continue;
+                if (i - begin < 32u) mask |= 1u << (i - begin);
+                if (t < t_near || !found) {
+                    t_near = t;
+                    window_end = t + blend.window * s.radius * inv_dlen;
+                    near_point = s.point;
+                    near_normal = vec3(s.normal);
+                    found = true;
+                }
+            }
+            if (!found) continue;
+        }
+        // Pass 2: blend the accepted hits inside the window (thesis 3.3, eq. 3.1).
+        detail::blend_leaf(v, colors, begin, end, mask, o, d, inside, fmaxf(lo, t_near),
+                           fminf(hi, window_end), acc, stats);
+        if (!blend.deep) break;
+    }
+    if (walk.truncated) ++stats.truncated;
+    if (!found) return false;
+    if (acc.w > 0.0f) {
+        const float inv = 1.0f / acc.w;
+        out.t = acc.wt * inv;
+        out.normal = normalize_or(acc.wn, normalize(near_normal));
+        out.color = acc.wc * inv;
+    } else {
+        out.t = t_near;
+        out.normal = normalize(near_normal);
+        out.color = detail::point_color(colors, near_point);
+    }
+    if (!(out.t >= t_near)) out.t = t_near;  // blended t never moves in front of the nearest hit
+    out.point = near_point;
+    return true;
+}
+
+/// Any hit of a ray with a model's splats in t in [0, t_max) (shadow rays, thesis 5.2).
+PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool inside, float t_max,
+                                  std::uint32_t max_steps, WalkStats& stats) {
+    OctreeWalk walk;
+    if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
+    OctreeLeaf leaf;
+    // An occluder anywhere on [0, t_max) counts, whichever leaf finds it.
+    const float hi = nextafterf(t_max, 0.0f);
+    while (walk_next(v, walk, leaf)) {  // bounded by max_steps
+        PRT_COUNT(stats.leaves);
+        std::uint32_t begin, end;
+        leaf_splats(v, leaf.node, begin, end);
+        for (std::uint32_t i = begin; i < end; ++i) {
+            float t, xr;
+            PRT_COUNT(stats.splat_tests);
+            if (intersect_splat(load_splat(v.splats + i), o, d, inside, 0.0f, hi, t, xr)) return true;
+        }
+    }
+    if (walk.truncated) ++stats.truncated;
+    return false;
+}
+
+}  // namespace prt::core

@@ -1,0 +1,538 @@
+// PointRT CUDA backend: kernels that call the shared core (prt/core/render.h), the same functions
+// the CPU backend runs. Two kernel structures (thesis 2.4), chosen by measurement (prt-bench):
+//   megakernel: one thread per pixel runs render_pixel(): generation, traversal, shading, shadow
+//               and secondary rays in one kernel;
+//   wavefront:  one kernel generates primary rays, then per bounce a trace kernel (closest hits)
+//               and a shade kernel (shadow rays, local shading, secondary rays appended to the next
+//               queue), then a post-process kernel (tone mapping), as in the thesis's Fig. 2.5.
+// Rays map to threads in Z-order (thesis 2.3): a 256-thread block covers a 16x16 tile and each
+// warp an 8x4 block of neighbouring pixels; a row-by-row mapping is kept for comparison.
+// Never include PCL, OpenMesh or OpenImageIO here.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <map>
+#include <thread>
+#include <vector>
+
+#include "cuda_check.h"
+#include "device_buffer.h"
+#include "prt/core/render.h"
+#include "prt/cuda/cuda_backend.h"
+
+namespace prt::cuda {
+
+namespace {
+
+constexpr std::uint32_t k_block = 256;  // threads per block = one 16x16 tile
+constexpr std::uint32_t k_tile = 16;
+
+enum Counter : std::uint32_t {
+    k_c_primary,
+    k_c_secondary,
+    k_c_shadow,
+    k_c_leaves,
+    k_c_splat_tests,
+    k_c_truncated,
+    k_c_sanitized,
+    k_c_dropped,
+    k_counter_count
+};
+
+/// Sums each thread's counters over the block (warp reductions, then shared memory) and adds
+/// them to the frame's 64-bit totals with one atomic per counter per block. Every thread of the
+/// block must call it (no early returns before it).
+__device__ void flush_counters(const core::RayCounters& c, unsigned long long* out) {
+    __shared__ unsigned int block_sum[k_counter_count];
+    if (threadIdx.x < k_counter_count) block_sum[threadIdx.x] = 0;
+    __syncthreads();
+    const unsigned int v[k_counter_count] = {c.primary,     c.secondary, c.shadow,    c.leaves,
+                                             c.splat_tests, c.truncated, c.sanitized, c.dropped};
+    const bool lane0 = (threadIdx.x & 31u) == 0;
+#pragma unroll
+    for (std::uint32_t i = 0; i < k_counter_count; ++i) {
+        const unsigned int s = __reduce_add_sync(0xffffffffu, v[i]);
+        if (lane0 && s) atomicAdd(&block_sum[i], s);
+    }
+    __syncthreads();
+    if (threadIdx.x < k_counter_count && block_sum[threadIdx.x]) {
+        atomicAdd(&out[threadIdx.x], static_cast<unsigned long long>(block_sum[threadIdx.x]));
+    }
+}
+
+/// The pixel of this thread: Z-order within a 16x16 tile per block (thesis 2.3), or row by row.
+template <bool k_zorder>
+__device__ __forceinline__ void thread_pixel(std::uint32_t width, std::uint32_t row_begin, std::uint32_t& x,
+                                             std::uint32_t& y) {
+    if constexpr (k_zorder) {
+        std::uint32_t tx, ty;
+        core::zorder_decode(threadIdx.x, tx, ty);
+        x = blockIdx.x * k_tile + tx;
+        y = row_begin + blockIdx.y * k_tile + ty;
+    } else {
+        const unsigned long long i = static_cast<unsigned long long>(blockIdx.x) * k_block + threadIdx.x;
+        x = static_cast<std::uint32_t>(i % width);
+        y = row_begin + static_cast<std::uint32_t>(i / width);
+    }
+}
+
+__device__ __forceinline__ void store_pixel(const core::RenderParams& p, std::size_t i, core::Vec3 color,
+                                            float* __restrict__ rgb, std::uint32_t* __restrict__ rgba) {
+    rgb[i * 3 + 0] = color.x;
+    rgb[i * 3 + 1] = color.y;
+    rgb[i * 3 + 2] = color.z;
+    rgba[i] = core::pack_rgba8(core::encode_display(color, p));
+}
+
+/// Megakernel: one thread traces one pixel's whole ray tree (render_pixel). k_min_blocks is the
+/// occupancy hint (resident 256-thread blocks per SM) that bounds the registers per thread.
+template <bool k_zorder, int k_min_blocks>
+__global__ void __launch_bounds__(k_block, k_min_blocks)
+    render_kernel(const core::SceneView scene, const core::PinholeCamera cam, std::uint32_t width,
+                  std::uint32_t height, std::uint32_t row_begin, std::uint32_t row_end,
+                  float* __restrict__ rgb, std::uint32_t* __restrict__ rgba, unsigned long long* counters) {
+    std::uint32_t x, y;
+    thread_pixel<k_zorder>(width, row_begin, x, y);
+    core::RayCounters c;
+    if (x < width && y < row_end) {
+        const core::Vec3 color = core::render_pixel(scene, cam, x, y, width, height, c);
+        store_pixel(scene.params, static_cast<std::size_t>(y) * width + x, color, rgb, rgba);
+    }
+    flush_counters(c, counters);
+}
+
+// ---- Wavefront kernels (thesis 2.4, Fig. 2.5) ---------------------------------------------------
+
+constexpr std::uint32_t k_no_pixel = 0xffffffffu;
+
+struct WaveRay {
+    core::PendingRay ray;
+    std::uint32_t pixel;  ///< k_no_pixel for padding slots
+};
+
+struct WaveHit {
+    core::SurfaceHit hit;
+    std::uint32_t valid;
+};
+
+template <bool k_zorder>
+__global__ void __launch_bounds__(k_block)
+    wave_primary(const core::PinholeCamera cam, std::uint32_t width, std::uint32_t height,
+                 std::uint32_t row_begin, std::uint32_t row_end, WaveRay* __restrict__ queue,
+                 float* __restrict__ accum, unsigned long long* counters) {
+    std::uint32_t x, y;
+    thread_pixel<k_zorder>(width, row_begin, x, y);
+    const std::uint32_t slot = (blockIdx.y * gridDim.x + blockIdx.x) * k_block + threadIdx.x;
+    WaveRay r;
+    r.pixel = k_no_pixel;
+    core::RayCounters c;
+    if (x < width && y < row_end) {
+        ++c.primary;
+        r.pixel = y * width + x;
+        r.ray = core::PendingRay{core::primary_ray(cam, x, y, width, height), core::Vec3{1, 1, 1}, 0};
+        accum[r.pixel * 3 + 0] = 0.0f;
+        accum[r.pixel * 3 + 1] = 0.0f;
+        accum[r.pixel * 3 + 2] = 0.0f;
+    }
+    queue[slot] = r;
+    flush_counters(c, counters);
+}
+
+__global__ void __launch_bounds__(k_block)
+    wave_trace(const core::SceneView scene, const WaveRay* __restrict__ queue,
+               const std::uint32_t* __restrict__ count, std::uint32_t fixed_count, WaveHit* __restrict__ hits,
+               unsigned long long* counters) {
+    const std::uint32_t i = blockIdx.x * k_block + threadIdx.x;
+    const std::uint32_t n = count ? *count : fixed_count;
+    core::RayCounters c;
+    if (i < n && queue[i].pixel != k_no_pixel) {
+        WaveHit h;
+        h.valid = core::closest_hit_scene(scene, queue[i].ray.ray, h.hit, c) ? 1u : 0u;
+        hits[i] = h;
+    }
+    flush_counters(c, counters);
+}
+
+__global__ void __launch_bounds__(k_block)
+    wave_shade(const core::SceneView scene, const WaveRay* __restrict__ queue,
+               const std::uint32_t* __restrict__ count, std::uint32_t fixed_count,
+               const WaveHit* __restrict__ hits, WaveRay* __restrict__ next,
+               std::uint32_t* __restrict__ next_count, std::uint32_t capacity, float* __restrict__ accum,
+               unsigned long long* counters) {
+    const std::uint32_t i = blockIdx.x * k_block + threadIdx.x;
+    const std::uint32_t n = count ? *count : fixed_count;
+    core::RayCounters c;
+    if (i < n && queue[i].pixel != k_no_pixel) {
+        const WaveRay r = queue[i];
+        const WaveHit h = hits[i];
+        core::Vec3 add;
+        if (!h.valid) {
+            add = r.ray.weight * core::background(scene.environment, r.ray.ray.dir);
+        } else {
+            add = r.ray.weight * core::shade_hit(scene, r.ray.ray, h.hit, c);
+            core::PendingRay spawned[2];
+            const std::uint32_t k = core::spawn_secondary(scene, r.ray, h.hit, spawned);
+            c.secondary += k;
+            if (k > 0) {
+                const std::uint32_t at = atomicAdd(next_count, k);
+                for (std::uint32_t j = 0; j < k; ++j) {
+                    if (at + j < capacity)
+                        next[at + j] = WaveRay{spawned[j], r.pixel};
+                    else
+                        ++c.dropped;
+                }
+            }
+        }
+        atomicAdd(&accum[r.pixel * 3 + 0], add.x);
+        atomicAdd(&accum[r.pixel * 3 + 1], add.y);
+        atomicAdd(&accum[r.pixel * 3 + 2], add.z);
+    }
+    flush_counters(c, counters);
+}
+
+__global__ void __launch_bounds__(k_block)
+    wave_finish(const core::RenderParams params, std::uint32_t width, std::uint32_t row_begin,
+                std::uint32_t row_end, const float* __restrict__ accum, float* __restrict__ rgb,
+                std::uint32_t* __restrict__ rgba, unsigned long long* counters) {
+    const unsigned long long i = static_cast<unsigned long long>(blockIdx.x) * k_block + threadIdx.x +
+                                 static_cast<unsigned long long>(row_begin) * width;
+    core::RayCounters c;
+    if (i < static_cast<unsigned long long>(row_end) * width) {
+        core::Vec3 color{accum[i * 3], accum[i * 3 + 1], accum[i * 3 + 2]};
+        if (!core::is_finite(color)) {
+            color = core::Vec3{0, 0, 0};
+            ++c.sanitized;
+        }
+        store_pixel(params, i, color, rgb, rgba);
+    }
+    flush_counters(c, counters);
+}
+
+// ---- Host side --------------------------------------------------------------------------------
+
+std::string error_line(cudaError_t e) {
+    return std::string(cudaGetErrorName(e)) + ": " + cudaGetErrorString(e);
+}
+
+/// Copies host arrays to the device through two pinned staging buffers with asynchronous copies,
+/// so reading the (memory-mapped) pool overlaps the transfer.
+class Uploader {
+public:
+    explicit Uploader(cudaStream_t stream) : m_stream(stream) {
+        for (int i = 0; i < 2; ++i) {
+            m_staging[i] = PinnedBuffer(k_chunk);
+            PRT_CUDA_CHECK(cudaEventCreateWithFlags(&m_done[i], cudaEventDisableTiming));
+        }
+    }
+    ~Uploader() {
+        cudaStreamSynchronize(m_stream);
+        for (cudaEvent_t e : m_done) cudaEventDestroy(e);
+    }
+    Uploader(const Uploader&) = delete;
+    Uploader& operator=(const Uploader&) = delete;
+
+    void copy(void* device, const void* host, std::size_t bytes) {
+        const auto* src = static_cast<const unsigned char*>(host);
+        auto* dst = static_cast<unsigned char*>(device);
+        for (std::size_t off = 0; off < bytes; off += k_chunk) {
+            const std::size_t n = std::min(k_chunk, bytes - off);
+            PRT_CUDA_CHECK(cudaEventSynchronize(m_done[m_next]));  // staging buffer free again
+            parallel_copy(static_cast<unsigned char*>(m_staging[m_next].data()), src + off, n);
+            PRT_CUDA_CHECK(
+                cudaMemcpyAsync(dst + off, m_staging[m_next].data(), n, cudaMemcpyHostToDevice, m_stream));
+            PRT_CUDA_CHECK(cudaEventRecord(m_done[m_next], m_stream));
+            m_next ^= 1;
+        }
+        m_bytes += bytes;
+    }
+    void finish() { PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream)); }
+
+    /// Copies into pinned memory from several threads: reading a memory-mapped pool is bound by
+    /// page faults, which parallelise.
+    static void parallel_copy(unsigned char* dst, const unsigned char* src, std::size_t n) {
+        const unsigned threads = std::min(8u, std::max(1u, std::thread::hardware_concurrency()));
+        if (n < (4u << 20) || threads == 1) {
+            std::memcpy(dst, src, n);
+            return;
+        }
+        const std::size_t slice = (n + threads - 1) / threads;
+        std::vector<std::thread> workers;
+        for (unsigned t = 1; t < threads; ++t) {
+            const std::size_t b = t * slice;
+            if (b >= n) break;
+            workers.emplace_back([=] { std::memcpy(dst + b, src + b, std::min(slice, n - b)); });
+        }
+        std::memcpy(dst, src, std::min(slice, n));
+        for (std::thread& w : workers) w.join();
+    }
+    std::uint64_t bytes() const { return m_bytes; }
+
+private:
+    static constexpr std::size_t k_chunk = 32u << 20;
+    cudaStream_t m_stream;
+    PinnedBuffer m_staging[2];
+    cudaEvent_t m_done[2] = {nullptr, nullptr};
+    int m_next = 0;
+    std::uint64_t m_bytes = 0;
+};
+
+class CudaBackend final : public rt::Backend {
+public:
+    explicit CudaBackend(const rt::BackendOptions& options) : m_options(options) {
+        std::string why;
+        if (!device_available(&why)) throw Error(why);
+        PRT_CUDA_CHECK(cudaSetDevice(0));
+        cudaDeviceProp prop{};
+        PRT_CUDA_CHECK(cudaGetDeviceProperties(&prop, 0));
+        m_device = std::string(prop.name) + " (" + std::to_string(prop.multiProcessorCount) + " SMs, sm_" +
+                   std::to_string(prop.major) + std::to_string(prop.minor) + ")";
+        PRT_CUDA_CHECK(cudaStreamCreateWithFlags(&m_stream, cudaStreamNonBlocking));
+        PRT_CUDA_CHECK(cudaEventCreate(&m_start));
+        PRT_CUDA_CHECK(cudaEventCreate(&m_stop));
+        m_counters.resize(k_counter_count);
+    }
+    ~CudaBackend() override {
+        if (m_stream) cudaStreamSynchronize(m_stream);
+        if (m_start) cudaEventDestroy(m_start);
+        if (m_stop) cudaEventDestroy(m_stop);
+        if (m_stream) cudaStreamDestroy(m_stream);
+    }
+
+    std::string name() const override { return "cuda"; }
+    std::string device() const override { return m_device; }
+
+    rt::UploadStats set_scene(const core::SceneView& host) override {
+        const auto start = std::chrono::steady_clock::now();
+        m_arrays.clear();
+        std::map<const void*, void*> uploaded;  // the same pool array used by several models: once
+        Uploader up(m_stream);
+        auto put = [&](const void* src, std::size_t bytes) -> void* {
+            if (src == nullptr || bytes == 0) return nullptr;
+            auto it = uploaded.find(src);
+            if (it != uploaded.end()) return it->second;
+            DeviceBuffer<unsigned char> buf(bytes);
+            up.copy(buf.data(), src, bytes);
+            void* d = buf.data();
+            m_arrays.push_back(std::move(buf));
+            uploaded[src] = d;
+            return d;
+        };
+        std::vector<core::ModelView> models(host.models, host.models + host.model_count);
+        for (core::ModelView& m : models) {
+            core::OctreeView& o = m.octree;
+            o.nodes = static_cast<const std::uint32_t*>(put(o.nodes, std::size_t{o.node_count} * 4));
+            o.leaf_info =
+                static_cast<const std::uint32_t*>(put(o.leaf_info, (std::size_t{o.filled_leaves} + 1) * 4));
+            o.splats = static_cast<const pool::Splat*>(
+                put(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat)));
+            if (m.colors)
+                m.colors = static_cast<const pool::Rgba8*>(put(m.colors, std::size_t{m.point_count} * 4));
+            if (m.material_ids)
+                m.material_ids =
+                    static_cast<const std::uint32_t*>(put(m.material_ids, std::size_t{m.point_count} * 4));
+        }
+        m_scene = host;
+        m_scene.models =
+            static_cast<const core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
+        m_scene.materials = static_cast<const core::Material*>(
+            put(host.materials, host.material_count * sizeof(core::Material)));
+        m_scene.lights = static_cast<const core::PointLight*>(
+            put(host.lights, host.light_count * sizeof(core::PointLight)));
+        if (host.environment.image) {
+            m_scene.environment.image = static_cast<const float*>(
+                put(host.environment.image,
+                    std::size_t{host.environment.width} * host.environment.height * 3 * sizeof(float)));
+        }
+        up.finish();  // `models` (host) must outlive the copies
+        rt::UploadStats s;
+        s.bytes = up.bytes();
+        s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return s;
+    }
+
+    rt::FrameStats render(const rt::FrameRequest& req, rt::Image& image) override {
+        const auto start = std::chrono::steady_clock::now();
+        const std::uint32_t w = req.width, h = req.height;
+        const std::uint32_t y0 = std::min(req.row_begin, h);
+        const std::uint32_t y1 = req.row_end == 0 ? h : std::min(req.row_end, h);
+        rt::FrameStats stats;
+        stats.pixels = static_cast<std::uint64_t>(w) * (y1 - y0);
+        if (image.width != w || image.height != h) image.resize(w, h);
+        if (stats.pixels == 0) return stats;
+        const std::size_t pixels = static_cast<std::size_t>(w) * h;
+        m_rgb.reserve(pixels * 3);
+        m_rgba.reserve(pixels);
+        core::SceneView scene = m_scene;
+        scene.params = req.params;
+        PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
+        PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
+        if (m_options.cuda_wavefront) {
+            render_wavefront(scene, req, w, h, y0, y1);
+        } else {
+            render_megakernel(scene, req, w, h, y0, y1);
+        }
+        PRT_CUDA_CHECK(cudaEventRecord(m_stop, m_stream));
+        unsigned long long counters[k_counter_count];
+        m_counters.download(counters, k_counter_count, 0, m_stream);
+        if (req.download) {
+            const std::size_t first = static_cast<std::size_t>(y0) * w,
+                              count = static_cast<std::size_t>(y1 - y0) * w;
+            m_rgb.download(image.rgb.data() + first * 3, count * 3, first * 3, m_stream);
+            m_rgba.download(image.rgba8.data() + first, count, first, m_stream);
+        }
+        PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream));
+        float ms = 0;
+        PRT_CUDA_CHECK(cudaEventElapsedTime(&ms, m_start, m_stop));
+        stats.device_ms = ms;
+        stats.primary = counters[k_c_primary];
+        stats.secondary = counters[k_c_secondary];
+        stats.shadow = counters[k_c_shadow];
+        stats.leaves = counters[k_c_leaves];
+        stats.splat_tests = counters[k_c_splat_tests];
+        stats.truncated = counters[k_c_truncated];
+        stats.sanitized = counters[k_c_sanitized];
+        stats.dropped = counters[k_c_dropped];
+        stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return stats;
+    }
+
+private:
+    void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
+                           std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
+        const bool z = !m_options.cuda_linear_mapping;
+        const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
+        const dim3 grid = z ? dim3((w + k_tile - 1) / k_tile, (y1 - y0 + k_tile - 1) / k_tile)
+                            : dim3(static_cast<unsigned>((n + k_block - 1) / k_block));
+        auto launch = [&](auto kernel) {
+            // Traversal reads through L1: ask for the largest L1 share (the kernel needs 32 B of
+            // shared memory).
+            PRT_CUDA_CHECK(
+                cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                     m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
+            kernel<<<grid, k_block, 0, m_stream>>>(scene, req.camera, w, h, y0, y1, m_rgb.data(),
+                                                   m_rgba.data(), m_counters.data());
+        };
+        switch (m_options.cuda_min_blocks) {
+            case 1:
+                z ? launch(render_kernel<true, 1>) : launch(render_kernel<false, 1>);
+                break;
+            case 2:
+                z ? launch(render_kernel<true, 2>) : launch(render_kernel<false, 2>);
+                break;
+            case 3:
+                z ? launch(render_kernel<true, 3>) : launch(render_kernel<false, 3>);
+                break;
+            case 5:
+                z ? launch(render_kernel<true, 5>) : launch(render_kernel<false, 5>);
+                break;
+            case 6:
+                z ? launch(render_kernel<true, 6>) : launch(render_kernel<false, 6>);
+                break;
+            default:
+                z ? launch(render_kernel<true, 4>) : launch(render_kernel<false, 4>);
+                break;
+        }
+        PRT_CUDA_CHECK_LAUNCH();
+    }
+
+    void render_wavefront(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
+                          std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
+        // Primary slots: whole tiles (Z-order) or whole blocks (linear), padding marked k_no_pixel.
+        dim3 grid;
+        if (!m_options.cuda_linear_mapping) {
+            grid = dim3((w + k_tile - 1) / k_tile, (y1 - y0 + k_tile - 1) / k_tile);
+        } else {
+            const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
+            grid = dim3(static_cast<unsigned>((n + k_block - 1) / k_block));
+        }
+        const std::uint32_t slots = grid.x * grid.y * k_block;
+        const std::uint32_t capacity = 2 * slots;  // each bounce at most doubles; overflow is counted
+        m_queue[0].reserve(capacity);
+        m_queue[1].reserve(capacity);
+        m_hits.reserve(capacity);
+        m_accum.reserve(static_cast<std::size_t>(w) * h * 3);
+        m_queue_count.reserve(2);
+        if (!m_options.cuda_linear_mapping) {
+            wave_primary<true><<<grid, k_block, 0, m_stream>>>(req.camera, w, h, y0, y1, m_queue[0].data(),
+                                                               m_accum.data(), m_counters.data());
+        } else {
+            wave_primary<false><<<grid, k_block, 0, m_stream>>>(req.camera, w, h, y0, y1, m_queue[0].data(),
+                                                                m_accum.data(), m_counters.data());
+        }
+        PRT_CUDA_CHECK_LAUNCH();
+        const std::uint32_t limit = std::min(req.params.max_bounces, core::k_max_bounces);
+        std::uint32_t upper = slots;  // upper bound of the current queue's length
+        int cur = 0;
+        for (std::uint32_t depth = 0; depth <= limit && upper > 0; ++depth) {
+            const std::uint32_t* count = depth == 0 ? nullptr : m_queue_count.data() + cur;
+            std::uint32_t* next_count = m_queue_count.data() + (cur ^ 1);
+            PRT_CUDA_CHECK(cudaMemsetAsync(next_count, 0, sizeof(std::uint32_t), m_stream));
+            const dim3 g((upper + k_block - 1) / k_block);
+            wave_trace<<<g, k_block, 0, m_stream>>>(scene, m_queue[cur].data(), count, slots, m_hits.data(),
+                                                    m_counters.data());
+            PRT_CUDA_CHECK_LAUNCH();
+            wave_shade<<<g, k_block, 0, m_stream>>>(scene, m_queue[cur].data(), count, slots, m_hits.data(),
+                                                    m_queue[cur ^ 1].data(), next_count, capacity,
+                                                    m_accum.data(), m_counters.data());
+            PRT_CUDA_CHECK_LAUNCH();
+            upper = depth < limit ? std::min<std::uint64_t>(capacity, 2ull * upper) : 0;
+            cur ^= 1;
+        }
+        const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
+        wave_finish<<<static_cast<unsigned>((n + k_block - 1) / k_block), k_block, 0, m_stream>>>(
+            req.params, w, y0, y1, m_accum.data(), m_rgb.data(), m_rgba.data(), m_counters.data());
+        PRT_CUDA_CHECK_LAUNCH();
+    }
+
+    rt::BackendOptions m_options;
+    std::string m_device;
+    cudaStream_t m_stream = nullptr;
+    cudaEvent_t m_start = nullptr, m_stop = nullptr;
+    core::SceneView m_scene;
+    std::vector<DeviceBuffer<unsigned char>> m_arrays;
+    DeviceBuffer<unsigned long long> m_counters;
+    DeviceBuffer<float> m_rgb;
+    DeviceBuffer<std::uint32_t> m_rgba;
+    DeviceBuffer<WaveRay> m_queue[2];
+    DeviceBuffer<WaveHit> m_hits;
+    DeviceBuffer<float> m_accum;
+    DeviceBuffer<std::uint32_t> m_queue_count;
+};
+
+}  // namespace
+
+bool device_available(std::string* why) {
+    int count = 0;
+    const cudaError_t e = cudaGetDeviceCount(&count);
+    if (e != cudaSuccess) {
+        if (why) {
+            *why = e == cudaErrorInsufficientDriver
+                       ? "no usable CUDA device: no NVIDIA driver, or one too old for this build ("
+                   : e == cudaErrorNoDevice ? "no CUDA device found ("
+                                            : "no usable CUDA device (";
+            *why += error_line(e) + ")";
+        }
+        cudaGetLastError();  // clear the sticky-free error so later calls start clean
+        return false;
+    }
+    if (count == 0) {
+        if (why) *why = "no CUDA device found";
+        return false;
+    }
+    return true;
+}
+
+std::string device_name() {
+    if (!device_available()) return {};
+    cudaDeviceProp prop{};
+    if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return {};
+    return prop.name;
+}
+
+std::unique_ptr<rt::Backend> make_cuda_backend(const rt::BackendOptions& options) {
+    return std::make_unique<CudaBackend>(options);
+}
+
+}  // namespace prt::cuda

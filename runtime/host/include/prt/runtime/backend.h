@@ -1,0 +1,82 @@
+// PointRT runtime (host): what every backend (cpu, cuda, hybrid) implements: upload a scene once,
+// render frames of it. Backends run the same core functions (prt/core/render.h).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "prt/core/camera.h"
+#include "prt/core/scene_view.h"
+#include "prt/runtime/image.h"
+
+namespace prt::rt {
+
+/// Counters and timings of one rendered frame.
+struct FrameStats {
+    double seconds = 0;    ///< wall time of render() (host clock)
+    double device_ms = 0;  ///< GPU time from CUDA events (0 for the CPU backend)
+    std::uint64_t pixels = 0;
+    std::uint64_t primary = 0, secondary = 0, shadow = 0;
+    std::uint64_t leaves = 0, splat_tests = 0;
+    std::uint64_t truncated = 0, sanitized = 0, dropped = 0;
+    double gpu_share = 0;  ///< hybrid: fraction of rows the GPU rendered
+
+    std::uint64_t rays() const { return primary + secondary + shadow; }
+    FrameStats& operator+=(const FrameStats& o);
+};
+
+/// One frame request: a camera in the render frame, settings, an image size and the rows to
+/// render ([row_begin, row_end); the hybrid backend splits frames by rows).
+struct FrameRequest {
+    core::PinholeCamera camera;
+    core::RenderParams params;
+    std::uint32_t width = 0, height = 0;
+    std::uint32_t row_begin = 0, row_end = 0;  ///< row_end 0 means height
+    bool download = true;  ///< GPU backends: copy the frame into `image` (benchmarks skip it)
+};
+
+/// Load statistics of set_scene().
+struct UploadStats {
+    std::uint64_t bytes = 0;
+    double seconds = 0;
+    double gb_per_s() const { return seconds > 0 ? static_cast<double>(bytes) / seconds * 1e-9 : 0.0; }
+};
+
+class Backend {
+public:
+    virtual ~Backend() = default;
+    /// "cpu", "cuda" or "hybrid".
+    virtual std::string name() const = 0;
+    /// A one-line description of the device (CPU threads, GPU name).
+    virtual std::string device() const = 0;
+    /// Makes the scene current. The views' arrays must stay valid until the next set_scene() or
+    /// the backend's destruction (the CPU backend reads them in place; the CUDA backend copies).
+    virtual UploadStats set_scene(const core::SceneView& scene) = 0;
+    /// Renders the requested rows into `image` (already sized width x height).
+    virtual FrameStats render(const FrameRequest& request, Image& image) = 0;
+};
+
+/// Which backends this build has and this machine can run.
+struct BackendAvailability {
+    bool cpu = true;
+    bool cuda_built = false;
+    bool cuda_device = false;
+    std::string cuda_why;  ///< one line: why CUDA cannot be used
+};
+BackendAvailability backend_availability();
+
+/// Backend options.
+struct BackendOptions {
+    unsigned cpu_threads = 0;          ///< 0: all hardware threads
+    bool cuda_wavefront = false;       ///< several kernels per frame (thesis 2.4) instead of one
+    bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
+    int cuda_min_blocks = 0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4)
+    bool cuda_max_l1 = true;  ///< prefer L1 over shared memory for the megakernel
+};
+
+/// Creates a backend by name: "cpu", "cuda", "hybrid" or "auto" (cuda when a device exists, else
+/// cpu). Throws prt::Error with one clear line when the backend cannot run here.
+std::unique_ptr<Backend> make_backend(const std::string& name, const BackendOptions& options = {});
+
+}  // namespace prt::rt

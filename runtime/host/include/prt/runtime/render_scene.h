@@ -1,0 +1,110 @@
+// PointRT runtime (host): a scene ready to render: pools mapped, scene-file materials, lights and
+// camera converted into the core's POD views, in the render frame (prt/core/scene_view.h).
+//
+// The render frame is the world frame translated so that the first model's local origin
+// (ModelInfo::origin after its transform) is at zero. All world-to-render conversions are done
+// here in double and rounded to float once, so models far from the world origin keep full float
+// precision (DESIGN.md, "The pool file" / numerical robustness).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "prt/core/camera.h"
+#include "prt/core/scene_view.h"
+#include "prt/formats/pool.h"
+#include "prt/formats/scene.h"
+#include "prt/runtime/image.h"
+
+namespace prt::rt {
+
+using DVec3 = std::array<double, 3>;
+
+/// One model as loaded: its pool and the views into it.
+struct LoadedModel {
+    std::string name;
+    std::shared_ptr<const pool::PoolFile> pool;
+    core::ModelView view;        ///< pointers into the mapped pool
+    DVec3 world_min, world_max;  ///< bounds after the model's transform (world frame)
+    std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads
+};
+
+/// Options that override the scene file.
+struct SceneOverrides {
+    std::uint32_t width = 0, height = 0;  ///< 0: keep
+};
+
+class RenderScene {
+public:
+    /// Loads a scene file's models (their pools must hold the octree sections: prt-octree).
+    /// `pool_override`, when not empty, replaces the scene's models by this one pool (keeping the
+    /// first model's transform and material if the scene has models). Throws prt::Error naming
+    /// the file and what is wrong.
+    static RenderScene load(const scene::Scene& scene, const std::filesystem::path& pool_override = {});
+    /// A pool on its own: the default scene (default material, one light, a camera framing the
+    /// model's bounds from the front and a little above).
+    static RenderScene from_pool(const std::filesystem::path& pool);
+    /// A scene whose models are given as already-open pools (tests, benchmarks).
+    static RenderScene from_pools(const scene::Scene& scene,
+                                  std::vector<std::shared_ptr<const pool::PoolFile>> pools);
+
+    /// The host view for the CPU backend (and the source the CUDA backend uploads).
+    core::SceneView view() const;
+
+    /// The scene as parsed (camera, lights, materials in the world frame).
+    const scene::Scene& scene() const { return m_scene; }
+    scene::Scene& scene() { return m_scene; }
+    /// Converts a world-frame camera into the render frame (double, then float).
+    core::PinholeCamera camera(const scene::Camera& world_camera) const;
+    core::PinholeCamera camera() const { return camera(m_scene.camera); }
+    /// Render settings from the scene file.
+    core::RenderParams params() const { return m_params; }
+    core::RenderParams& params() { return m_params; }
+    /// World position of the render frame's origin.
+    const DVec3& render_origin() const { return m_origin; }
+    /// World bounds of all models.
+    DVec3 world_min() const { return m_world_min; }
+    DVec3 world_max() const { return m_world_max; }
+    const std::vector<LoadedModel>& models() const { return m_models; }
+    /// Bytes of all sections the renderer reads (what a GPU upload moves).
+    std::uint64_t bytes() const;
+    /// Lights after area-light expansion (SCENE.md: samples x samples point lights each).
+    const std::vector<core::PointLight>& lights() const { return m_lights; }
+    /// Rebuilds the render-frame lights from scene().point_lights/area_lights (after editing them).
+    void update_lights();
+    /// Warnings collected while loading (clamped settings, unsupported surfaces, ...), one line each.
+    const std::vector<std::string>& warnings() const { return m_warnings; }
+
+    /// A camera framing world bounds [lo, hi], looking along `-direction` (default: from +z, a little above).
+    static scene::Camera framing_camera(const DVec3& lo, const DVec3& hi, std::uint32_t width,
+                                        std::uint32_t height, DVec3 direction = {0.0, 0.35, 1.0});
+
+private:
+    void build(std::vector<std::shared_ptr<const pool::PoolFile>> pools);
+    void convert_materials();
+    void load_environment();
+
+    scene::Scene m_scene;
+    core::RenderParams m_params;
+    DVec3 m_origin{0, 0, 0};
+    DVec3 m_world_min{0, 0, 0}, m_world_max{0, 0, 0};
+    std::vector<LoadedModel> m_models;
+    std::vector<core::ModelView> m_model_views;
+    std::vector<core::Material> m_materials;
+    std::vector<core::PointLight> m_lights;
+    FloatImage m_environment;
+    std::vector<std::string> m_warnings;
+};
+
+/// Converts a scene file's render settings to core parameters (clamping max_bounces to
+/// core::k_max_bounces; a warning is appended when it clamps).
+core::RenderParams to_params(const scene::RenderSettings& s, std::vector<std::string>* warnings = nullptr);
+
+/// Rotation of SCENE.md's transform: about X, then Y, then Z, in degrees: R = Rz Ry Rx.
+std::array<DVec3, 3> rotation_matrix(const DVec3& degrees);
+
+}  // namespace prt::rt

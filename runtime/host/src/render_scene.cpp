@@ -1,0 +1,369 @@
+#include "prt/runtime/render_scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "prt/error.h"
+
+namespace prt::rt {
+
+namespace {
+
+DVec3 add(const DVec3& a, const DVec3& b) {
+    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+DVec3 sub(const DVec3& a, const DVec3& b) {
+    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+DVec3 mul(const DVec3& a, double s) {
+    return {a[0] * s, a[1] * s, a[2] * s};
+}
+DVec3 mat_apply(const std::array<DVec3, 3>& m, const DVec3& v) {
+    DVec3 r{};
+    for (int i = 0; i < 3; ++i) r[i] = m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2];
+    return r;
+}
+core::Vec3 to_f(const DVec3& v) {
+    return {static_cast<float>(v[0]), static_cast<float>(v[1]), static_cast<float>(v[2])};
+}
+core::Vec3 to_f(const scene::Color& c) {
+    return {c[0], c[1], c[2]};
+}
+double dlength(const DVec3& v) {
+    return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/// World position of a model-local point: translate + R (scale (origin + local)).
+struct Placement {
+    std::array<DVec3, 3> rotation;
+    double scale;
+    DVec3 translate;
+    DVec3 origin;
+    DVec3 world(const DVec3& local) const {
+        return add(translate, mat_apply(rotation, mul(add(origin, local), scale)));
+    }
+};
+
+Placement placement(const scene::Transform& t, const pool::ModelInfo& info) {
+    Placement p;
+    p.rotation = rotation_matrix(t.rotate_degrees);
+    p.scale = t.scale;
+    p.translate = t.translate;
+    p.origin = {info.origin[0], info.origin[1], info.origin[2]};
+    return p;
+}
+
+}  // namespace
+
+std::array<DVec3, 3> rotation_matrix(const DVec3& degrees) {
+    constexpr double k = 3.14159265358979323846 / 180.0;
+    const double cx = std::cos(degrees[0] * k), sx = std::sin(degrees[0] * k);
+    const double cy = std::cos(degrees[1] * k), sy = std::sin(degrees[1] * k);
+    const double cz = std::cos(degrees[2] * k), sz = std::sin(degrees[2] * k);
+    const std::array<DVec3, 3> rx{{{1, 0, 0}, {0, cx, -sx}, {0, sx, cx}}};
+    const std::array<DVec3, 3> ry{{{cy, 0, sy}, {0, 1, 0}, {-sy, 0, cy}}};
+    const std::array<DVec3, 3> rz{{{cz, -sz, 0}, {sz, cz, 0}, {0, 0, 1}}};
+    auto matmul = [](const std::array<DVec3, 3>& a, const std::array<DVec3, 3>& b) {
+        std::array<DVec3, 3> r{};
+        for (int i = 0; i < 3; ++i)
+            for (int j = 0; j < 3; ++j) r[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+        return r;
+    };
+    return matmul(rz, matmul(ry, rx));  // X first, then Y, then Z
+}
+
+core::RenderParams to_params(const scene::RenderSettings& s, std::vector<std::string>* warnings) {
+    core::RenderParams p;
+    p.max_bounces = s.max_bounces;
+    if (p.max_bounces > core::k_max_bounces) {
+        if (warnings) {
+            warnings->push_back("render.max_bounces " + std::to_string(s.max_bounces) +
+                                " is above the runtime's limit of " + std::to_string(core::k_max_bounces) +
+                                ": using " + std::to_string(core::k_max_bounces));
+        }
+        p.max_bounces = core::k_max_bounces;
+    }
+    p.shadows = s.shadows;
+    p.reflections = s.reflections;
+    p.refractions = s.refractions;
+    p.exposure = s.exposure;
+    p.gamma = s.gamma;
+    return p;
+}
+
+RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::path& pool_override) {
+    RenderScene r;
+    r.m_scene = sc;
+    std::vector<std::shared_ptr<const pool::PoolFile>> pools;
+    if (!pool_override.empty()) {
+        scene::Model m;
+        if (!sc.models.empty()) m = sc.models.front();
+        m.name = pool_override.stem().string();
+        m.pool = pool_override;
+        m.source.clear();
+        r.m_scene.models = {m};
+    }
+    for (const scene::Model& m : r.m_scene.models) {
+        if (m.pool.empty()) {
+            throw Error((sc.file.empty() ? std::string("scene") : sc.file.string()) + ": model '" + m.name +
+                        "' has no pool (run prt-bake to build it from " + m.source.string() + ")");
+        }
+        pools.push_back(std::make_shared<const pool::PoolFile>(pool::PoolFile::open(m.pool)));
+    }
+    r.build(std::move(pools));
+    return r;
+}
+
+RenderScene RenderScene::from_pools(const scene::Scene& sc,
+                                    std::vector<std::shared_ptr<const pool::PoolFile>> pools) {
+    RenderScene r;
+    r.m_scene = sc;
+    while (r.m_scene.models.size() < pools.size()) r.m_scene.models.push_back(scene::Model{});
+    r.m_scene.models.resize(pools.size());
+    r.build(std::move(pools));
+    return r;
+}
+
+RenderScene RenderScene::from_pool(const std::filesystem::path& path) {
+    scene::Scene sc;
+    sc.materials.push_back(scene::Material{});
+    sc.materials.back().name = "default";
+    scene::Model m;
+    m.name = path.stem().string();
+    m.pool = path;
+    sc.models.push_back(m);
+    RenderScene r = load(sc);
+    // Default view: frame the model's bounds, one light above and to the right of the camera.
+    const DVec3 lo = r.m_world_min, hi = r.m_world_max;
+    r.m_scene.camera = framing_camera(lo, hi, r.m_scene.camera.width, r.m_scene.camera.height);
+    const DVec3 c = mul(add(lo, hi), 0.5);
+    const double radius = std::max(0.5 * dlength(sub(hi, lo)), 1e-30);
+    scene::PointLight light;
+    light.position = add(c, mul(DVec3{1.5, 3.0, 2.5}, radius));
+    r.m_scene.point_lights = {light};
+    r.update_lights();
+    return r;
+}
+
+scene::Camera RenderScene::framing_camera(const DVec3& lo, const DVec3& hi, std::uint32_t width,
+                                          std::uint32_t height, DVec3 direction) {
+    scene::Camera cam;
+    cam.width = width;
+    cam.height = height;
+    cam.fov_y_degrees = 45.0;
+    const DVec3 c = mul(add(lo, hi), 0.5);
+    double radius = 0.5 * dlength(sub(hi, lo));
+    if (!(radius > 0) || !std::isfinite(radius)) radius = 1.0;
+    const double len = dlength(direction);
+    direction = len > 0 ? mul(direction, 1.0 / len) : DVec3{0, 0, 1};
+    const double half = 0.5 * cam.fov_y_degrees * 3.14159265358979323846 / 180.0;
+    const double aspect = height > 0 ? static_cast<double>(width) / height : 1.0;
+    const double half_min = std::min(half, std::atan(std::tan(half) * aspect));  // narrower of the two fovs
+    const double dist = radius / std::sin(half_min) * 1.05;
+    cam.position = add(c, mul(direction, dist));
+    cam.look_at = c;
+    cam.up = {0, 1, 0};
+    return cam;
+}
+
+void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools) {
+    m_warnings.clear();
+    if (m_scene.materials.empty()) {
+        m_scene.materials.push_back(scene::Material{});
+        m_scene.materials.back().name = "default";
+    }
+    m_params = to_params(m_scene.render, &m_warnings);
+    if (m_scene.render.path_tracing)
+        m_warnings.push_back("render.path_tracing is not implemented by prt-play yet: ray tracing instead");
+    if (m_scene.render.spp > 1)
+        m_warnings.push_back("render.spp > 1 is not implemented by prt-play yet: 1 sample per pixel");
+    m_models.clear();
+    constexpr double k_inf = std::numeric_limits<double>::infinity();
+    m_world_min = {k_inf, k_inf, k_inf};
+    m_world_max = {-k_inf, -k_inf, -k_inf};
+    bool origin_set = false;
+    for (std::size_t i = 0; i < pools.size(); ++i) {
+        const pool::PoolFile& pf = *pools[i];
+        const scene::Model& sm = m_scene.models[i];
+        const char* who = "prt-play (build the octree with prt-octree)";
+        const pool::ModelInfo& info = pf.model_info();
+        const auto oinfo = pf.require<pool::OctreeInfo>(pool::SectionType::octree_info, who);
+        const auto nodes = pf.require<std::uint32_t>(pool::SectionType::octree_nodes, who);
+        const auto leaf_info = pf.require<std::uint32_t>(pool::SectionType::leaf_info, who);
+        const auto splats = pf.require<pool::Splat>(pool::SectionType::splats, who);
+        const auto colors = pf.array<pool::Rgba8>(pool::SectionType::colors);
+        const auto material_ids = pf.array<std::uint32_t>(pool::SectionType::material_ids);
+        if (oinfo.size() != 1)
+            pf.fail(pf.find(pool::SectionType::octree_info), "expected exactly one element");
+        const pool::OctreeInfo& oi = oinfo[0];
+        if (nodes.empty()) pf.fail(pf.find(pool::SectionType::octree_nodes), "empty node pool");
+        if (leaf_info.empty())
+            pf.fail(pf.find(pool::SectionType::leaf_info), "empty (needs filled leaves + 1 entries)");
+        if (nodes.size() > 0xffffffffull || splats.size() > 0xffffffffull ||
+            info.point_count > 0xffffffffull) {
+            pf.fail(nullptr, "more than 2^32 - 1 nodes, splats or points: not supported by the renderer");
+        }
+        if (!(oi.root_size > 0.0f) || !std::isfinite(oi.root_size)) {
+            pf.fail(pf.find(pool::SectionType::octree_info), "root_size must be finite and positive");
+        }
+        if (sm.surface != scene::SurfaceKind::splats) {
+            m_warnings.push_back(
+                "model '" + sm.name +
+                "': only the splat surface is implemented by prt-play yet: rendering splats");
+        }
+        LoadedModel lm;
+        lm.name = sm.name.empty() ? pf.label() : sm.name;
+        lm.pool = pools[i];
+        core::ModelView& v = lm.view;
+        v.octree.nodes = nodes.data();
+        v.octree.node_count = static_cast<std::uint32_t>(nodes.size());
+        v.octree.leaf_info = leaf_info.data();
+        v.octree.filled_leaves = static_cast<std::uint32_t>(leaf_info.size() - 1);
+        v.octree.splats = splats.data();
+        v.octree.splat_count = static_cast<std::uint32_t>(splats.size());
+        v.octree.root_min = {oi.root_min[0], oi.root_min[1], oi.root_min[2]};
+        v.octree.root_size = oi.root_size;
+        v.octree.inv_root_size = 1.0f / oi.root_size;
+        v.octree.flags = oi.flags;
+        v.point_count = static_cast<std::uint32_t>(info.point_count);
+        if (!colors.empty()) {
+            if (colors.size() == info.point_count)
+                v.colors = colors.data();
+            else
+                m_warnings.push_back(pf.label() +
+                                     ": section colors: count differs from the point count: ignored");
+        }
+        if (!material_ids.empty()) {
+            if (material_ids.size() == info.point_count)
+                v.material_ids = material_ids.data();
+            else
+                m_warnings.push_back(pf.label() +
+                                     ": section material_ids: count differs from the point count: ignored");
+        }
+        v.material =
+            std::min<std::uint32_t>(sm.material, static_cast<std::uint32_t>(m_scene.materials.size() - 1));
+        lm.bytes = nodes.size_bytes() + leaf_info.size_bytes() + splats.size_bytes() +
+                   (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0);
+
+        const Placement pl = placement(sm.transform, info);
+        const DVec3 world_origin = pl.world({0, 0, 0});
+        if (!origin_set) {
+            m_origin = world_origin;
+            origin_set = true;
+        }
+        v.offset = to_f(sub(world_origin, m_origin));
+        v.rotation = core::Mat3{to_f(pl.rotation[0]), to_f(pl.rotation[1]), to_f(pl.rotation[2])};
+        v.scale = static_cast<float>(pl.scale);
+        v.inv_scale = static_cast<float>(1.0 / pl.scale);
+        lm.world_min = {k_inf, k_inf, k_inf};
+        lm.world_max = {-k_inf, -k_inf, -k_inf};
+        for (int corner = 0; corner < 8; ++corner) {
+            const DVec3 local{(corner & 1) ? info.bounds_max[0] : info.bounds_min[0],
+                              (corner & 2) ? info.bounds_max[1] : info.bounds_min[1],
+                              (corner & 4) ? info.bounds_max[2] : info.bounds_min[2]};
+            const DVec3 w = pl.world(local);
+            for (int a = 0; a < 3; ++a) {
+                lm.world_min[a] = std::min(lm.world_min[a], w[a]);
+                lm.world_max[a] = std::max(lm.world_max[a], w[a]);
+            }
+        }
+        for (int a = 0; a < 3; ++a) {
+            m_world_min[a] = std::min(m_world_min[a], lm.world_min[a]);
+            m_world_max[a] = std::max(m_world_max[a], lm.world_max[a]);
+        }
+        m_models.push_back(std::move(lm));
+    }
+    if (m_models.empty()) m_world_min = m_world_max = {0, 0, 0};
+    m_model_views.clear();
+    for (const LoadedModel& lm : m_models) m_model_views.push_back(lm.view);
+    convert_materials();
+    update_lights();
+    load_environment();
+}
+
+void RenderScene::convert_materials() {
+    m_materials.clear();
+    for (const scene::Material& sm : m_scene.materials) {
+        core::Material m;
+        m.ambient = to_f(sm.ambient);
+        m.diffuse = to_f(sm.diffuse);
+        m.specular = to_f(sm.specular);
+        m.specular_exponent = sm.specular_exponent;
+        m.refractive_index = sm.refractive_index;
+        m.reflectivity = sm.reflectivity;
+        m.transmissivity = sm.transmissivity;
+        m.diffuse_reflectance = sm.diffuse_reflectance;
+        m.use_point_colors = sm.use_point_colors ? 1u : 0u;
+        if (!sm.texture.empty()) {
+            m_warnings.push_back("material '" + sm.name +
+                                 "': textures are not implemented by prt-play yet: ignored");
+        }
+        m_materials.push_back(m);
+    }
+}
+
+void RenderScene::update_lights() {
+    m_lights.clear();
+    for (const scene::PointLight& l : m_scene.point_lights) {
+        core::PointLight p;
+        p.position = to_f(sub(l.position, m_origin));
+        p.color = to_f(l.color) * l.intensity;
+        p.casts_shadows = l.casts_shadows ? 1u : 0u;
+        m_lights.push_back(p);
+    }
+    // SCENE.md: an area light is samples x samples point lights on a regular grid, each carrying
+    // intensity / samples^2 (seed 002, 5.6).
+    for (const scene::AreaLight& a : m_scene.area_lights) {
+        const std::uint32_t n = std::max<std::uint32_t>(a.samples, 1);
+        const float share = a.intensity / static_cast<float>(n * n);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            for (std::uint32_t j = 0; j < n; ++j) {
+                const double u = (i + 0.5) / n, v = (j + 0.5) / n;
+                const DVec3 w = add(a.corner, add(mul(a.edge_u, u), mul(a.edge_v, v)));
+                core::PointLight p;
+                p.position = to_f(sub(w, m_origin));
+                p.color = to_f(a.color) * share;
+                p.casts_shadows = a.casts_shadows ? 1u : 0u;
+                m_lights.push_back(p);
+            }
+        }
+    }
+}
+
+void RenderScene::load_environment() {
+    m_environment = FloatImage{};
+    if (!m_scene.environment.image.empty()) m_environment = read_float_image(m_scene.environment.image);
+}
+
+core::SceneView RenderScene::view() const {
+    core::SceneView s;
+    s.models = m_model_views.data();
+    s.model_count = static_cast<std::uint32_t>(m_model_views.size());
+    s.materials = m_materials.data();
+    s.material_count = static_cast<std::uint32_t>(m_materials.size());
+    s.lights = m_lights.data();
+    s.light_count = static_cast<std::uint32_t>(m_lights.size());
+    s.environment.color = to_f(m_scene.environment.color);
+    s.environment.intensity = m_scene.environment.intensity;
+    if (!m_environment.rgb.empty()) {
+        s.environment.image = m_environment.rgb.data();
+        s.environment.width = m_environment.width;
+        s.environment.height = m_environment.height;
+    }
+    s.params = m_params;
+    return s;
+}
+
+core::PinholeCamera RenderScene::camera(const scene::Camera& c) const {
+    return core::make_pinhole(to_f(sub(c.position, m_origin)), to_f(sub(c.look_at, m_origin)), to_f(c.up),
+                              static_cast<float>(c.fov_y_degrees), c.width, c.height);
+}
+
+std::uint64_t RenderScene::bytes() const {
+    std::uint64_t b = 0;
+    for (const LoadedModel& m : m_models) b += m.bytes;
+    return b;
+}
+
+}  // namespace prt::rt

@@ -1,0 +1,70 @@
+#include "player_options.h"
+
+namespace prt::player {
+
+void add_render_options(CLI::App& app, RenderOverrides& o) {
+    app.add_option("--tonemap", o.tone_map,
+                   "Tone mapping before gamma for 8-bit output: clamp, reinhard or aces")
+        ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
+    app.add_option("--exposure", o.exposure,
+                   "Multiply radiance by this before tone mapping (0: the scene's, default 1)")
+        ->check(CLI::NonNegativeNumber);
+    app.add_option("--max-bounces", o.max_bounces,
+                   "Reflection/refraction depth (-1: the scene's, default 4; at most 16)")
+        ->check(CLI::Range(-1, 16));
+    app.add_flag("--no-shadows", o.no_shadows, "Trace no shadow rays");
+    app.add_flag("--no-reflections", o.no_reflections, "Trace no reflected rays");
+    app.add_flag("--no-refractions", o.no_refractions, "Trace no refracted rays");
+    app.add_flag("--deep-blending", o.deep_blending, "Blend splats across leaf borders (thesis 3.5)");
+    app.add_option("--blend-window", o.blend_window,
+                   "Blend hits up to this many radii of the nearest splat behind it (thesis 3.3)")
+        ->check(CLI::PositiveNumber);
+    app.add_option("--max-steps", o.max_steps,
+                   "Octree leaves one ray may visit per model (walks cut here are counted)")
+        ->check(CLI::Range(1u, 1u << 30));
+}
+
+void add_backend_options(CLI::App& app, BackendChoice& b) {
+    app.add_option("--backend", b.name,
+                   "cpu, cuda, hybrid (GPU and CPU share each frame) or auto (cuda if a GPU exists)")
+        ->check(CLI::IsMember({"cpu", "cuda", "hybrid", "auto"}));
+    app.add_option("--kernel", b.kernel,
+                   "CUDA kernel structure: mega (one kernel) or wavefront (several, thesis 2.4)")
+        ->check(CLI::IsMember({"mega", "wavefront"}));
+    app.add_option("--mapping", b.mapping, "CUDA ray-to-thread mapping: zorder (thesis 2.3) or linear")
+        ->check(CLI::IsMember({"zorder", "linear"}));
+    app.add_option("--threads", b.threads, "CPU backend threads (0: all hardware threads)");
+    app.add_option(
+           "--min-blocks", b.min_blocks,
+           "CUDA megakernel occupancy hint: resident 256-thread blocks per SM, 1-6, which caps registers "
+           "per thread (0: the measured default, 4)")
+        ->check(CLI::Range(0, 6));
+    app.add_flag("--default-carveout", b.default_carveout,
+                 "CUDA: leave the L1 / shared-memory split to the driver instead of preferring L1");
+}
+
+void apply(const RenderOverrides& o, core::RenderParams& p) {
+    p.tone_map = o.tone_map == "reinhard" ? core::ToneMap::reinhard
+                 : o.tone_map == "aces"   ? core::ToneMap::aces
+                                          : core::ToneMap::clamp;
+    if (o.exposure > 0) p.exposure = o.exposure;
+    if (o.max_bounces >= 0) p.max_bounces = static_cast<std::uint32_t>(o.max_bounces);
+    if (o.no_shadows) p.shadows = 0;
+    if (o.no_reflections) p.reflections = 0;
+    if (o.no_refractions) p.refractions = 0;
+    p.deep_blending = o.deep_blending ? 1u : 0u;
+    p.blend_window = o.blend_window;
+    p.max_steps = o.max_steps;
+}
+
+rt::BackendOptions backend_options(const BackendChoice& b) {
+    rt::BackendOptions o;
+    o.cpu_threads = b.threads;
+    o.cuda_wavefront = b.kernel == "wavefront";
+    o.cuda_linear_mapping = b.mapping == "linear";
+    o.cuda_min_blocks = b.min_blocks;
+    o.cuda_max_l1 = !b.default_carveout;
+    return o;
+}
+
+}  // namespace prt::player

@@ -1,0 +1,179 @@
+// prt-play: the PointRT player. Loads a pool (and optionally a scene), uploads it to the chosen
+// backend and renders: in a GLFW window, or headless to image files.
+#include <cstdio>
+#include <filesystem>
+#include <string>
+
+#include "camera_path.h"
+#include "player_options.h"
+#include "prt/formats/scene.h"
+#include "prt/runtime/backend.h"
+#include "prt/runtime/image.h"
+#include "prt/runtime/render_scene.h"
+#include "prt/tool.h"
+#ifdef PRT_HAVE_GLFW
+#include "window.h"
+#endif
+
+namespace {
+
+struct Options {
+    std::filesystem::path pool;
+    std::filesystem::path scene;
+    bool headless = false;
+    std::uint32_t frames = 1;
+    std::string out;
+    std::uint32_t width = 0, height = 0;
+    double orbit = 0;
+    std::filesystem::path camera_path;
+    prt::player::RenderOverrides render;
+    prt::player::BackendChoice backend;
+};
+
+/// "frame_%04d.png" -> "frame_0007.png"; names without '%' are returned unchanged.
+std::string frame_name(const std::string& pattern, std::uint32_t frame) {
+    if (pattern.find('%') == std::string::npos) return pattern;
+    char buf[4096];
+    std::snprintf(buf, sizeof(buf), pattern.c_str(), static_cast<int>(frame));
+    return buf;
+}
+
+void report_frame_issues(bool quiet, const prt::rt::FrameStats& s) {
+    if (s.sanitized)
+        prt::tool::note(quiet, "warning: %llu non-finite pixels replaced by black",
+                        static_cast<unsigned long long>(s.sanitized));
+    if (s.truncated)
+        prt::tool::note(quiet, "warning: %llu octree walks cut by --max-steps",
+                        static_cast<unsigned long long>(s.truncated));
+    if (s.dropped)
+        prt::tool::note(quiet, "warning: %llu secondary rays dropped (ray stack or queue full)",
+                        static_cast<unsigned long long>(s.dropped));
+}
+
+void run(const Options& o, const prt::tool::CommonOptions& common) {
+    using namespace prt;
+    const double t0 = tool::now_seconds();
+    if (o.pool.empty() && o.scene.empty())
+        throw Error("give a pool file, a --scene file, or both (see --help)");
+    if (!o.out.empty()) {
+        std::string why;
+        if (!rt::can_write_image(frame_name(o.out, 0), &why)) throw Error(why);
+    }
+    rt::RenderScene rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool)
+                                         : rt::RenderScene::load(scene::load_scene(o.scene), o.pool);
+    scene::Camera& cam = rs.scene().camera;
+    if (o.width) cam.width = o.width;
+    if (o.height) cam.height = o.height;
+    player::apply(o.render, rs.params());
+    for (const std::string& w : rs.warnings()) tool::note(common.quiet, "warning: %s", w.c_str());
+    const double t_open = tool::now_seconds();
+    auto backend = rt::make_backend(o.backend.name, player::backend_options(o.backend));
+    const rt::UploadStats up = backend->set_scene(rs.view());
+    const double t_loaded = tool::now_seconds();
+    tool::note(common.quiet, "prt-play: %zu model(s), %.1f MB of sections; backend %s on %s",
+               rs.models().size(), rs.bytes() * 1e-6, backend->name().c_str(), backend->device().c_str());
+    if (up.bytes) {
+        tool::note(
+            common.quiet,
+            "prt-play: load %.3f s (open %.3f s, upload %.1f MB in %.3f s = %.2f GB/s, pinned async copies)",
+            t_loaded - t0, t_open - t0, up.bytes * 1e-6, up.seconds, up.gb_per_s());
+    } else {
+        tool::note(common.quiet, "prt-play: load %.3f s (sections read in place from the mapped pool)",
+                   t_loaded - t0);
+    }
+
+    bool headless = o.headless || !o.out.empty();  // an output file means a headless run
+#ifndef PRT_HAVE_GLFW
+    if (!headless) tool::note(common.quiet, "prt-play: built without GLFW: rendering headless");
+    headless = true;
+#endif
+    if (!headless) {
+#ifdef PRT_HAVE_GLFW
+        player::WindowOptions wo;
+        wo.backend = o.backend;
+        wo.quiet = common.quiet;
+        player::run_window(rs, backend, wo);
+        return;
+#endif
+    }
+
+    std::vector<player::CameraKey> path;
+    if (!o.camera_path.empty()) path = player::read_camera_path(o.camera_path);
+    const std::string out =
+        o.out.empty() ? std::string(rt::have_oiio() ? "prt-play.png" : "prt-play.ppm") : o.out;
+    const bool every_frame = out.find('%') != std::string::npos;
+    rt::Image image;
+    rt::FrameStats total;
+    tool::Progress progress("prt-play: rendering", o.frames, common.quiet || o.frames < 2);
+    for (std::uint32_t f = 0; f < o.frames; ++f) {
+        scene::Camera c =
+            path.empty() ? player::orbit_camera(cam, f, o.orbit) : player::path_camera(cam, path, f);
+        rt::FrameRequest req;
+        req.camera = rs.camera(c);
+        req.params = rs.params();
+        req.width = c.width;
+        req.height = c.height;
+        const rt::FrameStats s = backend->render(req, image);
+        total += s;
+        if (every_frame || f + 1 == o.frames) rt::write_image(frame_name(out, f), image, req.params.exposure);
+        progress.update(f + 1);
+    }
+    progress.finish();
+    const double secs = total.seconds;
+    tool::note(
+        common.quiet,
+        "prt-play: %u frame(s) %ux%u in %.3f s (%.2f ms/frame%s), %.3g rays (%.3g primary, %.3g shadow, %.3g "
+        "secondary), %.1f Mrays/s",
+        o.frames, cam.width, cam.height, secs, 1e3 * secs / o.frames,
+        total.device_ms > 0 ? (", GPU " + std::to_string(total.device_ms / o.frames) + " ms").c_str() : "",
+        static_cast<double>(total.rays()), static_cast<double>(total.primary),
+        static_cast<double>(total.shadow), static_cast<double>(total.secondary),
+        secs > 0 ? total.rays() / secs * 1e-6 : 0.0);
+    report_frame_issues(common.quiet, total);
+    tool::note(common.quiet, "prt-play: wrote %s",
+               every_frame ? out.c_str() : frame_name(out, o.frames - 1).c_str());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    return prt::tool::run(
+        argc, argv, "prt-play",
+        "PointRT player: ray traces a pool's splat octree (thesis ch. 2-3, 5) on the CPU or a GPU, in a "
+        "window or "
+        "headless.\nA pool alone renders with a default camera framing the model and one light; with "
+        "--scene, the "
+        "scene's camera, lights, materials and settings are used and the pool (if given) replaces the "
+        "scene's models.",
+        [&](CLI::App& app, prt::tool::CommonOptions&) {
+            app.add_option("pool", o.pool, "Pool file with the octree sections (prt-octree)")
+                ->check(CLI::ExistingFile);
+            app.add_option("--scene", o.scene, "Scene JSON (formats/SCENE.md)")->check(CLI::ExistingFile);
+            app.add_flag(
+                "--headless", o.headless,
+                "Render to files without a window (implied by --out; always on in builds without GLFW)");
+            app.add_option("--frames", o.frames, "Frames to render headless")
+                ->check(CLI::Range(1u, 1000000u));
+            app.add_option(
+                "--out", o.out,
+                "Output image: .png/.exr/... (OpenImageIO builds) or .ppm/.pfm (always); default "
+                "prt-play.png, "
+                "or prt-play.ppm without OpenImageIO. The last frame is written; a name with a printf "
+                "field (frame_%04d.png) writes every frame");
+            app.add_option("--width", o.width, "Image width (0: the scene camera's, default 512)")
+                ->check(CLI::Range(0u, 16384u));
+            app.add_option("--height", o.height, "Image height (0: the scene camera's, default 512)")
+                ->check(CLI::Range(0u, 16384u));
+            app.add_option("--orbit", o.orbit,
+                           "Headless: turn the camera about +y through its look-at point by this many "
+                           "degrees per frame");
+            app.add_option("--camera-path", o.camera_path,
+                           "Headless: camera path file, one frame per line 'px py pz lx ly lz [fov]' (world "
+                           "frame; frames cycle)")
+                ->check(CLI::ExistingFile);
+            prt::player::add_backend_options(app, o.backend);
+            prt::player::add_render_options(app, o.render);
+        },
+        [&](const prt::tool::CommonOptions& common) { run(o, common); });
+}

@@ -1,0 +1,103 @@
+// k-NN splat radii (thesis 3.1) against a brute-force O(n^2) computation in double.
+#include "radii.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "prt/error.h"
+#include "splat_test_data.h"
+
+namespace {
+
+using prt::pool::Float3;
+
+std::vector<Float3> mixed_points() {
+    // a sphere, a dense random blob, exact duplicates and a far outlier
+    std::vector<Float3> p = prt::test::sphere_points(600, 21).positions;
+    std::mt19937_64 rng(22);
+    std::uniform_real_distribution<float> u(-0.1f, 0.1f);
+    for (int i = 0; i < 200; ++i) p.push_back({2 + u(rng), u(rng), u(rng)});
+    for (int i = 0; i < 12; ++i) p.push_back(p[i * 7]);  // coincident points count at distance 0
+    p.push_back({50, 50, 50});
+    return p;
+}
+
+TEST(KnnRadii, EqualBruteForce) {
+    const std::vector<Float3> p = mixed_points();
+    for (const std::uint32_t k : {1u, 9u, 20u}) {
+        SCOPED_TRACE("k = " + std::to_string(k));
+        const std::vector<double> expected = prt::test::brute_force_knn(p, k);
+        const std::vector<float> got = prt::pre::knn_distances(p, k, 2);
+        ASSERT_EQ(got.size(), p.size());
+        for (std::size_t i = 0; i < p.size(); ++i)
+            ASSERT_NEAR(got[i], expected[i], 1e-5 * expected[i] + 1e-7) << "point " << i;
+    }
+}
+
+TEST(KnnRadii, ThreadCountDoesNotChangeTheResult) {
+    const std::vector<Float3> p = prt::test::sphere_points(20000, 23).positions;
+    EXPECT_EQ(prt::pre::knn_distances(p, 9, 1), prt::pre::knn_distances(p, 9, 3));
+}
+
+TEST(KnnRadii, TooFewPointsIsAnError) {
+    const std::vector<Float3> p = prt::test::sphere_points(9, 24).positions;
+    EXPECT_THROW(prt::pre::knn_distances(p, 9, 1), prt::Error);
+    EXPECT_NO_THROW(prt::pre::knn_distances(p, 8, 1));
+    std::vector<Float3> bad = prt::test::sphere_points(20, 25).positions;
+    bad[4].y = std::nanf("");
+    EXPECT_THROW(prt::pre::knn_distances(bad, 9, 1), prt::Error);
+}
+
+TEST(KnnRadii, ClampRuleAndStatistics) {
+    std::vector<float> r = {1, 2, 3, 4, 100, 0.5f, 2.5f};  // median 2.5
+    prt::pre::RadiiStats stats;
+    prt::pre::clamp_radii(r, 3.0f, stats);
+    EXPECT_DOUBLE_EQ(stats.raw_median, 2.5);
+    EXPECT_DOUBLE_EQ(stats.clamp_limit, 7.5);
+    EXPECT_EQ(stats.clamped, 1u);
+    EXPECT_FLOAT_EQ(r[4], 7.5f);
+    EXPECT_FLOAT_EQ(r[3], 4.0f);
+    EXPECT_DOUBLE_EQ(stats.min, 0.5);
+    EXPECT_DOUBLE_EQ(stats.max, 7.5);
+    EXPECT_NEAR(stats.mean, (1 + 2 + 3 + 4 + 7.5 + 0.5 + 2.5) / 7.0, 1e-12);
+    EXPECT_DOUBLE_EQ(stats.median, 2.5);
+
+    std::vector<float> with_zero = {4, 1, 3, 2, 0};  // median 2; the zero is counted
+    prt::pre::clamp_radii(with_zero, 0.0f, stats);   // clamping off
+    EXPECT_EQ(stats.clamped, 0u);
+    EXPECT_EQ(stats.zero, 1u);
+    EXPECT_DOUBLE_EQ(stats.median, 2.0);
+    std::vector<float> four = {4, 1, 3, 2};
+    prt::pre::clamp_radii(four, 1.0f, stats);  // median (2 + 3) / 2 = 2.5: the 3 and 4 clamp
+    EXPECT_DOUBLE_EQ(stats.raw_median, 2.5);
+    EXPECT_EQ(stats.clamped, 2u);
+    EXPECT_FLOAT_EQ(four[0], 2.5f);
+}
+
+TEST(KnnRadii, ComputeRadiiClampsTheOutlier) {
+    const std::vector<Float3> p = mixed_points();
+    prt::pre::RadiiParams params;
+    prt::pre::RadiiStats stats;
+    const std::vector<float> r = prt::pre::compute_radii(p, params, &stats);
+    const std::vector<double> raw = prt::test::brute_force_knn(p, 9);
+    std::vector<double> sorted = raw;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = 0.5 * (sorted[(sorted.size() - 1) / 2] + sorted[sorted.size() / 2]);
+    EXPECT_NEAR(stats.raw_median, median, 1e-5 * median);
+    std::uint64_t expected_clamped = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const double limit = 3.0 * median;
+        if (raw[i] > limit * (1 + 1e-5)) {
+            ++expected_clamped;
+            EXPECT_NEAR(r[i], limit, 1e-5 * limit);
+        } else if (raw[i] < limit * (1 - 1e-5)) {
+            EXPECT_NEAR(r[i], raw[i], 1e-5 * raw[i] + 1e-7);
+        }
+    }
+    EXPECT_GE(expected_clamped, 1u);  // at least the far outlier
+    EXPECT_EQ(stats.clamped, expected_clamped);
+}
+
+}  // namespace

@@ -1,0 +1,185 @@
+// prt-play and prt-bench end to end (label cpu): headless rendering of a pool to PPM, the default
+// scene, one-line errors (no GPU, missing sections, unwritable formats), and the benchmark's JSON.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "prt/runtime/backend.h"
+#include "prt/runtime/image.h"
+#include "test_scene.h"
+
+namespace prt::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct ToolRun {
+    int code;
+    std::string out, err;
+};
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+ToolRun run_tool(const std::string& tool, const std::string& args, const fs::path& dir) {
+    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
+    const std::string cmd =
+        std::string(PRT_BIN_DIR) + "/" + tool + " " + args + " >" + out.string() + " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
+}
+
+int lines(const std::string& s) {
+    int n = 0;
+    for (char c : s) n += c == '\n';
+    return n;
+}
+
+class PlayerTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_dir = fs::path(::testing::TempDir()) / ("prt_player_test_" + std::to_string(::getpid()));
+        fs::create_directories(m_dir);
+        const auto ball = make_pool(
+            make_model(sphere_points({10, 20, 30}, 1.0, 4000, false, {250, 60, 40, 255}), {10, 20, 30}));
+        pool::PoolWriter w;
+        w.carry_over(*ball);  // views into `ball`: it must outlive write()
+        w.write(m_dir / "ball.pool");
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+    fs::path m_dir;
+};
+
+TEST_F(PlayerTest, RendersAPoolAloneToPpm) {
+    const fs::path out = m_dir / "ball.ppm";
+    const ToolRun r = run_tool("prt-play",
+                               (m_dir / "ball.pool").string() +
+                                   " --headless --backend cpu --width 40 --height 30 --out " + out.string(),
+                               m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const rt::Image img = rt::read_ppm(out);
+    EXPECT_EQ(img.width, 40u);
+    EXPECT_EQ(img.height, 30u);
+    // The default camera frames the model: the centre is the red ball, the corner the background.
+    const std::uint32_t centre = img.rgba8[15 * 40 + 20], corner = img.rgba8[0];
+    EXPECT_GT(centre & 0xff, 2 * ((centre >> 8) & 0xff)) << "centre pixel is not the red ball";
+    EXPECT_NE(centre, corner);
+    EXPECT_NE(r.err.find("load"), std::string::npos) << "the load time is reported";
+}
+
+TEST_F(PlayerTest, QuietAndFramesAndPfm) {
+    const fs::path out = m_dir / "f_%02d.pfm";
+    const ToolRun r =
+        run_tool("prt-play",
+                 (m_dir / "ball.pool").string() +
+                     " --headless --quiet --backend cpu --width 16 --height 16 --frames 3 --orbit 30 --out " +
+                     out.string(),
+                 m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_TRUE(r.err.empty()) << "--quiet must silence stderr: " << r.err;
+    for (int f = 0; f < 3; ++f) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "f_%02d.pfm", f);
+        const rt::FloatImage img = rt::read_pfm(m_dir / name);
+        EXPECT_EQ(img.width, 16u);
+        for (float v : img.rgb) EXPECT_TRUE(std::isfinite(v));
+    }
+}
+
+TEST_F(PlayerTest, CudaWithoutDeviceFailsWithOneLine) {
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (a.cuda_device) GTEST_SKIP() << "a CUDA device exists here: nothing to refuse";
+    const ToolRun r = run_tool(
+        "prt-play",
+        (m_dir / "ball.pool").string() + " --headless --backend cuda --out " + (m_dir / "x.ppm").string(),
+        m_dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("cuda"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(m_dir / "x.ppm"));
+    // auto falls back to the CPU.
+    const ToolRun ok = run_tool("prt-play",
+                                (m_dir / "ball.pool").string() +
+                                    " --headless -q --width 8 --height 8 --out " + (m_dir / "y.ppm").string(),
+                                m_dir);
+    EXPECT_EQ(ok.code, 0) << ok.err;
+}
+
+TEST_F(PlayerTest, ErrorsNameTheFileAndTheProblem) {
+    // A pool without the octree sections.
+    pool::PoolWriter w;
+    auto full = make_pool(make_model(sphere_points({0, 0, 0}, 1.0, 500), {0, 0, 0}));
+    w.carry_over(*full);
+    for (auto t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
+                   pool::SectionType::leaf_info, pool::SectionType::splats})
+        w.remove(t);
+    w.write(m_dir / "points.pool");
+    const ToolRun r = run_tool(
+        "prt-play",
+        (m_dir / "points.pool").string() + " --headless --backend cpu --out " + (m_dir / "z.ppm").string(),
+        m_dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(lines(r.err), 1) << r.err;
+    EXPECT_NE(r.err.find("points.pool"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("octree"), std::string::npos) << r.err;
+    // An output format this build cannot write.
+    const ToolRun bad = run_tool("prt-play",
+                                 (m_dir / "ball.pool").string() + " --headless --backend cpu --out " +
+                                     (m_dir / "z.unknownext").string(),
+                                 m_dir);
+    EXPECT_NE(bad.code, 0);
+    EXPECT_EQ(lines(bad.err), 1) << bad.err;
+    // No input at all is a usage error.
+    const ToolRun none = run_tool("prt-play", "--headless", m_dir);
+    EXPECT_NE(none.code, 0);
+}
+
+TEST(GpuBackend, WithoutDeviceTheFactoryThrowsOneClearLine) {
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (a.cuda_device) GTEST_SKIP() << "a CUDA device exists here";
+    for (const char* name : {"cuda", "hybrid"}) {
+        try {
+            rt::make_backend(name);
+            ADD_FAILURE() << name << " must throw without a device";
+        } catch (const Error& e) {
+            const std::string m = e.what();
+            EXPECT_EQ(m.find('\n'), std::string::npos);
+            EXPECT_NE(m.find(name), std::string::npos) << m;
+        }
+    }
+    EXPECT_EQ(rt::make_backend("auto")->name(), "cpu");
+    EXPECT_THROW(rt::make_backend("vulkan"), Error);
+}
+
+TEST_F(PlayerTest, BenchWritesJsonWithEveryScenario) {
+    const fs::path json = m_dir / "bench.json";
+    const ToolRun r = run_tool(
+        "prt-bench",
+        "--synthetic 3000 --width 24 --height 24 --frames 3 --warmup 1 --backend cpu --quiet --json " +
+            json.string(),
+        m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(j["backend"], "cpu");
+    ASSERT_EQ(j["scenarios"].size(), 3u);
+    for (const auto& s : j["scenarios"]) {
+        EXPECT_GT(s["median_ms"].get<double>(), 0.0);
+        EXPECT_EQ(s["primary"].get<std::uint64_t>(), 24u * 24u);  // the camera is inside the room
+    }
+    EXPECT_GT(j["scenarios"][1]["shadow"].get<std::uint64_t>(), 0u);
+    // 4 bounces in a closed room: nearly every reflected ray hits again (a sparse 3000-point
+    // sampling leaves a few gaps at the room's edges).
+    EXPECT_GE(j["scenarios"][2]["secondary"].get<double>(), 0.97 * 4 * 24 * 24);
+    EXPECT_LE(j["scenarios"][2]["secondary"].get<std::uint64_t>(), 4u * 24u * 24u);
+    EXPECT_NE(r.out.find("Grays/s"), std::string::npos) << "the table goes to stdout";
+}
+
+}  // namespace
+}  // namespace prt::test
