@@ -48,6 +48,11 @@ enum class SectionType : std::uint32_t {
     octree_nodes = 17, ///< uint32 per node: 2-bit type + 30-bit address (OctreeNode helpers)
     leaf_info = 18,    ///< uint32 per filled leaf + 1: begin index into splats (thesis 3.2)
     splats = 19,       ///< Splat per stored splat, leaf-contiguous, replicas included
+    // 32-47: ISO (prt-iso, thesis ch. 4); layouts in iso_layout.h
+    iso_info = 32,        ///< one IsoInfo
+    iso_nodes = 33,       ///< uint32 node words (octree_nodes encoding), filled leaf -> leaf index
+    iso_leaves_q8 = 34,   ///< IsoLeafQ8 per filled leaf (56 B, thesis 4.4)
+    iso_leaves_f32 = 35,  ///< IsoLeafF32 per filled leaf (160 B)
     // 48-63: exact MLS kd-tree (prt-mls, Wald-Seidel 2005); layouts in mls_layout.h
     mls_info = 48,     ///< one MlsInfo
     mls_nodes = 49,    ///< MlsNode per kd-tree node
@@ -74,6 +79,11 @@ inline constexpr std::uint32_t section_version(SectionType type) {
         case SectionType::octree_nodes: return 1;
         case SectionType::leaf_info: return 1;
         case SectionType::splats: return 1;
+        // 32-47: ISO
+        case SectionType::iso_info:
+        case SectionType::iso_nodes:
+        case SectionType::iso_leaves_q8:
+        case SectionType::iso_leaves_f32: return 1;
         case SectionType::mls_info:
         case SectionType::mls_nodes:
         case SectionType::mls_refs:
@@ -100,6 +110,11 @@ inline constexpr const char* section_name(SectionType type) {
         case SectionType::octree_nodes: return "octree_nodes";
         case SectionType::leaf_info: return "leaf_info";
         case SectionType::splats: return "splats";
+        // 32-47: ISO
+        case SectionType::iso_info: return "iso_info";
+        case SectionType::iso_nodes: return "iso_nodes";
+        case SectionType::iso_leaves_q8: return "iso_leaves_q8";
+        case SectionType::iso_leaves_f32: return "iso_leaves_f32";
         case SectionType::mls_info: return "mls_info";
         case SectionType::mls_nodes: return "mls_nodes";
         case SectionType::mls_refs: return "mls_refs";

@@ -1,0 +1,123 @@
+// prt-mls end to end (PRT_BIN_DIR/prt-mls): exit codes 0 / 1 (bad pool) / 2 (bad usage), one-line
+// errors naming the file and the section, --help with defaults, --quiet, statistics, carry-over
+// of the input's sections, and a pool load_mls_view accepts.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "mls_test_util.h"
+#include "point_cloud.h"
+#include "prt/formats/pool.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace prt;
+
+class MlsTool : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_tool = fs::path(PRT_BIN_DIR) / "prt-mls";
+        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-mls is not built in " << PRT_BIN_DIR;
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        m_dir =
+            fs::temp_directory_path() / ("prt_mls_tool_" + std::to_string(::getpid()) + "_" + info->name());
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override {
+        if (!m_dir.empty()) fs::remove_all(m_dir);
+    }
+    int run(const std::string& args) {
+        const std::string cmd = m_tool.string() + " " + args + " >" + (m_dir / "out.txt").string() + " 2>" +
+                                (m_dir / "err.txt").string();
+        const int status = std::system(cmd.c_str());
+        m_stdout = slurp(m_dir / "out.txt");
+        m_stderr = slurp(m_dir / "err.txt");
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    static std::string slurp(const fs::path& p) {
+        std::ifstream in(p);
+        std::stringstream ss;
+        ss << in.rdbuf();
+        return ss.str();
+    }
+    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    /// A sphere pool with positions and normals, and radii unless `radii` is false.
+    std::string sphere_pool(const std::string& name, bool radii = true) {
+        const mls_test::PointSet s = mls_test::fibonacci_sphere(1500);
+        pre::PointCloud c;
+        for (std::size_t i = 0; i < s.positions.size(); ++i) {
+            c.positions.push_back({s.positions[i].x, s.positions[i].y, s.positions[i].z});
+            c.normals.push_back(s.normals[i]);
+            if (radii) c.radii.push_back(s.radii[i]);
+        }
+        pool::PoolWriter w;
+        pre::write_point_sections(c, w);
+        w.add_provenance("test", "0", "{}");
+        w.write(path(name));
+        return path(name);
+    }
+
+    fs::path m_tool, m_dir;
+    std::string m_stdout, m_stderr;
+};
+
+TEST_F(MlsTool, WritesAValidPoolWithStatistics) {
+    const std::string in = sphere_pool("in.pool");
+    ASSERT_EQ(run(in + " -o " + path("out.pool") + " --stats-json " + path("stats.json")), 0) << m_stderr;
+    const pool::PoolFile p = pool::PoolFile::open(path("out.pool"));
+    const core::MlsView v = mls::load_mls_view(p);
+    EXPECT_EQ(v.splat_count, 1500u);
+    EXPECT_TRUE(p.has(pool::SectionType::radii));  // carried over
+    EXPECT_NE(p.provenance_json().find("\"test\""), std::string::npos);
+    EXPECT_NE(p.provenance_json().find("\"prt-mls\""), std::string::npos);
+    EXPECT_NE(p.provenance_json().find("\"support_factor\""), std::string::npos);
+    EXPECT_NE(m_stderr.find("kd-tree"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("shrinking"), std::string::npos) << m_stderr;
+    EXPECT_EQ(m_stdout, "");
+    const std::string stats = slurp(path("stats.json"));
+    for (const char* key :
+         {"\"nodes\"", "\"refs_per_leaf\"", "\"culled_leaves\"", "\"collapsed\"", "\"seconds_total\""})
+        EXPECT_NE(stats.find(key), std::string::npos) << key;
+    // Rebuilding over the output replaces the tree; --quiet prints nothing.
+    ASSERT_EQ(run(path("out.pool") + " -o " + path("out.pool") + " --quiet --no-shrink --support-factor 1.5"),
+              0)
+        << m_stderr;
+    EXPECT_EQ(m_stderr, "");
+    const pool::PoolFile p2 = pool::PoolFile::open(path("out.pool"));
+    EXPECT_EQ(p2.array<pool::MlsInfo>(pool::SectionType::mls_info)[0].support_factor, 1.5f);
+    EXPECT_EQ(p2.array<pool::MlsInfo>(pool::SectionType::mls_info)[0].flags & pool::k_mls_shrunk, 0u);
+}
+
+TEST_F(MlsTool, MissingRadiiIsAOneLineError) {
+    const std::string in = sphere_pool("noradii.pool", false);
+    EXPECT_EQ(run(in + " -o " + path("out.pool")), 1);
+    EXPECT_NE(m_stderr.find("noradii.pool"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("radii"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("prt-radii"), std::string::npos) << m_stderr;
+    EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+    EXPECT_EQ(run(path("nothing.pool") + " -o " + path("out.pool")), 1);
+    EXPECT_NE(m_stderr.find("nothing.pool"), std::string::npos) << m_stderr;
+}
+
+TEST_F(MlsTool, UsageErrorsAndHelp) {
+    const std::string in = sphere_pool("in.pool");
+    EXPECT_EQ(run(in + " -o " + path("o.pool") + " --support-factor -1"), 2);
+    EXPECT_EQ(run(in + " -o " + path("o.pool") + " --shrink-axes 2"), 2);
+    EXPECT_EQ(run(in), 2);  // no -o
+    EXPECT_FALSE(fs::exists(path("o.pool")));
+    ASSERT_EQ(run("--help"), 0);
+    for (const char* opt : {"--support-factor", "--samples", "--slices", "--shrink-axes", "--no-shrink",
+                            "--no-encourage", "--no-collapse", "--encourage-limit", "--quiet", "--threads"})
+        EXPECT_NE(m_stdout.find(opt), std::string::npos) << opt;
+    EXPECT_NE(m_stdout.find("=1"), std::string::npos);  // defaults shown (support factor 1)
+}
+
+}  // namespace
