@@ -8,6 +8,7 @@ packages=(
     libopenmesh-dev libopenimageio-dev openimageio-tools
     libglfw3-dev libgl-dev
     nlohmann-json3-dev libcli11-dev libxxhash-dev libgtest-dev
+    libembree-dev
     xvfb xauth
 )
 sudo=""

@@ -22,6 +22,10 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
     app.add_option("--max-steps", o.max_steps,
                    "Octree leaves one ray may visit per model (walks cut here are counted)")
         ->check(CLI::Range(1u, 1u << 30));
+    app.add_option("--leaf-culling", o.leaf_culling,
+                   "Pass octree leaves unread when their bounds rule out a hit: 0 off, 1 normal cones (rays "
+                   "leaving a surface skip it), 2 cones and slabs. The image is the same; for comparisons")
+        ->check(CLI::Range(0u, 2u));
 }
 
 void add_backend_options(CLI::App& app, BackendChoice& b) {
@@ -55,6 +59,7 @@ void apply(const RenderOverrides& o, core::RenderParams& p) {
     p.deep_blending = o.deep_blending ? 1u : 0u;
     p.blend_window = o.blend_window;
     p.max_steps = o.max_steps;
+    p.leaf_culling = o.leaf_culling;
 }
 
 rt::BackendOptions backend_options(const BackendChoice& b) {

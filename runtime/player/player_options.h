@@ -19,6 +19,7 @@ struct RenderOverrides {
     bool deep_blending = false;
     float blend_window = 1.0f;
     std::uint32_t max_steps = 1u << 16;
+    std::uint32_t leaf_culling = 2;  ///< core::LeafCulling
 };
 
 /// Backend choice.

@@ -1,5 +1,6 @@
 // prt-play: the PointRT player. Loads a pool (and optionally a scene), uploads it to the chosen
 // backend and renders: in a GLFW window, or headless to image files.
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 #include <string>
@@ -28,6 +29,9 @@ struct Options {
     std::filesystem::path camera_path;
     prt::player::RenderOverrides render;
     prt::player::BackendChoice backend;
+    std::filesystem::path screenshot;
+    bool frames_given = false;  ///< --frames on the command line (the window then closes after them)
+    bool no_interop = false;
 };
 
 /// "frame_%04d.png" -> "frame_0007.png"; names without '%' are returned unchanged.
@@ -58,6 +62,22 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     if (!o.out.empty()) {
         std::string why;
         if (!rt::can_write_image(frame_name(o.out, 0), &why)) throw Error(why);
+    }
+    if (!o.screenshot.empty()) {
+#ifndef PRT_HAVE_GLFW
+        throw Error("--screenshot captures the window, and this build has none (configured without GLFW)");
+#endif
+        if (o.headless || !o.out.empty())
+            throw Error("--screenshot captures the window: it cannot be combined with --headless or --out");
+        std::string ext = o.screenshot.extension().string();
+        for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (ext == ".pfm" || ext == ".exr" || ext == ".hdr")
+            throw Error(
+                o.screenshot.string() +
+                ": --screenshot writes 8-bit images (.ppm, .png, ...): the window holds display-encoded "
+                "pixels, not linear radiance");
+        std::string why;
+        if (!rt::can_write_image(o.screenshot, &why)) throw Error(why);
     }
     rt::RenderScene rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool)
                                          : rt::RenderScene::load(scene::load_scene(o.scene), o.pool);
@@ -92,6 +112,9 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         player::WindowOptions wo;
         wo.backend = o.backend;
         wo.quiet = common.quiet;
+        wo.frames = o.frames_given || !o.screenshot.empty() ? o.frames : 0;
+        wo.screenshot = o.screenshot;
+        wo.interop = !o.no_interop;
         player::run_window(rs, backend, wo);
         return;
 #endif
@@ -153,8 +176,19 @@ int main(int argc, char** argv) {
             app.add_flag(
                 "--headless", o.headless,
                 "Render to files without a window (implied by --out; always on in builds without GLFW)");
-            app.add_option("--frames", o.frames, "Frames to render headless")
-                ->check(CLI::Range(1u, 1000000u));
+            app.add_option("--frames", o.frames,
+                           "Frames to render headless; in the window, frames to show before it closes by "
+                           "itself (default: until closed; with --screenshot, the frame captured)")
+                ->check(CLI::Range(1u, 1000000u))
+                ->each([&](const std::string&) { o.frames_given = true; });
+            app.add_option("--screenshot", o.screenshot,
+                           "Window: after --frames frames (default 1), read the displayed framebuffer back "
+                           "(glReadPixels), write it to this 8-bit image (.ppm always, .png ... with "
+                           "OpenImageIO) and exit");
+            app.add_flag(
+                "--no-interop", o.no_interop,
+                "Window with --backend cuda: show frames by a texture upload from host memory instead "
+                "of CUDA-OpenGL interop (which needs the GL context on the CUDA device)");
             app.add_option(
                 "--out", o.out,
                 "Output image: .png/.exr/... (OpenImageIO builds) or .ppm/.pfm (always); default "

@@ -1,19 +1,221 @@
 #include "window.h"
 
+#define GLFW_INCLUDE_GLEXT  // GL 1.5+ buffer-object types and enums (GL_PIXEL_UNPACK_BUFFER)
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "prt/error.h"
+#include "prt/runtime/image.h"
 #include "prt/tool.h"
+#ifdef PRT_HAVE_CUDA_GL
+#include "prt/cuda/gl_interop.h"
+#endif
 
 namespace prt::player {
 
 namespace {
+
+#ifdef PRT_HAVE_CUDA_GL
+/// The GL buffer-object entry points (GL 1.5; pixel buffers GL 2.1), loaded through GLFW: the
+/// system libGL need not export them, and the window's legacy context has no loader otherwise.
+struct GlBufferApi {
+    PFNGLGENBUFFERSPROC gen = nullptr;
+    PFNGLBINDBUFFERPROC bind = nullptr;
+    PFNGLBUFFERDATAPROC data = nullptr;
+    PFNGLDELETEBUFFERSPROC del = nullptr;
+
+    bool load() {
+        gen = reinterpret_cast<PFNGLGENBUFFERSPROC>(glfwGetProcAddress("glGenBuffers"));
+        bind = reinterpret_cast<PFNGLBINDBUFFERPROC>(glfwGetProcAddress("glBindBuffer"));
+        data = reinterpret_cast<PFNGLBUFFERDATAPROC>(glfwGetProcAddress("glBufferData"));
+        del = reinterpret_cast<PFNGLDELETEBUFFERSPROC>(glfwGetProcAddress("glDeleteBuffers"));
+        return gen && bind && data && del;
+    }
+};
+#endif
+
+/// How a frame reaches the window: a texture drawn over the whole framebuffer, filled either by
+/// an upload of the rendered image from host memory (CPU and hybrid backends, and the fallback),
+/// or, with the CUDA backend, from a pixel buffer the kernels wrote through CUDA-OpenGL interop
+/// (map, render into it, unmap, glTexSubImage2D from the bound PBO: the frame stays on the GPU).
+class FrameDisplay {
+public:
+    FrameDisplay(bool quiet, bool interop) : m_quiet(quiet), m_interop_allowed(interop) {
+        glGenTextures(1, &m_texture);
+        glBindTexture(GL_TEXTURE_2D, m_texture);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glPixelStorei(GL_UNPACK_ALIGNMENT, 4);  // RGBA8 rows are whole words
+    }
+    ~FrameDisplay() {
+#ifdef PRT_HAVE_CUDA_GL
+        release_interop();
+#endif
+        glDeleteTextures(1, &m_texture);
+    }
+    FrameDisplay(const FrameDisplay&) = delete;
+    FrameDisplay& operator=(const FrameDisplay&) = delete;
+
+    /// Renders `req` (fw x fh) with `backend` and draws it over the whole framebuffer.
+    rt::FrameStats render(rt::Backend& backend, rt::FrameRequest req, rt::Image& image, int fw, int fh) {
+        if (fw != m_tex_w || fh != m_tex_h) {  // (re)allocate the texture for the framebuffer size
+            glBindTexture(GL_TEXTURE_2D, m_texture);
+            glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
+            m_tex_w = fw;
+            m_tex_h = fh;
+        }
+        glBindTexture(GL_TEXTURE_2D, m_texture);
+        rt::FrameStats stats;
+        bool shown = false;
+#ifdef PRT_HAVE_CUDA_GL
+        if (backend.name() == "cuda" && m_interop_allowed && !m_interop_failed) {
+            shown = render_interop(backend, req, image, fw, fh, stats);
+        }
+#endif
+        if (!shown) {
+            stats = backend.render(req, image);
+            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba8.data());
+        }
+        glViewport(0, 0, fw, fh);
+        glEnable(GL_TEXTURE_2D);
+        glBegin(GL_QUADS);  // image row 0 is the top
+        glTexCoord2f(0, 1);
+        glVertex2f(-1, -1);
+        glTexCoord2f(1, 1);
+        glVertex2f(1, -1);
+        glTexCoord2f(1, 0);
+        glVertex2f(1, 1);
+        glTexCoord2f(0, 0);
+        glVertex2f(-1, 1);
+        glEnd();
+        return stats;
+    }
+
+    /// "interop" while frames go through the pixel buffer, else "texture upload".
+    const char* path() const {
+        return m_interop_active ? "interop" : "texture upload";
+    }
+
+private:
+#ifdef PRT_HAVE_CUDA_GL
+    /// One frame through the registered pixel buffer; false (and the texture upload from then on)
+    /// when the buffer cannot be created, registered or mapped.
+    bool render_interop(rt::Backend& backend, rt::FrameRequest req, rt::Image& image, int fw, int fh,
+                        rt::FrameStats& stats) {
+        const std::size_t need = static_cast<std::size_t>(fw) * static_cast<std::size_t>(fh) * 4;
+        void* pixels = nullptr;
+        try {
+            if (fw != m_pbo_w || fh != m_pbo_h || !m_registered) {
+                release_interop();
+                if (!m_gl.gen && !m_gl.load()) throw Error("the GL context has no buffer objects (GL 2.1)");
+                m_gl.gen(1, &m_pbo);
+                m_gl.bind(GL_PIXEL_UNPACK_BUFFER, m_pbo);
+                m_gl.data(GL_PIXEL_UNPACK_BUFFER, static_cast<GLsizeiptr>(need), nullptr, GL_STREAM_DRAW);
+                m_gl.bind(GL_PIXEL_UNPACK_BUFFER, 0);
+                m_registered.emplace(m_pbo);
+                m_pbo_w = fw;
+                m_pbo_h = fh;
+            }
+            std::size_t bytes = 0;
+            pixels = m_registered->map(bytes);
+            if (bytes < need) throw Error("the mapped pixel buffer is smaller than the frame");
+        } catch (const Error& e) {
+            if (pixels) m_registered->unmap();
+            release_interop();
+            m_interop_failed = true;
+            m_interop_active = false;
+            tool::note(m_quiet,
+                       "prt-play: CUDA-OpenGL interop unavailable (%s): frames go through a texture upload",
+                       e.what());
+            return false;
+        }
+        req.device_rgba8 = pixels;
+        req.download = false;
+        try {
+            stats = backend.render(req, image);
+        } catch (...) {
+            m_registered->unmap();
+            throw;
+        }
+        m_registered->unmap();
+        m_gl.bind(GL_PIXEL_UNPACK_BUFFER, m_pbo);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);  // from the PBO
+        m_gl.bind(GL_PIXEL_UNPACK_BUFFER, 0);
+        if (!m_interop_active)
+            tool::note(m_quiet, "prt-play: frames reach the window through CUDA-OpenGL interop");
+        m_interop_active = true;
+        return true;
+    }
+
+    void release_interop() {
+        m_registered.reset();  // unregister before the buffer is deleted
+        if (m_pbo) m_gl.del(1, &m_pbo);
+        m_pbo = 0;
+        m_pbo_w = m_pbo_h = 0;
+    }
+
+    GlBufferApi m_gl;
+    GLuint m_pbo = 0;
+    int m_pbo_w = 0, m_pbo_h = 0;
+    std::optional<cuda::GlPixelBuffer> m_registered;
+#endif
+    GLuint m_texture = 0;
+    int m_tex_w = 0, m_tex_h = 0;
+    bool m_quiet;
+    bool m_interop_allowed;
+    bool m_interop_failed = false;
+    bool m_interop_active = false;
+};
+
+/// The last GLFW error, for one-line messages.
+std::string g_glfw_error = "no GLFW error reported";
+void on_glfw_error(int code, const char* text) {
+    g_glfw_error = "GLFW error " + std::to_string(code) + ": " + (text ? text : "?");
+}
+
+/// Destroys the window and terminates GLFW on every way out of run_window().
+struct WindowGuard {
+    GLFWwindow* window = nullptr;
+    WindowGuard() = default;
+    WindowGuard(const WindowGuard&) = delete;
+    WindowGuard& operator=(const WindowGuard&) = delete;
+    ~WindowGuard() {
+        if (window) glfwDestroyWindow(window);
+        glfwTerminate();
+    }
+};
+
+/// Reads the framebuffer just drawn (the back buffer, before the swap) and writes it as an 8-bit
+/// image: GL rows run bottom-up, image rows top-down.
+void write_screenshot(const std::filesystem::path& path, int fw, int fh) {
+    rt::Image shot;
+    shot.resize(static_cast<std::uint32_t>(fw), static_cast<std::uint32_t>(fh));
+    std::vector<std::uint32_t> rows(shot.rgba8.size());
+    glPixelStorei(GL_PACK_ALIGNMENT, 4);
+    glReadBuffer(GL_BACK);
+    glReadPixels(0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, rows.data());
+    const GLenum err = glGetError();
+    if (err != GL_NO_ERROR)
+        throw Error(path.string() + ": glReadPixels failed (GL error " + std::to_string(err) + ")");
+    const std::size_t w = static_cast<std::size_t>(fw);
+    for (int y = 0; y < fh; ++y) {
+        const std::uint32_t* src = rows.data() + static_cast<std::size_t>(fh - 1 - y) * w;
+        std::uint32_t* dst = shot.rgba8.data() + static_cast<std::size_t>(y) * w;
+        for (std::size_t x = 0; x < w; ++x) {
+            const std::uint32_t p = src[x] | 0xff000000u;  // R in the low byte, as Image::rgba8
+            dst[x] = p;
+            float* rgb = shot.rgb.data() + (static_cast<std::size_t>(y) * w + x) * 3;
+            for (int c = 0; c < 3; ++c) rgb[c] = static_cast<float>((p >> (8 * c)) & 0xffu) / 255.0f;
+        }
+    }
+    rt::write_image(path, shot);
+}
 
 struct OrbitState {
     scene::Vec3 target{0, 0, 0};
@@ -116,14 +318,14 @@ void on_scroll(GLFWwindow* w, double, double dy) {
 }  // namespace
 
 void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, const WindowOptions& options) {
-    if (!glfwInit()) throw Error("cannot initialise GLFW (no display? use --headless)");
+    glfwSetErrorCallback(on_glfw_error);
+    if (!glfwInit()) throw Error("cannot initialise GLFW (" + g_glfw_error + "; no display? use --headless)");
+    WindowGuard guard;  // destroyed last: after the display's GL objects
     scene::Camera& cam = rs.scene().camera;
-    GLFWwindow* window = glfwCreateWindow(static_cast<int>(cam.width), static_cast<int>(cam.height),
-                                          "prt-play", nullptr, nullptr);
-    if (!window) {
-        glfwTerminate();
-        throw Error("cannot open a window (no display? use --headless)");
-    }
+    guard.window = glfwCreateWindow(static_cast<int>(cam.width), static_cast<int>(cam.height), "prt-play",
+                                    nullptr, nullptr);
+    GLFWwindow* window = guard.window;
+    if (!window) throw Error("cannot open a window (" + g_glfw_error + "; no display? use --headless)");
     glfwMakeContextCurrent(window);
     glfwSwapInterval(0);
 
@@ -150,13 +352,11 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
     glfwSetCursorPosCallback(window, on_cursor);
     glfwSetScrollCallback(window, on_scroll);
 
-    GLuint texture = 0;
-    glGenTextures(1, &texture);
-    glBindTexture(GL_TEXTURE_2D, texture);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    FrameDisplay display(options.quiet, options.interop);
     rt::Image image;
     double smoothed_ms = 0;
+    std::uint32_t shown = 0;
+    const std::uint32_t frames = options.screenshot.empty() ? options.frames : std::max(options.frames, 1u);
     while (!glfwWindowShouldClose(window)) {
         glfwPollEvents();
         if (ctx.switch_backend) {
@@ -176,35 +376,29 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
         req.params = rs.params();
         req.width = cam.width;
         req.height = cam.height;
-        const rt::FrameStats s = backend->render(req, image);
+        const rt::FrameStats s = display.render(*backend, req, image, fw, fh);
+        ++shown;
+        const bool last = frames > 0 && shown >= frames;
+        if (last && !options.screenshot.empty()) {
+            write_screenshot(options.screenshot, fw, fh);
+            tool::note(options.quiet,
+                       "prt-play: wrote %s (%dx%d, the window's framebuffer after %u frames, %s)",
+                       options.screenshot.string().c_str(), fw, fh, shown, display.path());
+        }
+        glfwSwapBuffers(window);
         const double ms = s.seconds * 1e3;
         smoothed_ms = smoothed_ms > 0 ? 0.9 * smoothed_ms + 0.1 * ms : ms;
-        glViewport(0, 0, fw, fh);
-        glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba8.data());
-        glEnable(GL_TEXTURE_2D);
-        glBegin(GL_QUADS);  // image row 0 is the top
-        glTexCoord2f(0, 1);
-        glVertex2f(-1, -1);
-        glTexCoord2f(1, 1);
-        glVertex2f(1, -1);
-        glTexCoord2f(1, 0);
-        glVertex2f(1, 1);
-        glTexCoord2f(0, 0);
-        glVertex2f(-1, 1);
-        glEnd();
-        glfwSwapBuffers(window);
         const core::RenderParams& p = rs.params();
         char title[256];
-        std::snprintf(title, sizeof(title),
-                      "prt-play - %s - %.2f ms (%.1f fps) - shadows %s, reflections %s, refractions %s%s",
-                      backend->name().c_str(), smoothed_ms, 1e3 / std::max(smoothed_ms, 1e-3),
-                      p.shadows ? "on" : "off", p.reflections ? "on" : "off", p.refractions ? "on" : "off",
-                      p.deep_blending ? ", deep blending" : "");
+        std::snprintf(
+            title, sizeof(title),
+            "prt-play - %s (%s) - %.2f ms (%.1f fps) - shadows %s, reflections %s, refractions %s%s",
+            backend->name().c_str(), display.path(), smoothed_ms, 1e3 / std::max(smoothed_ms, 1e-3),
+            p.shadows ? "on" : "off", p.reflections ? "on" : "off", p.refractions ? "on" : "off",
+            p.deep_blending ? ", deep blending" : "");
         glfwSetWindowTitle(window, title);
+        if (last) break;
     }
-    glDeleteTextures(1, &texture);
-    glfwDestroyWindow(window);
-    glfwTerminate();
 }
 
 }  // namespace prt::player

@@ -1,6 +1,8 @@
 // PointRT player: the interactive GLFW window (built only with PRT_HAVE_PRT_WITH_GLFW).
 #pragma once
 
+#include <cstdint>
+#include <filesystem>
 #include <memory>
 
 #include "player_options.h"
@@ -12,13 +14,23 @@ namespace prt::player {
 struct WindowOptions {
     BackendChoice backend;
     bool quiet = false;
+    /// Frames to show before closing the window by itself (0: until the user closes it).
+    std::uint32_t frames = 0;
+    /// When set: after `frames` frames (at least 1), the displayed framebuffer is read back
+    /// (glReadPixels) and written here as an 8-bit image, then the window closes.
+    std::filesystem::path screenshot;
+    /// CUDA backend: render straight into an OpenGL pixel buffer through CUDA-OpenGL interop
+    /// (builds with CUDA and OpenGL); false keeps the texture upload.
+    bool interop = true;
 };
 
 /// Opens a window and renders until it is closed. Mouse: left drag orbits about the look-at
 /// point, right (or middle) drag pans, the wheel zooms. Keys: S shadows, R reflections,
 /// T refractions, D deep blending, K surface kind, B next backend (cpu / cuda / hybrid, those this
-/// machine runs), Esc quits. The title shows the backend, frame time and toggles. Frames reach the
-/// screen as a texture upload of the rendered image (both backends).
+/// machine runs), Esc quits. The title shows the backend, frame time and toggles. With the CUDA
+/// backend, frames reach the screen through CUDA-OpenGL interop (a pixel buffer the kernels write,
+/// then copied into the texture on the GPU) where the GL context runs on the CUDA device; otherwise
+/// (CPU and hybrid backends, or registration refused) as a texture upload of the rendered image.
 void run_window(rt::RenderScene& scene, std::unique_ptr<rt::Backend>& backend, const WindowOptions& options);
 
 }  // namespace prt::player

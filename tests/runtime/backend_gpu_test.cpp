@@ -10,6 +10,7 @@
 
 #include <cmath>
 
+#include "prt/core/splat.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
 #include "test_scene.h"
@@ -91,7 +92,7 @@ std::vector<GpuScene> scenes() {
 }
 
 rt::Image render(rt::Backend& b, const rt::RenderScene& rs, std::uint32_t w, std::uint32_t h,
-                 rt::FrameStats* stats) {
+                 rt::FrameStats* stats, std::uint32_t leaf_culling = core::k_cull_slabs) {
     b.set_scene(rs.view());
     rt::FrameRequest req;
     scene::Camera c = rs.scene().camera;
@@ -99,6 +100,7 @@ rt::Image render(rt::Backend& b, const rt::RenderScene& rs, std::uint32_t w, std
     c.height = h;
     req.camera = rs.camera(c);
     req.params = rs.params();
+    req.params.leaf_culling = leaf_culling;
     req.width = w;
     req.height = h;
     rt::Image img;
@@ -149,6 +151,27 @@ TEST_P(GpuAgreement, CudaMatchesCpu) {
         const rt::Image ref = render(*cpu, s.rs, 160, 120, &sc);
         const rt::Image img = render(*gpu, s.rs, 160, 120, &sg);
         compare(ref, img, sc, sg);
+    }
+}
+
+TEST(GpuLeafCulling, PassingLeavesByTheirBoundsKeepsTheImage) {
+    // The per-leaf bounds (core::LeafBounds) on the GPU: the same image as without them (within the
+    // fast-math tolerance above), far fewer splat tests, and the CPU backend's counts.
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
+    auto cpu = rt::make_backend("cpu");
+    auto gpu = rt::make_backend("cuda");
+    for (GpuScene& s : scenes()) {
+        SCOPED_TRACE(s.name + " on " + gpu->device());
+        rt::FrameStats off, on, cpu_on;
+        const rt::Image a_img = render(*gpu, s.rs, 160, 120, &off, core::k_cull_none);
+        const rt::Image b_img = render(*gpu, s.rs, 160, 120, &on, core::k_cull_slabs);
+        render(*cpu, s.rs, 160, 120, &cpu_on, core::k_cull_slabs);
+        compare(a_img, b_img, off, on);
+        EXPECT_EQ(off.culled, 0u);
+        EXPECT_GT(on.culled, 0u);
+        EXPECT_LT(on.splat_tests, off.splat_tests);
+        EXPECT_NEAR(double(on.splat_tests), double(cpu_on.splat_tests), 0.01 * double(cpu_on.splat_tests));
     }
 }
 

@@ -10,37 +10,12 @@
 #include "prt/runtime/backend.h"
 #include "prt/runtime/image.h"
 #include "test_scene.h"
+#include "tool_run.h"
 
 namespace prt::test {
 namespace {
 
 namespace fs = std::filesystem;
-
-struct ToolRun {
-    int code;
-    std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
-}
-
-ToolRun run_tool(const std::string& tool, const std::string& args, const fs::path& dir) {
-    const fs::path out = dir / "stdout.txt", err = dir / "stderr.txt";
-    const std::string cmd =
-        std::string(PRT_BIN_DIR) + "/" + tool + " " + args + " >" + out.string() + " 2>" + err.string();
-    const int status = std::system(cmd.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, slurp(out), slurp(err)};
-}
-
-int lines(const std::string& s) {
-    int n = 0;
-    for (char c : s) n += c == '\n';
-    return n;
-}
 
 class PlayerTest : public ::testing::Test {
 protected:
@@ -179,6 +154,60 @@ TEST_F(PlayerTest, BenchWritesJsonWithEveryScenario) {
     EXPECT_GE(j["scenarios"][2]["secondary"].get<double>(), 0.97 * 4 * 24 * 24);
     EXPECT_LE(j["scenarios"][2]["secondary"].get<std::uint64_t>(), 4u * 24u * 24u);
     EXPECT_NE(r.out.find("Grays/s"), std::string::npos) << "the table goes to stdout";
+}
+
+TEST_F(PlayerTest, BenchProfileSplitsTheWorkByRayKindAndDepth) {
+    const fs::path json = m_dir / "profile.json";
+    const ToolRun r =
+        run_tool("prt-bench",
+                 "--synthetic 3000 --width 16 --height 16 --frames 1 --warmup 0 --backend cpu --quiet "
+                 "--profile --json " +
+                     json.string(),
+                 m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(json));
+    // Per ray kind from the scenarios: shadow rays leave their surface, so its leaves' bounds pass
+    // them (the normal cones), and they test far fewer splats than primary rays.
+    const auto& k = j["per_ray_kind"];
+    EXPECT_GT(k["shadow"]["culled_leaves_per_ray"].get<double>(), 0.0);
+    EXPECT_LT(k["shadow"]["splat_tests_per_ray"].get<double>(),
+              k["primary"]["splat_tests_per_ray"].get<double>());
+    // The host profile: primary + 4 bounces, then shadow rays; efficiencies in (0, 1].
+    const auto& kinds = j["profile"]["reflect4"]["kinds"];
+    ASSERT_EQ(kinds.size(), 6u);
+    EXPECT_EQ(kinds[0]["kind"], "primary");
+    EXPECT_EQ(kinds[4]["kind"], "bounce 4");
+    EXPECT_EQ(kinds[0]["rays"].get<std::uint64_t>(), 256u);
+    for (const auto& [name, value] : j["profile"]["reflect4"]["simt_efficiency"].items()) {
+        EXPECT_GT(value.get<double>(), 0.0) << name;
+        EXPECT_LE(value.get<double>(), 1.0) << name;
+    }
+    EXPECT_NE(r.out.find("SIMT efficiency"), std::string::npos) << r.out;
+}
+
+TEST_F(PlayerTest, EmbreePeerBenchmarkTracesTheSameSurface) {
+#ifndef PRT_TEST_HAVE_EMBREE
+    GTEST_SKIP() << "prt-bench-embree is not built (no Embree 3: libembree-dev)";
+#endif
+    const fs::path json = m_dir / "embree.json";
+    const ToolRun r =
+        run_tool("prt-bench-embree",
+                 "--synthetic 4000 --width 32 --height 32 --frames 1 --warmup 0 --threads 2 --quiet --json " +
+                     json.string(),
+                 m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto j = nlohmann::json::parse(slurp(json));
+    ASSERT_EQ(j["scenarios"].size(), 3u);
+    for (const auto& s : j["scenarios"]) {
+        EXPECT_GT(s["ratio_ours_over_embree"].get<double>(), 0.0);
+        // The same rays: every pixel's primary ray, the same shadow and secondary rays within 2%.
+        EXPECT_NEAR(s["embree_rays"].get<double>(), s["ours_rays"].get<double>(),
+                    0.02 * s["ours_rays"].get<double>());
+        EXPECT_LT(s["mean_abs_diff_8bit"].get<double>(), 8.0) << s["name"];
+    }
+    const auto& a = j["primary_agreement"];
+    EXPECT_GE(a["same_distance"].get<double>(), 0.95 * a["both_hit"].get<double>());
+    EXPECT_NE(r.out.find("ours/Embree"), std::string::npos) << r.out;
 }
 
 }  // namespace

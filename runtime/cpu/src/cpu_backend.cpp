@@ -91,6 +91,7 @@ void add_counters(rt::FrameStats& s, const core::RayCounters& c) {
     s.truncated += c.truncated;
     s.sanitized += c.sanitized;
     s.dropped += c.dropped;
+    s.culled += c.culled;
 }
 
 class CpuBackend final : public rt::Backend {

@@ -38,6 +38,7 @@ enum Counter : std::uint32_t {
     k_c_truncated,
     k_c_sanitized,
     k_c_dropped,
+    k_c_culled,
     k_counter_count
 };
 
@@ -48,8 +49,8 @@ __device__ void flush_counters(const core::RayCounters& c, unsigned long long* o
     __shared__ unsigned int block_sum[k_counter_count];
     if (threadIdx.x < k_counter_count) block_sum[threadIdx.x] = 0;
     __syncthreads();
-    const unsigned int v[k_counter_count] = {c.primary,     c.secondary, c.shadow,    c.leaves,
-                                             c.splat_tests, c.truncated, c.sanitized, c.dropped};
+    const unsigned int v[k_counter_count] = {c.primary,   c.secondary, c.shadow,  c.leaves, c.splat_tests,
+                                             c.truncated, c.sanitized, c.dropped, c.culled};
     const bool lane0 = (threadIdx.x & 31u) == 0;
 #pragma unroll
     for (std::uint32_t i = 0; i < k_counter_count; ++i) {
@@ -327,6 +328,9 @@ public:
                 static_cast<const std::uint32_t*>(put(o.leaf_info, (std::size_t{o.filled_leaves} + 1) * 4));
             o.splats = static_cast<const pool::Splat*>(
                 put(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat)));
+            if (o.leaf_bounds)
+                o.leaf_bounds = static_cast<const core::LeafBounds*>(
+                    put(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds)));
             if (m.colors)
                 m.colors = static_cast<const pool::Rgba8*>(put(m.colors, std::size_t{m.point_count} * 4));
             if (m.material_ids)
@@ -380,7 +384,7 @@ public:
             const std::size_t first = static_cast<std::size_t>(y0) * w,
                               count = static_cast<std::size_t>(y1 - y0) * w;
             m_rgb.download(image.rgb.data() + first * 3, count * 3, first * 3, m_stream);
-            m_rgba.download(image.rgba8.data() + first, count, first, m_stream);
+            if (!req.device_rgba8) m_rgba.download(image.rgba8.data() + first, count, first, m_stream);
         }
         PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream));
         float ms = 0;
@@ -394,11 +398,18 @@ public:
         stats.truncated = counters[k_c_truncated];
         stats.sanitized = counters[k_c_sanitized];
         stats.dropped = counters[k_c_dropped];
+        stats.culled = counters[k_c_culled];
         stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return stats;
     }
 
 private:
+    /// Where the kernels write the display-encoded frame: the caller's device buffer (a mapped GL
+    /// pixel buffer in the window) or the backend's own.
+    std::uint32_t* rgba_target(const rt::FrameRequest& req) {
+        return req.device_rgba8 ? static_cast<std::uint32_t*>(req.device_rgba8) : m_rgba.data();
+    }
+
     void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
                            std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
         const bool z = !m_options.cuda_linear_mapping;
@@ -412,7 +423,7 @@ private:
                 cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
                                      m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
             kernel<<<grid, k_block, 0, m_stream>>>(scene, req.camera, w, h, y0, y1, m_rgb.data(),
-                                                   m_rgba.data(), m_counters.data());
+                                                   rgba_target(req), m_counters.data());
         };
         switch (m_options.cuda_min_blocks) {
             case 1:
@@ -482,7 +493,7 @@ private:
         }
         const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
         wave_finish<<<static_cast<unsigned>((n + k_block - 1) / k_block), k_block, 0, m_stream>>>(
-            req.params, w, y0, y1, m_accum.data(), m_rgb.data(), m_rgba.data(), m_counters.data());
+            req.params, w, y0, y1, m_accum.data(), m_rgb.data(), rgba_target(req), m_counters.data());
         PRT_CUDA_CHECK_LAUNCH();
     }
 

@@ -14,6 +14,7 @@ FrameStats& FrameStats::operator+=(const FrameStats& o) {
     truncated += o.truncated;
     sanitized += o.sanitized;
     dropped += o.dropped;
+    culled += o.culled;
     return *this;
 }
 

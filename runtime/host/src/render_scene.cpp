@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "prt/error.h"
+#include "prt/runtime/leaf_bounds.h"
 
 namespace prt::rt {
 
@@ -226,6 +227,8 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         v.octree.root_size = oi.root_size;
         v.octree.inv_root_size = 1.0f / oi.root_size;
         v.octree.flags = oi.flags;
+        lm.leaf_bounds = build_leaf_bounds(v.octree);
+        v.octree.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves below
         v.point_count = static_cast<std::uint32_t>(info.point_count);
         if (!colors.empty()) {
             if (colors.size() == info.point_count)
@@ -244,7 +247,8 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         v.material =
             std::min<std::uint32_t>(sm.material, static_cast<std::uint32_t>(m_scene.materials.size() - 1));
         lm.bytes = nodes.size_bytes() + leaf_info.size_bytes() + splats.size_bytes() +
-                   (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0);
+                   (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0) +
+                   lm.leaf_bounds.size() * sizeof(core::LeafBounds);
 
         const Placement pl = placement(sm.transform, info);
         const DVec3 world_origin = pl.world({0, 0, 0});

@@ -28,6 +28,15 @@
 #define PRT_DEVICE_CODE 0
 #endif
 
+#ifndef PRT_BATCHED_WALK
+/// 0: one leaf per pass of the intersection loop ("if-if"); 1: a ray walks on until the next leaf
+/// whose splats must be read before reading any ("while-while", splat.h next_leaf). The same hits
+/// either way; only how the threads of a GPU warp line up changes. Measured on an H100 (prt-bench,
+/// 1M-point room, runtime/README.md): 1 is 49% slower for primary rays and no faster for 4-bounce
+/// reflections, so 0 is the default; 1 stays selectable for other scenes.
+#define PRT_BATCHED_WALK 0
+#endif
+
 #ifndef PRT_COUNT_WORK
 /// 1: count octree leaves visited and splats tested per ray (WalkStats, benchmark diagnostics);
 /// 0: leave those two counters at zero (the counters cost registers in GPU kernels).

@@ -39,6 +39,24 @@ inline constexpr std::uint32_t k_fixed_bits = 30;
 inline constexpr std::uint32_t k_fixed_one = 1u << k_fixed_bits;
 inline constexpr std::uint32_t k_fixed_max = k_fixed_one - 1;
 
+/// Bounds on the splats of one filled leaf, derived from the pool on the host when a scene is
+/// loaded (rt::build_leaf_bounds) so that a ray can pass a leaf without reading its splats
+/// (splat.h, leaf_may_hit), with a copy of the leaf's splat range, so that one 32-byte read (two
+/// 16-byte loads, one memory sector) gives a visited leaf everything but its splats. Not a pool
+/// section.
+///   normal cone: every splat normal n of the leaf (unit) makes an angle of at most theta with
+///                `axis`; `sin_theta` is sin(theta) plus a rounding margin, or 2 when the normals
+///                do not fit in a cone narrower than a half-space (the cone test never passes).
+///   slab:        every point of every disk of the leaf lies in lo <= dot(axis, p) <= hi (local
+///                frame, widened by a rounding margin); lo > hi when no splat of the leaf can be hit.
+struct alignas(16) LeafBounds {
+    float axis_x, axis_y, axis_z;  ///< 0: unit cone axis, also the slab normal
+    float sin_theta;               ///< 12
+    float lo, hi;                  ///< 16, 20: the slab
+    std::uint32_t begin, end;      ///< 24, 28: the leaf's splats [begin, end) (leaf_info, clamped)
+};
+static_assert(sizeof(LeafBounds) == 32);
+
 /// A non-owning view of a model's octree sections (pool section types 16-19).
 struct OctreeView {
     const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words
@@ -51,6 +69,9 @@ struct OctreeView {
     float root_size = 1.0f;  ///< root cube edge
     float inv_root_size = 1.0f;
     std::uint32_t flags = 0;  ///< pool::OctreeFlags
+    /// One LeafBounds per filled leaf (same index as leaf_info), or null: leaves are then never
+    /// skipped without testing their splats.
+    const LeafBounds* leaf_bounds = nullptr;
 };
 
 /// Node word decoding (pool_layout.h encoding), callable from device code.

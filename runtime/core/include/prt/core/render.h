@@ -28,12 +28,14 @@ struct RayCounters {
     std::uint32_t truncated = 0;  ///< walks cut by RenderParams::max_steps
     std::uint32_t sanitized = 0;  ///< non-finite pixels replaced by black
     std::uint32_t dropped = 0;    ///< secondary rays dropped because the ray stack was full
+    std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds (splat.h)
 };
 
 PRT_HD PRT_INLINE void add_walk_stats(RayCounters& c, const WalkStats& w) {
     c.leaves += w.leaves;
     c.splat_tests += w.splat_tests;
     c.truncated += w.truncated;
+    c.culled += w.culled;
 }
 
 /// A shaded surface point in the render frame.
@@ -65,7 +67,7 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
         WalkStats ws;
         SplatSample cand{};
         if (closest_hit_splats(mv.octree, mv.colors, o, d, ray_inside(r), best, blend, s.params.max_steps,
-                               cand, ws)) {
+                               cand, ws, s.params.leaf_culling)) {
             if (cand.t < best || !found) {
                 best = cand.t;
                 sample = cand;
@@ -97,7 +99,8 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
         Vec3 o, d;
         to_model_frame(mv, r, o, d);
         WalkStats ws;
-        const bool hit = any_hit_splats(mv.octree, o, d, ray_inside(r), r.t_max, s.params.max_steps, ws);
+        const bool hit = any_hit_splats(mv.octree, o, d, ray_inside(r), r.t_max, s.params.max_steps, ws,
+                                        s.params.leaf_culling);
         add_walk_stats(c, ws);
         if (hit) return true;
     }

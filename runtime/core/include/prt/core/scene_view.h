@@ -61,6 +61,9 @@ struct RenderParams {
     std::uint32_t deep_blending = 0;     ///< thesis 3.5
     std::uint32_t max_steps = 1u << 16;  ///< leaves one ray may visit in one octree
     float min_ray_weight = 1e-3f;        ///< secondary rays carrying less intensity are not traced
+    /// LeafCulling (splat.h): which per-leaf bounds tests may pass a filled leaf unread (they never
+    /// change the image; 0 turns them off, for comparison).
+    std::uint32_t leaf_culling = 2;
 };
 
 /// One model: its octree and per-point attributes, and its placement in the render frame:

@@ -32,6 +32,14 @@ struct WalkStats {
     std::uint32_t leaves = 0;  ///< leaves visited
     std::uint32_t splat_tests = 0;
     std::uint32_t truncated = 0;  ///< walks ended by the step bound
+    std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds, splats unread
+};
+
+/// Which LeafBounds tests may skip a filled leaf (RenderParams::leaf_culling).
+enum LeafCulling : std::uint32_t {
+    k_cull_none = 0,   ///< test every splat of every filled leaf
+    k_cull_cones = 1,  ///< skip leaves whose normal cone holds no face the ray accepts
+    k_cull_slabs = 2,  ///< also skip leaves whose slab the ray does not cross inside the leaf
 };
 
 /// Reads a splat (two 16-byte read-only loads on the GPU: pool payloads are 256-byte aligned and a
@@ -68,6 +76,45 @@ PRT_HD PRT_INLINE bool intersect_splat(const pool::Splat& s, Vec3 o, Vec3 d, boo
     t = th;
     x_over_r = sqrtf(x2 / r2);
     return true;
+}
+
+/// Reads a leaf's bounds (two 16-byte read-only loads on the GPU).
+PRT_HD PRT_INLINE LeafBounds load_leaf_bounds(const LeafBounds* p) {
+#if PRT_DEVICE_CODE
+    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
+    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
+    return LeafBounds{a.x, a.y, a.z, a.w, b.x, b.y, __float_as_uint(b.z), __float_as_uint(b.w)};
+#else
+    return *p;
+#endif
+}
+
+/// Whether a filled leaf can hold a hit the ray o + t d accepts with t in [t_lo, t_hi] (`inv_dlen`
+/// = 1 / |d|). Conservative: false only when no splat of the leaf can give one, so skipping the
+/// leaf changes no image.
+///   cone (thesis 3.6: only the faces a ray expects are hits): an outside ray accepts a disk only
+///     when dot(d, n) < 0. Over a cone of normals of half-angle theta about `axis`, the smallest
+///     dot(d/|d|, n) is cos(phi + theta), phi the angle between d and the axis, which is >= 0 when
+///     cos(phi) >= sin(theta). Then no normal faces the ray and the leaf is passed: this is what
+///     makes secondary and shadow rays leave their own surface without reading its splats. Inside
+///     rays accept dot(d, n) > 0: the same test with -axis.
+///   slab: every hit point lies in the slab lo <= dot(axis, p) <= hi; the ray is inside the slab
+///     only for t in one interval, which must meet [t_lo, t_hi].
+PRT_HD PRT_INLINE bool leaf_may_hit(const LeafBounds& b, Vec3 o, Vec3 d, float inv_dlen, bool inside,
+                                    float t_lo, float t_hi, std::uint32_t mode) {
+    const float sd = b.axis_x * d.x + b.axis_y * d.y + b.axis_z * d.z;
+    if ((inside ? -sd : sd) * inv_dlen >= b.sin_theta) return false;
+    if (mode < k_cull_slabs) return true;
+    const float so = b.axis_x * o.x + b.axis_y * o.y + b.axis_z * o.z;
+    // Rounding margin for the ray's side (the builder widened lo, hi for the splats' side): a few
+    // hundred float ulps of the largest term, so a hit intersect_splat accepts is never lost.
+    const float m = 1e-5f * (fabsf(so) + fabsf(b.lo) + fabsf(b.hi));
+    const float lo = b.lo - m, hi = b.hi + m;
+    if (!(lo <= hi)) return false;  // no splat of the leaf can be hit
+    if (sd == 0.0f) return so >= lo && so <= hi;
+    const float inv = 1.0f / sd;
+    const float ta = (lo - so) * inv, tb = (hi - so) * inv;
+    return fmaxf(ta, tb) >= t_lo && fminf(ta, tb) <= t_hi;
 }
 
 /// thesis 3.3, eq. 3.1: blending weight of a hit at x/R from its disk's centre. Floored at a
@@ -134,31 +181,95 @@ PRT_HD PRT_INLINE void blend_leaf(const OctreeView& v, const pool::Rgba8* colors
 }
 }  // namespace detail
 
+/// What the walk found for the caller (next_leaf).
+enum class LeafStep : std::uint32_t {
+    done,       ///< the walk ended, or the next leaf starts past `stop_after`
+    skip,       ///< (unbatched walks only) a leaf with nothing to read: ask again
+    candidate,  ///< a leaf whose splats must be read: [begin, end), accepted range [lo, hi]
+};
+
+/// The walk's next leaf whose splats must be read (thesis 2.2.1), passing empty leaves and, with
+/// `bounds`, filled leaves whose LeafBounds rule out a hit in the range still searched: from the
+/// leaf's t0 (`own_range`: replicated trees) or 0, to its t1 (`end_at_leaf`) or t_cap, at most
+/// t_cap, clipped to [clip_lo, clip_hi]; that range before clipping is returned in [lo, hi]. The
+/// walk stops at a leaf starting past `stop_after`.
+///
+/// k_batched (PRT_BATCHED_WALK): keep stepping until such a leaf is found ("while-while", Aila and
+/// Laine 2009) instead of returning `skip` after every step that finds nothing to read ("if-if",
+/// the default: measured faster here, runtime/README.md).
+template <bool k_batched>
+PRT_HD PRT_INLINE LeafStep next_leaf(const OctreeView& v, OctreeWalk& walk, OctreeLeaf& leaf,
+                                     const LeafBounds* bounds, std::uint32_t culling, Vec3 o, Vec3 d,
+                                     float inv_dlen, bool inside, bool own_range, bool end_at_leaf,
+                                     float t_cap, float clip_lo, float clip_hi, float stop_after,
+                                     std::uint32_t& begin, std::uint32_t& end, float& lo, float& hi,
+                                     WalkStats& stats) {
+    while (walk_next(v, walk, leaf)) {  // bounded by max_steps
+        PRT_COUNT(stats.leaves);
+        if (leaf.t0 > stop_after) return LeafStep::done;
+        lo = own_range ? leaf.t0 : 0.0f;
+        hi = end_at_leaf ? fminf(leaf.t1, t_cap) : t_cap;
+        if (bounds != nullptr) {
+            // One read gives the splat range and the bounds; a leaf whose bounds rule out every
+            // hit in the range still searched is passed without reading its splats.
+            if (!node_is_filled(leaf.node) || node_addr(leaf.node) >= v.filled_leaves) {
+                if (k_batched) continue;
+                return LeafStep::skip;
+            }
+            const LeafBounds b = load_leaf_bounds(bounds + node_addr(leaf.node));
+            begin = b.begin;
+            end = b.end;
+            if (begin >= end) {
+                if (k_batched) continue;
+                return LeafStep::skip;
+            }
+            if (!leaf_may_hit(b, o, d, inv_dlen, inside, fmaxf(lo, clip_lo), fminf(hi, clip_hi), culling)) {
+                PRT_COUNT(stats.culled);
+                if (k_batched) continue;
+                return LeafStep::skip;
+            }
+        } else {
+            leaf_splats(v, leaf.node, begin, end);
+            if (begin == end) {
+                if (k_batched) continue;
+                return LeafStep::skip;
+            }
+        }
+        return LeafStep::candidate;
+    }
+    return LeafStep::done;
+}
+
 /// Closest hit of a ray with a model's splats (model local frame; d need not be unit). Hits are
-/// searched in t in [0, t_max). `colors` may be null. Returns false on a miss.
+/// searched in t in [0, t_max). `colors` may be null. Returns false on a miss. `culling`
+/// (LeafCulling) says which of the view's LeafBounds tests may skip a filled leaf.
 PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* colors, Vec3 o, Vec3 d,
                                       bool inside, float t_max, const BlendOptions& blend,
-                                      std::uint32_t max_steps, SplatSample& out, WalkStats& stats) {
+                                      std::uint32_t max_steps, SplatSample& out, WalkStats& stats,
+                                      std::uint32_t culling = k_cull_slabs) {
     OctreeWalk walk;
     if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
     const bool replicated = (v.flags & pool::k_octree_replicated) != 0;
     const float inv_dlen = 1.0f / length(d);
+    const LeafBounds* bounds = culling != k_cull_none ? v.leaf_bounds : nullptr;
     bool found = false;
     float t_near = k_inf, window_end = k_inf;
     std::uint32_t near_point = 0;
     Vec3 near_normal{0, 0, 1};
     detail::BlendAccumulator acc;
     OctreeLeaf leaf;
-    while (walk_next(v, walk, leaf)) {  // bounded by max_steps
-        PRT_COUNT(stats.leaves);
-        if (found && leaf.t0 > window_end) break;
-        std::uint32_t begin, end;
-        leaf_splats(v, leaf.node, begin, end);
-        if (begin == end) continue;
-        // A replicated tree holds every disk in every leaf it overlaps: accept only this leaf's
-        // t range. A tree without replicas keeps each disk in one leaf only: accept any t.
-        const float lo = replicated ? leaf.t0 : 0.0f;
-        const float hi = fminf(leaf.t1, t_max);
+    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
+        // The next leaf with splats to read, and the t range [lo, hi] its hits are accepted in: a
+        // replicated tree holds every disk in every leaf it overlaps, so only this leaf's t range
+        // (own_range); a tree without replicas keeps each disk in one leaf only: from t = 0.
+        std::uint32_t begin = 0, end = 0;
+        float lo = 0.0f, hi = 0.0f;
+        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(
+            v, walk, leaf, bounds, culling, o, d, inv_dlen, inside, replicated, true, t_max,
+            found ? t_near : 0.0f, found ? window_end : k_inf, found ? window_end : k_inf, begin, end, lo, hi,
+            stats);
+        if (step == LeafStep::done) break;
+        if (step == LeafStep::skip) continue;
         // Pass 1 (first leaf with hits only): the nearest accepted hit fixes the surface and the
         // blending window; the hits of the leaf's first 32 splats are remembered in a bit mask so
         // pass 2 revisits only those (and every splat past the 32nd).
@@ -203,18 +314,31 @@ PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* co
     return true;
 }
 
-/// Any hit of a ray with a model's splats in t in [0, t_max) (shadow rays, thesis 5.2).
+/// Any hit of a ray with a model's splats in t in [0, t_max) (shadow rays, thesis 5.2). `culling`
+/// as for closest_hit_splats.
 PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool inside, float t_max,
-                                  std::uint32_t max_steps, WalkStats& stats) {
+                                  std::uint32_t max_steps, WalkStats& stats,
+                                  std::uint32_t culling = k_cull_slabs) {
     OctreeWalk walk;
     if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
     OctreeLeaf leaf;
     // An occluder anywhere on [0, t_max) counts, whichever leaf finds it.
     const float hi = nextafterf(t_max, 0.0f);
-    while (walk_next(v, walk, leaf)) {  // bounded by max_steps
-        PRT_COUNT(stats.leaves);
-        std::uint32_t begin, end;
-        leaf_splats(v, leaf.node, begin, end);
+    const LeafBounds* bounds = culling != k_cull_none ? v.leaf_bounds : nullptr;
+    const float inv_dlen = bounds != nullptr ? 1.0f / length(d) : 0.0f;
+    // In a fully replicated tree every hit also lies in the leaf holding the hit point, which the
+    // walk visits: a leaf may be passed when its bounds rule out hits inside its own t range.
+    // Culled trees (prt-cull) lack some replicas, so there the whole [0, t_max) range is kept.
+    const bool own_range =
+        (v.flags & pool::k_octree_replicated) != 0 && (v.flags & pool::k_octree_culled) == 0;
+    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
+        std::uint32_t begin = 0, end = 0;
+        float leaf_lo, leaf_hi;
+        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(v, walk, leaf, bounds, culling, o, d, inv_dlen,
+                                                               inside, own_range, own_range, hi, 0.0f, k_inf,
+                                                               k_inf, begin, end, leaf_lo, leaf_hi, stats);
+        if (step == LeafStep::done) break;
+        if (step == LeafStep::skip) continue;
         for (std::uint32_t i = begin; i < end; ++i) {
             float t, xr;
             PRT_COUNT(stats.splat_tests);

@@ -20,7 +20,8 @@ struct FrameStats {
     std::uint64_t primary = 0, secondary = 0, shadow = 0;
     std::uint64_t leaves = 0, splat_tests = 0;
     std::uint64_t truncated = 0, sanitized = 0, dropped = 0;
-    double gpu_share = 0;  ///< hybrid: fraction of rows the GPU rendered
+    std::uint64_t culled = 0;  ///< filled leaves passed unread by their bounds (core LeafBounds)
+    double gpu_share = 0;      ///< hybrid: fraction of rows the GPU rendered
 
     std::uint64_t rays() const { return primary + secondary + shadow; }
     FrameStats& operator+=(const FrameStats& o);
@@ -34,6 +35,11 @@ struct FrameRequest {
     std::uint32_t width = 0, height = 0;
     std::uint32_t row_begin = 0, row_end = 0;  ///< row_end 0 means height
     bool download = true;  ///< GPU backends: copy the frame into `image` (benchmarks skip it)
+    /// CUDA backend only: a device pointer (e.g. a mapped OpenGL pixel buffer, prt/cuda/gl_interop.h)
+    /// that receives the display-encoded frame, width * height RGBA8 words, row 0 at the top,
+    /// instead of the backend's own buffer; `image.rgba8` is then not written. Other backends
+    /// ignore it (the window passes it to the CUDA backend only).
+    void* device_rgba8 = nullptr;
 };
 
 /// Load statistics of set_scene().

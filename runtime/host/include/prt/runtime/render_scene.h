@@ -28,9 +28,11 @@ using DVec3 = std::array<double, 3>;
 struct LoadedModel {
     std::string name;
     std::shared_ptr<const pool::PoolFile> pool;
-    core::ModelView view;        ///< pointers into the mapped pool
+    core::ModelView view;  ///< pointers into the mapped pool (and leaf_bounds below)
+    /// Per filled leaf: bounds that let rays pass it unread (derived at load, not in the pool).
+    std::vector<core::LeafBounds> leaf_bounds;
     DVec3 world_min, world_max;  ///< bounds after the model's transform (world frame)
-    std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads
+    std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads, leaf bounds included
 };
 
 /// Options that override the scene file.

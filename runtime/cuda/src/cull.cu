@@ -1,0 +1,161 @@
+// PointRT CUDA: prt-cull's kernels (thesis 3.4). One thread culls one filled leaf with
+// pre::cull_leaf(), the function the CPU path runs: probes are generated from the same host-made
+// direction table and integer hashes, walked with the renderer's core::walk_next() and tested
+// with core::intersect_splat(). This file is compiled without FMA contraction and without fast
+// math (runtime/CMakeLists.txt), so the probes and their hits are bit-identical to the CPU's and
+// the two backends keep the same replicas.
+//
+// Why one thread per leaf: the greedy policy is sequential within a leaf (each probe sees the
+// replicas kept by the probes before it), and a 1M-point model has 1-3 x 10^5 filled leaves, about
+// as many threads as an H100 holds. Leaves are launched in chunks so that progress can be reported.
+#include <cuda_runtime.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "cuda_check.h"
+#include "device_buffer.h"
+#include "prt/cuda/cull_cuda.h"
+
+namespace prt::cuda {
+
+namespace {
+
+constexpr std::uint32_t k_block = 128;
+/// Leaves per launch: ~2 waves of resident threads on an H100 (132 SMs x 2048), so a launch fills
+/// the GPU; progress is reported between launches.
+constexpr std::uint32_t k_leaves_per_launch = 1u << 19;
+
+enum CullCounter : std::uint32_t { k_c_probes, k_c_hit, k_c_unserved, k_c_tests, k_c_count };
+
+__global__ void cull_kernel(const pre::CullView view, std::uint32_t first, std::uint32_t count,
+                            std::uint8_t* keep, std::uint32_t* votes, unsigned long long* counters) {
+    const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
+    if (i >= count) return;
+    pre::CullCounters c;
+    pre::cull_leaf(view, first + i, keep, votes, c);
+    if (c.probes) atomicAdd(&counters[k_c_probes], static_cast<unsigned long long>(c.probes));
+    if (c.probes_hit) atomicAdd(&counters[k_c_hit], static_cast<unsigned long long>(c.probes_hit));
+    if (c.probes_unserved)
+        atomicAdd(&counters[k_c_unserved], static_cast<unsigned long long>(c.probes_unserved));
+    if (c.splat_tests) atomicAdd(&counters[k_c_tests], static_cast<unsigned long long>(c.splat_tests));
+}
+
+__global__ void hole_kernel(const core::OctreeView full, const core::OctreeView culled,
+                            const pre::HoleRay* rays, std::uint64_t count, const core::BlendOptions blend,
+                            std::uint32_t max_steps, pre::HoleSample* out) {
+    const std::uint64_t i = static_cast<std::uint64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (i >= count) return;
+    const pre::HoleRay r = rays[i];
+    pre::HoleSample s;
+    pre::trace_hole_ray(full, culled, r.o, r.d, r.inside != 0, blend, max_steps, s);
+    out[i] = s;
+}
+
+template <class T>
+DeviceBuffer<T> upload(const T* host, std::size_t count) {
+    DeviceBuffer<T> b;
+    b.upload(host, count);
+    return b;
+}
+
+/// The device copies of an octree view's arrays, and the view pointing at them.
+struct DeviceOctree {
+    DeviceBuffer<std::uint32_t> nodes, leaf_info;
+    DeviceBuffer<pool::Splat> splats;
+    core::OctreeView view;
+    explicit DeviceOctree(const core::OctreeView& host) : view(host) {
+        nodes = upload(host.nodes, host.node_count);
+        leaf_info = upload(host.leaf_info, std::size_t(host.filled_leaves) + 1);
+        splats = upload(host.splats, host.splat_count);
+        view.nodes = nodes.data();
+        view.leaf_info = leaf_info.data();
+        view.splats = splats.data();
+    }
+};
+
+}  // namespace
+
+bool cull_device_available(std::string* why) {
+    int n = 0;
+    const cudaError_t e = cudaGetDeviceCount(&n);
+    if (e != cudaSuccess) {
+        if (why) *why = std::string("no usable CUDA device: ") + cudaGetErrorString(e);
+        cudaGetLastError();  // clear the sticky error state of this failed query
+        return false;
+    }
+    if (n == 0) {
+        if (why) *why = "no usable CUDA device: no device found";
+        return false;
+    }
+    return true;
+}
+
+std::string cull_device_name() {
+    if (!cull_device_available()) return "";
+    cudaDeviceProp p{};
+    if (cudaGetDeviceProperties(&p, 0) != cudaSuccess) return "";
+    return p.name;
+}
+
+pre::CullCounters cull_leaves_cuda(const pre::CullView& host, std::span<std::uint8_t> keep,
+                                   const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    PRT_CUDA_CHECK(cudaSetDevice(0));
+    if (keep.size() != host.octree.splat_count)
+        throw Error("cull_leaves_cuda: one keep flag per splat expected");
+    const std::uint32_t leaves = host.octree.filled_leaves;
+    DeviceOctree octree(host.octree);
+    DeviceBuffer<pre::CullLeaf> d_leaves = upload(host.leaves, leaves);
+    DeviceBuffer<pre::ProbeDirection> d_dirs =
+        upload(host.directions, std::size_t(host.direction_sets) * host.directions_per_set);
+    DeviceBuffer<std::uint8_t> d_keep = upload(keep.data(), keep.size());
+    DeviceBuffer<std::uint32_t> d_votes;
+    if (host.policy == pre::CullPolicy::votes && !keep.empty()) {
+        d_votes.resize(keep.size());
+        PRT_CUDA_CHECK(cudaMemset(d_votes.data(), 0, d_votes.bytes()));
+    }
+    DeviceBuffer<unsigned long long> d_counters(k_c_count);
+    PRT_CUDA_CHECK(cudaMemset(d_counters.data(), 0, d_counters.bytes()));
+    pre::CullView view = host;
+    view.octree = octree.view;
+    view.leaves = d_leaves.data();
+    view.directions = d_dirs.data();
+    for (std::uint32_t first = 0; first < leaves; first += k_leaves_per_launch) {
+        const std::uint32_t count = std::min(k_leaves_per_launch, leaves - first);
+        cull_kernel<<<(count + k_block - 1) / k_block, k_block>>>(view, first, count, d_keep.data(),
+                                                                  d_votes.data(), d_counters.data());
+        PRT_CUDA_CHECK_LAUNCH();
+        PRT_CUDA_CHECK(cudaDeviceSynchronize());
+        if (progress) progress(first + count, leaves);
+    }
+    d_keep.download(keep.data(), keep.size());
+    unsigned long long c[k_c_count];
+    d_counters.download(c, k_c_count);
+    PRT_CUDA_CHECK(cudaDeviceSynchronize());
+    pre::CullCounters out;
+    out.probes = c[k_c_probes];
+    out.probes_hit = c[k_c_hit];
+    out.probes_unserved = c[k_c_unserved];
+    out.splat_tests = c[k_c_tests];
+    return out;
+}
+
+void trace_hole_rays_cuda(const core::OctreeView& full, const core::OctreeView& culled,
+                          std::span<const pre::HoleRay> rays, const core::BlendOptions& blend,
+                          std::uint32_t max_steps, std::span<pre::HoleSample> out) {
+    PRT_CUDA_CHECK(cudaSetDevice(0));
+    if (out.size() != rays.size()) throw Error("trace_hole_rays_cuda: one sample per ray expected");
+    if (rays.empty()) return;
+    DeviceOctree f(full), c(culled);
+    DeviceBuffer<pre::HoleRay> d_rays = upload(rays.data(), rays.size());
+    DeviceBuffer<pre::HoleSample> d_out(rays.size());
+    constexpr std::uint32_t block = 256;
+    const std::uint64_t blocks = (rays.size() + block - 1) / block;
+    hole_kernel<<<static_cast<unsigned>(blocks), block>>>(f.view, c.view, d_rays.data(), rays.size(), blend,
+                                                          max_steps, d_out.data());
+    PRT_CUDA_CHECK_LAUNCH();
+    d_out.download(out.data(), out.size());
+    PRT_CUDA_CHECK(cudaDeviceSynchronize());
+}
+
+}  // namespace prt::cuda

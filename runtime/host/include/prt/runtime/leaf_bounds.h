@@ -1,0 +1,21 @@
+// PointRT runtime (host): the per-leaf bounds (core::LeafBounds, prt/core/octree.h) that let rays
+// pass a filled leaf without reading its splats. Derived from the pool's octree sections when a
+// scene is loaded: they are not stored in the pool.
+#pragma once
+
+#include <vector>
+
+#include "prt/core/octree.h"
+
+namespace prt::rt {
+
+/// Builds one LeafBounds per filled leaf of `v` (v.leaf_bounds is not read): the normal cone
+/// (axis = the mean unit normal, half-angle = the widest normal from it), the slab of the disks
+/// along that axis, computed in double and widened by rounding margins so the core's tests stay
+/// conservative, and the leaf's splat range (leaf_info, clamped as core::leaf_splats clamps).
+/// Splats that the core can never hit (zero or NaN radius or normal) are left out; a splat with
+/// non-finite data turns the leaf's tests off. Uses up to `threads` threads (0: all hardware
+/// threads).
+std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads = 0);
+
+}  // namespace prt::rt

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# CPU peer benchmark: PointRT's CPU backend against Embree 3 on the same splats and the same view,
+# in one run (runtime/bench/prt_bench_embree.cpp). The scene is prt-bench's: the synthetic room of
+# POINTS points seen from inside, one light; scenarios primary, shadow (one shadow light) and
+# reflect4 (4 mirror bounces). Ours traces the replicated octree with splat blending (thesis 2-3);
+# Embree traces one oriented disc per point (rtcIntersect1, with the seamless front/back rule of
+# thesis 3.6 as an intersection filter); shading and secondary rays are the same core functions.
+# Prints both frame times and rays per second and the ratio ours / Embree (> 1: ours is faster).
+#
+# Usage: scripts/bench-embree.sh BUILD_DIR [POINTS] [SIZE] [FRAMES]
+#   BUILD_DIR  a configured tree with Embree found (Debian: apt-get install libembree-dev); the
+#              script builds its target prt-bench-embree there
+#   POINTS     points of the synthetic room (default 1000000)
+#   SIZE       image width and height (default 512)
+#   FRAMES     timed frames per scenario and renderer, the median is reported (default 3)
+# Environment: THREADS (default 0 = all cores, the same for both), JSON=FILE writes the results,
+#   JOBS (build jobs, default: all cores), EXTRA (more prt-bench-embree arguments, e.g.
+#   "--scenarios primary,shadow" or "--max-leaf 64").
+set -euo pipefail
+if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
+    sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'
+    exit 2
+fi
+build=$1
+points=${2:-1000000}
+size=${3:-512}
+frames=${4:-3}
+if ! cmake --build "$build" -j "${JOBS:-$(nproc)}" --target prt-bench-embree >/dev/null 2>&1; then
+    echo "bench-embree: cannot build prt-bench-embree in $build: is Embree 3 installed (libembree-dev) and" \
+         "found by CMake (PRT_WITH_EMBREE)? See the configure log." >&2
+    exit 1
+fi
+echo "# machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average $(cut -d' ' -f1-3 /proc/loadavg)"
+args=(--synthetic "$points" --width "$size" --height "$size" --frames "$frames" --warmup 1 --threads "${THREADS:-0}" --quiet)
+[ -n "${JSON:-}" ] && args+=(--json "$JSON")
+# shellcheck disable=SC2086
+"$build/bin/prt-bench-embree" "${args[@]}" ${EXTRA:-}

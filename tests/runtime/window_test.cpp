@@ -1,0 +1,101 @@
+// prt-play's GLFW window end to end (label cpu): under a virtual X server (xvfb-run), the player
+// opens its window with the CPU backend, shows a few frames and writes the displayed framebuffer
+// (--screenshot, read back with glReadPixels); the capture must be a real render (not blank: the
+// model in the middle, the background in the corners) and match the headless render of the same
+// view. Skips with a message where the build has no window (GLFW) or xvfb-run is not installed.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <set>
+
+#include "prt/runtime/image.h"
+#include "test_scene.h"
+#include "tool_run.h"
+
+namespace prt::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+class WindowTest : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_dir = fs::path(::testing::TempDir()) / ("prt_window_test_" + std::to_string(::getpid()));
+        fs::create_directories(m_dir);
+        // A red ball in front of a grey wall: shading, a shadow and a silhouette to compare.
+        std::vector<TestPoint> pts = sphere_points({0, 0, 0}, 1.0, 6000, false, {250, 60, 40, 255});
+        const auto wall = rect_points({-3, -3, -1.5}, {6, 0, 0}, {0, 6, 0}, {0, 0, 1}, 90);
+        pts.insert(pts.end(), wall.begin(), wall.end());
+        const auto pool = make_pool(make_model(pts, {0, 0, 0}));
+        pool::PoolWriter w;
+        w.carry_over(*pool);  // views into `pool`: it must outlive write()
+        w.write(m_dir / "ball.pool");
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+    fs::path m_dir;
+};
+
+int channel(std::uint32_t p, int c) {
+    return static_cast<int>((p >> (8 * c)) & 0xffu);
+}
+
+TEST_F(WindowTest, ScreenshotArgumentsAreCheckedBeforeAnyWindowOpens) {
+    const std::string pool = (m_dir / "ball.pool").string();
+    const ToolRun headless = run_tool(
+        "prt-play", pool + " --backend cpu --headless --screenshot " + (m_dir / "a.ppm").string(), m_dir);
+    EXPECT_EQ(headless.code, 1);
+    EXPECT_EQ(lines(headless.err), 1) << headless.err;
+    EXPECT_NE(headless.err.find("--screenshot"), std::string::npos) << headless.err;
+    const ToolRun linear =
+        run_tool("prt-play", pool + " --backend cpu --screenshot " + (m_dir / "a.pfm").string(), m_dir);
+    EXPECT_EQ(linear.code, 1);
+    EXPECT_EQ(lines(linear.err), 1) << linear.err;
+    EXPECT_FALSE(fs::exists(m_dir / "a.ppm"));
+    EXPECT_FALSE(fs::exists(m_dir / "a.pfm"));
+}
+
+TEST_F(WindowTest, ScreenshotUnderXvfbMatchesTheHeadlessRender) {
+#ifndef PRT_TEST_HAVE_WINDOW
+    GTEST_SKIP() << "this build has no player window (configured without GLFW)";
+#endif
+    if (!on_path("xvfb-run"))
+        GTEST_SKIP() << "xvfb-run is not installed (Debian: apt-get install xvfb xauth): window test skipped";
+    const std::string pool = (m_dir / "ball.pool").string();
+    const std::string view = " --backend cpu --width 96 --height 72 --max-bounces 1";
+    const fs::path shot = m_dir / "shot.ppm", ref = m_dir / "ref.ppm";
+    // A 24-bit screen (xvfb-run's default is 8-bit); -a picks a free display number.
+    const ToolRun win = run_tool("prt-play", pool + view + " --frames 3 --screenshot " + shot.string(), m_dir,
+                                 "xvfb-run -a -s '-screen 0 640x480x24'");
+    ASSERT_EQ(win.code, 0) << win.err;
+    EXPECT_NE(win.err.find("after 3 frames"), std::string::npos) << win.err;
+    const ToolRun head = run_tool("prt-play", pool + view + " --out " + ref.string(), m_dir);
+    ASSERT_EQ(head.code, 0) << head.err;
+
+    const rt::Image a = rt::read_ppm(shot), b = rt::read_ppm(ref);
+    ASSERT_EQ(a.width, 96u);
+    ASSERT_EQ(a.height, 72u);
+    ASSERT_EQ(b.width, a.width);
+    ASSERT_EQ(b.height, a.height);
+    // A real render: many distinct colors, the red ball in the middle, something else in a corner.
+    std::set<std::uint32_t> distinct(a.rgba8.begin(), a.rgba8.end());
+    EXPECT_GT(distinct.size(), 50u) << "the screenshot is (nearly) blank";
+    const std::uint32_t centre = a.rgba8[36 * 96 + 48], corner = a.rgba8[0];
+    EXPECT_GT(channel(centre, 0), 2 * channel(centre, 1)) << "the centre is not the red ball";
+    EXPECT_NE(centre, corner);
+    // The window shows what the headless render computes: the texture is drawn texel for pixel.
+    double sum = 0;
+    std::size_t off = 0;
+    for (std::size_t i = 0; i < a.rgba8.size(); ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const int d = std::abs(channel(a.rgba8[i], c) - channel(b.rgba8[i], c));
+            sum += d;
+            off += d > 2;
+        }
+    }
+    EXPECT_LE(sum / (3.0 * a.rgba8.size()), 0.5) << "mean difference in 8-bit levels";
+    EXPECT_LE(off, a.rgba8.size() * 3 / 100) << "channels more than 2 levels apart";
+}
+
+}  // namespace
+}  // namespace prt::test
