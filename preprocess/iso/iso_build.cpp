@@ -1,0 +1,1448 @@
+// PointRT: the Implicit Surface Octree builder (thesis ch. 4). See iso_build.h for the steps.
+#include "iso_build.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include "disk_box.h"
+#include "iso_morton.h"
+#include "parallel.h"
+#include "prt/error.h"
+
+namespace prt::iso {
+
+using detail::Frame;
+using detail::k_code_level;
+using detail::morton3;
+
+const char* radius_source_name(RadiusSource s) {
+    switch (s) {
+        case RadiusSource::automatic:
+            return "auto";
+        case RadiusSource::radii:
+            return "radii";
+        case RadiusSource::knn:
+            return "knn";
+    }
+    return "?";
+}
+
+RadiusSource parse_radius_source(const std::string& name) {
+    if (name == "auto") return RadiusSource::automatic;
+    if (name == "radii") return RadiusSource::radii;
+    if (name == "knn") return RadiusSource::knn;
+    throw Error("unknown radius source '" + name + "' (auto, radii or knn)");
+}
+
+const char* storage_name(Storage s) {
+    switch (s) {
+        case Storage::q8:
+            return "q8";
+        case Storage::f32:
+            return "f32";
+        case Storage::both:
+            return "both";
+    }
+    return "?";
+}
+
+Storage parse_storage(const std::string& name) {
+    if (name == "q8") return Storage::q8;
+    if (name == "f32") return Storage::f32;
+    if (name == "both") return Storage::both;
+    throw Error("unknown storage '" + name + "' (q8, f32 or both)");
+}
+
+void validate(const BuildOptions& o) {
+    if (o.max_level > pool::k_max_iso_level)
+        throw Error("max level " + std::to_string(o.max_level) + " exceeds " +
+                    std::to_string(pool::k_max_iso_level));
+    if (o.min_level > o.max_level)
+        throw Error("min level " + std::to_string(o.min_level) + " above max level " +
+                    std::to_string(o.max_level));
+    if (o.max_points < 1) throw Error("max points per leaf must be at least 1");
+    if (!(o.smoothing > 0.0f) || !std::isfinite(o.smoothing) || o.smoothing > 1000.0f)
+        throw Error("smoothing must be in (0, 1000]");
+    if (!(o.support >= 1.0f) || !(o.support <= 10.0f)) throw Error("support must be in [1, 10] sigmas");
+    if (o.knn < 1 || o.knn > 1024) throw Error("k of the k-NN radius must be in [1, 1024]");
+    if (!(o.knn_clamp == 0.0f || (o.knn_clamp >= 1.0f && std::isfinite(o.knn_clamp))))
+        throw Error("the k-NN clamp factor must be 0 (off) or at least 1");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t0) {
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+using Progress = std::function<void(const char*, std::uint64_t, std::uint64_t)>;
+
+/// Leaf kinds (thesis 4.3.1) and the internal-node marker.
+enum Kind : std::uint8_t { k_empty = 0, k_active = 1, k_passive = 2, k_internal = 3 };
+
+/// A node of the octree under construction.
+struct Node {
+    std::uint32_t child = 0;  ///< first of 8 children; 0 for a leaf (the root is never a child)
+    std::uint32_t parent = 0;
+    std::uint32_t begin = 0, end = 0;   ///< its points, in code order
+    std::uint32_t x = 0, y = 0, z = 0;  ///< cell at `level`
+    std::uint8_t level = 0;
+    std::uint8_t kind = k_empty;
+};
+
+bool is_filled(std::uint8_t kind) {
+    return kind == k_active || kind == k_passive;
+}
+
+/// The usable points, sorted by their level-K Morton code (structure of arrays).
+struct PointSet {
+    std::size_t n = 0;
+    std::vector<double> pos, nrm;     ///< 3n: position (local frame), unit normal
+    std::vector<double> sigma;        ///< Gaussian sigma_i
+    std::vector<double> support;      ///< support x sigma_i: the corner evaluation's reach
+    std::vector<double> rho;          ///< radius of the influence disk (passive leaves)
+    std::vector<double> reach;        ///< max(support, rho): what the index is built for
+    std::vector<std::uint8_t> col;    ///< 3n sRGB
+    std::vector<std::uint64_t> code;  ///< sorted
+};
+
+/// Points grouped by the size of their reach, each group sorted by code (so that a box query
+/// widens the box only by its own group's largest reach).
+struct ClassIndex {
+    std::uint32_t level = 0;  ///< cells at least as wide as the group's largest reach
+    double reach = 0;
+    std::vector<std::uint64_t> codes;
+    std::vector<std::uint32_t> ids;  ///< into PointSet
+};
+
+struct InfluenceIndex {
+    Frame frame;
+    std::vector<ClassIndex> classes;
+};
+
+InfluenceIndex build_index(const PointSet& ps, const Frame& frame) {
+    InfluenceIndex index;
+    index.frame = frame;
+    if (ps.n == 0) return index;
+    std::vector<double> sorted(ps.reach);
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const std::uint32_t median_level =
+        detail::level_for_extent(frame, sorted[sorted.size() / 2], 1.0, k_code_level);
+    const std::uint32_t finest = std::min(k_code_level, median_level + 2);
+    std::vector<int> slot(k_code_level + 1, -1);
+    for (std::size_t i = 0; i < ps.n; ++i) {
+        const std::uint32_t level =
+            std::min(finest, detail::level_for_extent(frame, ps.reach[i], 1.0, k_code_level));
+        if (slot[level] < 0) {
+            slot[level] = static_cast<int>(index.classes.size());
+            index.classes.push_back(ClassIndex{});
+            index.classes.back().level = level;
+        }
+        ClassIndex& c = index.classes[slot[level]];
+        c.reach = std::max(c.reach, ps.reach[i]);
+        c.codes.push_back(ps.code[i]);
+        c.ids.push_back(static_cast<std::uint32_t>(i));
+    }
+    return index;
+}
+
+/// Squared distance from point p to the box [lo, hi].
+double box_distance_sq(const double* p, const double lo[3], const double hi[3]) {
+    double d2 = 0;
+    for (int a = 0; a < 3; ++a) {
+        const double d = p[a] < lo[a] ? lo[a] - p[a] : (p[a] > hi[a] ? p[a] - hi[a] : 0.0);
+        d2 += d * d;
+    }
+    return d2;
+}
+
+/// Appends the points whose ball of radius radius[i] meets the box [lo, hi] (exact test).
+void gather_overlapping(const InfluenceIndex& index, const PointSet& ps, const std::vector<double>& radius,
+                        const double lo[3], const double hi[3], std::vector<std::uint32_t>& out) {
+    for (const ClassIndex& c : index.classes) {
+        double blo[3], bhi[3], extent = 0;
+        for (int a = 0; a < 3; ++a) {
+            blo[a] = lo[a] - c.reach;
+            bhi[a] = hi[a] + c.reach;
+            extent = std::max(extent, bhi[a] - blo[a]);
+        }
+        const std::uint32_t level =
+            std::min(c.level, detail::level_for_extent(index.frame, extent, 4.0, k_code_level));
+        detail::for_each_node_range(c.codes, index.frame, level, blo, bhi, [&](std::size_t b, std::size_t e) {
+            for (std::size_t k = b; k < e; ++k) {
+                const std::uint32_t id = c.ids[k];
+                const double r = radius[id];
+                if (box_distance_sq(&ps.pos[3 * id], lo, hi) <= r * r) out.push_back(id);
+            }
+        });
+    }
+}
+
+/// Appends the points within distance `radius` of q (exact test).
+void gather_ball(const InfluenceIndex& index, const PointSet& ps, const double q[3], double radius,
+                 std::vector<std::uint32_t>& out) {
+    const double r2 = radius * radius;
+    double blo[3], bhi[3];
+    for (int a = 0; a < 3; ++a) blo[a] = q[a] - radius, bhi[a] = q[a] + radius;
+    for (const ClassIndex& c : index.classes) {
+        const std::uint32_t level =
+            std::min(c.level, detail::level_for_extent(index.frame, 2 * radius, 4.0, k_code_level));
+        detail::for_each_node_range(c.codes, index.frame, level, blo, bhi, [&](std::size_t b, std::size_t e) {
+            for (std::size_t k = b; k < e; ++k) {
+                const std::uint32_t id = c.ids[k];
+                const double* p = &ps.pos[3 * id];
+                const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                  (p[2] - q[2]) * (p[2] - q[2]);
+                if (d2 <= r2) out.push_back(id);
+            }
+        });
+    }
+}
+
+// ---- radii of influence: k nearest neighbours (thesis 3.1, as prt-radii) ----------------------
+
+/// Distance from every point to its k-th nearest other point (exact). Points are processed in
+/// blocks of one octree node each; a block's candidates are the points of its node and the 26
+/// around it at a level where nodes hold about k points, so the k-th distance is exact when it
+/// does not exceed the distance to the candidates' box; the rare others search again in a ball.
+std::vector<double> knn_distances(const std::vector<double>& pos, std::uint32_t k, unsigned threads,
+                                  const Progress& progress) {
+    const std::size_t n = pos.size() / 3;
+    if (n <= k)
+        throw Error("the k-NN radius needs more than k = " + std::to_string(k) + " points, the model has " +
+                    std::to_string(n));
+    Frame frame;
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
+    for (std::size_t i = 0; i < n; ++i)
+        for (int a = 0; a < 3; ++a)
+            lo[a] = std::min(lo[a], pos[3 * i + a]), hi[a] = std::max(hi[a], pos[3 * i + a]);
+    double size = 0;
+    for (int a = 0; a < 3; ++a) size = std::max(size, hi[a] - lo[a]);
+    size = size > 0 ? size * 1.001 : 1.0;
+    double corner[3];
+    for (int a = 0; a < 3; ++a) corner[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * size;
+    frame.set(corner, size);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+    pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) {
+            const double* p = &pos[3 * i];
+            order[i] = {morton3(frame.cell(p[0], 0, k_code_level), frame.cell(p[1], 1, k_code_level),
+                                frame.cell(p[2], 2, k_code_level)),
+                        static_cast<std::uint32_t>(i)};
+        }
+    });
+    std::sort(order.begin(), order.end());
+    std::vector<std::uint64_t> codes(n);
+    std::vector<double> sp(3 * n);
+    for (std::size_t i = 0; i < n; ++i) {
+        codes[i] = order[i].first;
+        for (int a = 0; a < 3; ++a) sp[3 * i + a] = pos[3 * order[i].second + a];
+    }
+    // The deepest level whose occupied nodes hold at least k points on average.
+    std::uint32_t level = 0;
+    for (std::uint32_t l = 1; l <= k_code_level; ++l) {
+        const std::uint32_t shift = 3 * (k_code_level - l);
+        std::size_t occupied = 1;
+        for (std::size_t i = 1; i < n; ++i) occupied += (codes[i] >> shift) != (codes[i - 1] >> shift);
+        if (static_cast<double>(n) / static_cast<double>(occupied) < static_cast<double>(k)) break;
+        level = l;
+    }
+    const std::uint32_t shift = 3 * (k_code_level - level);
+    std::vector<std::size_t> blocks{0};
+    for (std::size_t i = 1; i < n; ++i)
+        if ((codes[i] >> shift) != (codes[i - 1] >> shift)) blocks.push_back(i);
+    blocks.push_back(n);
+    const double root_hi[3] = {frame.lo[0] + frame.size, frame.lo[1] + frame.size, frame.lo[2] + frame.size};
+
+    std::vector<double> result(n);
+    std::atomic<std::uint64_t> done{0};
+    const std::size_t block_count = blocks.size() - 1;
+    pre::parallel_chunks(block_count, 64, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
+        std::vector<std::uint32_t> block_ids, ball_ids;  // candidates: indices into sp
+        std::vector<double> cx, cy, cz, d2;              // their positions (SoA) and distances
+        std::vector<double> best(k);
+        // The k smallest squared distances from sp[i] to candidates other than i (sorted in best);
+        // returns how many were found (< k only when the candidates are too few). The distances
+        // come from a branch-free loop over the candidates' positions in SoA (vectorized).
+        auto load = [&](const std::vector<std::uint32_t>& ids) {
+            cx.resize(ids.size()), cy.resize(ids.size()), cz.resize(ids.size()), d2.resize(ids.size());
+            for (std::size_t c = 0; c < ids.size(); ++c)
+                cx[c] = sp[3 * ids[c]], cy[c] = sp[3 * ids[c] + 1], cz[c] = sp[3 * ids[c] + 2];
+        };
+        auto k_smallest = [&](std::size_t i, const std::vector<std::uint32_t>& ids) {
+            const double px = sp[3 * i], py = sp[3 * i + 1], pz = sp[3 * i + 2];
+            const std::size_t m = ids.size();
+            for (std::size_t c = 0; c < m; ++c) {
+                const double dx = cx[c] - px, dy = cy[c] - py, dz = cz[c] - pz;
+                d2[c] = dx * dx + dy * dy + dz * dz;
+            }
+            std::size_t have = 0;
+            for (std::size_t c = 0; c < m; ++c) {
+                const double v = d2[c];
+                if ((have == k && v >= best[k - 1]) || ids[c] == i) continue;
+                std::size_t at = have < k ? have++ : k - 1;
+                while (at > 0 && best[at - 1] > v) {
+                    best[at] = best[at - 1];
+                    --at;
+                }
+                best[at] = v;
+            }
+            return have;
+        };
+        auto collect = [&](const double lo[3], const double hi[3], std::uint32_t at_level,
+                           std::vector<std::uint32_t>& ids) {
+            ids.clear();
+            detail::for_each_node_range(codes, frame, at_level, lo, hi, [&](std::size_t b, std::size_t en) {
+                for (std::size_t j = b; j < en; ++j) ids.push_back(static_cast<std::uint32_t>(j));
+            });
+        };
+        for (std::size_t bi = b0; bi < b1; ++bi) {
+            const std::size_t first = blocks[bi], last = blocks[bi + 1];
+            const std::uint64_t prefix = codes[first] >> shift;
+            double blo[3], bhi[3];
+            frame.box(level, detail::compact21(prefix), detail::compact21(prefix >> 1),
+                      detail::compact21(prefix >> 2), blo, bhi);
+            const double e = frame.edge(level);
+            double glo[3], ghi[3];
+            for (int a = 0; a < 3; ++a) glo[a] = blo[a] - e, ghi[a] = bhi[a] + e;
+            collect(glo, ghi, level, block_ids);  // the block's node and the 26 around it
+            load(block_ids);
+            for (std::size_t i = first; i < last; ++i) {
+                const double* p = &sp[3 * i];
+                // Every point closer than `margin` is a candidate (no point lies beyond the root).
+                double margin = std::numeric_limits<double>::infinity();
+                for (int a = 0; a < 3; ++a) {
+                    if (glo[a] > frame.lo[a]) margin = std::min(margin, p[a] - glo[a]);
+                    if (ghi[a] < root_hi[a]) margin = std::min(margin, ghi[a] - p[a]);
+                }
+                std::size_t have = k_smallest(i, block_ids);
+                if (!(have == k && best[k - 1] <= margin * margin)) {
+                    // Exact search in a ball: the k smallest are exact once the k-th lies inside it.
+                    double radius = have == k ? std::sqrt(best[k - 1]) : 2 * e;
+                    for (int round = 0; round < 128; ++round, radius *= 2) {
+                        double qlo[3], qhi[3];
+                        for (int a = 0; a < 3; ++a) qlo[a] = p[a] - radius, qhi[a] = p[a] + radius;
+                        collect(qlo, qhi, detail::level_for_extent(frame, 2 * radius, 4.0, k_code_level),
+                                ball_ids);
+                        load(ball_ids);
+                        have = k_smallest(i, ball_ids);
+                        if (have == k && best[k - 1] <= radius * radius) break;
+                    }
+                    load(block_ids);  // back to the block's candidates for the next point
+                }
+                result[order[i].second] = std::sqrt(best[k - 1]);
+            }
+            const std::uint64_t d = done.fetch_add(last - first) + (last - first);
+            if (worker == 0 && progress) progress("k-NN radii", d, n);
+        }
+    });
+    return result;
+}
+
+// ---- the octree over the points (thesis 4.3.1) --------------------------------------------------
+
+class TreeBuilder {
+public:
+    TreeBuilder(const PointSet& ps, const InfluenceIndex& index, const Frame& frame, const BuildOptions& o)
+        : m_ps(ps), m_index(index), m_frame(frame), m_options(o) {}
+
+    std::vector<Node> nodes;
+
+    void check_size(std::size_t more) const {
+        if (nodes.size() + more > pool::k_node_address_max)
+            throw Error(
+                "the ISO octree would need more than 2^30 nodes (lower --max-level or raise --max-points)");
+    }
+
+    /// Top-down split by point count (step 2).
+    void build_from_points() {
+        nodes.clear();
+        Node root;
+        root.begin = 0;
+        root.end = static_cast<std::uint32_t>(m_ps.n);
+        root.kind = m_ps.n > 0 ? k_active : k_empty;
+        nodes.push_back(root);
+        for (std::size_t i = 0; i < nodes.size(); ++i) {  // nodes appended behind: breadth first
+            const Node n = nodes[i];
+            const std::uint32_t count = n.end - n.begin;
+            if (count == 0) continue;
+            if (n.level < m_options.min_level ||
+                (n.level < m_options.max_level && count > m_options.max_points))
+                split_by_points(static_cast<std::uint32_t>(i), false);
+        }
+    }
+
+    /// Splits leaf `i` into 8 children: children with points are active; the others are tested
+    /// against the influence disks near the parent when `test_disks` (else empty). Returns the
+    /// first child.
+    std::uint32_t split_by_points(std::uint32_t i, bool test_disks) {
+        check_size(8);
+        const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
+        const Node parent = nodes[i];
+        const std::uint32_t shift = 3 * (k_code_level - parent.level - 1);
+        std::uint32_t b = parent.begin;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            std::uint32_t e = b;
+            while (e < parent.end && ((m_ps.code[e] >> shift) & 7u) == c) ++e;
+            Node child;
+            child.parent = i;
+            child.begin = b;
+            child.end = e;
+            child.level = static_cast<std::uint8_t>(parent.level + 1);
+            child.x = 2 * parent.x + (c & 1u);
+            child.y = 2 * parent.y + ((c >> 1) & 1u);
+            child.z = 2 * parent.z + ((c >> 2) & 1u);
+            child.kind = b < e ? k_active : k_empty;
+            nodes.push_back(child);
+            b = e;
+        }
+        nodes[i].child = first;
+        nodes[i].kind = k_internal;
+        if (test_disks) {
+            double lo[3], hi[3];
+            m_frame.box(parent.level, parent.x, parent.y, parent.z, lo, hi);
+            m_candidates.clear();
+            gather_overlapping(m_index, m_ps, m_ps.rho, lo, hi, m_candidates);
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                Node& ch = nodes[first + c];
+                if (ch.kind != k_empty) continue;
+                double clo[3], chi[3];
+                m_frame.box(ch.level, ch.x, ch.y, ch.z, clo, chi);
+                for (std::uint32_t id : m_candidates)
+                    if (pre::disk_overlaps_box(&m_ps.pos[3 * id], &m_ps.nrm[3 * id], m_ps.rho[id], clo,
+                                               chi)) {
+                        ch.kind = k_passive;
+                        break;
+                    }
+            }
+        }
+        return first;
+    }
+
+    /// thesis 4.3.1: marks empty leaves touched by a point's influence disk as passive.
+    void mark_passive(unsigned threads, const Progress& progress) {
+        std::atomic<std::uint64_t> done{0};
+        pre::parallel_chunks(m_ps.n, 4096, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+            std::uint32_t stack[8 * (pool::k_max_iso_level + 2)];
+            for (std::size_t i = b; i < e; ++i) {
+                const double* p = &m_ps.pos[3 * i];
+                const double* nv = &m_ps.nrm[3 * i];
+                const double r = m_ps.rho[i];
+                double dlo[3], dhi[3];
+                std::uint32_t clo[3], chi[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double h = pre::disk_half_extent(r, nv[a]);
+                    dlo[a] = p[a] - h;
+                    dhi[a] = p[a] + h;
+                    clo[a] = m_frame.cell(dlo[a], a, k_code_level);
+                    chi[a] = m_frame.cell(dhi[a], a, k_code_level);
+                }
+                const std::uint64_t diff = morton3(clo[0], clo[1], clo[2]) ^ morton3(chi[0], chi[1], chi[2]);
+                // Levels whose child choice is the same for both corners of the disk's box.
+                const std::uint32_t common =
+                    diff == 0 ? k_code_level : k_code_level - 1 - (63 - std::countl_zero(diff)) / 3;
+                const std::uint64_t code = m_ps.code[i];
+                std::uint32_t node = 0;
+                while (nodes[node].child != 0 && nodes[node].level < common)
+                    node = nodes[node].child +
+                           static_cast<std::uint32_t>((code >> (3 * (k_code_level - nodes[node].level - 1))) &
+                                                      7u);
+                if (nodes[node].child == 0) continue;  // a leaf holds the whole disk: p's own, active
+                std::uint32_t top = 0;
+                stack[top++] = node;
+                while (top > 0) {  // bounded: at most 8 entries per level on the stack
+                    const Node& nd = nodes[stack[--top]];
+                    for (std::uint32_t c = 0; c < 8; ++c) {
+                        const std::uint32_t ci = nd.child + c;
+                        const Node& ch = nodes[ci];
+                        double lo[3], hi[3];
+                        m_frame.box(ch.level, ch.x, ch.y, ch.z, lo, hi);
+                        if (lo[0] > dhi[0] || hi[0] < dlo[0] || lo[1] > dhi[1] || hi[1] < dlo[1] ||
+                            lo[2] > dhi[2] || hi[2] < dlo[2])
+                            continue;
+                        if (ch.child != 0) {
+                            stack[top++] = ci;
+                            continue;
+                        }
+                        std::atomic_ref<std::uint8_t> kind(nodes[ci].kind);
+                        if (kind.load(std::memory_order_relaxed) != k_empty) continue;
+                        if (pre::disk_overlaps_box(p, nv, r, lo, hi))
+                            kind.store(k_passive, std::memory_order_relaxed);
+                    }
+                }
+            }
+            const std::uint64_t d = done.fetch_add(e - b) + (e - b);
+            if (worker == 0 && progress) progress("passive leaves", d, m_ps.n);
+        });
+    }
+
+    /// Splits passive leaves above min_level down to it (their children tested against the disks).
+    std::uint64_t enforce_min_level() {
+        std::uint64_t splits = 0;
+        for (std::size_t i = 0; i < nodes.size(); ++i) {  // children appended behind are visited too
+            if (nodes[i].child == 0 && nodes[i].kind == k_passive && nodes[i].level < m_options.min_level) {
+                split_by_points(static_cast<std::uint32_t>(i), true);
+                ++splits;
+            }
+        }
+        return splits;
+    }
+
+    /// thesis 4.5.1: 2:1 balance. For every filled leaf B at level l (finest levels first), the
+    /// cells next to B (faces, edges, corners) must lie in nodes of level >= l - 1; a filled leaf
+    /// coarser than that is split (repeatedly) until they do. B's neighbour cells at level l - 1
+    /// are its parent's neighbours on B's sides, so the check runs once per parent and direction.
+    std::uint64_t balance(const Progress& progress) {
+        std::uint64_t splits = 0;
+        std::uint32_t deepest = 0;
+        for (const Node& n : nodes) deepest = std::max<std::uint32_t>(deepest, n.level);
+        for (std::uint32_t l = deepest; l >= 2; --l) {
+            // Parents of filled leaves at level l, with the directions their filled children face.
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> work;  // (parent, 27-bit direction mask)
+            for (std::size_t i = 0; i < nodes.size(); ++i) {
+                const Node& n = nodes[i];
+                if (n.level != l || n.child != 0 || !is_filled(n.kind)) continue;
+                const std::uint32_t c = static_cast<std::uint32_t>(i) - nodes[n.parent].child;
+                std::uint32_t mask = 0;
+                const int sx = (c & 1u) ? 1 : -1, sy = (c & 2u) ? 1 : -1, sz = (c & 4u) ? 1 : -1;
+                for (int dz = 0; dz < 2; ++dz)
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            if (dx == 0 && dy == 0 && dz == 0) continue;
+                            const int d = (dx * sx + 1) + 3 * (dy * sy + 1) + 9 * (dz * sz + 1);
+                            mask |= 1u << d;
+                        }
+                if (!work.empty() && work.back().first == n.parent)
+                    work.back().second |= mask;
+                else
+                    work.emplace_back(n.parent, mask);
+            }
+            for (const auto& [parent, mask] : work) {
+                const Node p = nodes[parent];
+                const std::int64_t top = std::int64_t{1} << p.level;
+                for (int d = 0; d < 27; ++d) {
+                    if (!(mask & (1u << d))) continue;
+                    const std::int64_t nx = std::int64_t{p.x} + d % 3 - 1,
+                                       ny = std::int64_t{p.y} + (d / 3) % 3 - 1,
+                                       nz = std::int64_t{p.z} + d / 9 - 1;
+                    if (nx < 0 || ny < 0 || nz < 0 || nx >= top || ny >= top || nz >= top) continue;
+                    splits += refine_towards(static_cast<std::uint32_t>(nx), static_cast<std::uint32_t>(ny),
+                                             static_cast<std::uint32_t>(nz), p.level);
+                }
+            }
+            if (progress) progress("2:1 balance", deepest - l + 1, deepest - 1);
+        }
+        return splits;
+    }
+
+private:
+    /// Descends towards the cell (x, y, z) at `level`, splitting every filled leaf met above that
+    /// level. Returns the number of splits.
+    std::uint64_t refine_towards(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint32_t level) {
+        std::uint64_t splits = 0;
+        std::uint32_t node = 0;
+        for (;;) {  // bounded: one level per iteration
+            const Node& n = nodes[node];
+            if (n.level >= level) break;
+            if (n.child == 0) {
+                if (!is_filled(n.kind)) break;
+                split_by_points(node, m_options.passive);
+                ++splits;
+            }
+            const std::uint32_t s = level - nodes[node].level - 1;
+            const std::uint32_t c = ((x >> s) & 1u) | (((y >> s) & 1u) << 1) | (((z >> s) & 1u) << 2);
+            node = nodes[node].child + c;
+        }
+        return splits;
+    }
+
+    const PointSet& m_ps;
+    const InfluenceIndex& m_index;
+    const Frame& m_frame;
+    const BuildOptions& m_options;
+    std::vector<std::uint32_t> m_candidates;
+};
+
+// ---- surface closure (thesis 4.3.1, 4.5.1) --------------------------------------------------------
+
+/// Passive leaves found by disks miss cells where the smoothed surface f = 0 leaves every disk
+/// (noisy scans, coarse levels of detail) and rays then fall through holes. The corner values
+/// say where the surface goes: a filled leaf whose face has corners of both signs is crossed by
+/// its trilinear surface there, so the leaves on the other side of that face must be filled too:
+///   same-level empty leaf  -> filled (passive);
+///   coarser empty leaf     -> split down to the level, the cell on the face filled;
+///   finer empty leaves     -> those touching the face where the leaf's surface crosses it
+///                             (its trilinear f has both signs at their corners on the face);
+///   coarser filled leaf without a sign change -> split, its children filled (it is too coarse to
+///                             hold the surface its finer neighbour reaches it with).
+/// Only cells some point's support reaches are filled this way: f far from every point says
+/// little, and on scans with inconsistent normals its sign flips there and would flood the volume.
+/// New leaves are evaluated and examined in turn until no face leads anywhere new. The 2:1 balance
+/// (thesis 4.5.1) is kept: a new leaf with a filled neighbour two or more levels coarser splits
+/// that neighbour, one with a filled leaf two or more levels finer next to it splits itself.
+/// Leaves that still end up without a sign change are dropped like any other.
+class SurfaceClosure {
+public:
+    /// `near(level, x, y, z)`: whether some point's support reaches that cell.
+    SurfaceClosure(TreeBuilder& tree, std::uint32_t max_level,
+                   std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t)> near)
+        : m_tree(tree), m_max_level(max_level), m_near(std::move(near)) {}
+
+    /// Examines the faces of `frontier` (evaluated leaves); returns the leaves to evaluate next.
+    /// `values(node, f)` fills the 8 corner values of an evaluated leaf.
+    template <class SignMask, class Values>
+    std::vector<std::uint32_t> close(const std::vector<std::uint32_t>& frontier,
+                                     const std::vector<std::uint32_t>& leaf_slot, SignMask&& sign_mask,
+                                     Values&& values) {
+        std::vector<Node>& nodes = m_tree.nodes;
+        m_added.clear();
+        m_work.clear();
+        auto evaluated = [&](std::uint32_t i) { return i < leaf_slot.size() && leaf_slot[i] != UINT32_MAX; };
+        for (const std::uint32_t leaf : frontier) {
+            if (nodes[leaf].child != 0 || !evaluated(leaf)) continue;
+            const std::uint32_t m = sign_mask(leaf);
+            if (m == 0 || m == 0xffu) continue;
+            for (std::uint32_t a = 0; a < 3; ++a)
+                for (std::uint32_t side = 0; side < 2; ++side) {
+                    std::uint32_t face = 0;  // corners on this face
+                    for (std::uint32_t c = 0; c < 8; ++c)
+                        if (((c >> a) & 1u) == side) face |= 1u << c;
+                    if ((m & face) == 0 || (m & face) == face) continue;  // one sign: no crossing
+                    beyond_face(
+                        leaf, a, side,
+                        [&](std::uint32_t i) {
+                            return evaluated(i) ? sign_mask(i) : 0x100u;  // 0x100: not known yet
+                        },
+                        values);
+                }
+        }
+        keep_balanced();
+        std::vector<std::uint32_t> out;
+        for (const std::uint32_t i : m_added)
+            if (nodes[i].child == 0) out.push_back(i);
+        return out;
+    }
+
+private:
+    /// Marks leaf i filled and to be evaluated (and balanced).
+    void add(std::uint32_t i) {
+        Node& n = m_tree.nodes[i];
+        if (n.kind == k_empty) n.kind = k_passive;
+        m_added.push_back(i);
+        m_work.push_back(i);
+    }
+
+    /// Fills empty leaf i if some point's support reaches it.
+    void add_empty(std::uint32_t i) {
+        const Node& n = m_tree.nodes[i];
+        if (m_near(n.level, n.x, n.y, n.z)) add(i);
+    }
+
+    /// Splits filled leaf i; all 8 children are filled and to be evaluated.
+    void split_all(std::uint32_t i) {
+        const std::uint32_t first = m_tree.split_by_points(i, false);
+        for (std::uint32_t c = 0; c < 8; ++c) add(first + c);
+    }
+
+    /// The node holding cell (x, y, z) at `level`, or the leaf above it.
+    std::uint32_t locate(const std::uint32_t cell[3], std::uint32_t level) const {
+        const std::vector<Node>& nodes = m_tree.nodes;
+        std::uint32_t node = 0;
+        while (nodes[node].child != 0 && nodes[node].level < level) {  // bounded: one level per step
+            const std::uint32_t s = level - nodes[node].level - 1;
+            node = nodes[node].child +
+                   (((cell[0] >> s) & 1u) | (((cell[1] >> s) & 1u) << 1) | (((cell[2] >> s) & 1u) << 2));
+        }
+        return node;
+    }
+
+    /// Trilinear interpolation of 8 corner values at unit-cube coordinates u (double).
+    static double trilinear(const double c[8], const double u[3]) {
+        const double x00 = c[0] + (c[1] - c[0]) * u[0], x10 = c[2] + (c[3] - c[2]) * u[0];
+        const double x01 = c[4] + (c[5] - c[4]) * u[0], x11 = c[6] + (c[7] - c[6]) * u[0];
+        const double y0 = x00 + (x10 - x00) * u[1], y1 = x01 + (x11 - x01) * u[1];
+        return y0 + (y1 - y0) * u[2];
+    }
+
+    template <class Mask, class Values>
+    void beyond_face(std::uint32_t leaf, std::uint32_t a, std::uint32_t side, Mask&& mask, Values&& values) {
+        std::vector<Node>& nodes = m_tree.nodes;
+        const std::uint32_t l = nodes[leaf].level;
+        std::uint32_t cell[3] = {nodes[leaf].x, nodes[leaf].y, nodes[leaf].z};
+        if (side == 1) {
+            if (cell[a] + 1 >= (1u << l)) return;  // the root's face
+            ++cell[a];
+        } else {
+            if (cell[a] == 0) return;
+            --cell[a];
+        }
+        std::uint32_t node = locate(cell, l);
+        if (nodes[node].child == 0 && nodes[node].level == l) {
+            if (nodes[node].kind == k_empty) add_empty(node);
+            return;
+        }
+        if (nodes[node].child == 0) {  // a coarser leaf
+            if (nodes[node].kind == k_empty) {
+                if (!m_near(l, cell[0], cell[1], cell[2])) return;
+                while (nodes[node].level < l) {  // bounded by l
+                    m_tree.split_by_points(node, false);
+                    node = locate(cell, l);
+                }
+                add(node);
+            } else {
+                const std::uint32_t m = mask(node);
+                if (m == 0 || m == 0xffu) split_all(node);
+            }
+            return;
+        }
+        // Finer leaves: those touching the shared face (child bit along a facing the leaf) where
+        // the leaf's own trilinear f has both signs at their corners on that face.
+        double f[8];
+        values(leaf, f);
+        const std::uint32_t facing = side == 1 ? 0u : 1u;
+        const std::uint32_t leaf_cell[3] = {nodes[leaf].x, nodes[leaf].y, nodes[leaf].z};
+        std::vector<std::uint32_t> stack{node};
+        while (!stack.empty()) {  // bounded by the subtree
+            const std::uint32_t i = stack.back();
+            stack.pop_back();
+            if (nodes[i].child == 0) {
+                if (nodes[i].kind != k_empty) continue;
+                const std::uint32_t e_cell[3] = {nodes[i].x, nodes[i].y, nodes[i].z};
+                const double scale = std::ldexp(1.0, -static_cast<int>(nodes[i].level - l));
+                bool pos = false, neg = false;
+                for (std::uint32_t c = 0; c < 4; ++c) {  // the 4 corners of i on the face
+                    double u[3];
+                    std::uint32_t k = 0;
+                    for (std::uint32_t b = 0; b < 3; ++b) {
+                        if (b == a) {
+                            u[b] = side;
+                            continue;
+                        }
+                        u[b] = (e_cell[b] + ((c >> k++) & 1u)) * scale - leaf_cell[b];
+                    }
+                    (trilinear(f, u) > 0 ? pos : neg) = true;
+                }
+                if (pos && neg) add_empty(i);
+                continue;
+            }
+            for (std::uint32_t c = 0; c < 8; ++c)
+                if (((c >> a) & 1u) == facing) stack.push_back(nodes[i].child + c);
+        }
+    }
+
+    /// Whether the subtree of node i holds a filled leaf.
+    bool has_filled(std::uint32_t i) const {
+        const std::vector<Node>& nodes = m_tree.nodes;
+        std::vector<std::uint32_t> stack{i};
+        while (!stack.empty()) {
+            const std::uint32_t k = stack.back();
+            stack.pop_back();
+            if (nodes[k].child == 0) {
+                if (is_filled(nodes[k].kind)) return true;
+                continue;
+            }
+            for (std::uint32_t c = 0; c < 8; ++c) stack.push_back(nodes[k].child + c);
+        }
+        return false;
+    }
+
+    /// 2:1 balance around the new leaves (worklist: splits add more).
+    void keep_balanced() {
+        std::vector<Node>& nodes = m_tree.nodes;
+        while (!m_work.empty()) {  // bounded: every iteration removes one entry; splits add finitely many
+            const std::uint32_t leaf = m_work.back();
+            m_work.pop_back();
+            if (nodes[leaf].child != 0) continue;
+            const std::uint32_t l = nodes[leaf].level;
+            const std::int64_t top = std::int64_t{1} << l;
+            // Coarser filled neighbours: the cells around at level l must lie in nodes of level >= l - 1.
+            for (int d = 0; d < 27 && l >= 2; ++d) {
+                if (d == 13) continue;
+                const std::int64_t c[3] = {std::int64_t{nodes[leaf].x} + d % 3 - 1,
+                                           std::int64_t{nodes[leaf].y} + (d / 3) % 3 - 1,
+                                           std::int64_t{nodes[leaf].z} + d / 9 - 1};
+                if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= top || c[1] >= top || c[2] >= top) continue;
+                const std::uint32_t parent_cell[3] = {std::uint32_t(c[0] >> 1), std::uint32_t(c[1] >> 1),
+                                                      std::uint32_t(c[2] >> 1)};
+                for (;;) {  // bounded: each split goes one level down
+                    const std::uint32_t node = locate(parent_cell, l - 1);
+                    if (nodes[node].child != 0 || nodes[node].level >= l - 1 || !is_filled(nodes[node].kind))
+                        break;
+                    split_all(node);
+                }
+            }
+            // Finer filled neighbours: no filled leaf two levels finer may touch this one.
+            if (l + 2 > m_max_level) continue;
+            const std::int64_t top1 = std::int64_t{1} << (l + 1);
+            bool split = false;
+            for (int z = -1; z <= 2 && !split; ++z)
+                for (int y = -1; y <= 2 && !split; ++y)
+                    for (int x = -1; x <= 2 && !split; ++x) {
+                        if (x >= 0 && x <= 1 && y >= 0 && y <= 1 && z >= 0 && z <= 1) continue;  // inside
+                        const std::int64_t c[3] = {2 * std::int64_t{nodes[leaf].x} + x,
+                                                   2 * std::int64_t{nodes[leaf].y} + y,
+                                                   2 * std::int64_t{nodes[leaf].z} + z};
+                        if (c[0] < 0 || c[1] < 0 || c[2] < 0 || c[0] >= top1 || c[1] >= top1 || c[2] >= top1)
+                            continue;
+                        const std::uint32_t cell[3] = {std::uint32_t(c[0]), std::uint32_t(c[1]),
+                                                       std::uint32_t(c[2])};
+                        const std::uint32_t node = locate(cell, l + 1);
+                        if (nodes[node].child != 0 && nodes[node].level == l + 1 && has_filled(node))
+                            split = true;
+                    }
+            if (split) split_all(leaf);
+        }
+    }
+
+    TreeBuilder& m_tree;
+    std::uint32_t m_max_level;
+    std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t)> m_near;
+    std::vector<std::uint32_t> m_added, m_work;
+};
+
+// ---- corners (thesis 4.2-4.3) ---------------------------------------------------------------------
+
+struct CornerValue {
+    double f = 0;
+    float n[3] = {0, 0, 1};
+    float color[3] = {255, 255, 255};
+};
+
+/// LSD radix sort of (key, slot) pairs by key, 11 bits per pass, passes over constant digits skipped.
+void radix_sort(std::vector<std::pair<std::uint64_t, std::uint32_t>>& v) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> tmp(v.size());
+    constexpr int k_bits = 11;
+    constexpr std::size_t k_buckets = std::size_t{1} << k_bits;
+    std::vector<std::size_t> count(k_buckets);
+    for (int shift = 0; shift < 64; shift += k_bits) {
+        std::fill(count.begin(), count.end(), 0);
+        for (const auto& e : v) ++count[(e.first >> shift) & (k_buckets - 1)];
+        if (std::find(count.begin(), count.end(), v.size()) != count.end()) continue;  // one bucket: no-op
+        std::size_t sum = 0;
+        for (std::size_t& c : count) {
+            const std::size_t t = c;
+            c = sum;
+            sum += t;
+        }
+        for (const auto& e : v) tmp[count[(e.first >> shift) & (k_buckets - 1)]++] = e;
+        v.swap(tmp);
+    }
+}
+
+/// Per-thread candidate buffer of the corner evaluation (structure of arrays).
+struct Candidates {
+    std::vector<double> px, py, pz, nx, ny, nz, sup2, inv2s2, wn, cr, cg, cb;
+    void clear() {
+        for (auto* v : {&px, &py, &pz, &nx, &ny, &nz, &sup2, &inv2s2, &wn, &cr, &cg, &cb}) v->clear();
+    }
+    void add(const PointSet& ps, std::uint32_t id) {
+        px.push_back(ps.pos[3 * id]);
+        py.push_back(ps.pos[3 * id + 1]);
+        pz.push_back(ps.pos[3 * id + 2]);
+        nx.push_back(ps.nrm[3 * id]);
+        ny.push_back(ps.nrm[3 * id + 1]);
+        nz.push_back(ps.nrm[3 * id + 2]);
+        sup2.push_back(ps.support[id] * ps.support[id]);
+        const double s = ps.sigma[id];
+        inv2s2.push_back(1.0 / (2.0 * s * s));
+        wn.push_back(1.0 / std::sqrt(2.0 * std::numbers::pi * s * s));  // eq. 4.1's normalization
+        cr.push_back(ps.col[3 * id]);
+        cg.push_back(ps.col[3 * id + 1]);
+        cb.push_back(ps.col[3 * id + 2]);
+    }
+};
+
+/// Weighted sums of eq. 4.2 around Q: positions relative to Q (short vectors: no cancellation).
+struct Sums {
+    double w = 0, px = 0, py = 0, pz = 0, nx = 0, ny = 0, nz = 0, r = 0, g = 0, b = 0;
+    std::uint32_t count = 0;
+    void add(double wi, double dx, double dy, double dz, double nxi, double nyi, double nzi, double ri,
+             double gi, double bi) {
+        w += wi;
+        px += wi * dx, py += wi * dy, pz += wi * dz;
+        nx += wi * nxi, ny += wi * nyi, nz += wi * nzi;
+        r += wi * ri, g += wi * gi, b += wi * bi;
+        ++count;
+    }
+};
+
+/// eq. 4.3 from the sums: f = (Q - p) . n with p, n the weighted means (eq. 4.2); the stored
+/// normal is n normalized.
+CornerValue finish(const Sums& s) {
+    CornerValue v;
+    const double inv = 1.0 / s.w;
+    const double qp[3] = {-s.px * inv, -s.py * inv, -s.pz * inv};  // Q - p
+    const double n[3] = {s.nx * inv, s.ny * inv, s.nz * inv};
+    v.f = qp[0] * n[0] + qp[1] * n[1] + qp[2] * n[2];
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (len > 0 && std::isfinite(len)) {
+        for (int a = 0; a < 3; ++a) v.n[a] = static_cast<float>(n[a] / len);
+    } else {
+        const double ql = std::sqrt(qp[0] * qp[0] + qp[1] * qp[1] + qp[2] * qp[2]);
+        for (int a = 0; a < 3; ++a) v.n[a] = ql > 0 ? static_cast<float>(qp[a] / ql) : (a == 2 ? 1.0f : 0.0f);
+    }
+    v.color[0] = static_cast<float>(s.r * inv);
+    v.color[1] = static_cast<float>(s.g * inv);
+    v.color[2] = static_cast<float>(s.b * inv);
+    return v;
+}
+
+/// A corner no point's support reaches: eq. 4.1-4.3 over the points within d_min + support x
+/// sigma_max (see iso_build.h), weights scaled by their largest value in log space.
+CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const double q[3], double support,
+                         double sigma_max, double start_radius, std::vector<std::uint32_t>& ids) {
+    double radius = start_radius;
+    double d_min2 = std::numeric_limits<double>::infinity();
+    for (int round = 0; round < 80 && !std::isfinite(d_min2); ++round, radius *= 2) {
+        ids.clear();
+        gather_ball(index, ps, q, radius, ids);
+        for (std::uint32_t id : ids) {
+            const double* p = &ps.pos[3 * id];
+            d_min2 = std::min(d_min2, (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                                          (p[2] - q[2]) * (p[2] - q[2]));
+        }
+    }
+    const double reach = std::sqrt(d_min2) + support * sigma_max;
+    ids.clear();
+    gather_ball(index, ps, q, reach, ids);
+    double lmax = -std::numeric_limits<double>::infinity();
+    auto log_weight = [&](std::uint32_t id) {
+        const double* p = &ps.pos[3 * id];
+        const double d2 =
+            (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
+        const double s = ps.sigma[id];
+        return -d2 / (2 * s * s) - std::log(s);  // log of eq. 4.1 up to the constant sqrt(2 pi)
+    };
+    for (std::uint32_t id : ids) lmax = std::max(lmax, log_weight(id));
+    Sums sums;
+    for (std::uint32_t id : ids) {
+        const double* p = &ps.pos[3 * id];
+        const double* n = &ps.nrm[3 * id];
+        sums.add(std::exp(log_weight(id) - lmax), p[0] - q[0], p[1] - q[1], p[2] - q[2], n[0], n[1], n[2],
+                 ps.col[3 * id], ps.col[3 * id + 1], ps.col[3 * id + 2]);
+    }
+    return finish(sums);
+}
+
+/// Per-thread buffers of CornerEvaluator.
+struct EvaluatorScratch {
+    std::vector<std::uint32_t> ids, idx;
+    std::vector<double> d2, arg, w;
+    Candidates cand;
+    std::uint64_t far = 0, counted = 0;  ///< corners beyond every support; points counted
+};
+
+/// thesis 4.2-4.3: eq. 4.1-4.3 at corners, all inside one box, from one gather of the points whose
+/// support reaches the box.
+struct CornerEvaluator {
+    const InfluenceIndex& index;
+    const PointSet& ps;
+    double support;       ///< in sigmas
+    double sigma_max;     ///< largest sigma (far corners)
+    double start_radius;  ///< first search radius for far corners
+
+    /// The `count` corners at qs[3 k .. 3 k + 2], all within the closed box [blo, bhi], into out[k].
+    void evaluate(const double* qs, std::size_t count, const double blo[3], const double bhi[3],
+                  CornerValue* out, EvaluatorScratch& s) const {
+        s.ids.clear();
+        gather_overlapping(index, ps, ps.support, blo, bhi, s.ids);
+        s.cand.clear();
+        for (std::uint32_t id : s.ids) s.cand.add(ps, id);
+        const Candidates& cand = s.cand;
+        const std::size_t m = s.ids.size();
+        if (s.d2.size() < m) s.d2.resize(m), s.idx.resize(m), s.arg.resize(m), s.w.resize(m);
+        double* d2 = s.d2.data();
+        double* arg = s.arg.data();
+        double* w = s.w.data();
+        std::uint32_t* idx = s.idx.data();
+        for (std::size_t k = 0; k < count; ++k) {
+            const double* q = qs + 3 * k;
+            // Squared distances of every candidate (a branch-free, vectorized loop), then the
+            // Gaussian weights (eq. 4.1) of those within their support, then the sums (eq. 4.2).
+            for (std::size_t j = 0; j < m; ++j) {
+                const double dx = cand.px[j] - q[0], dy = cand.py[j] - q[1], dz = cand.pz[j] - q[2];
+                d2[j] = dx * dx + dy * dy + dz * dz;
+            }
+            std::size_t inside = 0;
+            for (std::size_t j = 0; j < m; ++j) {
+                idx[inside] = static_cast<std::uint32_t>(j);
+                arg[inside] = -d2[j] * cand.inv2s2[j];
+                inside += d2[j] <= cand.sup2[j];
+            }
+            // arg >= -support^2 / 2 >= -50: inside exp_nonpositive's domain
+            for (std::size_t i = 0; i < inside; ++i) w[i] = detail::exp_nonpositive(arg[i]);
+            Sums sums;
+            for (std::size_t i = 0; i < inside; ++i) {
+                const std::uint32_t j = idx[i];
+                sums.add(cand.wn[j] * w[i], cand.px[j] - q[0], cand.py[j] - q[1], cand.pz[j] - q[2],
+                         cand.nx[j], cand.ny[j], cand.nz[j], cand.cr[j], cand.cg[j], cand.cb[j]);
+            }
+            if (sums.count > 0 && sums.w > 0) {
+                out[k] = finish(sums);
+                s.counted += sums.count;
+            } else {
+                std::vector<std::uint32_t> ids;
+                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, ids);
+                ++s.far;
+            }
+        }
+    }
+};
+
+std::int8_t quantize_value(double f, double scale) {
+    // Sign-preserving: f > 0 never rounds to 0, so the quantized corners have the float corners'
+    // signs and the two leaf arrays describe the same topology.
+    const double q = std::round(f / scale * 127.0);
+    if (f > 0) return static_cast<std::int8_t>(std::clamp(q, 1.0, 127.0));
+    return static_cast<std::int8_t>(std::clamp(std::isfinite(q) ? q : 0.0, -127.0, 0.0));
+}
+
+std::int8_t quantize_unit(float v) {
+    return static_cast<std::int8_t>(std::clamp(std::round(v * 127.0f), -127.0f, 127.0f));
+}
+
+std::uint8_t quantize_color(float v) {
+    return static_cast<std::uint8_t>(std::clamp(std::round(v), 0.0f, 255.0f));
+}
+
+}  // namespace
+
+// ---- the build ------------------------------------------------------------------------------------
+
+IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& progress) {
+    validate(o);
+    const auto t_start = Clock::now();
+    const unsigned threads = pre::resolve_threads(o.threads);
+    const std::size_t count = in.positions.size();
+    if (in.normals.size() != count)
+        throw Error("the ISO needs a normal per point (prt-import estimates them)");
+    if (!in.radii.empty() && in.radii.size() != count) throw Error("radii and positions differ in count");
+    if (!in.colors.empty() && in.colors.size() != count) throw Error("colors and positions differ in count");
+    RadiusSource source = o.radius;
+    if (source == RadiusSource::automatic)
+        source = in.radii.empty() ? RadiusSource::knn : RadiusSource::radii;
+    if (source == RadiusSource::radii && in.radii.empty())
+        throw Error("no radii section: run prt-radii or use the k-NN radius (--radius knn)");
+
+    IsoModel model;
+    BuildStats& st = model.stats;
+    st.points = count;
+
+    // -- 1. usable points and radii of influence ------------------------------------------------
+    auto t0 = Clock::now();
+    std::vector<std::uint32_t> keep;
+    keep.reserve(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const pool::Float3 p = in.positions[i], n = in.normals[i];
+        const double len = std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !(len > 0) ||
+            !std::isfinite(len))
+            continue;
+        if (source == RadiusSource::radii && !(in.radii[i] > 0.0f && std::isfinite(in.radii[i]))) continue;
+        keep.push_back(static_cast<std::uint32_t>(i));
+    }
+    std::vector<double> radius(keep.size());
+    if (source == RadiusSource::radii) {
+        for (std::size_t j = 0; j < keep.size(); ++j) radius[j] = in.radii[keep[j]];
+    } else if (!keep.empty()) {
+        std::vector<double> pos(3 * keep.size());
+        for (std::size_t j = 0; j < keep.size(); ++j) {
+            const pool::Float3 p = in.positions[keep[j]];
+            pos[3 * j] = p.x, pos[3 * j + 1] = p.y, pos[3 * j + 2] = p.z;
+        }
+        radius = knn_distances(pos, o.knn, threads, progress);
+        // prt-radii's outlier rule: radii above clamp x median become clamp x median.
+        std::vector<double> sorted(radius);
+        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+        const double limit = o.knn_clamp > 0 ? o.knn_clamp * sorted[sorted.size() / 2] : 0.0;
+        for (double& r : radius)
+            if (limit > 0 && r > limit) r = limit, ++st.radii_clamped;
+        // Points with k coincident neighbours get radius 0: skipped like prt-octree skips them.
+        std::vector<std::uint32_t> kept2;
+        std::vector<double> radius2;
+        for (std::size_t j = 0; j < keep.size(); ++j)
+            if (radius[j] > 0 && std::isfinite(radius[j]))
+                kept2.push_back(keep[j]), radius2.push_back(radius[j]);
+        keep.swap(kept2);
+        radius.swap(radius2);
+    }
+    st.skipped = count - keep.size();
+    if (keep.empty()) throw Error("no usable point (positions, normals and radii all needed)");
+    {
+        std::vector<double> sorted(radius);
+        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+        st.radius_median = sorted[sorted.size() / 2];
+    }
+    st.seconds_radii = seconds_since(t0);
+
+    // -- root cube: every influence disk inside ---------------------------------------------------
+    t0 = Clock::now();
+    const std::size_t n = keep.size();
+    double lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
+    double sigma_max = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+        const pool::Float3 p = in.positions[keep[j]];
+        const double sigma = o.smoothing * radius[j];
+        const double rho = std::max(radius[j], sigma);
+        sigma_max = std::max(sigma_max, sigma);
+        const double c[3] = {p.x, p.y, p.z};
+        for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a] - rho), hi[a] = std::max(hi[a], c[a] + rho);
+    }
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
+    const float root_size = static_cast<float>(extent * 1.002);
+    if (!(root_size > 0.0f) || !std::isfinite(root_size)) throw Error("the points span no volume");
+    Frame frame;
+    float root_min[3];
+    double corner[3];
+    for (int a = 0; a < 3; ++a) {
+        root_min[a] = static_cast<float>(0.5 * (lo[a] + hi[a]) - 0.5 * double(root_size));
+        // float rounding must not leave a disk outside the cube
+        while (double(root_min[a]) > lo[a]) root_min[a] = std::nextafter(root_min[a], -INFINITY);
+        while (double(root_min[a]) + double(root_size) < hi[a])
+            root_min[a] = std::nextafter(root_min[a], INFINITY);
+        corner[a] = root_min[a];
+    }
+    frame.set(corner, root_size);
+
+    // -- the point set, sorted by code ---------------------------------------------------------------
+    PointSet ps;
+    ps.n = n;
+    {
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+        pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t j = b; j < e; ++j) {
+                const pool::Float3 p = in.positions[keep[j]];
+                order[j] = {morton3(frame.cell(p.x, 0, k_code_level), frame.cell(p.y, 1, k_code_level),
+                                    frame.cell(p.z, 2, k_code_level)),
+                            static_cast<std::uint32_t>(j)};
+            }
+        });
+        std::sort(order.begin(), order.end());
+        ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
+        ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t j = order[i].second;
+            const std::uint32_t src = keep[j];
+            const pool::Float3 p = in.positions[src], nv = in.normals[src];
+            const double len = std::sqrt(double(nv.x) * nv.x + double(nv.y) * nv.y + double(nv.z) * nv.z);
+            ps.pos[3 * i] = p.x, ps.pos[3 * i + 1] = p.y, ps.pos[3 * i + 2] = p.z;
+            ps.nrm[3 * i] = nv.x / len, ps.nrm[3 * i + 1] = nv.y / len, ps.nrm[3 * i + 2] = nv.z / len;
+            const pool::Rgba8 c = in.colors.empty() ? pool::Rgba8{255, 255, 255, 255} : in.colors[src];
+            ps.col[3 * i] = c.r, ps.col[3 * i + 1] = c.g, ps.col[3 * i + 2] = c.b;
+            ps.sigma[i] = o.smoothing * radius[j];
+            ps.support[i] = o.support * ps.sigma[i];
+            ps.rho[i] = std::max(radius[j], ps.sigma[i]);
+            ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
+            ps.code[i] = order[i].first;
+        }
+    }
+    const InfluenceIndex index = build_index(ps, frame);
+
+    // -- 2. the octree over the points -----------------------------------------------------------------
+    TreeBuilder tree(ps, index, frame, o);
+    tree.build_from_points();
+    st.seconds_tree = seconds_since(t0);
+
+    // -- 3. passive leaves ------------------------------------------------------------------------------
+    t0 = Clock::now();
+    if (o.passive) {
+        tree.mark_passive(threads, progress);
+        st.min_level_splits = tree.enforce_min_level();
+    }
+    st.seconds_passive = seconds_since(t0);
+
+    // -- 4. 2:1 balance ---------------------------------------------------------------------------------
+    t0 = Clock::now();
+    if (o.balance) st.balance_splits = tree.balance(progress);
+    st.seconds_balance = seconds_since(t0);
+    std::vector<Node>& nodes = tree.nodes;
+
+    // -- 5. corners -------------------------------------------------------------------------------------
+    t0 = Clock::now();
+    std::vector<double> sorted_support(ps.support);
+    std::nth_element(sorted_support.begin(), sorted_support.begin() + n / 2, sorted_support.end());
+    const CornerEvaluator evaluator{index, ps, o.support, sigma_max, 2 * sorted_support[n / 2]};
+    // Every evaluated filled leaf owns 8 corner slots; slot_corner maps them into `corners`.
+    // leaf_slot: node -> its evaluated leaf (UINT32_MAX for nodes never evaluated).
+    std::vector<std::uint32_t> filled;
+    for (std::size_t i = 0; i < nodes.size(); ++i)
+        if (nodes[i].child == 0 && is_filled(nodes[i].kind)) {
+            filled.push_back(static_cast<std::uint32_t>(i));
+            (nodes[i].kind == k_active ? st.active_leaves : st.passive_leaves)++;
+        }
+    std::vector<std::uint32_t> leaf_slot(nodes.size(), UINT32_MAX);
+    for (std::size_t f = 0; f < filled.size(); ++f) leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> slots(8 * filled.size());
+    pre::parallel_chunks(filled.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t f = b; f < e; ++f) {
+            const Node& nd = nodes[filled[f]];
+            const std::uint32_t s = k_code_level - nd.level;
+            for (std::uint32_t c = 0; c < 8; ++c)
+                slots[8 * f + c] = {morton3((nd.x + (c & 1u)) << s, (nd.y + ((c >> 1) & 1u)) << s,
+                                            (nd.z + ((c >> 2) & 1u)) << s),
+                                    static_cast<std::uint32_t>(8 * f + c)};
+        }
+    });
+    radix_sort(slots);
+    std::vector<std::uint64_t> corner_keys;
+    std::vector<std::uint32_t> slot_corner(slots.size());
+    for (std::size_t i = 0; i < slots.size(); ++i) {
+        if (i == 0 || slots[i].first != slots[i - 1].first) corner_keys.push_back(slots[i].first);
+        slot_corner[slots[i].second] = static_cast<std::uint32_t>(corner_keys.size() - 1);
+    }
+    std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(slots);
+
+    // Blocks of corners sharing a node at a level about half as wide as the median support: one
+    // gather of candidates per block.
+    const std::uint32_t block_level =
+        detail::level_for_extent(frame, 0.5 * sorted_support[n / 2], 1.0, k_code_level);
+    const std::uint32_t block_shift = 3 * (k_code_level - block_level);
+    std::vector<std::size_t> blocks{0};
+    for (std::size_t i = 1; i < corner_keys.size(); ++i)
+        if ((corner_keys[i] >> block_shift) != (corner_keys[i - 1] >> block_shift)) blocks.push_back(i);
+    blocks.push_back(corner_keys.size());
+    std::vector<CornerValue> corners(corner_keys.size());
+    std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0};
+    const double corner_step = frame.edge(k_code_level);
+    pre::parallel_chunks(
+        blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
+            EvaluatorScratch scratch;
+            std::vector<double> qs;
+            for (std::size_t bi = b0; bi < b1; ++bi) {
+                const std::size_t first = blocks[bi], last = blocks[bi + 1];
+                const std::uint64_t prefix = corner_keys[first] >> block_shift;
+                double blo[3], bhi[3];
+                frame.box(block_level, detail::compact21(prefix), detail::compact21(prefix >> 1),
+                          detail::compact21(prefix >> 2), blo, bhi);
+                qs.clear();
+                for (std::size_t ci = first; ci < last; ++ci) {
+                    const std::uint64_t key = corner_keys[ci];
+                    qs.push_back(frame.lo[0] + corner_step * detail::compact21(key));
+                    qs.push_back(frame.lo[1] + corner_step * detail::compact21(key >> 1));
+                    qs.push_back(frame.lo[2] + corner_step * detail::compact21(key >> 2));
+                }
+                evaluator.evaluate(qs.data(), last - first, blo, bhi, &corners[first], scratch);
+                const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
+                if (worker == 0 && progress) progress("corners", d, corner_keys.size());
+            }
+            far += scratch.far;
+            counted += scratch.counted;
+        });
+    st.far_corners = far.load();
+    st.mean_neighbours_x100 = corner_keys.size() > st.far_corners
+                                  ? 100 * counted.load() / (corner_keys.size() - st.far_corners)
+                                  : 0;
+    st.corners = corner_keys.size();
+    std::vector<std::uint64_t>().swap(corner_keys);
+    st.seconds_corners = seconds_since(t0);
+
+    // -- 5b. surface closure ----------------------------------------------------------------------------
+    t0 = Clock::now();
+    auto sign_mask = [&](std::uint32_t node) {  // bit c: corner c has f > 0
+        const std::uint32_t f = leaf_slot[node];
+        std::uint32_t m = 0;
+        for (std::uint32_t c = 0; c < 8; ++c) m |= (corners[slot_corner[8 * f + c]].f > 0 ? 1u : 0u) << c;
+        return m;
+    };
+    std::vector<std::uint32_t> near_ids;
+    SurfaceClosure closure(tree, o.max_level,
+                           [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+                               double blo[3], bhi[3];
+                               frame.box(level, x, y, z, blo, bhi);
+                               near_ids.clear();
+                               gather_overlapping(index, ps, ps.support, blo, bhi, near_ids);
+                               return !near_ids.empty();
+                           });
+    std::vector<std::uint32_t> frontier;
+    if (o.closure) frontier = filled;
+    for (std::uint32_t round = 0; round < 256 && !frontier.empty(); ++round) {  // every round adds leaves
+        std::vector<std::uint32_t> added =
+            closure.close(frontier, leaf_slot, sign_mask, [&](std::uint32_t node, double f[8]) {
+                for (std::uint32_t c = 0; c < 8; ++c) f[c] = corners[slot_corner[8 * leaf_slot[node] + c]].f;
+            });
+        st.closure_leaves += added.size();
+        // New leaves: evaluate their 8 corners each (a corner shared with an older leaf gets the same
+        // value again: f depends on the position only).
+        const std::size_t base = slot_corner.size() / 8;
+        leaf_slot.resize(nodes.size(), UINT32_MAX);
+        for (std::size_t k = 0; k < added.size(); ++k)
+            leaf_slot[added[k]] = static_cast<std::uint32_t>(base + k);
+        slot_corner.resize(slot_corner.size() + 8 * added.size());
+        const std::size_t corner_base = corners.size();
+        corners.resize(corner_base + 8 * added.size());
+        for (std::size_t k = 0; k < 8 * added.size(); ++k)
+            slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
+        std::atomic<std::uint64_t> far_added{0};
+        pre::parallel_chunks(added.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            EvaluatorScratch scratch;
+            for (std::size_t k = b; k < e; ++k) {
+                const Node& nd = nodes[added[k]];
+                double blo[3], bhi[3], qs[24];
+                frame.box(nd.level, nd.x, nd.y, nd.z, blo, bhi);
+                for (int c = 0; c < 8; ++c)
+                    for (int a = 0; a < 3; ++a) qs[3 * c + a] = ((c >> a) & 1) ? bhi[a] : blo[a];
+                evaluator.evaluate(qs, 8, blo, bhi, &corners[corner_base + 8 * k], scratch);
+            }
+            far_added += scratch.far;
+        });
+        st.far_corners += far_added.load();
+        st.corner_slots += 8 * added.size();
+        frontier.swap(added);
+    }
+    st.seconds_closure = seconds_since(t0);
+
+    // -- 6. leaves without a sign change; collapse; 7. encode ------------------------------------------
+    t0 = Clock::now();
+    st.corner_slots = 0;
+    std::vector<std::uint8_t> keep_node(nodes.size(), 0);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        if (nodes[i].child != 0 || !is_filled(nodes[i].kind)) continue;
+        st.corner_slots += 8;
+        const std::uint32_t m = sign_mask(static_cast<std::uint32_t>(i));
+        if (m != 0 && m != 0xffu) {
+            keep_node[i] = 1;
+        } else {
+            ++st.uncrossed_leaves;
+            if (!o.drop_uncrossed) keep_node[i] = 1;
+        }
+    }
+    for (std::size_t i = nodes.size(); i-- > 0;)  // children come after their parent
+        if (nodes[i].child != 0)
+            for (std::uint32_t c = 0; c < 8; ++c) keep_node[i] |= keep_node[nodes[i].child + c];
+
+    // Leaf indices in depth-first (Morton) order.
+    std::vector<std::uint32_t> leaf_of(nodes.size(), UINT32_MAX);
+    std::vector<std::uint32_t> dfs_leaves;
+    {
+        std::vector<std::uint32_t> stack{0};
+        while (!stack.empty()) {
+            const std::uint32_t i = stack.back();
+            stack.pop_back();
+            if (!keep_node[i]) continue;
+            if (nodes[i].child == 0) {
+                leaf_of[i] = static_cast<std::uint32_t>(dfs_leaves.size());
+                dfs_leaves.push_back(i);
+                continue;
+            }
+            for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
+        }
+    }
+    const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
+    if (q8) model.leaves_q8.resize(dfs_leaves.size());
+    if (f32) model.leaves_f32.resize(dfs_leaves.size());
+    const bool colors = !in.colors.empty();
+    pre::parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t li = b; li < e; ++li) {
+            const Node& nd = nodes[dfs_leaves[li]];
+            const std::uint32_t f = leaf_slot[dfs_leaves[li]];
+            const double scale = pool::k_iso_q8_range * frame.edge(nd.level);
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                const CornerValue& v = corners[slot_corner[8 * f + c]];
+                if (q8) {
+                    pool::IsoLeafQ8& q = model.leaves_q8[li];
+                    q.value[c] = quantize_value(v.f, scale);
+                    for (int a = 0; a < 3; ++a) {
+                        q.normal[c][a] = quantize_unit(v.n[a]);
+                        q.color[c][a] = colors ? quantize_color(v.color[a]) : 255;
+                    }
+                }
+                if (f32) {
+                    pool::IsoLeafF32& l = model.leaves_f32[li];
+                    l.value[c] = static_cast<float>(v.f);
+                    for (int a = 0; a < 3; ++a) l.normal[c][a] = v.n[a];
+                    l.color[c] = colors ? pool::Rgba8{quantize_color(v.color[0]), quantize_color(v.color[1]),
+                                                      quantize_color(v.color[2]), 255}
+                                        : pool::Rgba8{255, 255, 255, 255};
+                }
+            }
+        }
+    });
+
+    // Node pool, breadth first; subtrees without a filled leaf become one empty leaf.
+    std::vector<std::uint32_t> bfs{0};
+    std::vector<std::uint32_t>& words = model.nodes;
+    for (std::size_t k = 0; k < bfs.size(); ++k) {
+        const std::uint32_t i = bfs[k];
+        const Node& nd = nodes[i];
+        if (nd.child != 0 && keep_node[i]) {
+            if (bfs.size() + 8 > pool::k_node_address_max)
+                throw Error("the ISO octree needs more than 2^30 nodes (lower --max-level)");
+            words.push_back(
+                pool::make_node(pool::NodeType::internal, static_cast<std::uint32_t>(bfs.size())));
+            for (std::uint32_t c = 0; c < 8; ++c) bfs.push_back(nd.child + c);
+        } else if (nd.child == 0 && keep_node[i]) {
+            words.push_back(pool::make_node(pool::NodeType::filled_leaf, leaf_of[i]));
+            st.depth = std::max<std::uint32_t>(st.depth, nd.level);
+            ++st.leaves_per_level[nd.level];
+        } else {
+            words.push_back(pool::make_node(pool::NodeType::empty_leaf, 0));
+        }
+    }
+    st.leaves = dfs_leaves.size();
+    st.nodes = words.size();
+    st.seconds_encode = seconds_since(t0);
+
+    pool::IsoInfo& info = model.info;
+    for (int a = 0; a < 3; ++a) info.root_min[a] = root_min[a];
+    info.root_size = root_size;
+    info.node_count = static_cast<std::uint32_t>(words.size());
+    info.leaf_count = static_cast<std::uint32_t>(dfs_leaves.size());
+    info.min_level = o.min_level;
+    info.max_level = o.max_level;
+    info.depth = st.depth;
+    info.flags = (q8 ? pool::k_iso_has_q8 : 0u) | (f32 ? pool::k_iso_has_f32 : 0u) |
+                 (colors ? pool::k_iso_colors : 0u) | (o.balance ? pool::k_iso_balanced : 0u) |
+                 (source == RadiusSource::knn ? pool::k_iso_radii_knn : 0u);
+    info.smoothing = o.smoothing;
+    info.support = o.support;
+    info.active_leaves = static_cast<std::uint32_t>(st.active_leaves);
+    info.passive_leaves = static_cast<std::uint32_t>(st.passive_leaves);
+    info.corner_count = static_cast<std::uint32_t>(std::min<std::uint64_t>(st.corners, UINT32_MAX));
+    st.bytes = sizeof(pool::IsoInfo) + 4 * words.size() + sizeof(pool::IsoLeafQ8) * model.leaves_q8.size() +
+               sizeof(pool::IsoLeafF32) * model.leaves_f32.size();
+    st.seconds_total = seconds_since(t_start);
+    return model;
+}
+
+std::vector<LeafCell> leaf_cells(std::span<const std::uint32_t> nodes, std::uint32_t leaf_count) {
+    std::vector<LeafCell> cells(leaf_count);
+    if (nodes.empty()) return cells;
+    std::vector<std::pair<std::uint32_t, LeafCell>> queue{{0, LeafCell{}}};
+    for (std::size_t k = 0; k < queue.size(); ++k) {
+        const auto [i, cell] = queue[k];
+        const std::uint32_t w = nodes[i];
+        const pool::NodeType type = pool::node_type(w);
+        const std::uint32_t a = pool::node_address(w);
+        if (type == pool::NodeType::internal) {
+            for (std::uint32_t c = 0; c < 8; ++c)
+                queue.push_back(
+                    {a + c, LeafCell{cell.level + 1, 2 * cell.x + (c & 1u), 2 * cell.y + ((c >> 1) & 1u),
+                                     2 * cell.z + ((c >> 2) & 1u)}});
+        } else if (type == pool::NodeType::filled_leaf && a < leaf_count) {
+            cells[a] = cell;
+        }
+    }
+    return cells;
+}
+
+void corner_position(const pool::IsoInfo& info, const LeafCell& cell, int corner, double q[3]) {
+    const double e = std::ldexp(double(info.root_size), -static_cast<int>(cell.level));
+    const std::uint32_t c[3] = {cell.x + (corner & 1), cell.y + ((corner >> 1) & 1),
+                                cell.z + ((corner >> 2) & 1)};
+    for (int a = 0; a < 3; ++a) q[a] = double(info.root_min[a]) + e * c[a];
+}
+
+}  // namespace prt::iso
