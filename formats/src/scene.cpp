@@ -84,13 +84,31 @@ std::string format_number(double v) {
     return std::strtod(shorter, nullptr) == v ? std::string(shorter) : std::string(buf);
 }
 
+/// An error message kept on one line: control characters from the document (a key or name
+/// holding "\n" or "\r") are written as JSON escapes, \u000a.
+std::string one_line(const std::string& text) {
+    std::string out;
+    out.reserve(text.size());
+    for (const char c : text) {
+        const auto u = static_cast<unsigned char>(c);
+        if (u < 0x20 || u == 0x7F) {
+            char buf[8];
+            std::snprintf(buf, sizeof buf, "\\u%04x", u);
+            out += buf;
+        } else {
+            out += c;
+        }
+    }
+    return out;
+}
+
 /// Error reporting and path resolution shared by all readers of one document.
 struct Context {
     std::string label;
     std::filesystem::path base_dir;
 
     [[noreturn]] void fail(const std::string& path, const std::string& what) const {
-        throw Error(label + ": " + (path.empty() ? std::string("(document)") : path) + ": " + what);
+        throw Error(one_line(label + ": " + (path.empty() ? std::string("(document)") : path) + ": " + what));
     }
 };
 
@@ -515,7 +533,8 @@ Json parse_text(const Context& ctx, const std::string& text) {
             what = what.substr(close + 2);
         // A syntax error carries its line and column; other failures (a number too large for a
         // double) are named by the path the parser had reached.
-        if (dynamic_cast<const Json::parse_error*>(&e)) throw Error(ctx.label + ": invalid JSON: " + what);
+        if (dynamic_cast<const Json::parse_error*>(&e))
+            throw Error(one_line(ctx.label + ": invalid JSON: " + what));
         ctx.fail(current_path(), "invalid JSON: " + what);
     }
     if (!duplicate_path.empty())

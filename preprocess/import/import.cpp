@@ -179,7 +179,11 @@ PointCloud import_file(const std::filesystem::path& path, const Options& options
             precheck_mesh_file(path);
             const MeshData mesh = read_mesh(path, report, quiet);
             if (options.sample > 0) {
-                cloud = sample_mesh(mesh, options.sample, options.seed, options.sample_normals);
+                try {
+                    cloud = sample_mesh(mesh, options.sample, options.seed, options.sample_normals);
+                } catch (const Error& e) {
+                    throw Error(label + ": " + e.what());  // the one error that cannot name the file
+                }
                 report.records = cloud.size();
                 report.normals_detail =
                     options.sample_normals == SampleNormals::face

@@ -24,8 +24,11 @@ struct MeshData {
 };
 
 /// Checks a mesh file's header against its size before OpenMesh sees it (OpenMesh trusts header
-/// counts; garbled ones can make it loop): PLY with our reader, OFF counts, STL binary size or
-/// "solid". Throws prt::Error "PATH: ...". OBJ has no header: nothing to check.
+/// counts; garbled ones can make it loop): PLY with our reader (and a text-only header), ASCII OFF
+/// counts and body as OpenMesh tokenises them (binary OFF and '#' comments refused), STL binary
+/// size or "solid", OBJ faces whose first corner has a vertex index (OpenMesh asserts otherwise)
+/// and mtllib lines naming no device or FIFO (OpenMesh reads them to the end).
+/// Throws prt::Error "PATH: ...".
 void precheck_mesh_file(const std::filesystem::path& path);
 
 /// Reads a PLY/OBJ/OFF/STL mesh through OpenMesh (requires have_openmesh()). Faces with an invalid

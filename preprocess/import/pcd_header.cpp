@@ -1,7 +1,9 @@
 #include "pcd_header.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstring>
+#include <set>
 
 #include "mapped_file.h"
 #include "prt/error.h"
@@ -37,6 +39,7 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
     constexpr std::size_t k_max_header = 1u << 16;  // a real PCD header is a few hundred bytes
     PcdHeader h;
     bool have_width = false, have_height = false, have_points = false, have_count = false;
+    std::set<std::string> seen;  // header keywords met so far
     std::size_t pos = 0, line_no = 0;
     auto fail = [&](const std::string& what) -> void {
         throw Error(label + ": not a valid PCD file: line " + std::to_string(line_no) + ": " + what);
@@ -51,8 +54,15 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
         ++line_no;
         if (line.find('\0') != std::string_view::npos) fail("binary bytes in the header");
         const auto w = words_of(line);
+        // PCL skips empty lines but crashes (a null read in PCDReader::read, PCL 1.13) on a line of
+        // only spaces, tabs or a carriage return before FIELDS: such lines are refused (fuzzer).
+        if (w.empty() && !line.empty()) fail("a blank line of spaces, tabs or a carriage return");
         if (w.empty() || w[0][0] == '#') continue;
         const std::string_view key = w[0];
+        // PCL acts on every header line as it comes (POINTS 14294967296 then POINTS 4: it sized
+        // its buffer from the first, 400 GB; fuzzer); ours kept the last. Each keyword once.
+        const std::string canonical = key == "COLUMNS" ? std::string("FIELDS") : std::string(key);
+        if (!seen.insert(canonical).second) fail(canonical + " given twice");
         auto unsigned_list = [&](std::vector<std::uint32_t>& out) {
             for (std::size_t i = 1; i < w.size(); ++i) {
                 std::uint64_t v = 0;
@@ -94,6 +104,27 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
         }
     }
     h.data_offset = pos;
+    // PCL's header reader goes on past DATA while lines look like header lines (a keyword prefix
+    // or a '#' comment; empty lines skipped) and takes the last DATA and POINTS it sees: a
+    // POINTS 34294967296 after "DATA ascii" made it allocate 548 GB (fuzzer). Refused here.
+    for (std::size_t p = pos; p < bytes.size();) {
+        const std::size_t e = std::min(bytes.find('\n', p), bytes.size());
+        const auto w = words_of(bytes.substr(p, e - p));
+        if (e == p) {
+            p = e + 1;
+            continue;
+        }
+        static constexpr const char* k_keywords[] = {"#",      "VERSION",   "FIELDS", "COLUMNS",
+                                                     "SIZE",   "TYPE",      "COUNT",  "WIDTH",
+                                                     "HEIGHT", "VIEWPOINT", "POINTS", "DATA"};
+        for (const char* k : k_keywords)
+            if (!w.empty() && w[0].substr(0, std::strlen(k)) == k) {
+                line_no +=
+                    1 + static_cast<std::size_t>(std::count(bytes.begin() + pos, bytes.begin() + p, '\n'));
+                fail("header line " + quoted(w[0], 20) + " after the DATA line");
+            }
+        break;
+    }
     if (h.fields.empty()) throw Error(label + ": not a valid PCD file (no FIELDS line)");
     if (!have_count) h.count.assign(h.fields.size(), 1);
     if (h.size.size() != h.fields.size() || h.type.size() != h.fields.size() ||
@@ -114,18 +145,22 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
     if (!have_width) throw Error(label + ": not a valid PCD file (no WIDTH line)");
     if (!have_height) h.height = 1;
     if (!have_points) h.points = h.width * h.height;
-    if (h.width == 0 || h.height == 0 || h.width > (1ull << 32) || h.height > (1ull << 32) ||
-        h.points != h.width * h.height)
+    // PCL keeps WIDTH and HEIGHT in 32 bits; within that their product cannot overflow 64 bits.
+    if (h.width > 0xFFFFFFFFull || h.height > 0xFFFFFFFFull)
+        throw Error(label + ": not a valid PCD file (WIDTH " + std::to_string(h.width) + " x HEIGHT " +
+                    std::to_string(h.height) + ": each must be at most 4294967295)");
+    if (h.width == 0 || h.height == 0 || h.points != h.width * h.height)
         throw Error(label + ": not a valid PCD file (POINTS " + std::to_string(h.points) + " is not WIDTH " +
                     std::to_string(h.width) + " x HEIGHT " + std::to_string(h.height) + ")");
 
     const std::uint64_t available = bytes.size() - h.data_offset;
     if (h.data == "binary") {
-        const std::uint64_t need = h.points * h.point_step;
-        if (h.point_step == 0 || available < need)
+        // Compared by division: points x point_step can overflow 64 bits (2^31 x 2^31 x 12 = 0).
+        if (h.point_step == 0 || h.points > available / h.point_step)
             throw Error(label + ": header declares " + std::to_string(h.points) +
                         " points but the data ends after " +
                         std::to_string(h.point_step ? available / h.point_step : 0));
+        const std::uint64_t need = h.points * h.point_step;
         if (available > need)
             report.notes.push_back(
                 label + ": warning: " + std::to_string(available - need) +
@@ -136,7 +171,8 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
         std::uint32_t compressed = 0, uncompressed = 0;
         std::memcpy(&compressed, bytes.data() + h.data_offset, 4);
         std::memcpy(&uncompressed, bytes.data() + h.data_offset + 4, 4);
-        if (uncompressed != h.points * h.point_step)
+        const bool fits = h.point_step == 0 || h.points <= 0xFFFFFFFFull / h.point_step;  // no overflow
+        if (!fits || uncompressed != h.points * h.point_step)
             throw Error(label + ": binary_compressed data unpacks to " + std::to_string(uncompressed) +
                         " bytes but the header declares " + std::to_string(h.points) + " points of " +
                         std::to_string(h.point_step) + " bytes");
@@ -161,6 +197,15 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
         if (lines < h.points)
             throw Error(label + ": header declares " + std::to_string(h.points) +
                         " points but the data has " + std::to_string(lines) + " lines");
+        // ascii: every value takes at least one byte, so the data bounds POINTS x the values per
+        // point; PCL allocates POINTS x point_step before reading (COUNT 77777771 for one field
+        // of 4 points: 2.5 GB, fuzzer).
+        std::uint64_t values = 0;
+        for (const std::uint32_t c : h.count) values += c;
+        if (values > 0 && h.points > available / values)
+            throw Error(label + ": header declares " + std::to_string(h.points) + " points of " +
+                        std::to_string(values) + " values (COUNT) but the data holds only " +
+                        std::to_string(available) + " bytes");
         if (lines > h.points)
             report.notes.push_back(label + ": warning: " + std::to_string(lines - h.points) +
                                    " lines after the declared points (not read)");
