@@ -29,13 +29,14 @@ export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:strict_strin
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
 start=$(date +%s)
+mkdir -p "$build"
 # shellcheck disable=SC2086 # CMAKE_ARGS holds several arguments
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPRT_SANITIZE=ON -DPRT_WITH_CUDA=OFF \
-    ${CMAKE_ARGS:-} >"$build.configure.log" 2>&1 || { cat "$build.configure.log" >&2; exit 1; }
-cmake --build "$build" -j "$jobs" >"$build.build.log" 2>&1 ||
-    { tail -50 "$build.build.log" >&2; echo "asan-tests: build failed (log: $build.build.log)" >&2; exit 1; }
+    ${CMAKE_ARGS:-} >"$build/asan-configure.log" 2>&1 || { cat "$build/asan-configure.log" >&2; exit 1; }
+cmake --build "$build" -j "$jobs" >"$build/asan-build.log" 2>&1 ||
+    { tail -50 "$build/asan-build.log" >&2; echo "asan-tests: build failed (log: $build/asan-build.log)" >&2; exit 1; }
 built=$(date +%s)
-echo "asan-tests: configure + build: $((built - start)) s ($jobs jobs, $(nproc) cores; log: $build.build.log)"
+echo "asan-tests: configure + build: $((built - start)) s ($jobs jobs, $(nproc) cores; log: $build/asan-build.log)"
 
 # Two passes. The window tests (prt-play under Xvfb) load the system's OpenGL driver with
 # dlopen and unload it before LeakSanitizer runs at exit; the driver's own allocations are then

@@ -93,6 +93,10 @@ for t in "${targets[@]}"; do
     "$bin/prt-fuzz-$t" "$corpus" "$seeds/$t" "${dict[@]}" -max_total_time="$seconds" -timeout=10 \
         -rss_limit_mb=2048 -detect_leaks=1 -print_final_stats=1 -artifact_prefix="$artifacts/" \
         ${FUZZ_ARGS:-} >"$log" 2>&1 || rc=$?
+    # A run that stops on a finding exits without removing its scratch folder (fuzz_entries.cpp).
+    for d in /dev/shm/prt-fuzz-* "${TMPDIR:-/tmp}"/prt-fuzz-*; do
+        [ -d "$d" ] && ! kill -0 "${d##*-}" 2>/dev/null && rm -rf "$d"
+    done
     execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
     rate=$(sed -n 's/^stat::average_exec_per_sec: *//p' "$log" | tail -1)
     last=$(grep -E '^#[0-9]+' "$log" | tail -1 || true)
