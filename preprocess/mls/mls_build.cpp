@@ -9,7 +9,7 @@
 #include <numeric>
 #include <string>
 
-#include "mls_parallel.h"
+#include "parallel.h"
 #include "prt/error.h"
 #include "prt/tool.h"
 
@@ -422,7 +422,7 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
                     std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
                     " radii: every point needs all three");
     const double t_start = tool::now_seconds();
-    const unsigned threads = resolve_threads(opt.threads);
+    const unsigned threads = pre::resolve_threads(opt.threads);
     MlsModel model;
     BuildStats& st = model.stats;
     st.points = positions.size();
@@ -524,7 +524,7 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
             frontier = std::move(next);
         }
         std::vector<std::vector<BNode>> local(frontier.size());
-        parallel_chunks(frontier.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        pre::parallel_chunks(frontier.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
             for (std::size_t f = begin; f < end; ++f) {
                 local[f].resize(1);
                 local[f][0].box = nodes[frontier[f].index].box;
@@ -572,7 +572,7 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
             if (nodes[i].axis < 0 && !nodes[i].refs.empty()) leaves.push_back(i);
         std::vector<ShrinkOutcome> outcomes(leaves.size());
         std::atomic<std::uint64_t> done{0};
-        parallel_chunks(leaves.size(), 64, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        pre::parallel_chunks(leaves.size(), 64, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
             for (std::size_t k = begin; k < end; ++k)
                 outcomes[k] = shrink_leaf(nodes[leaves[k]], splats, opt);
             const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);

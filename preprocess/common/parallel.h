@@ -1,6 +1,6 @@
-// PointRT preprocess: the fork-join loop prt-mls and the MLS batch tracer share: chunks of an index
-// range handed out through an atomic counter to std::threads; the first exception any worker throws
-// is rethrown on the calling thread once every worker stopped.
+// PointRT preprocess: a minimal fork-join helper over std::thread shared by the tools (prt-radii,
+// prt-octree, prt-cull, prt-mls, prt-iso). Work is handed out in chunks through an atomic counter
+// (dynamic scheduling); the first exception thrown by any worker is rethrown on the calling thread.
 #pragma once
 
 #include <algorithm>
@@ -11,17 +11,18 @@
 #include <thread>
 #include <vector>
 
-namespace prt::mls {
+namespace prt::pre {
 
-/// `requested` threads, or every hardware thread when 0.
+/// The number of worker threads to use: `requested`, or every hardware thread when 0.
 inline unsigned resolve_threads(unsigned requested) {
     if (requested > 0) return requested;
     const unsigned hw = std::thread::hardware_concurrency();
     return hw > 0 ? hw : 1;
 }
 
-/// Calls body(begin, end, worker) over chunks of [0, count) of at most `chunk` items from
-/// `threads` workers; worker 0 is the calling thread (the only one that may report progress).
+/// Calls `body(begin, end, worker)` on chunks of [0, count) of at most `chunk` items, from
+/// `threads` workers (worker 0 is the calling thread). Chunks are taken in increasing order.
+/// Rethrows the first exception any call threw, after every worker stopped.
 template <class Body>
 void parallel_chunks(std::size_t count, std::size_t chunk, unsigned threads, Body&& body) {
     chunk = std::max<std::size_t>(chunk, 1);
@@ -48,10 +49,11 @@ void parallel_chunks(std::size_t count, std::size_t chunk, unsigned threads, Bod
         }
     };
     std::vector<std::thread> pool;
+    pool.reserve(workers > 0 ? workers - 1 : 0);
     for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work, w);
     work(0);
     for (std::thread& t : pool) t.join();
     if (error) std::rethrow_exception(error);
 }
 
-}  // namespace prt::mls
+}  // namespace prt::pre
