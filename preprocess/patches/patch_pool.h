@@ -1,20 +1,13 @@
-// PointRT: the patch sections of a pool, validated, as the core's PatchView (host pointers into
-// the mapped file). Every cross-reference the traversal relies on is checked here, so a bad pool
-// gives a one-line error instead of a crash or an endless loop.
+// PointRT: the patch sections of a pool read back validated as the core's PatchView. The
+// validation lives with the renderer that depends on it (runtime/host, prt/runtime/surface_pools.h);
+// prt-patches and its tests use the same functions under these names.
 #pragma once
 
-#include "prt/core/patch.h"
-#include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace prt::patches {
 
-/// Whether the pool holds any of the patch sections.
-bool has_patches(const pool::PoolFile& pool);
-
-/// Validates patch_info, patch_control_points, patch_bvh and patch_subpatch_boxes (all present,
-/// counts agreeing, finite values, boxes not inverted, the BVH a proper depth-first tree with skip
-/// offsets over every patch exactly once, its depth within pool::k_max_patch_bvh_depth) and returns
-/// the view. Throws prt::Error "FILE: section NAME: what is wrong" otherwise.
-core::PatchView load_patch_view(const pool::PoolFile& pool);
+using rt::has_patches;
+using rt::load_patch_view;
 
 }  // namespace prt::patches

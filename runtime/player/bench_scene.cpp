@@ -57,8 +57,8 @@ std::shared_ptr<const pool::PoolFile> synthetic_room_pool(std::uint64_t n, std::
 rt::RenderScene bench_scene(const BenchSceneOptions& o, bool quiet) {
     rt::RenderScene rs;
     if (!o.pool.empty() || !o.scene.empty()) {
-        rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool)
-                             : rt::RenderScene::load(scene::load_scene(o.scene), o.pool);
+        rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool, o.load)
+                             : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, o.load);
     } else {
         scene::Scene sc;
         sc.materials.push_back(scene::Material{});

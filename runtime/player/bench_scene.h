@@ -21,6 +21,7 @@ struct BenchSceneOptions {
     std::uint64_t synthetic = 1000000;  ///< points of the synthetic room (no pool and no scene)
     std::uint32_t max_leaf = 32;        ///< the synthetic room's octree: splats per leaf before a split
     std::filesystem::path save_pool;    ///< also write the synthetic room's pool here
+    rt::LoadOptions load;               ///< surface choice (--surface, --iso-float)
     std::uint32_t width = 1024, height = 1024;
 };
 

@@ -52,7 +52,8 @@ nlohmann::json derived_kind(const rt::FrameStats& with, const rt::FrameStats& ba
             {"splat_tests_per_ray", per(with.splat_tests, base.splat_tests)}};
 }
 
-void run(const Options& o, const tool::CommonOptions& common) {
+void run(Options o, const tool::CommonOptions& common) {
+    o.scene.load = player::load_options(o.render);
     rt::RenderScene rs = player::bench_scene(o.scene, common.quiet);
     core::RenderParams base = rs.params();
     player::apply(o.render, base);

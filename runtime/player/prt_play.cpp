@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <string>
 
+#include "accumulate.h"
 #include "camera_path.h"
 #include "player_options.h"
 #include "prt/formats/scene.h"
@@ -79,8 +80,9 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         std::string why;
         if (!rt::can_write_image(o.screenshot, &why)) throw Error(why);
     }
-    rt::RenderScene rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool)
-                                         : rt::RenderScene::load(scene::load_scene(o.scene), o.pool);
+    const rt::LoadOptions load = player::load_options(o.render);
+    rt::RenderScene rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool, load)
+                                         : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, load);
     scene::Camera& cam = rs.scene().camera;
     if (o.width) cam.width = o.width;
     if (o.height) cam.height = o.height;
@@ -127,17 +129,25 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     const bool every_frame = out.find('%') != std::string::npos;
     rt::Image image;
     rt::FrameStats total;
+    // seed 002, 7: with a still camera, sampled frames (path tracing or spp > 1) accumulate: frame f
+    // draws new samples and the image is the running mean of all frames, written at the end.
+    const core::RenderParams base = rs.params();
+    const bool still = path.empty() && o.orbit == 0.0f;
+    const bool accumulate = still && !every_frame && (base.path_tracing != 0 || base.spp > 1);
+    player::Accumulator acc;
     tool::Progress progress("prt-play: rendering", o.frames, common.quiet || o.frames < 2);
     for (std::uint32_t f = 0; f < o.frames; ++f) {
         scene::Camera c =
             path.empty() ? player::orbit_camera(cam, f, o.orbit) : player::path_camera(cam, path, f);
         rt::FrameRequest req;
         req.camera = rs.camera(c);
-        req.params = rs.params();
+        req.params = base;
+        req.params.frame = f;
         req.width = c.width;
         req.height = c.height;
         const rt::FrameStats s = backend->render(req, image);
         total += s;
+        if (accumulate) acc.add(image, base);
         if (every_frame || f + 1 == o.frames) rt::write_image(frame_name(out, f), image, req.params.exposure);
         progress.update(f + 1);
     }
@@ -208,6 +218,7 @@ int main(int argc, char** argv) {
                 ->check(CLI::ExistingFile);
             prt::player::add_backend_options(app, o.backend);
             prt::player::add_render_options(app, o.render);
+            prt::player::add_sampling_options(app, o.render);
         },
         [&](const prt::tool::CommonOptions& common) { run(o, common); });
 }

@@ -1,11 +1,14 @@
 #include "window.h"
 
+#include "accumulate.h"
+
 #define GLFW_INCLUDE_GLEXT  // GL 1.5+ buffer-object types and enums (GL_PIXEL_UNPACK_BUFFER)
 #include <GLFW/glfw3.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,8 +65,10 @@ public:
     FrameDisplay(const FrameDisplay&) = delete;
     FrameDisplay& operator=(const FrameDisplay&) = delete;
 
-    /// Renders `req` (fw x fh) with `backend` and draws it over the whole framebuffer.
-    rt::FrameStats render(rt::Backend& backend, rt::FrameRequest req, rt::Image& image, int fw, int fh) {
+    /// Renders `req` (fw x fh) with `backend` and draws it over the whole framebuffer; with `acc`,
+    /// the frame joins the running mean first (sampled frames: host memory, no interop).
+    rt::FrameStats render(rt::Backend& backend, rt::FrameRequest req, rt::Image& image, int fw, int fh,
+                          Accumulator* acc = nullptr) {
         if (fw != m_tex_w || fh != m_tex_h) {  // (re)allocate the texture for the framebuffer size
             glBindTexture(GL_TEXTURE_2D, m_texture);
             glTexImage2D(GL_TEXTURE_2D, 0, GL_RGBA8, fw, fh, 0, GL_RGBA, GL_UNSIGNED_BYTE, nullptr);
@@ -74,12 +79,13 @@ public:
         rt::FrameStats stats;
         bool shown = false;
 #ifdef PRT_HAVE_CUDA_GL
-        if (backend.name() == "cuda" && m_interop_allowed && !m_interop_failed) {
+        if (acc == nullptr && backend.name() == "cuda" && m_interop_allowed && !m_interop_failed) {
             shown = render_interop(backend, req, image, fw, fh, stats);
         }
 #endif
         if (!shown) {
             stats = backend.render(req, image);
+            if (acc != nullptr) acc->add(image, req.params);
             glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, fw, fh, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba8.data());
         }
         glViewport(0, 0, fw, fh);
@@ -354,6 +360,8 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
 
     FrameDisplay display(options.quiet, options.interop);
     rt::Image image;
+    Accumulator acc;  // sampled frames (path tracing, spp > 1) converge while the view stays still
+    core::PinholeCamera last_camera{};
     double smoothed_ms = 0;
     std::uint32_t shown = 0;
     const std::uint32_t frames = options.screenshot.empty() ? options.frames : std::max(options.frames, 1u);
@@ -363,6 +371,7 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
             ctx.switch_backend = false;
             backend = rt::make_backend(ctx.backends[ctx.backend_index], backend_options(options.backend));
             backend->set_scene(rs.view());
+            acc.reset();
         }
         int fw = 0, fh = 0;
         glfwGetFramebufferSize(window, &fw, &fh);
@@ -376,7 +385,11 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
         req.params = rs.params();
         req.width = cam.width;
         req.height = cam.height;
-        const rt::FrameStats s = display.render(*backend, req, image, fw, fh);
+        const bool sampled = req.params.path_tracing != 0 || req.params.spp > 1;
+        if (std::memcmp(&req.camera, &last_camera, sizeof(last_camera)) != 0) acc.reset();
+        last_camera = req.camera;
+        req.params.frame = acc.frames();
+        const rt::FrameStats s = display.render(*backend, req, image, fw, fh, sampled ? &acc : nullptr);
         ++shown;
         const bool last = frames > 0 && shown >= frames;
         if (last && !options.screenshot.empty()) {

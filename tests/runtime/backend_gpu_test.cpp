@@ -13,6 +13,7 @@
 #include "prt/core/splat.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
+#include "surface_fixtures.h"
 #include "test_scene.h"
 
 namespace prt::test {
@@ -172,6 +173,78 @@ TEST(GpuLeafCulling, PassingLeavesByTheirBoundsKeepsTheImage) {
         EXPECT_GT(on.culled, 0u);
         EXPECT_LT(on.splat_tests, off.splat_tests);
         EXPECT_NEAR(double(on.splat_tests), double(cpu_on.splat_tests), 0.01 * double(cpu_on.splat_tests));
+    }
+}
+
+TEST(GpuSurfaces, IsoMlsAndPatchesMatchTheCpu) {
+    // The other surfaces through the same megakernel: a sphere as ISO and as MLS over a splat floor,
+    // with shadows and a reflective floor, and a mirror patch beside the sphere.
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
+    TempDir dir("prt-gpu-surfaces");
+    const auto sphere = sphere_pool_all_surfaces(dir.path, 40000);
+    const auto bpt = flat_patch_file(dir.path, -1.5, -1.5, 0, 3);
+    const auto patch_pool = dir.path / "mirror.pool";
+    must_run("prt-patches", bpt.string() + " -o " + patch_pool.string() + " -q", dir.path);
+    ASSERT_FALSE(HasFatalFailure());
+    auto cpu = rt::make_backend("cpu");
+    auto gpu = rt::make_backend("cuda");
+    for (const char* surface : {"iso", "mls", "splats"}) {
+        SCOPED_TRACE(std::string(surface) + " sphere and a mirror patch on " + gpu->device());
+        scene::Scene sc;
+        scene::Material diffuse, mirror;
+        mirror.reflectivity = 0.7f;
+        mirror.diffuse_reflectance = 0.3f;
+        sc.materials = {diffuse, mirror};
+        scene::Model ball, plate;
+        ball.pool = sphere;
+        ball.surface = std::string(surface) == "iso"   ? scene::SurfaceKind::iso
+                       : std::string(surface) == "mls" ? scene::SurfaceKind::mls
+                                                       : scene::SurfaceKind::splats;
+        plate.pool = patch_pool;
+        plate.surface = scene::SurfaceKind::patches;
+        plate.material = 1;
+        plate.transform.rotate_degrees = {-90, 0, 0};  // the patch's +z normal turns to +y
+        plate.transform.translate = {0, -1, 0};
+        sc.models = {ball, plate};
+        sc.camera.position = {0.5, 1.5, 4};
+        sc.camera.look_at = {0, -0.3, 0};
+        scene::PointLight pl;
+        pl.position = {1.5, 4, 1};
+        sc.point_lights.push_back(pl);
+        const rt::RenderScene rs = rt::RenderScene::load(sc);
+        rt::FrameStats scpu, sgpu;
+        const rt::Image ref = render(*cpu, rs, 160, 120, &scpu);
+        const rt::Image img = render(*gpu, rs, 160, 120, &sgpu);
+        EXPECT_GT(scpu.secondary, 1000u);  // the mirror is in view
+        compare(ref, img, scpu, sgpu);
+    }
+}
+
+TEST(GpuMemory, AScenePastFreeGpuMemoryFailsWithTheFigures) {
+    // Issue 10: nothing is allocated; the error names the bytes needed and free and what to do.
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
+    std::vector<pool::Splat> one(1);
+    core::ModelView mv;
+    mv.octree.splats = one.data();
+    mv.octree.splat_count = 0xfffffff0u;  // 137 GB of splats claimed: more than any GPU has
+    core::Material mat;
+    core::SceneView s;
+    s.models = &mv;
+    s.model_count = 1;
+    s.materials = &mat;
+    s.material_count = 1;
+    auto gpu = rt::make_backend("cuda");
+    try {
+        gpu->set_scene(s);
+        FAIL() << "expected an error";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("needs 131072 MiB"), std::string::npos) << what;
+        EXPECT_NE(what.find("free"), std::string::npos) << what;
+        EXPECT_NE(what.find("prt-iso --max-level"), std::string::npos) << what;
+        EXPECT_EQ(what.find('\n'), std::string::npos) << what;
     }
 }
 

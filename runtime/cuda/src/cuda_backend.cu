@@ -13,14 +13,13 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
-#include <map>
-#include <thread>
 #include <vector>
 
 #include "cuda_check.h"
 #include "device_buffer.h"
 #include "prt/core/render.h"
 #include "prt/cuda/cuda_backend.h"
+#include "prt/cuda/device_scene.h"
 
 namespace prt::cuda {
 
@@ -217,68 +216,6 @@ std::string error_line(cudaError_t e) {
     return std::string(cudaGetErrorName(e)) + ": " + cudaGetErrorString(e);
 }
 
-/// Copies host arrays to the device through two pinned staging buffers with asynchronous copies,
-/// so reading the (memory-mapped) pool overlaps the transfer.
-class Uploader {
-public:
-    explicit Uploader(cudaStream_t stream) : m_stream(stream) {
-        for (int i = 0; i < 2; ++i) {
-            m_staging[i] = PinnedBuffer(k_chunk);
-            PRT_CUDA_CHECK(cudaEventCreateWithFlags(&m_done[i], cudaEventDisableTiming));
-        }
-    }
-    ~Uploader() {
-        cudaStreamSynchronize(m_stream);
-        for (cudaEvent_t e : m_done) cudaEventDestroy(e);
-    }
-    Uploader(const Uploader&) = delete;
-    Uploader& operator=(const Uploader&) = delete;
-
-    void copy(void* device, const void* host, std::size_t bytes) {
-        const auto* src = static_cast<const unsigned char*>(host);
-        auto* dst = static_cast<unsigned char*>(device);
-        for (std::size_t off = 0; off < bytes; off += k_chunk) {
-            const std::size_t n = std::min(k_chunk, bytes - off);
-            PRT_CUDA_CHECK(cudaEventSynchronize(m_done[m_next]));  // staging buffer free again
-            parallel_copy(static_cast<unsigned char*>(m_staging[m_next].data()), src + off, n);
-            PRT_CUDA_CHECK(
-                cudaMemcpyAsync(dst + off, m_staging[m_next].data(), n, cudaMemcpyHostToDevice, m_stream));
-            PRT_CUDA_CHECK(cudaEventRecord(m_done[m_next], m_stream));
-            m_next ^= 1;
-        }
-        m_bytes += bytes;
-    }
-    void finish() { PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream)); }
-
-    /// Copies into pinned memory from several threads: reading a memory-mapped pool is bound by
-    /// page faults, which parallelise.
-    static void parallel_copy(unsigned char* dst, const unsigned char* src, std::size_t n) {
-        const unsigned threads = std::min(8u, std::max(1u, std::thread::hardware_concurrency()));
-        if (n < (4u << 20) || threads == 1) {
-            std::memcpy(dst, src, n);
-            return;
-        }
-        const std::size_t slice = (n + threads - 1) / threads;
-        std::vector<std::thread> workers;
-        for (unsigned t = 1; t < threads; ++t) {
-            const std::size_t b = t * slice;
-            if (b >= n) break;
-            workers.emplace_back([=] { std::memcpy(dst + b, src + b, std::min(slice, n - b)); });
-        }
-        std::memcpy(dst, src, std::min(slice, n));
-        for (std::thread& w : workers) w.join();
-    }
-    std::uint64_t bytes() const { return m_bytes; }
-
-private:
-    static constexpr std::size_t k_chunk = 32u << 20;
-    cudaStream_t m_stream;
-    PinnedBuffer m_staging[2];
-    cudaEvent_t m_done[2] = {nullptr, nullptr};
-    int m_next = 0;
-    std::uint64_t m_bytes = 0;
-};
-
 class CudaBackend final : public rt::Backend {
 public:
     explicit CudaBackend(const rt::BackendOptions& options) : m_options(options) {
@@ -305,55 +242,9 @@ public:
     std::string device() const override { return m_device; }
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
-        const auto start = std::chrono::steady_clock::now();
-        m_arrays.clear();
-        std::map<const void*, void*> uploaded;  // the same pool array used by several models: once
-        Uploader up(m_stream);
-        auto put = [&](const void* src, std::size_t bytes) -> void* {
-            if (src == nullptr || bytes == 0) return nullptr;
-            auto it = uploaded.find(src);
-            if (it != uploaded.end()) return it->second;
-            DeviceBuffer<unsigned char> buf(bytes);
-            up.copy(buf.data(), src, bytes);
-            void* d = buf.data();
-            m_arrays.push_back(std::move(buf));
-            uploaded[src] = d;
-            return d;
-        };
-        std::vector<core::ModelView> models(host.models, host.models + host.model_count);
-        for (core::ModelView& m : models) {
-            core::OctreeView& o = m.octree;
-            o.nodes = static_cast<const std::uint32_t*>(put(o.nodes, std::size_t{o.node_count} * 4));
-            o.leaf_info =
-                static_cast<const std::uint32_t*>(put(o.leaf_info, (std::size_t{o.filled_leaves} + 1) * 4));
-            o.splats = static_cast<const pool::Splat*>(
-                put(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat)));
-            if (o.leaf_bounds)
-                o.leaf_bounds = static_cast<const core::LeafBounds*>(
-                    put(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds)));
-            if (m.colors)
-                m.colors = static_cast<const pool::Rgba8*>(put(m.colors, std::size_t{m.point_count} * 4));
-            if (m.material_ids)
-                m.material_ids =
-                    static_cast<const std::uint32_t*>(put(m.material_ids, std::size_t{m.point_count} * 4));
-        }
-        m_scene = host;
-        m_scene.models =
-            static_cast<const core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
-        m_scene.materials = static_cast<const core::Material*>(
-            put(host.materials, host.material_count * sizeof(core::Material)));
-        m_scene.lights = static_cast<const core::PointLight*>(
-            put(host.lights, host.light_count * sizeof(core::PointLight)));
-        if (host.environment.image) {
-            m_scene.environment.image = static_cast<const float*>(
-                put(host.environment.image,
-                    std::size_t{host.environment.width} * host.environment.height * 3 * sizeof(float)));
-        }
-        up.finish();  // `models` (host) must outlive the copies
-        rt::UploadStats s;
-        s.bytes = up.bytes();
-        s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        return s;
+        const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
+        m_scene = m_device_scene.view();
+        return stats;
     }
 
     rt::FrameStats render(const rt::FrameRequest& req, rt::Image& image) override {
@@ -372,7 +263,8 @@ public:
         scene.params = req.params;
         PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
         PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
-        if (m_options.cuda_wavefront) {
+        // Sampled frames (spp > 1, path tracing: seed 002, 7) run in the megakernel only.
+        if (m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0) {
             render_wavefront(scene, req, w, h, y0, y1);
         } else {
             render_megakernel(scene, req, w, h, y0, y1);
@@ -501,8 +393,8 @@ private:
     std::string m_device;
     cudaStream_t m_stream = nullptr;
     cudaEvent_t m_start = nullptr, m_stop = nullptr;
-    core::SceneView m_scene;
-    std::vector<DeviceBuffer<unsigned char>> m_arrays;
+    DeviceScene m_device_scene;
+    core::SceneView m_scene;  ///< m_device_scene's view
     DeviceBuffer<unsigned long long> m_counters;
     DeviceBuffer<float> m_rgb;
     DeviceBuffer<std::uint32_t> m_rgba;

@@ -6,6 +6,7 @@
 
 #include "prt/error.h"
 #include "prt/runtime/leaf_bounds.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace prt::rt {
 
@@ -55,6 +56,86 @@ Placement placement(const scene::Transform& t, const pool::ModelInfo& info) {
     return p;
 }
 
+const char* surface_name(scene::SurfaceKind k) {
+    switch (k) {
+    case scene::SurfaceKind::iso: return "iso";
+    case scene::SurfaceKind::mls: return "mls";
+    case scene::SurfaceKind::patches: return "patches";
+    case scene::SurfaceKind::splats: break;
+    }
+    return "splats";
+}
+
+bool has_splats(const pool::PoolFile& pf) {
+    return pf.has(pool::SectionType::octree_info) || pf.has(pool::SectionType::octree_nodes) ||
+           pf.has(pool::SectionType::splats);
+}
+
+/// The surface a model is traced as: the one asked for, or for "auto" the first the pool holds of
+/// splats, patches, ISO, MLS. A scene's default ("splats") on a pool without splat sections but with
+/// another surface takes that one with a warning (a patch pool named without "surface").
+core::SurfaceKind choose_surface(const pool::PoolFile& pf, const std::string& asked, const std::string& model,
+                                 std::vector<std::string>& warnings) {
+    if (asked == "iso") return core::SurfaceKind::iso;
+    if (asked == "mls") return core::SurfaceKind::mls;
+    if (asked == "patches") return core::SurfaceKind::patches;
+    if (asked == "splats" && has_splats(pf)) return core::SurfaceKind::splats;
+    core::SurfaceKind k = core::SurfaceKind::splats;
+    const char* name = "splats";
+    if (has_splats(pf)) {
+        k = core::SurfaceKind::splats;
+    } else if (has_patches(pf)) {
+        k = core::SurfaceKind::patches;
+        name = "patches";
+    } else if (has_iso(pf)) {
+        k = core::SurfaceKind::iso;
+        name = "iso";
+    } else if (has_mls(pf)) {
+        k = core::SurfaceKind::mls;
+        name = "mls";
+    } else {
+        pf.fail(nullptr, "no surface to render: no octree (prt-octree), ISO (prt-iso), MLS (prt-mls) or patch "
+                         "(prt-patches) sections");
+    }
+    if (asked == "splats")
+        warnings.push_back("model '" + model + "': the pool has no splat octree: rendering its " + name +
+                           " surface (set models[].surface)");
+    return k;
+}
+
+/// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds.
+void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
+    const char* who = "prt-play (build the octree with prt-octree)";
+    const auto oinfo = pf.require<pool::OctreeInfo>(pool::SectionType::octree_info, who);
+    const auto nodes = pf.require<std::uint32_t>(pool::SectionType::octree_nodes, who);
+    const auto leaf_info = pf.require<std::uint32_t>(pool::SectionType::leaf_info, who);
+    const auto splats = pf.require<pool::Splat>(pool::SectionType::splats, who);
+    if (oinfo.size() != 1) pf.fail(pf.find(pool::SectionType::octree_info), "expected exactly one element");
+    const pool::OctreeInfo& oi = oinfo[0];
+    if (nodes.empty()) pf.fail(pf.find(pool::SectionType::octree_nodes), "empty node pool");
+    if (leaf_info.empty())
+        pf.fail(pf.find(pool::SectionType::leaf_info), "empty (needs filled leaves + 1 entries)");
+    if (nodes.size() > 0xffffffffull || splats.size() > 0xffffffffull)
+        pf.fail(nullptr, "more than 2^32 - 1 nodes or splats: not supported by the renderer");
+    if (!(oi.root_size > 0.0f) || !std::isfinite(oi.root_size))
+        pf.fail(pf.find(pool::SectionType::octree_info), "root_size must be finite and positive");
+    core::OctreeView& o = lm.view.octree;
+    o.nodes = nodes.data();
+    o.node_count = static_cast<std::uint32_t>(nodes.size());
+    o.leaf_info = leaf_info.data();
+    o.filled_leaves = static_cast<std::uint32_t>(leaf_info.size() - 1);
+    o.splats = splats.data();
+    o.splat_count = static_cast<std::uint32_t>(splats.size());
+    o.root_min = {oi.root_min[0], oi.root_min[1], oi.root_min[2]};
+    o.root_size = oi.root_size;
+    o.inv_root_size = 1.0f / oi.root_size;
+    o.flags = oi.flags;
+    lm.leaf_bounds = build_leaf_bounds(o);
+    o.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves of LoadedModel
+    lm.bytes = nodes.size_bytes() + leaf_info.size_bytes() + splats.size_bytes() +
+               lm.leaf_bounds.size() * sizeof(core::LeafBounds);
+}
+
 }  // namespace
 
 std::array<DVec3, 3> rotation_matrix(const DVec3& degrees) {
@@ -90,12 +171,17 @@ core::RenderParams to_params(const scene::RenderSettings& s, std::vector<std::st
     p.refractions = s.refractions;
     p.exposure = s.exposure;
     p.gamma = s.gamma;
+    p.path_tracing = s.path_tracing ? 1u : 0u;
+    p.spp = std::max<std::uint32_t>(s.spp, 1);
     return p;
 }
 
-RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::path& pool_override) {
+RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::path& pool_override,
+                              const LoadOptions& options) {
     RenderScene r;
     r.m_scene = sc;
+    r.m_surface_override = options.surface;
+    r.m_iso_float = options.iso_float;
     std::vector<std::shared_ptr<const pool::PoolFile>> pools;
     if (!pool_override.empty()) {
         scene::Model m;
@@ -105,8 +191,11 @@ RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::pat
         m.source.clear();
         r.m_scene.models = {m};
     }
-    for (const scene::Model& m : r.m_scene.models) {
-        if (m.pool.empty()) {
+    for (scene::Model& m : r.m_scene.models) {
+        // SCENE.md: a model given only by its source has its pool where prt-bake writes it.
+        if (m.pool.empty() && !m.source.empty() && !sc.file.empty())
+            m.pool = sc.file.parent_path() / "pools" / (m.source.stem().string() + ".pool");
+        if (m.pool.empty() || (!m.source.empty() && !std::filesystem::exists(m.pool))) {
             throw Error((sc.file.empty() ? std::string("scene") : sc.file.string()) + ": model '" + m.name +
                         "' has no pool (run prt-bake to build it from " + m.source.string() + ")");
         }
@@ -117,16 +206,20 @@ RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::pat
 }
 
 RenderScene RenderScene::from_pools(const scene::Scene& sc,
-                                    std::vector<std::shared_ptr<const pool::PoolFile>> pools) {
+                                    std::vector<std::shared_ptr<const pool::PoolFile>> pools,
+                                    const LoadOptions& options) {
     RenderScene r;
     r.m_scene = sc;
+    r.m_surface_override = options.surface;
+    r.m_iso_float = options.iso_float;
     while (r.m_scene.models.size() < pools.size()) r.m_scene.models.push_back(scene::Model{});
     r.m_scene.models.resize(pools.size());
     r.build(std::move(pools));
     return r;
 }
 
-RenderScene RenderScene::from_pool(const std::filesystem::path& path) {
+RenderScene RenderScene::from_pool(const std::filesystem::path& path, LoadOptions options) {
+    if (options.surface.empty()) options.surface = "auto";
     scene::Scene sc;
     sc.materials.push_back(scene::Material{});
     sc.materials.back().name = "default";
@@ -134,7 +227,7 @@ RenderScene RenderScene::from_pool(const std::filesystem::path& path) {
     m.name = path.stem().string();
     m.pool = path;
     sc.models.push_back(m);
-    RenderScene r = load(sc);
+    RenderScene r = load(sc, {}, options);
     // Default view: frame the model's bounds, one light above and to the right of the camera.
     const DVec3 lo = r.m_world_min, hi = r.m_world_max;
     r.m_scene.camera = framing_camera(lo, hi, r.m_scene.camera.width, r.m_scene.camera.height);
@@ -175,10 +268,6 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         m_scene.materials.back().name = "default";
     }
     m_params = to_params(m_scene.render, &m_warnings);
-    if (m_scene.render.path_tracing)
-        m_warnings.push_back("render.path_tracing is not implemented by prt-play yet: ray tracing instead");
-    if (m_scene.render.spp > 1)
-        m_warnings.push_back("render.spp > 1 is not implemented by prt-play yet: 1 sample per pixel");
     m_models.clear();
     constexpr double k_inf = std::numeric_limits<double>::infinity();
     m_world_min = {k_inf, k_inf, k_inf};
@@ -187,48 +276,41 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
     for (std::size_t i = 0; i < pools.size(); ++i) {
         const pool::PoolFile& pf = *pools[i];
         const scene::Model& sm = m_scene.models[i];
-        const char* who = "prt-play (build the octree with prt-octree)";
         const pool::ModelInfo& info = pf.model_info();
-        const auto oinfo = pf.require<pool::OctreeInfo>(pool::SectionType::octree_info, who);
-        const auto nodes = pf.require<std::uint32_t>(pool::SectionType::octree_nodes, who);
-        const auto leaf_info = pf.require<std::uint32_t>(pool::SectionType::leaf_info, who);
-        const auto splats = pf.require<pool::Splat>(pool::SectionType::splats, who);
         const auto colors = pf.array<pool::Rgba8>(pool::SectionType::colors);
         const auto material_ids = pf.array<std::uint32_t>(pool::SectionType::material_ids);
-        if (oinfo.size() != 1)
-            pf.fail(pf.find(pool::SectionType::octree_info), "expected exactly one element");
-        const pool::OctreeInfo& oi = oinfo[0];
-        if (nodes.empty()) pf.fail(pf.find(pool::SectionType::octree_nodes), "empty node pool");
-        if (leaf_info.empty())
-            pf.fail(pf.find(pool::SectionType::leaf_info), "empty (needs filled leaves + 1 entries)");
-        if (nodes.size() > 0xffffffffull || splats.size() > 0xffffffffull ||
-            info.point_count > 0xffffffffull) {
-            pf.fail(nullptr, "more than 2^32 - 1 nodes, splats or points: not supported by the renderer");
-        }
-        if (!(oi.root_size > 0.0f) || !std::isfinite(oi.root_size)) {
-            pf.fail(pf.find(pool::SectionType::octree_info), "root_size must be finite and positive");
-        }
-        if (sm.surface != scene::SurfaceKind::splats) {
-            m_warnings.push_back(
-                "model '" + sm.name +
-                "': only the splat surface is implemented by prt-play yet: rendering splats");
-        }
+        if (info.point_count > 0xffffffffull)
+            pf.fail(nullptr, "more than 2^32 - 1 points: not supported by the renderer");
         LoadedModel lm;
         lm.name = sm.name.empty() ? pf.label() : sm.name;
         lm.pool = pools[i];
         core::ModelView& v = lm.view;
-        v.octree.nodes = nodes.data();
-        v.octree.node_count = static_cast<std::uint32_t>(nodes.size());
-        v.octree.leaf_info = leaf_info.data();
-        v.octree.filled_leaves = static_cast<std::uint32_t>(leaf_info.size() - 1);
-        v.octree.splats = splats.data();
-        v.octree.splat_count = static_cast<std::uint32_t>(splats.size());
-        v.octree.root_min = {oi.root_min[0], oi.root_min[1], oi.root_min[2]};
-        v.octree.root_size = oi.root_size;
-        v.octree.inv_root_size = 1.0f / oi.root_size;
-        v.octree.flags = oi.flags;
-        lm.leaf_bounds = build_leaf_bounds(v.octree);
-        v.octree.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves below
+        v.surface = choose_surface(pf, m_surface_override.empty() ? surface_name(sm.surface) : m_surface_override,
+                                   lm.name, m_warnings);
+        switch (v.surface) {
+        case core::SurfaceKind::splats: load_splats(pf, lm); break;
+        case core::SurfaceKind::iso: {
+            v.iso = load_iso_view(pf, !m_iso_float);
+            if (v.iso.use_q8)  // upload only the leaves traced
+                v.iso.leaves_f32 = nullptr;
+            else
+                v.iso.leaves_q8 = nullptr;
+            const std::size_t leaf = v.iso.use_q8 ? sizeof(pool::IsoLeafQ8) : sizeof(pool::IsoLeafF32);
+            lm.bytes = std::size_t{v.iso.tree.node_count} * 4 + std::size_t{v.iso.leaf_count} * leaf;
+            break;
+        }
+        case core::SurfaceKind::mls:
+            v.mls = load_mls_view(pf);
+            lm.bytes = std::size_t{v.mls.node_count} * sizeof(pool::MlsNode) + std::size_t{v.mls.ref_count} * 4 +
+                       std::size_t{v.mls.splat_count} * sizeof(pool::MlsSplat);
+            break;
+        case core::SurfaceKind::patches:
+            v.patches = load_patch_view(pf);
+            lm.bytes = std::size_t{v.patches.patch_count} * sizeof(pool::PatchControlNet) +
+                       std::size_t{v.patches.bvh_node_count} * sizeof(pool::PatchBvhNode) +
+                       std::size_t{v.patches.patch_count} * v.patches.subpatch_nodes * sizeof(pool::SubpatchNode);
+            break;
+        }
         v.point_count = static_cast<std::uint32_t>(info.point_count);
         if (!colors.empty()) {
             if (colors.size() == info.point_count)
@@ -246,9 +328,10 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         }
         v.material =
             std::min<std::uint32_t>(sm.material, static_cast<std::uint32_t>(m_scene.materials.size() - 1));
-        lm.bytes = nodes.size_bytes() + leaf_info.size_bytes() + splats.size_bytes() +
-                   (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0) +
-                   lm.leaf_bounds.size() * sizeof(core::LeafBounds);
+        // ISO leaves carry their own colors; patches have none.
+        const bool per_point = v.surface == core::SurfaceKind::splats || v.surface == core::SurfaceKind::mls;
+        if (!per_point) v.colors = nullptr;
+        lm.bytes += (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0);
 
         const Placement pl = placement(sm.transform, info);
         const DVec3 world_origin = pl.world({0, 0, 0});
@@ -299,16 +382,13 @@ void RenderScene::convert_materials() {
         m.transmissivity = sm.transmissivity;
         m.diffuse_reflectance = sm.diffuse_reflectance;
         m.use_point_colors = sm.use_point_colors ? 1u : 0u;
-        if (!sm.texture.empty()) {
-            m_warnings.push_back("material '" + sm.name +
-                                 "': textures are not implemented by prt-play yet: ignored");
-        }
         m_materials.push_back(m);
     }
 }
 
 void RenderScene::update_lights() {
     m_lights.clear();
+    m_area_lights.clear();
     for (const scene::PointLight& l : m_scene.point_lights) {
         core::PointLight p;
         p.position = to_f(sub(l.position, m_origin));
@@ -316,6 +396,7 @@ void RenderScene::update_lights() {
         p.casts_shadows = l.casts_shadows ? 1u : 0u;
         m_lights.push_back(p);
     }
+    m_point_light_count = static_cast<std::uint32_t>(m_lights.size());
     // SCENE.md: an area light is samples x samples point lights on a regular grid, each carrying
     // intensity / samples^2 (seed 002, 5.6).
     for (const scene::AreaLight& a : m_scene.area_lights) {
@@ -332,6 +413,13 @@ void RenderScene::update_lights() {
                 m_lights.push_back(p);
             }
         }
+        core::AreaLight al;  // the path tracer samples the parallelogram itself (path.h)
+        al.corner = to_f(sub(a.corner, m_origin));
+        al.edge_u = to_f(a.edge_u);
+        al.edge_v = to_f(a.edge_v);
+        al.color = to_f(a.color) * a.intensity;
+        al.casts_shadows = a.casts_shadows ? 1u : 0u;
+        m_area_lights.push_back(al);
     }
 }
 
@@ -348,6 +436,9 @@ core::SceneView RenderScene::view() const {
     s.material_count = static_cast<std::uint32_t>(m_materials.size());
     s.lights = m_lights.data();
     s.light_count = static_cast<std::uint32_t>(m_lights.size());
+    s.point_light_count = m_point_light_count;
+    s.area_lights = m_area_lights.data();
+    s.area_light_count = static_cast<std::uint32_t>(m_area_lights.size());
     s.environment.color = to_f(m_scene.environment.color);
     s.environment.intensity = m_scene.environment.intensity;
     if (!m_environment.rgb.empty()) {

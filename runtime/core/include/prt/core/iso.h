@@ -11,7 +11,7 @@
 //     if (trace_iso(view, o, d, t_max, inside, params, hit, stats)) ... hit.t, hit.normal, hit.color
 //     bool shadowed = iso_occluded(view, o, d, t_max, inside, params, stats);
 //     trace_iso(view, local_ray, t_max, hit)   // the same with default IsoParams
-// Host setup: prt::iso::load_iso_view(pool) (preprocess/iso/iso_pool.h) validates the sections.
+// Host setup: prt::rt::load_iso_view(pool) (prt/runtime/surface_pools.h) validates the sections.
 //
 // The walk (thesis 2.2) is the splat core's (prt/core/octree.h): the ISO's node words use the
 // same encoding, so walk_begin/walk_next step through the leaves front to back with exact
@@ -67,7 +67,7 @@
 namespace prt::core {
 
 /// The ISO sections of one pool as the core reads them (built and validated on the host by
-/// prt::iso::load_iso_view; the pointers may be device pointers to the same bytes).
+/// prt::rt::load_iso_view; the pointers may be device pointers to the same bytes).
 struct IsoView {
     /// The node words and the root cube (walk_begin / walk_next read only nodes, node_count,
     /// root_min, root_size, inv_root_size; leaf_info and splats stay null).

@@ -12,7 +12,7 @@
 //     if (trace_mls(view, o, d, t_max, inside, params, hit, stats)) ... hit.t, hit.position, hit.normal
 //     bool shadowed = mls_occluded(view, o, d, t_max, inside, params, stats);
 //     Vec3 srgb = mls_blend_color(view, colors, hit);   // optional: weighted point colors at the hit
-// Host setup: prt::mls::load_mls_view(pool) (preprocess/mls/mls_pool.h) validates the sections.
+// Host setup: prt::rt::load_mls_view(pool) (prt/runtime/surface_pools.h) validates the sections.
 // Host code calling these in hot loops should build with -fno-math-errno: the four sample lanes
 // of a cell (mls_sums_lanes) then vectorize with GCC (measured 1.45x fewer cycles per ray).
 //
@@ -33,7 +33,7 @@
 namespace prt::core {
 
 /// The MLS sections of one pool as the core reads them (built and validated on the host by
-/// prt::mls::load_mls_view; the pointers may be device pointers to the same bytes).
+/// prt::rt::load_mls_view; the pointers may be device pointers to the same bytes).
 struct MlsView {
     const pool::MlsNode* nodes = nullptr;    ///< node_count nodes, node 0 the root
     const std::uint32_t* refs = nullptr;     ///< ref_count splat indices, leaf after leaf

@@ -28,7 +28,7 @@
 namespace prt::core {
 
 /// The patch sections of one pool as the core reads them (built and validated on the host by
-/// prt::patches::load_patch_view; the pointers may be device pointers to the same bytes).
+/// prt::rt::load_patch_view; the pointers may be device pointers to the same bytes).
 struct PatchView {
     const pool::PatchControlNet* nets = nullptr;  ///< patch_count nets, local frame
     const pool::PatchBvhNode* bvh = nullptr;      ///< bvh_node_count nodes, depth first with skips

@@ -24,7 +24,17 @@ struct Ray {
     Vec3 dir;
     float t_max;          ///< hits at t >= t_max are ignored (the light's distance for shadow rays)
     std::uint32_t flags;  ///< RayFlags
+    /// The surface point a secondary or shadow ray leaves: model index (k_no_model for primary
+    /// rays), primitive and its (u, v). Only surfaces whose faces carry no orientation (patch pools
+    /// not marked oriented) need it: there the seamless flag cannot tell the start point from a
+    /// real hit, so roots within a tiny parameter distance of it are skipped (seed 002, 5.6).
+    std::uint32_t from_model = 0xffffffffu;
+    std::uint32_t from_prim = 0;
+    float from_u = 0.0f, from_v = 0.0f;
 };
+
+/// Ray::from_model of rays that leave no surface.
+inline constexpr std::uint32_t k_no_model = 0xffffffffu;
 
 PRT_HD PRT_INLINE Vec3 ray_at(const Ray& r, float t) {
     return r.origin + r.dir * t;

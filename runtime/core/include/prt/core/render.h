@@ -10,7 +10,10 @@
 #include <cstdint>
 
 #include "prt/core/camera.h"
+#include "prt/core/iso.h"
 #include "prt/core/math.h"
+#include "prt/core/mls.h"
+#include "prt/core/patch.h"
 #include "prt/core/ray.h"
 #include "prt/core/scene_view.h"
 #include "prt/core/shading.h"
@@ -45,6 +48,9 @@ struct SurfaceHit {
     Vec3 normal;      ///< unit, outward (as stored); the ray's flag says which face was hit
     Vec3 base_color;  ///< linear; (1,1,1) when the material ignores point colors
     std::uint32_t material;
+    std::uint32_t model = 0;  ///< index into SceneView::models
+    std::uint32_t prim = 0;   ///< patch index (patches), else 0
+    float u = 0.0f, v = 0.0f;  ///< patch parameters (patches), else 0
 };
 
 /// The ray in a model's local frame (t is unchanged: d is scaled, not normalized).
@@ -53,21 +59,123 @@ PRT_HD PRT_INLINE void to_model_frame(const ModelView& m, const Ray& r, Vec3& o,
     d = mul_transpose(m.rotation, r.dir) * m.inv_scale;
 }
 
-/// Closest hit over all models (thesis 2.2 traversal + 3.3 blending), t in [0, r.t_max).
+/// The nearest hit on one model, in its local frame, whatever its surface.
+struct ModelHit {
+    float t = 0.0f;
+    Vec3 normal{0, 0, 1};  ///< local frame, unit, outward
+    Vec3 color{1, 1, 1};   ///< display-encoded (sRGB) point color; 1 without colors
+    std::uint32_t point = 0xffffffffu;  ///< source point (per-point material ids), or none
+    std::uint32_t prim = 0;
+    float u = 0.0f, v = 0.0f;
+};
+
+/// Patch settings for a ray: the seamless rule (thesis 3.6) on oriented pools; on unoriented ones
+/// both faces count and a ray leaving a patch of this model skips its own start point.
+PRT_HD PRT_INLINE PatchTraceParams patch_params_for(const SceneView& s, const ModelView& mv, std::uint32_t m,
+                                                    const Ray& r) {
+    PatchTraceParams p = s.params.patch;
+    if ((mv.patches.flags & pool::k_patch_oriented) != 0) {
+        p.faces = k_patch_faces_by_ray;
+    } else {
+        p.faces = k_patch_faces_both;
+        if (r.from_model == m) {
+            p.skip_patch = r.from_prim;
+            p.skip_u = r.from_u;
+            p.skip_v = r.from_v;
+        }
+    }
+    return p;
+}
+
+/// The closest hit of ray r (render frame) with model m at t in [0, t_max), dispatched on the
+/// model's surface: splats (thesis 3.3 blending), ISO (thesis 4.5), MLS (WS05 3.2), patches
+/// (seed 002, 3). Every surface takes the seamless flag (thesis 3.6) instead of an epsilon.
+/// Counters: leaves = octree leaves / ISO leaves / kd-tree cells / BVH nodes visited;
+/// splat_tests = splat tests / evaluations of f or F / Newton steps.
+PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const Ray& r, float t_max, ModelHit& out,
+                                     RayCounters& c) {
+    const ModelView& mv = s.models[m];
+    Vec3 o, d;
+    to_model_frame(mv, r, o, d);
+    const bool inside = ray_inside(r);
+    switch (mv.surface) {
+    case SurfaceKind::iso: {
+        IsoParams p = s.params.iso;
+        p.faces = k_iso_faces_by_ray;
+        IsoHit h;
+        IsoStats st;
+        const bool hit = trace_iso(mv.iso, o, d, t_max, inside, p, h, st);
+        c.leaves += st.leaves;
+        c.splat_tests += st.evaluations;
+        c.truncated += st.truncated;
+        if (!hit) return false;
+        out.t = h.t;
+        out.normal = h.normal;
+        out.color = (mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1};
+        out.point = 0xffffffffu;
+        return true;
+    }
+    case SurfaceKind::mls: {
+        MlsParams p = s.params.mls;
+        p.faces = k_mls_faces_by_ray;
+        MlsHit h;
+        MlsStats st;
+        const bool hit = trace_mls<float>(mv.mls, o, d, t_max, inside, p, h, st);
+        c.leaves += st.cells;
+        c.splat_tests += st.evaluations;
+        c.truncated += st.truncated;
+        if (!hit) return false;
+        out.t = h.t;
+        out.normal = h.normal;
+        out.color = mls_blend_color(mv.mls, mv.colors, h);
+        out.point = h.point;
+        return true;
+    }
+    case SurfaceKind::patches: {
+        const PatchTraceParams p = patch_params_for(s, mv, m, r);
+        PatchHit h;
+        PatchStats st;
+        const bool hit = trace_patches(mv.patches, make_patch_ray(o, d, t_max, inside), p, h, &st);
+        c.leaves += st.bvh_nodes;
+        c.splat_tests += st.newton_iterations;
+        if (!hit || !(h.t < static_cast<double>(t_max))) return false;
+        out.t = static_cast<float>(h.t);
+        out.normal = Vec3{static_cast<float>(h.normal.x), static_cast<float>(h.normal.y),
+                          static_cast<float>(h.normal.z)};
+        out.color = Vec3{1, 1, 1};
+        out.point = 0xffffffffu;
+        out.prim = h.patch;
+        out.u = static_cast<float>(h.u);
+        out.v = static_cast<float>(h.v);
+        return true;
+    }
+    case SurfaceKind::splats:
+    default: {
+        const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
+        WalkStats ws;
+        SplatSample h{};
+        const bool hit = closest_hit_splats(mv.octree, mv.colors, o, d, inside, t_max, blend, s.params.max_steps,
+                                            h, ws, s.params.leaf_culling);
+        add_walk_stats(c, ws);
+        if (!hit) return false;
+        out.t = h.t;
+        out.normal = h.normal;
+        out.color = h.color;
+        out.point = h.point;
+        return true;
+    }
+    }
+}
+
+/// Closest hit over all models, t in [0, r.t_max).
 PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHit& hit, RayCounters& c) {
-    const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
     float best = r.t_max;
     bool found = false;
-    SplatSample sample{};
+    ModelHit sample;
     std::uint32_t model = 0;
     for (std::uint32_t m = 0; m < s.model_count; ++m) {
-        const ModelView& mv = s.models[m];
-        Vec3 o, d;
-        to_model_frame(mv, r, o, d);
-        WalkStats ws;
-        SplatSample cand{};
-        if (closest_hit_splats(mv.octree, mv.colors, o, d, ray_inside(r), best, blend, s.params.max_steps,
-                               cand, ws, s.params.leaf_culling)) {
+        ModelHit cand;
+        if (closest_hit_model(s, m, r, best, cand, c)) {
             if (cand.t < best || !found) {
                 best = cand.t;
                 sample = cand;
@@ -75,7 +183,6 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
                 found = true;
             }
         }
-        add_walk_stats(c, ws);
     }
     if (!found) return false;
     const ModelView& mv = s.models[model];
@@ -86,25 +193,74 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
     hit.position = ray_at(r, sample.t);
     hit.normal = normalize(mv.rotation * sample.normal);
     hit.material = mat;
-    const bool colors =
-        mv.colors != nullptr && s.material_count > 0 && s.materials[mat].use_point_colors != 0;
+    hit.model = model;
+    hit.prim = sample.prim;
+    hit.u = sample.u;
+    hit.v = sample.v;
+    const bool colors = s.material_count > 0 && s.materials[mat].use_point_colors != 0;
     hit.base_color = colors ? srgb_to_linear(sample.color) : Vec3{1, 1, 1};
     return true;
 }
 
-/// Whether anything blocks the segment [0, r.t_max) of a shadow ray (thesis 5.2).
+/// Whether anything blocks the segment [0, r.t_max) of a shadow ray (thesis 5.2), any surface.
 PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
     for (std::uint32_t m = 0; m < s.model_count; ++m) {
         const ModelView& mv = s.models[m];
         Vec3 o, d;
         to_model_frame(mv, r, o, d);
-        WalkStats ws;
-        const bool hit = any_hit_splats(mv.octree, o, d, ray_inside(r), r.t_max, s.params.max_steps, ws,
-                                        s.params.leaf_culling);
-        add_walk_stats(c, ws);
+        const bool inside = ray_inside(r);
+        bool hit = false;
+        switch (mv.surface) {
+        case SurfaceKind::iso: {
+            IsoParams p = s.params.iso;
+            p.faces = k_iso_faces_by_ray;
+            IsoStats st;
+            hit = iso_occluded(mv.iso, o, d, r.t_max, inside, p, st);
+            c.leaves += st.leaves;
+            c.splat_tests += st.evaluations;
+            c.truncated += st.truncated;
+            break;
+        }
+        case SurfaceKind::mls: {
+            MlsParams p = s.params.mls;
+            p.faces = k_mls_faces_by_ray;
+            MlsStats st;
+            hit = mls_occluded<float>(mv.mls, o, d, r.t_max, inside, p, st);
+            c.leaves += st.cells;
+            c.splat_tests += st.evaluations;
+            c.truncated += st.truncated;
+            break;
+        }
+        case SurfaceKind::patches: {
+            const PatchTraceParams p = patch_params_for(s, mv, m, r);
+            PatchStats st;
+            hit = patches_occluded(mv.patches, make_patch_ray(o, d, r.t_max, inside), p, &st);
+            c.leaves += st.bvh_nodes;
+            c.splat_tests += st.newton_iterations;
+            break;
+        }
+        case SurfaceKind::splats:
+        default: {
+            WalkStats ws;
+            hit = any_hit_splats(mv.octree, o, d, inside, r.t_max, s.params.max_steps, ws, s.params.leaf_culling);
+            add_walk_stats(c, ws);
+            break;
+        }
+        }
         if (hit) return true;
     }
     return false;
+}
+
+/// A ray leaving the surface point h (shadow, reflected, refracted): starts exactly at the hit,
+/// no offset (thesis 3.6), and remembers where it left (Ray::from_model).
+PRT_HD PRT_INLINE Ray leave_surface(const SurfaceHit& h, Vec3 dir, float t_max, std::uint32_t flags) {
+    Ray r{h.position, dir, t_max, flags};
+    r.from_model = h.model;
+    r.from_prim = h.prim;
+    r.from_u = h.u;
+    r.from_v = h.v;
+    return r;
 }
 
 /// The shading normal: the stored normal turned to face the incoming ray.
@@ -130,7 +286,7 @@ PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit&
         if (!(dot(n, l) > 0.0f)) continue;
         if (s.params.shadows != 0 && light.casts_shadows != 0) {
             ++c.shadow;
-            if (occluded(s, Ray{h.position, l, dist, r.flags}, c)) continue;
+            if (occluded(s, leave_surface(h, l, dist, r.flags), c)) continue;
         }
         sum += lambert_phong(m, h.base_color, n, l, r.dir, light.color);
     }
@@ -168,7 +324,7 @@ PRT_HD inline std::uint32_t spawn_secondary(const SceneView& s, const PendingRay
             const Vec3 w = in.weight * kt;
             if (max3(w) > p.min_ray_weight) {
                 out[count++] =
-                    PendingRay{Ray{h.position, dt, k_inf, in.ray.flags ^ k_ray_inside}, w, in.depth + 1};
+                    PendingRay{leave_surface(h, dt, k_inf, in.ray.flags ^ k_ray_inside), w, in.depth + 1};
             }
         } else {
             kr += kt;  // total internal reflection
@@ -177,8 +333,8 @@ PRT_HD inline std::uint32_t spawn_secondary(const SceneView& s, const PendingRay
     if (kr > 0.0f) {
         const Vec3 w = in.weight * kr;
         if (max3(w) > p.min_ray_weight) {
-            out[count++] = PendingRay{Ray{h.position, normalize(reflect(in.ray.dir, n)), k_inf, in.ray.flags},
-                                      w, in.depth + 1};
+            out[count++] = PendingRay{leave_surface(h, normalize(reflect(in.ray.dir, n)), k_inf, in.ray.flags), w,
+                                      in.depth + 1};
         }
     }
     return count;
@@ -221,9 +377,18 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
     return color;
 }
 
-/// One pixel: the primary ray through its centre, traced; never NaN (replaced and counted).
+}  // namespace prt::core
+
+#include "prt/core/path.h"
+
+namespace prt::core {
+
+/// One pixel: with one sample the primary ray through its centre, ray traced (thesis 2-3, 5);
+/// otherwise RenderParams::spp stratified samples, path traced when RenderParams::path_tracing
+/// (seed 002, 7; path.h). Never NaN (replaced and counted).
 PRT_HD inline Vec3 render_pixel(const SceneView& s, const PinholeCamera& cam, std::uint32_t x,
                                 std::uint32_t y, std::uint32_t width, std::uint32_t height, RayCounters& c) {
+    if (s.params.spp > 1 || s.params.path_tracing != 0) return sample_pixel(s, cam, x, y, width, height, c);
     const Ray r = primary_ray(cam, x, y, width, height);
     Vec3 color = trace_ray(s, r, c);
     if (!is_finite(color)) {

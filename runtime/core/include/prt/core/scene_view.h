@@ -9,8 +9,11 @@
 
 #include <cstdint>
 
+#include "prt/core/iso.h"
 #include "prt/core/math.h"
+#include "prt/core/mls.h"
 #include "prt/core/octree.h"
+#include "prt/core/patch.h"
 
 namespace prt::core {
 
@@ -31,6 +34,17 @@ struct Material {
 struct PointLight {
     Vec3 position{0, 10, 0};  ///< render frame
     Vec3 color{1, 1, 1};      ///< linear RGB, intensity already multiplied in
+    std::uint32_t casts_shadows = 1;
+};
+
+/// An area light (seed 002, 5.6): a parallelogram corner + s edge_u + t edge_v, s, t in [0, 1].
+/// The ray tracer sees it as samples x samples point lights (RenderScene); the path tracer samples
+/// it uniformly by area and sees its face (path.h).
+struct AreaLight {
+    Vec3 corner{0, 0, 0};  ///< render frame
+    Vec3 edge_u{1, 0, 0};
+    Vec3 edge_v{0, 0, 1};
+    Vec3 color{1, 1, 1};  ///< linear RGB, total intensity already multiplied in
     std::uint32_t casts_shadows = 1;
 };
 
@@ -64,12 +78,38 @@ struct RenderParams {
     /// LeafCulling (splat.h): which per-leaf bounds tests may pass a filled leaf unread (they never
     /// change the image; 0 turns them off, for comparison).
     std::uint32_t leaf_culling = 2;
+    /// seed 002, 7: path trace (path.h) instead of Whitted ray tracing; samples per pixel (both
+    /// modes: stratified and jittered, so spp > 1 antialiases the ray tracer too); the depth at
+    /// which a path gathers direct light and ends; the frame number (progressive accumulation:
+    /// each frame draws new samples).
+    std::uint32_t path_tracing = 0;
+    std::uint32_t spp = 1;
+    std::uint32_t max_path_depth = 10;
+    std::uint32_t frame = 0;
+    /// Intersection settings of the other surfaces (the accuracy knobs of issue 9). The renderer
+    /// overrides their `faces` per ray (closest_hit_scene: the seamless rule of thesis 3.6).
+    IsoParams iso;            ///< thesis 4.5: samples per leaf edge, refinement steps, seams
+    MlsParams mls;            ///< WS05 3.2: samples per cell interval (k), refinement steps
+    PatchTraceParams patch;   ///< seed 002, 3: Newton iteration cap, tolerance, domain margins
 };
 
-/// One model: its octree and per-point attributes, and its placement in the render frame:
-/// render = rotation * (scale * local) + offset.
+/// Which representation of a model rays meet (SCENE.md models[].surface, DESIGN.md "surfaces").
+enum class SurfaceKind : std::uint32_t {
+    splats = 0,   ///< thesis 3: splats in the octree (sections 16-19)
+    iso = 1,      ///< thesis 4: the Implicit Surface Octree (sections 32-35)
+    mls = 2,      ///< WS05: the exact MLS surface over the kd-tree (sections 48-51)
+    patches = 3,  ///< seed 002: bicubic Bezier patches (sections 112-115)
+};
+
+/// One model: the view of the surface it is traced as, per-point attributes, and its placement in
+/// the render frame: render = rotation * (scale * local) + offset. Only the view named by
+/// `surface` is set; the others stay empty.
 struct ModelView {
-    OctreeView octree;
+    SurfaceKind surface = SurfaceKind::splats;
+    OctreeView octree;  ///< splats
+    IsoView iso;        ///< iso
+    MlsView mls;        ///< mls
+    PatchView patches;  ///< patches
     const pool::Rgba8* colors = nullptr;          ///< per point, or null
     const std::uint32_t* material_ids = nullptr;  ///< per point, or null
     std::uint32_t point_count = 0;
@@ -86,8 +126,11 @@ struct SceneView {
     std::uint32_t model_count = 0;
     const Material* materials = nullptr;  ///< at least one
     std::uint32_t material_count = 0;
-    const PointLight* lights = nullptr;
+    const PointLight* lights = nullptr;  ///< point lights first, then the area lights' samples
     std::uint32_t light_count = 0;
+    std::uint32_t point_light_count = 0;  ///< lights[0, point_light_count) are the scene's point lights
+    const AreaLight* area_lights = nullptr;
+    std::uint32_t area_light_count = 0;
     EnvironmentView environment;
     RenderParams params;
 };

@@ -35,6 +35,15 @@ struct LoadedModel {
     std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads, leaf bounds included
 };
 
+/// How models are loaded (override the scene file).
+struct LoadOptions {
+    /// Surface of every model: "" keeps each model's (SCENE.md models[].surface), "auto" takes what
+    /// each pool holds (splats, else patches, ISO, MLS), or one of splats, iso, mls, patches.
+    std::string surface;
+    /// ISO: trace the float leaves (160 B) instead of the quantized ones (56 B) when a pool has both.
+    bool iso_float = false;
+};
+
 /// Options that override the scene file.
 struct SceneOverrides {
     std::uint32_t width = 0, height = 0;  ///< 0: keep
@@ -46,13 +55,18 @@ public:
     /// `pool_override`, when not empty, replaces the scene's models by this one pool (keeping the
     /// first model's transform and material if the scene has models). Throws prt::Error naming
     /// the file and what is wrong.
-    static RenderScene load(const scene::Scene& scene, const std::filesystem::path& pool_override = {});
+    /// Each model is traced as its `surface` (or LoadOptions::surface): its pool must hold those
+    /// sections (splats: prt-octree; iso: prt-iso; mls: prt-mls; patches: prt-patches).
+    static RenderScene load(const scene::Scene& scene, const std::filesystem::path& pool_override = {},
+                            const LoadOptions& options = {});
     /// A pool on its own: the default scene (default material, one light, a camera framing the
-    /// model's bounds from the front and a little above).
-    static RenderScene from_pool(const std::filesystem::path& pool);
+    /// model's bounds from the front and a little above); the surface is what the pool holds
+    /// unless `options` names one.
+    static RenderScene from_pool(const std::filesystem::path& pool, LoadOptions options = {});
     /// A scene whose models are given as already-open pools (tests, benchmarks).
     static RenderScene from_pools(const scene::Scene& scene,
-                                  std::vector<std::shared_ptr<const pool::PoolFile>> pools);
+                                  std::vector<std::shared_ptr<const pool::PoolFile>> pools,
+                                  const LoadOptions& options = {});
 
     /// The host view for the CPU backend (and the source the CUDA backend uploads).
     core::SceneView view() const;
@@ -91,13 +105,17 @@ private:
     void load_environment();
 
     scene::Scene m_scene;
+    std::string m_surface_override;  ///< LoadOptions::surface
+    bool m_iso_float = false;
     core::RenderParams m_params;
     DVec3 m_origin{0, 0, 0};
     DVec3 m_world_min{0, 0, 0}, m_world_max{0, 0, 0};
     std::vector<LoadedModel> m_models;
     std::vector<core::ModelView> m_model_views;
     std::vector<core::Material> m_materials;
-    std::vector<core::PointLight> m_lights;
+    std::vector<core::PointLight> m_lights;  ///< point lights, then area-light samples
+    std::uint32_t m_point_light_count = 0;
+    std::vector<core::AreaLight> m_area_lights;
     FloatImage m_environment;
     std::vector<std::string> m_warnings;
 };
