@@ -225,10 +225,13 @@ TEST(GpuMemory, AScenePastFreeGpuMemoryFailsWithTheFigures) {
     // Issue 10: nothing is allocated; the error names the bytes needed and free and what to do.
     const rt::BackendAvailability a = rt::backend_availability();
     if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
-    std::vector<pool::Splat> one(1);
+    // 2^32 - 16 float ISO leaves of 160 B claimed: 687 GB, more than any GPU has (the check must
+    // come first: the host array behind the pointer holds one leaf).
+    std::vector<pool::IsoLeafF32> one(1);
     core::ModelView mv;
-    mv.octree.splats = one.data();
-    mv.octree.splat_count = 0xfffffff0u;  // 137 GB of splats claimed: more than any GPU has
+    mv.surface = core::SurfaceKind::iso;
+    mv.iso.leaves_f32 = one.data();
+    mv.iso.leaf_count = 0xfffffff0u;
     core::Material mat;
     core::SceneView s;
     s.models = &mv;
@@ -241,7 +244,7 @@ TEST(GpuMemory, AScenePastFreeGpuMemoryFailsWithTheFigures) {
         FAIL() << "expected an error";
     } catch (const Error& e) {
         const std::string what = e.what();
-        EXPECT_NE(what.find("needs 131072 MiB"), std::string::npos) << what;
+        EXPECT_NE(what.find("needs 655360 MiB"), std::string::npos) << what;
         EXPECT_NE(what.find("free"), std::string::npos) << what;
         EXPECT_NE(what.find("prt-iso --max-level"), std::string::npos) << what;
         EXPECT_EQ(what.find('\n'), std::string::npos) << what;

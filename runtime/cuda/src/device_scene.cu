@@ -100,6 +100,10 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(pv.nodes, std::size_t{pv.patch_count} * pv.subpatch_nodes * sizeof(pool::SubpatchNode));
     f(mv.colors, std::size_t{mv.point_count} * 4);
     f(mv.material_ids, std::size_t{mv.point_count} * 4);
+    for (core::GiOctreeView* gi : {&mv.caustics.tree, &mv.light_map.tree}) {  // thesis 5.3-5.4
+        f(gi->nodes, std::size_t{gi->node_count} * 4);
+        f(gi->leaves, std::size_t{gi->leaf_count} * sizeof(pool::GiLeaf));
+    }
 }
 
 /// The same for the scene-wide arrays (models excluded).
@@ -153,10 +157,11 @@ rt::UploadStats DeviceScene::upload(const core::SceneView& host, cudaStream_t st
     PRT_CUDA_CHECK(cudaMemGetInfo(&free_bytes, &total_bytes));
     const std::uint64_t reserve = 256ull << 20;  // frame buffers, ray queues, the driver's own
     if (need + reserve > free_bytes) {
-        throw Error("the scene needs " + mib(need) + " on the GPU (+ " + mib(reserve) + " for frames) but only " +
-                    mib(free_bytes) + " of " + mib(total_bytes) +
-                    " are free: build a coarser ISO (prt-iso --max-level), cull the splats (prt-cull), or render "
-                    "with --backend cpu");
+        throw Error(
+            "the scene needs " + mib(need) + " on the GPU (+ " + mib(reserve) + " for frames) but only " +
+            mib(free_bytes) + " of " + mib(total_bytes) +
+            " are free: build a coarser ISO (prt-iso --max-level), cull the splats (prt-cull), or render "
+            "with --backend cpu");
     }
     std::map<const void*, void*> uploaded;  // the same pool array used by several models: once
     Uploader up(stream);
@@ -180,7 +185,8 @@ rt::UploadStats DeviceScene::upload(const core::SceneView& host, cudaStream_t st
     core::SceneView& s = m->view;
     s = host;
     visit_scene_arrays(s, put_as);
-    s.models = static_cast<const core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
+    s.models =
+        static_cast<const core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
     up.finish();  // `models` (host) must outlive the copies
     rt::UploadStats stats;
     stats.bytes = up.bytes();

@@ -191,8 +191,8 @@ PRT_HD inline Vec3 trace_path(const SceneView& s, Ray ray, PathRng& rng, RayCoun
 
 /// The radiance of pixel (x, y) from `spp` stratified samples of frame `frame` (seed 002, 7:
 /// jittered samples in a grid of cells over the pixel), path traced or ray traced (antialiasing).
-PRT_HD inline Vec3 sample_pixel(const SceneView& s, const PinholeCamera& cam, std::uint32_t x, std::uint32_t y,
-                                std::uint32_t width, std::uint32_t height, RayCounters& c) {
+PRT_HD inline Vec3 sample_pixel(const SceneView& s, const PinholeCamera& cam, std::uint32_t x,
+                                std::uint32_t y, std::uint32_t width, std::uint32_t height, RayCounters& c) {
     const RenderParams& p = s.params;
     const std::uint32_t spp = p.spp > 0 ? p.spp : 1;
     std::uint32_t grid = 1;
@@ -206,8 +206,10 @@ PRT_HD inline Vec3 sample_pixel(const SceneView& s, const PinholeCamera& cam, st
         const float sy = (static_cast<float>(cell / grid) + next_float(rng)) / static_cast<float>(grid);
         const Ray r = primary_ray(cam, x, y, width, height, sx, sy);
         const Vec3 v = p.path_tracing != 0 ? trace_path(s, r, rng, c) : trace_ray(s, r, c);
-        if (is_finite(v)) sum += v;
-        else ++c.sanitized;
+        if (is_finite(v))
+            sum += v;
+        else
+            ++c.sanitized;
     }
     return sum * (1.0f / static_cast<float>(spp));
 }

@@ -48,8 +48,8 @@ struct SurfaceHit {
     Vec3 normal;      ///< unit, outward (as stored); the ray's flag says which face was hit
     Vec3 base_color;  ///< linear; (1,1,1) when the material ignores point colors
     std::uint32_t material;
-    std::uint32_t model = 0;  ///< index into SceneView::models
-    std::uint32_t prim = 0;   ///< patch index (patches), else 0
+    std::uint32_t model = 0;   ///< index into SceneView::models
+    std::uint32_t prim = 0;    ///< patch index (patches), else 0
     float u = 0.0f, v = 0.0f;  ///< patch parameters (patches), else 0
 };
 
@@ -62,8 +62,8 @@ PRT_HD PRT_INLINE void to_model_frame(const ModelView& m, const Ray& r, Vec3& o,
 /// The nearest hit on one model, in its local frame, whatever its surface.
 struct ModelHit {
     float t = 0.0f;
-    Vec3 normal{0, 0, 1};  ///< local frame, unit, outward
-    Vec3 color{1, 1, 1};   ///< display-encoded (sRGB) point color; 1 without colors
+    Vec3 normal{0, 0, 1};               ///< local frame, unit, outward
+    Vec3 color{1, 1, 1};                ///< display-encoded (sRGB) point color; 1 without colors
     std::uint32_t point = 0xffffffffu;  ///< source point (per-point material ids), or none
     std::uint32_t prim = 0;
     float u = 0.0f, v = 0.0f;
@@ -87,75 +87,101 @@ PRT_HD PRT_INLINE PatchTraceParams patch_params_for(const SceneView& s, const Mo
     return p;
 }
 
+/// Which code a kernel carries (a template argument of the functions below): the surfaces it can
+/// meet and whether it samples pixels (path.h). The CUDA backend launches the smallest kernel a
+/// scene needs, so a splat scene keeps the registers (and the speed) of a splat-only kernel; the
+/// CPU backend uses k_mask_all.
+enum KernelMask : std::uint32_t {
+    k_mask_splats = 1u << 0,
+    k_mask_iso = 1u << 1,
+    k_mask_mls = 1u << 2,
+    k_mask_patches = 1u << 3,
+    k_mask_sampling = 1u << 4,  ///< spp > 1 or path tracing
+    k_mask_all = 31u,
+};
+
+/// The mask a scene needs.
+PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
+    std::uint32_t m = (s.params.spp > 1 || s.params.path_tracing != 0) ? k_mask_sampling : 0u;
+    for (std::uint32_t i = 0; i < s.model_count; ++i)
+        m |= 1u << static_cast<std::uint32_t>(s.models[i].surface);
+    return m;
+}
+
 /// The closest hit of ray r (render frame) with model m at t in [0, t_max), dispatched on the
 /// model's surface: splats (thesis 3.3 blending), ISO (thesis 4.5), MLS (WS05 3.2), patches
 /// (seed 002, 3). Every surface takes the seamless flag (thesis 3.6) instead of an epsilon.
 /// Counters: leaves = octree leaves / ISO leaves / kd-tree cells / BVH nodes visited;
 /// splat_tests = splat tests / evaluations of f or F / Newton steps.
-PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const Ray& r, float t_max, ModelHit& out,
-                                     RayCounters& c) {
+template <std::uint32_t K = k_mask_all>
+PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const Ray& r, float t_max,
+                                     ModelHit& out, RayCounters& c) {
     const ModelView& mv = s.models[m];
     Vec3 o, d;
     to_model_frame(mv, r, o, d);
     const bool inside = ray_inside(r);
-    switch (mv.surface) {
-    case SurfaceKind::iso: {
-        IsoParams p = s.params.iso;
-        p.faces = k_iso_faces_by_ray;
-        IsoHit h;
-        IsoStats st;
-        const bool hit = trace_iso(mv.iso, o, d, t_max, inside, p, h, st);
-        c.leaves += st.leaves;
-        c.splat_tests += st.evaluations;
-        c.truncated += st.truncated;
-        if (!hit) return false;
-        out.t = h.t;
-        out.normal = h.normal;
-        out.color = (mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1};
-        out.point = 0xffffffffu;
-        return true;
+    if constexpr ((K & k_mask_iso) != 0) {
+        if (mv.surface == SurfaceKind::iso) {
+            IsoParams p = s.params.iso;
+            p.faces = k_iso_faces_by_ray;
+            IsoHit h;
+            IsoStats st;
+            const bool hit = trace_iso(mv.iso, o, d, t_max, inside, p, h, st);
+            c.leaves += st.leaves;
+            c.splat_tests += st.evaluations;
+            c.truncated += st.truncated;
+            if (!hit) return false;
+            out.t = h.t;
+            out.normal = h.normal;
+            out.color = (mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1};
+            out.point = 0xffffffffu;
+            return true;
+        }
     }
-    case SurfaceKind::mls: {
-        MlsParams p = s.params.mls;
-        p.faces = k_mls_faces_by_ray;
-        MlsHit h;
-        MlsStats st;
-        const bool hit = trace_mls<float>(mv.mls, o, d, t_max, inside, p, h, st);
-        c.leaves += st.cells;
-        c.splat_tests += st.evaluations;
-        c.truncated += st.truncated;
-        if (!hit) return false;
-        out.t = h.t;
-        out.normal = h.normal;
-        out.color = mls_blend_color(mv.mls, mv.colors, h);
-        out.point = h.point;
-        return true;
+    if constexpr ((K & k_mask_mls) != 0) {
+        if (mv.surface == SurfaceKind::mls) {
+            MlsParams p = s.params.mls;
+            p.faces = k_mls_faces_by_ray;
+            MlsHit h;
+            MlsStats st;
+            const bool hit = trace_mls<float>(mv.mls, o, d, t_max, inside, p, h, st);
+            c.leaves += st.cells;
+            c.splat_tests += st.evaluations;
+            c.truncated += st.truncated;
+            if (!hit) return false;
+            out.t = h.t;
+            out.normal = h.normal;
+            out.color = mls_blend_color(mv.mls, mv.colors, h);
+            out.point = h.point;
+            return true;
+        }
     }
-    case SurfaceKind::patches: {
-        const PatchTraceParams p = patch_params_for(s, mv, m, r);
-        PatchHit h;
-        PatchStats st;
-        const bool hit = trace_patches(mv.patches, make_patch_ray(o, d, t_max, inside), p, h, &st);
-        c.leaves += st.bvh_nodes;
-        c.splat_tests += st.newton_iterations;
-        if (!hit || !(h.t < static_cast<double>(t_max))) return false;
-        out.t = static_cast<float>(h.t);
-        out.normal = Vec3{static_cast<float>(h.normal.x), static_cast<float>(h.normal.y),
-                          static_cast<float>(h.normal.z)};
-        out.color = Vec3{1, 1, 1};
-        out.point = 0xffffffffu;
-        out.prim = h.patch;
-        out.u = static_cast<float>(h.u);
-        out.v = static_cast<float>(h.v);
-        return true;
+    if constexpr ((K & k_mask_patches) != 0) {
+        if (mv.surface == SurfaceKind::patches) {
+            const PatchTraceParams p = patch_params_for(s, mv, m, r);
+            PatchHit h;
+            PatchStats st;
+            const bool hit = trace_patches(mv.patches, make_patch_ray(o, d, t_max, inside), p, h, &st);
+            c.leaves += st.bvh_nodes;
+            c.splat_tests += st.newton_iterations;
+            if (!hit || !(h.t < static_cast<double>(t_max))) return false;
+            out.t = static_cast<float>(h.t);
+            out.normal = Vec3{static_cast<float>(h.normal.x), static_cast<float>(h.normal.y),
+                              static_cast<float>(h.normal.z)};
+            out.color = Vec3{1, 1, 1};
+            out.point = 0xffffffffu;
+            out.prim = h.patch;
+            out.u = static_cast<float>(h.u);
+            out.v = static_cast<float>(h.v);
+            return true;
+        }
     }
-    case SurfaceKind::splats:
-    default: {
+    if constexpr ((K & k_mask_splats) != 0) {
         const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
         WalkStats ws;
         SplatSample h{};
-        const bool hit = closest_hit_splats(mv.octree, mv.colors, o, d, inside, t_max, blend, s.params.max_steps,
-                                            h, ws, s.params.leaf_culling);
+        const bool hit = closest_hit_splats(mv.octree, mv.colors, o, d, inside, t_max, blend,
+                                            s.params.max_steps, h, ws, s.params.leaf_culling);
         add_walk_stats(c, ws);
         if (!hit) return false;
         out.t = h.t;
@@ -164,10 +190,11 @@ PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const 
         out.point = h.point;
         return true;
     }
-    }
+    return false;
 }
 
 /// Closest hit over all models, t in [0, r.t_max).
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHit& hit, RayCounters& c) {
     float best = r.t_max;
     bool found = false;
@@ -175,7 +202,7 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
     std::uint32_t model = 0;
     for (std::uint32_t m = 0; m < s.model_count; ++m) {
         ModelHit cand;
-        if (closest_hit_model(s, m, r, best, cand, c)) {
+        if (closest_hit_model<K>(s, m, r, best, cand, c)) {
             if (cand.t < best || !found) {
                 best = cand.t;
                 sample = cand;
@@ -203,6 +230,7 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
 }
 
 /// Whether anything blocks the segment [0, r.t_max) of a shadow ray (thesis 5.2), any surface.
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
     for (std::uint32_t m = 0; m < s.model_count; ++m) {
         const ModelView& mv = s.models[m];
@@ -210,42 +238,44 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
         to_model_frame(mv, r, o, d);
         const bool inside = ray_inside(r);
         bool hit = false;
-        switch (mv.surface) {
-        case SurfaceKind::iso: {
-            IsoParams p = s.params.iso;
-            p.faces = k_iso_faces_by_ray;
-            IsoStats st;
-            hit = iso_occluded(mv.iso, o, d, r.t_max, inside, p, st);
-            c.leaves += st.leaves;
-            c.splat_tests += st.evaluations;
-            c.truncated += st.truncated;
-            break;
+        if constexpr ((K & k_mask_iso) != 0) {
+            if (mv.surface == SurfaceKind::iso) {
+                IsoParams p = s.params.iso;
+                p.faces = k_iso_faces_by_ray;
+                IsoStats st;
+                hit = iso_occluded(mv.iso, o, d, r.t_max, inside, p, st);
+                c.leaves += st.leaves;
+                c.splat_tests += st.evaluations;
+                c.truncated += st.truncated;
+            }
         }
-        case SurfaceKind::mls: {
-            MlsParams p = s.params.mls;
-            p.faces = k_mls_faces_by_ray;
-            MlsStats st;
-            hit = mls_occluded<float>(mv.mls, o, d, r.t_max, inside, p, st);
-            c.leaves += st.cells;
-            c.splat_tests += st.evaluations;
-            c.truncated += st.truncated;
-            break;
+        if constexpr ((K & k_mask_mls) != 0) {
+            if (mv.surface == SurfaceKind::mls) {
+                MlsParams p = s.params.mls;
+                p.faces = k_mls_faces_by_ray;
+                MlsStats st;
+                hit = mls_occluded<float>(mv.mls, o, d, r.t_max, inside, p, st);
+                c.leaves += st.cells;
+                c.splat_tests += st.evaluations;
+                c.truncated += st.truncated;
+            }
         }
-        case SurfaceKind::patches: {
-            const PatchTraceParams p = patch_params_for(s, mv, m, r);
-            PatchStats st;
-            hit = patches_occluded(mv.patches, make_patch_ray(o, d, r.t_max, inside), p, &st);
-            c.leaves += st.bvh_nodes;
-            c.splat_tests += st.newton_iterations;
-            break;
+        if constexpr ((K & k_mask_patches) != 0) {
+            if (mv.surface == SurfaceKind::patches) {
+                const PatchTraceParams p = patch_params_for(s, mv, m, r);
+                PatchStats st;
+                hit = patches_occluded(mv.patches, make_patch_ray(o, d, r.t_max, inside), p, &st);
+                c.leaves += st.bvh_nodes;
+                c.splat_tests += st.newton_iterations;
+            }
         }
-        case SurfaceKind::splats:
-        default: {
-            WalkStats ws;
-            hit = any_hit_splats(mv.octree, o, d, inside, r.t_max, s.params.max_steps, ws, s.params.leaf_culling);
-            add_walk_stats(c, ws);
-            break;
-        }
+        if constexpr ((K & k_mask_splats) != 0) {
+            if (mv.surface == SurfaceKind::splats) {
+                WalkStats ws;
+                hit = any_hit_splats(mv.octree, o, d, inside, r.t_max, s.params.max_steps, ws,
+                                     s.params.leaf_culling);
+                add_walk_stats(c, ws);
+            }
         }
         if (hit) return true;
     }
@@ -272,11 +302,25 @@ PRT_HD PRT_INLINE Vec3 facing_normal(const SurfaceHit& h, const Ray& r) {
 /// light tested with a shadow ray when shadows are on and the light casts them, all scaled by the
 /// material's diffuse reflectance. Shadow rays keep the ray's front/back flag (thesis 3.6), so the
 /// surface they leave never shadows itself.
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit& h, RayCounters& c) {
     const Material& m = s.materials[h.material];
     if (!(m.diffuse_reflectance > 0.0f)) return Vec3{0, 0, 0};
     const Vec3 n = facing_normal(h, r);
     Vec3 sum = m.ambient * h.base_color;
+    if (h.model < s.model_count) {
+        // thesis 5.3 / 5.4.2: precomputed global illumination, looked up in the model's local frame:
+        // the light map's indirect irradiance replaces the constant ambient term, the caustic
+        // irradiance adds; both reflect with the diffuse albedo.
+        const ModelView& mv = s.models[h.model];
+        if (mv.light_map.tree.nodes != nullptr || mv.caustics.tree.nodes != nullptr) {
+            const Vec3 lp = mul_transpose(mv.rotation, h.position - mv.offset) * mv.inv_scale;
+            const Vec3 ln = mul_transpose(mv.rotation, n);
+            Vec3 e;
+            if (light_map_irradiance(mv.light_map, lp, ln, e)) sum = m.diffuse * h.base_color * e;
+            sum += m.diffuse * h.base_color * caustic_radiance(mv.caustics, lp, ln);
+        }
+    }
     for (std::uint32_t i = 0; i < s.light_count; ++i) {
         const PointLight& light = s.lights[i];
         const Vec3 to_light = light.position - h.position;
@@ -286,7 +330,7 @@ PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit&
         if (!(dot(n, l) > 0.0f)) continue;
         if (s.params.shadows != 0 && light.casts_shadows != 0) {
             ++c.shadow;
-            if (occluded(s, leave_surface(h, l, dist, r.flags), c)) continue;
+            if (occluded<K>(s, leave_surface(h, l, dist, r.flags), c)) continue;
         }
         sum += lambert_phong(m, h.base_color, n, l, r.dir, light.color);
     }
@@ -333,8 +377,8 @@ PRT_HD inline std::uint32_t spawn_secondary(const SceneView& s, const PendingRay
     if (kr > 0.0f) {
         const Vec3 w = in.weight * kr;
         if (max3(w) > p.min_ray_weight) {
-            out[count++] = PendingRay{leave_surface(h, normalize(reflect(in.ray.dir, n)), k_inf, in.ray.flags), w,
-                                      in.depth + 1};
+            out[count++] = PendingRay{
+                leave_surface(h, normalize(reflect(in.ray.dir, n)), k_inf, in.ray.flags), w, in.depth + 1};
         }
     }
     return count;
@@ -343,6 +387,7 @@ PRT_HD inline std::uint32_t spawn_secondary(const SceneView& s, const PendingRay
 /// Traces a primary ray and everything it spawns, iteratively: one branch continues in the
 /// loop, the other waits on a fixed stack (depth-first, so at most k_max_bounces + 1 entries).
 /// Misses see the background. Returns linear radiance.
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters& c) {
     PendingRay stack[k_max_bounces + 1];
     std::uint32_t top = 0;
@@ -353,10 +398,10 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
     // limit, so at most 2^(k_max_bounces+1) rays; the weight cut-off keeps real counts small.
     for (;;) {
         SurfaceHit h;
-        if (!closest_hit_scene(s, cur.ray, h, c)) {
+        if (!closest_hit_scene<K>(s, cur.ray, h, c)) {
             color += cur.weight * background(s.environment, cur.ray.dir);
         } else {
-            color += cur.weight * shade_hit(s, cur.ray, h, c);
+            color += cur.weight * shade_hit<K>(s, cur.ray, h, c);
             PendingRay next[2];
             const std::uint32_t n = spawn_secondary(s, cur, h, next);
             c.secondary += n;
@@ -386,11 +431,16 @@ namespace prt::core {
 /// One pixel: with one sample the primary ray through its centre, ray traced (thesis 2-3, 5);
 /// otherwise RenderParams::spp stratified samples, path traced when RenderParams::path_tracing
 /// (seed 002, 7; path.h). Never NaN (replaced and counted).
+/// K (KernelMask) limits the code to the surfaces and modes a kernel needs (scene_mask()).
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline Vec3 render_pixel(const SceneView& s, const PinholeCamera& cam, std::uint32_t x,
                                 std::uint32_t y, std::uint32_t width, std::uint32_t height, RayCounters& c) {
-    if (s.params.spp > 1 || s.params.path_tracing != 0) return sample_pixel(s, cam, x, y, width, height, c);
+    if constexpr ((K & k_mask_sampling) != 0) {
+        if (s.params.spp > 1 || s.params.path_tracing != 0)
+            return sample_pixel(s, cam, x, y, width, height, c);
+    }
     const Ray r = primary_ray(cam, x, y, width, height);
-    Vec3 color = trace_ray(s, r, c);
+    Vec3 color = trace_ray<K>(s, r, c);
     if (!is_finite(color)) {
         color = Vec3{0, 0, 0};
         ++c.sanitized;
