@@ -92,15 +92,17 @@ const char* shape_name(ShapeKind kind) {
             return "plane";
         case ShapeKind::room:
             return "room";
+        case ShapeKind::ring:
+            return "ring";
     }
     return "unknown";
 }
 
 ShapeKind shape_kind(const std::string& name) {
     for (ShapeKind k :
-         {ShapeKind::sphere, ShapeKind::torus, ShapeKind::cube, ShapeKind::plane, ShapeKind::room})
+         {ShapeKind::sphere, ShapeKind::torus, ShapeKind::cube, ShapeKind::plane, ShapeKind::room, ShapeKind::ring})
         if (name == shape_name(k)) return k;
-    throw Error("unknown shape \"" + name + "\" (expected sphere, torus, cube, plane or room)");
+    throw Error("unknown shape \"" + name + "\" (expected sphere, torus, cube, plane, room or ring)");
 }
 
 Room Room::standard(double size) {
@@ -178,6 +180,11 @@ void validate(const Shape& s) {
             break;
         case ShapeKind::plane:
             require_positive("plane size", s.plane.size);
+            break;
+        case ShapeKind::ring:
+            require_positive("ring radius", s.ring.radius);
+            require_positive("ring thickness", s.ring.thickness);
+            require_positive("ring height", s.ring.height);
             break;
         case ShapeKind::room: {
             const Room& r = s.room;
@@ -277,6 +284,23 @@ SurfacePoint closest(const Room& room, const Vec3& p) {
     return best;
 }
 
+SurfacePoint closest(const Ring& ring, const Vec3& p) {
+    // In the (rho, y) half-plane the band is the rectangle [r, r + t] x [-h/2, h/2]: the nearest
+    // point of the solid's surface is the nearest point of that rectangle's boundary, turned back
+    // about the axis.
+    const double rho = std::hypot(p[0], p[2]);
+    const Vec3 radial = rho > 0 ? Vec3{p[0] / rho, 0, p[2] / rho} : Vec3{1, 0, 0};
+    const double mid = ring.radius + 0.5 * ring.thickness;
+    const SurfacePoint b = closest_box({0.5 * ring.thickness, 0.5 * ring.height, 1.0}, {rho - mid, p[1], 0.0});
+    SurfacePoint r;
+    const double rho_s = mid + b.point[0];
+    r.point = {radial[0] * rho_s, b.point[1], radial[2] * rho_s};
+    r.normal = {radial[0] * b.normal[0], b.normal[1], radial[2] * b.normal[0]};
+    r.signed_distance = b.signed_distance;
+    r.part = b.part == 1 ? k_ring_inner : b.part == 0 ? k_ring_outer : b.part == 2 ? k_ring_top : k_ring_part_count;
+    return r;
+}
+
 SurfacePoint closest(const Shape& shape, const Vec3& world_point) {
     const Vec3 p = mul(sub(world_point, shape.offset), 1.0 / shape.scale);
     SurfacePoint r;
@@ -295,6 +319,9 @@ SurfacePoint closest(const Shape& shape, const Vec3& world_point) {
             break;
         case ShapeKind::room:
             r = closest(shape.room, p);
+            break;
+        case ShapeKind::ring:
+            r = closest(shape.ring, p);
             break;
     }
     r.point = add(mul(r.point, shape.scale), shape.offset);
@@ -323,6 +350,12 @@ double surface_area(const Shape& shape) {
                 5 * r.cube_edge * r.cube_edge;
             break;
         }
+        case ShapeKind::ring: {
+            const Ring& r = shape.ring;
+            const double o = r.radius + r.thickness;
+            a = 2 * k_pi * (r.radius + o) * r.height + k_pi * (o * o - r.radius * r.radius);
+            break;
+        }
     }
     return a * shape.scale * shape.scale;
 }
@@ -347,6 +380,11 @@ std::array<Vec3, 2> shape_bounds(const Shape& shape) {
         case ShapeKind::room:
             h = {0.5 * shape.room.size, 0.5 * shape.room.size, 0.5 * shape.room.size};
             break;
+        case ShapeKind::ring: {
+            const double o = shape.ring.radius + shape.ring.thickness;
+            h = {o, 0.5 * shape.ring.height, o};
+            break;
+        }
     }
     return {add(mul(h, -shape.scale), shape.offset), add(mul(h, shape.scale), shape.offset)};
 }
@@ -384,6 +422,12 @@ std::string shape_to_json(const Shape& s) {
             j["cube_center"] = s.room.cube_center;
             j["cube_edge"] = s.room.cube_edge;
             j["cube_yaw_degrees"] = s.room.cube_yaw_degrees;
+            break;
+        case ShapeKind::ring:
+            j["radius"] = s.ring.radius;
+            j["thickness"] = s.ring.thickness;
+            j["height"] = s.ring.height;
+            j["axis"] = "y";
             break;
     }
     j["scale"] = s.scale;
@@ -437,6 +481,11 @@ Shape shape_from(const nlohmann::json& j, const std::string& label) {
             s.room.cube_center = vec("cube_center");
             s.room.cube_edge = number("cube_edge");
             s.room.cube_yaw_degrees = number("cube_yaw_degrees");
+            break;
+        case ShapeKind::ring:
+            s.ring.radius = number("radius");
+            s.ring.thickness = number("thickness");
+            s.ring.height = number("height");
             break;
     }
     s.scale = number("scale");

@@ -11,6 +11,9 @@
 //   plane   square of side s in the plane y = 0 (|x|, |z| <= s/2), normal +y
 //   room    closed box [-s/2, s/2]^3 seen from inside (normals point into the room), with a sphere
 //           resting on the floor and a cube resting on the floor turned about y (normals outward)
+//   ring    a cylindrical band about the y axis: inner radius r, wall thickness t, height h
+//           (|y| <= h/2); its inner wall (normals towards the axis), outer wall (outward) and top rim
+//           (+y) are sampled, not its bottom (it stands on a floor): a mirror band for caustics
 //
 // Signed distances are positive on the side the normals point to: outside the sphere, torus and
 // cube, above the plane (y >= 0), and in the room's air (inside the walls, outside both objects).
@@ -27,9 +30,9 @@ namespace prt::synth {
 
 using Vec3 = std::array<double, 3>;
 
-enum class ShapeKind : std::uint32_t { sphere, torus, cube, plane, room };
+enum class ShapeKind : std::uint32_t { sphere, torus, cube, plane, room, ring };
 
-/// "sphere", "torus", "cube", "plane", "room".
+/// "sphere", "torus", "cube", "plane", "room", "ring".
 const char* shape_name(ShapeKind kind);
 /// The kind named `name`; throws prt::Error for an unknown name.
 ShapeKind shape_kind(const std::string& name);
@@ -50,6 +53,14 @@ struct Cube {
 struct Plane {
     double size = 2.0;  ///< side of the square
 };
+/// A cylindrical band (thesis Fig. 5.3a: the reflective ring of the cardioid caustic).
+struct Ring {
+    double radius = 1.0;      ///< inner radius r
+    double thickness = 0.02;  ///< wall thickness t: outer radius r + t
+    double height = 0.4;      ///< h: the band spans |y| <= h/2
+};
+/// Parts of the ring, in the order prt-synth writes them.
+enum RingPart : int { k_ring_inner = 0, k_ring_outer = 1, k_ring_top = 2, k_ring_part_count = 3 };
 
 /// A Cornell-box-like room. The geometry of the two objects is stored explicitly (not derived from
 /// `size` when read back), so a pool's provenance rebuilds exactly the shape that was sampled.
@@ -97,6 +108,7 @@ struct Shape {
     Cube cube;
     Plane plane;
     Room room;
+    Ring ring;
     double scale = 1.0;
     Vec3 offset{0, 0, 0};
 };
@@ -123,6 +135,9 @@ SurfacePoint closest(const Cube& c, const Vec3& p);
 SurfacePoint closest(const Plane& s, const Vec3& p);
 /// The nearest of walls, sphere and cube; sign: + in the air, - inside the walls or an object.
 SurfacePoint closest(const Room& r, const Vec3& p);
+/// The band as a solid annulus r <= rho <= r + t, |y| <= h/2 (its unsampled bottom included);
+/// sign + outside it; part: k_ring_inner, k_ring_outer, k_ring_top (bottom: k_ring_part_count).
+SurfacePoint closest(const Ring& r, const Vec3& p);
 
 /// World-frame query of a placed shape.
 SurfacePoint closest(const Shape& shape, const Vec3& world_point);

@@ -22,6 +22,9 @@ Shapes (y is up; every shape is centred at the origin before --scale and --offse
            axis y; normals outward.
   cube     axis-aligned, edge --edge; points on the 6 faces, each with its face normal (sharp edges).
   plane    square of side --size in the plane y = 0, normal +y.
+  ring     cylindrical band about y: inner radius --radius, wall --thickness, height --height
+           (|y| <= height/2); inner wall (normals towards the axis), outer wall and top rim are
+           sampled, the bottom is not: a mirror band for the cardioid caustic (thesis Fig. 5.3a).
   room     closed box of side --size seen from inside (floor, ceiling, 4 walls, normals inward)
            holding a sphere (radius 0.2 size) and a cube (edge 0.3 size, turned 25 degrees about y),
            both resting on the floor, normals outward; the cube's bottom face is not sampled.
@@ -43,7 +46,7 @@ int main(int argc, char** argv) {
     std::string output;
     std::uint64_t points = 100000;
     double radius = 1.0, major = 1.0, minor = 0.25, edge = 2.0, size = 2.0;
-    double noise = 0.0, scale = 1.0;
+    double noise = 0.0, scale = 1.0, thickness = 0.02, height = 0.4;
     std::vector<double> offset{0, 0, 0};
     std::uint64_t seed = 1;
     std::string sampling = "r2";
@@ -53,13 +56,17 @@ int main(int argc, char** argv) {
     return prt::tool::run(
         argc, argv, "prt-synth", k_description,
         [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("shape", shape_name, "sphere, torus, cube, plane or room")
+            app.add_option("shape", shape_name, "sphere, torus, cube, plane, room or ring")
                 ->required()
-                ->check(CLI::IsMember({"sphere", "torus", "cube", "plane", "room"}));
+                ->check(CLI::IsMember({"sphere", "torus", "cube", "plane", "room", "ring"}));
             app.add_option("-o,--output", output, "Pool file to write (replaced atomically)")->required();
             app.add_option("-n,--points", points, "Number of points, exactly")
                 ->check(CLI::Range(std::uint64_t{1}, prt::synth::k_max_points));
-            auto* o_radius = app.add_option("--radius", radius, "sphere: radius");
+            auto* o_radius = app.add_option("--radius", radius, "sphere: radius; ring: inner radius")
+                                 ->capture_default_str();
+            auto* o_thickness =
+                app.add_option("--thickness", thickness, "ring: wall thickness")->capture_default_str();
+            auto* o_height = app.add_option("--height", height, "ring: height of the band")->capture_default_str();
             auto* o_major = app.add_option("--major", major, "torus: major radius (centre circle)");
             auto* o_minor = app.add_option("--minor", minor, "torus: minor radius (tube), < --major");
             auto* o_edge = app.add_option("--edge", edge, "cube: edge length");
@@ -88,7 +95,8 @@ int main(int argc, char** argv) {
                     std::vector<std::string> shapes;
                 };
                 for (const Applies& a :
-                     {Applies{o_radius, {"sphere"}}, Applies{o_major, {"torus"}}, Applies{o_minor, {"torus"}},
+                     {Applies{o_radius, {"sphere", "ring"}}, Applies{o_thickness, {"ring"}}, Applies{o_height, {"ring"}},
+                      Applies{o_major, {"torus"}}, Applies{o_minor, {"torus"}},
                       Applies{o_edge, {"cube"}}, Applies{o_size, {"plane", "room"}}})
                     if (a.option->count() > 0 &&
                         std::find(a.shapes.begin(), a.shapes.end(), shape_name) == a.shapes.end())
@@ -104,6 +112,7 @@ int main(int argc, char** argv) {
             o.shape.torus = {major, minor};
             o.shape.cube.edge = edge;
             o.shape.plane.size = size;
+            o.shape.ring = {radius, thickness, height};
             if (o.shape.kind == ShapeKind::room) {
                 if (!(std::isfinite(size) && size > 0))
                     throw prt::Error("invalid option: room size must be a finite number > 0, got " +

@@ -97,7 +97,7 @@ double torus_theta(double u, double k) {
 // ---- Patches: pieces of surface with an area-preserving map from [0,1)^2 ------------------------
 
 struct Patch {
-    enum Type { square, sphere, torus } type = square;
+    enum Type { square, sphere, torus, cylinder, annulus } type = square;
     int part = 0;                       ///< index into the part list
     double area = 0;                    ///< local frame
     Vec3 center{};                      ///< square centre / sphere centre
@@ -105,6 +105,9 @@ struct Patch {
     double half_u = 0, half_v = 0;      ///< square half extents
     double radius = 0;                  ///< sphere radius / torus minor radius
     double major = 0;                   ///< torus major radius
+    double height = 0;                  ///< cylinder height (|y| <= height / 2); annulus plane y
+    double sign = 1;                    ///< cylinder: +1 normals outward, -1 towards the axis
+    double outer = 0;                   ///< annulus outer radius (inner: radius)
 };
 
 Patch square_patch(int part, const Vec3& center, const Vec3& u, const Vec3& v, const Vec3& n, double half_u,
@@ -184,6 +187,32 @@ void build_patches(const SynthOptions& o, std::vector<Patch>& patches, std::vect
             patches.push_back(square_patch(0, {0, 0, 0}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}, 0.5 * s.plane.size,
                                            0.5 * s.plane.size));
             break;
+        case ShapeKind::ring: {
+            const Ring& r = s.ring;
+            parts.push_back({"inner", o.color});
+            parts.push_back({"outer", o.color});
+            parts.push_back({"top", o.color});
+            const double outer = r.radius + r.thickness;
+            for (int side = 0; side < 2; ++side) {
+                Patch p;
+                p.type = Patch::cylinder;
+                p.part = side == 0 ? k_ring_inner : k_ring_outer;
+                p.radius = side == 0 ? r.radius : outer;
+                p.height = r.height;
+                p.sign = side == 0 ? -1.0 : 1.0;
+                p.area = 2 * k_pi * p.radius * r.height;
+                patches.push_back(p);
+            }
+            Patch top;
+            top.type = Patch::annulus;
+            top.part = k_ring_top;
+            top.radius = r.radius;
+            top.outer = outer;
+            top.height = 0.5 * r.height;
+            top.area = k_pi * (outer * outer - r.radius * r.radius);
+            patches.push_back(top);
+            break;
+        }
         case ShapeKind::room: {
             const Room& r = s.room;
             for (int p = 0; p < k_room_part_count; ++p)
@@ -249,6 +278,21 @@ void evaluate(const Patch& p, double u, double v, Vec3& position, Vec3& normal) 
             normal = {ct * cp, st, ct * sp};
             const double ring = p.major + p.radius * ct;
             position = {ring * cp, p.radius * st, ring * sp};
+            break;
+        }
+        case Patch::cylinder: {
+            // Area-preserving: the angle and the height are both uniform.
+            const double phi = 2 * k_pi * u;
+            normal = {p.sign * std::cos(phi), 0.0, p.sign * std::sin(phi)};
+            position = {p.radius * std::cos(phi), (v - 0.5) * p.height, p.radius * std::sin(phi)};
+            break;
+        }
+        case Patch::annulus: {
+            // Area-preserving: rho^2 uniform between the radii.
+            const double rho = std::sqrt(p.radius * p.radius + u * (p.outer * p.outer - p.radius * p.radius));
+            const double phi = 2 * k_pi * v;
+            normal = {0, 1, 0};
+            position = {rho * std::cos(phi), p.height, rho * std::sin(phi)};
             break;
         }
     }

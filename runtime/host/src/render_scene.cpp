@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "prt/error.h"
+#include "prt/runtime/gi_pool.h"
 #include "prt/runtime/leaf_bounds.h"
 #include "prt/runtime/surface_pools.h"
 
@@ -332,6 +333,27 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         const bool per_point = v.surface == core::SurfaceKind::splats || v.surface == core::SurfaceKind::mls;
         if (!per_point) v.colors = nullptr;
         lm.bytes += (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0);
+        // thesis 5.3-5.4: precomputed global illumination, when the scene asks for it.
+        if (m_scene.render.caustics) {
+            if (has_caustics(pf)) {
+                v.caustics = load_caustic_view(pf);
+                lm.bytes += std::size_t{v.caustics.tree.node_count} * 4 +
+                            std::size_t{v.caustics.tree.leaf_count} * sizeof(pool::GiLeaf);
+            } else {
+                m_warnings.push_back("model '" + lm.name + "': render.caustics is on but " + pf.label() +
+                                     " has no caustic octree (run prt-photons on the scene)");
+            }
+        }
+        if (m_scene.render.light_map) {
+            if (has_light_map(pf)) {
+                v.light_map = load_light_map_view(pf);
+                lm.bytes += std::size_t{v.light_map.tree.node_count} * 4 +
+                            std::size_t{v.light_map.tree.leaf_count} * sizeof(pool::GiLeaf);
+            } else {
+                m_warnings.push_back("model '" + lm.name + "': render.light_map is on but " + pf.label() +
+                                     " has no light map (run prt-lightmap on the scene)");
+            }
+        }
 
         const Placement pl = placement(sm.transform, info);
         const DVec3 world_origin = pl.world({0, 0, 0});

@@ -58,6 +58,14 @@ enum class SectionType : std::uint32_t {
     mls_nodes = 49,    ///< MlsNode per kd-tree node
     mls_refs = 50,     ///< uint32 splat indices referenced by the kd-tree leaves
     mls_splats = 51,   ///< MlsSplat per unique splat
+    // 64-79: caustic octree (prt-photons, thesis 5.4); 80-95: light map (prt-lightmap, thesis 5.3);
+    // layouts in gi_layout.h
+    caustic_info = 64,      ///< one GiInfo
+    caustic_nodes = 65,     ///< uint32 node words (octree_nodes encoding), filled leaf -> leaf index
+    caustic_leaves = 66,    ///< GiLeaf per filled leaf: corner irradiance (eq. 5.1-5.2)
+    light_map_info = 80,    ///< one GiInfo
+    light_map_nodes = 81,   ///< uint32 node words
+    light_map_leaves = 82,  ///< GiLeaf per filled leaf: corner indirect irradiance (eq. 5.3-5.4)
     // 112-127: Bezier patches (prt-patches, seed 002); layouts in patch_layout.h
     patch_info = 112,           ///< one PatchInfo
     patch_control_points = 113, ///< 16 control points per patch
@@ -88,6 +96,12 @@ inline constexpr std::uint32_t section_version(SectionType type) {
         case SectionType::mls_nodes:
         case SectionType::mls_refs:
         case SectionType::mls_splats:
+        case SectionType::caustic_info:
+        case SectionType::caustic_nodes:
+        case SectionType::caustic_leaves:
+        case SectionType::light_map_info:
+        case SectionType::light_map_nodes:
+        case SectionType::light_map_leaves:
         case SectionType::patch_info:
         case SectionType::patch_control_points:
         case SectionType::patch_bvh:
@@ -119,6 +133,12 @@ inline constexpr const char* section_name(SectionType type) {
         case SectionType::mls_nodes: return "mls_nodes";
         case SectionType::mls_refs: return "mls_refs";
         case SectionType::mls_splats: return "mls_splats";
+        case SectionType::caustic_info: return "caustic_info";
+        case SectionType::caustic_nodes: return "caustic_nodes";
+        case SectionType::caustic_leaves: return "caustic_leaves";
+        case SectionType::light_map_info: return "light_map_info";
+        case SectionType::light_map_nodes: return "light_map_nodes";
+        case SectionType::light_map_leaves: return "light_map_leaves";
         case SectionType::patch_info: return "patch_info";
         case SectionType::patch_control_points: return "patch_control_points";
         case SectionType::patch_bvh: return "patch_bvh";

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 
+#include "prt/core/gi.h"
 #include "prt/core/iso.h"
 #include "prt/core/math.h"
 #include "prt/core/mls.h"
@@ -110,6 +111,8 @@ struct ModelView {
     IsoView iso;        ///< iso
     MlsView mls;        ///< mls
     PatchView patches;  ///< patches
+    CausticView caustics;    ///< prt-photons' caustic octree (thesis 5.4), or empty
+    LightMapView light_map;  ///< prt-lightmap's diffuse light map (thesis 5.3), or empty
     const pool::Rgba8* colors = nullptr;          ///< per point, or null
     const std::uint32_t* material_ids = nullptr;  ///< per point, or null
     std::uint32_t point_count = 0;

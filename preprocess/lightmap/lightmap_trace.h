@@ -1,0 +1,93 @@
+// PointRT prt-lightmap: the indirect irradiance at a surface sample (thesis 5.3: "the output of a
+// precomputation phase where a path tracer ... is used to compute the indirect illumination"),
+// host + device (PRT_HD) over the renderer's core (prt/core/render.h).
+//
+// Units follow the renderer: a point light of color I gives a surface E = I cos(theta) (no
+// falloff), and a diffuse surface sends albedo x E. The indirect irradiance at a sample is
+// E_ind = integral of L cos / pi over the hemisphere = the mean of L over cosine-distributed
+// directions, so each sample averages `rays` paths of up to `bounces` vertices: at every vertex the
+// path gains the direct light there (Lambert, shadow rays as the renderer casts them, times the
+// diffuse share) and then continues by one event drawn in proportion to the material's diffuse
+// share (cosine-distributed bounce, x albedo), reflectivity (mirror) and transmissivity
+// (refraction), with weight x (their sum). Misses see the background. Caustic paths (L S+ D) need
+// the light to be hit and belong to prt-photons; these are the L D (S|D)* D paths.
+#pragma once
+
+#include <cstdint>
+
+#include "photon_trace.h"
+#include "prt/core/math.h"
+#include "prt/core/path.h"
+#include "prt/core/render.h"
+#include "prt/core/scene_view.h"
+#include "prt/core/shading.h"
+
+namespace prt::lightmap {
+
+struct TraceParams {
+    std::uint32_t rays = 64;    ///< paths per sample
+    std::uint32_t bounces = 3;  ///< vertices per path
+    std::uint64_t seed = 1;
+};
+
+/// thesis 5.3: indirect irradiance at render-frame point `p` on the side of unit normal `n`,
+/// sample number `sample` (seeds its random numbers, so every backend draws the same paths).
+PRT_HD inline core::Vec3 indirect_irradiance(const core::SceneView& s, const TraceParams& tp, core::Vec3 p,
+                                             core::Vec3 n, std::uint64_t sample, core::RayCounters& c) {
+    core::Vec3 sum{0, 0, 0};
+    for (std::uint32_t k = 0; k < tp.rays; ++k) {
+        std::uint64_t h = photons::hash64(tp.seed ^ photons::hash64(sample * 0x9e3779b97f4a7c15ull + k));
+        const float u1 = photons::unit_float(h);
+        h = photons::hash64(h);
+        core::Ray ray{p, core::cosine_direction(n, u1, photons::unit_float(h)), core::k_inf, 0u};
+        core::Vec3 weight{1, 1, 1};
+        // Bounded: at most `bounces` closest-hit queries per path.
+        for (std::uint32_t b = 0; b < tp.bounces; ++b) {
+            core::SurfaceHit hit;
+            ++c.secondary;
+            if (!core::closest_hit_scene(s, ray, hit, c)) {
+                sum += weight * core::background(s.environment, ray.dir);
+                break;
+            }
+            const core::Material& m = s.materials[hit.material];
+            const float d = fmaxf(m.diffuse_reflectance, 0.0f), kr = fmaxf(m.reflectivity, 0.0f),
+                        kt = fmaxf(m.transmissivity, 0.0f);
+            const core::Vec3 nf = core::facing_normal(hit, ray);
+            const core::Vec3 albedo = m.diffuse * hit.base_color;
+            if (d > 0.0f) {
+                // The renderer's direct light (path.h: point lights, area lights sampled by area).
+                core::PathRng rng{static_cast<std::uint32_t>(h >> 32)};
+                sum += weight * core::direct_light(s, ray, hit, nf, albedo, rng, c) * d;
+            }
+            const float total = d + kr + kt;
+            if (!(total > 0.0f) || b + 1 == tp.bounces) break;
+            h = photons::hash64(h);
+            const float u = photons::unit_float(h) * total;
+            weight = weight * total;
+            if (u < d) {
+                h = photons::hash64(h);
+                const float a1 = photons::unit_float(h);
+                h = photons::hash64(h);
+                weight = weight * albedo;
+                ray = core::leave_surface(hit, core::cosine_direction(nf, a1, photons::unit_float(h)),
+                                          core::k_inf, ray.flags);
+                continue;
+            }
+            bool refracted = false;
+            if (u >= d + kr) {
+                const float ior = m.refractive_index > 0.0f ? m.refractive_index : 1.0f;
+                core::Vec3 t;
+                if (core::refract(ray.dir, nf, core::ray_inside(ray) ? ior : 1.0f / ior, t)) {
+                    ray = core::leave_surface(hit, t, core::k_inf, ray.flags ^ core::k_ray_inside);
+                    refracted = true;
+                }
+            }
+            if (!refracted)
+                ray = core::leave_surface(hit, core::normalize(core::reflect(ray.dir, nf)), core::k_inf,
+                                          ray.flags);
+        }
+    }
+    return tp.rays > 0 ? sum * (1.0f / static_cast<float>(tp.rays)) : sum;
+}
+
+}  // namespace prt::lightmap

@@ -1,0 +1,345 @@
+// Tests of prt-photons (thesis 5.4): emission (solid angles, isotropy), power accounting against an
+// analytic sphere, a ball lens's focus against paraxial optics, the caustic octree's density
+// estimate against a known irradiance, RGB9E5, and the validating loader.
+#include "photons.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "gi_test_util.h"
+#include "prt/core/gi.h"
+#include "prt/runtime/gi_pool.h"
+
+using namespace prt;
+
+namespace {
+
+constexpr double k_pi = 3.14159265358979323846;
+
+double lum(const double c[3]) {
+    return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+}  // namespace
+
+TEST(Photons, EmissionCoversTheSphereEvenly) {
+    // Every photon of one light: total solid angle 4 pi, and the power inside a cone about a cube
+    // diagonal (where equal powers per pixel would be 5x too bright) is the cone's share.
+    photons::ShootParams p;
+    p.face_res = 64;
+    p.per_pixel = 3;
+    p.solid_angle_norm = photons::solid_angle_norm(p.face_res);
+    const core::Vec3 axis = core::normalize(core::Vec3{1, 1, 1});
+    const double cos_cone = std::cos(20.0 * k_pi / 180.0);
+    double total = 0, in_cone = 0, upper = 0;
+    for (std::uint64_t i = 0; i < photons::photons_per_light(p); ++i) {
+        core::Vec3 d;
+        float w;
+        photons::emit_photon(p, 0, i, d, w);
+        ASSERT_NEAR(core::length(d), 1.0f, 1e-5f);
+        total += w;
+        if (core::dot(d, axis) > cos_cone) in_cone += w;
+        if (d.y > 0) upper += w;
+    }
+    EXPECT_NEAR(total, 4 * k_pi, 4 * k_pi * 1e-5);
+    EXPECT_NEAR(upper / total, 0.5, 1e-3);
+    EXPECT_NEAR(in_cone / total, (1 - cos_cone) / 2, 0.02 * (1 - cos_cone) / 2);
+}
+
+TEST(Photons, PowerIsConservedAndMatchesTheSphereSolidAngle) {
+    // A partly mirroring sphere (d 0.3, kr 0.6, absorbs 0.1) seen from a light along a cube diagonal.
+    const double R = 0.5;
+    test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, R, 60000), {0, 0, 0});
+    const auto pool = test::make_pool(m);
+    const rt::RenderScene rs = test::load_gi_scene(R"({
+        "lights": [{"type": "point", "position": [1.7320508, 1.7320508, 1.7320508], "color": [1, 0.5, 0.25]}],
+        "materials": [{"name": "m", "diffuse_reflectance": 0.3, "reflectivity": 0.6, "use_point_colors": false}],
+        "models": [{"name": "s", "pool": "unused.pool"}]})",
+                                                   {pool});
+    photons::ShootOptions o;
+    o.params.face_res = 128;
+    o.params.per_pixel = 4;
+    o.backend = "cpu";
+    const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    const photons::PhotonTally& t = r.tally;
+    for (int a = 0; a < 3; ++a) {
+        const double sum = t.direct[a] + t.deposited[a] + t.absorbed[a] + t.escaped[a] + t.truncated[a];
+        EXPECT_NEAR(sum, t.emitted[a], 1e-5 * t.emitted[a]) << "channel " << a;
+    }
+    const double color[3] = {1, 0.5, 0.25};
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(t.emitted[a], 4 * k_pi * color[a], 4 * k_pi * color[a] * 1e-4);
+    // A convex mirror cannot send light back to itself: no L S+ D deposits at all.
+    EXPECT_EQ(t.deposits, 0u);
+    EXPECT_EQ(lum(t.deposited), 0.0);
+    // First-hit power H: direct = 0.3 H, absorbed = 0.1 H.
+    const double H = lum(t.direct) / 0.3;
+    EXPECT_NEAR(lum(t.absorbed), 0.1 * H, 1e-4 * H);
+    // H / emitted is the sphere's solid-angle share (1 - cos theta) / 2, sin theta = R / D, for the
+    // splat surface between the sphere and the sphere grown by the largest splat radius.
+    const double D = 3.0, r_max = m.radii.empty() ? 0 : *std::max_element(m.radii.begin(), m.radii.end());
+    auto share = [&](double radius) { return (1 - std::sqrt(1 - radius * radius / (D * D))) / 2; };
+    const double f = H / lum(t.emitted);
+    EXPECT_GT(f, share(R) * 0.98);
+    EXPECT_LT(f, share(R + r_max) * 1.02);
+}
+
+TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
+    // A glass ball (n 1.5, R 0.5) at the origin, a point light on the axis at z = +2 behind a
+    // mask with a small hole (paraxial rays only), and a diffuse strip in the plane y = 0 along
+    // the axis behind the ball: every refracted ray stays in its meridional plane, so it meets the
+    // strip where it crosses the axis. The caustic must peak at the paraxial image of the light:
+    // ball lens focal length f = n R / (2 (n - 1)) from the centre (both principal planes there),
+    // 1 / s_i = 1 / f - 1 / s_o.
+    const double R = 0.5, n = 1.5, s_o = 2.0, hole = 0.1, mask_z = 0.8;
+    const double f = n * R / (2 * (n - 1));
+    const double s_i = 1.0 / (1.0 / f - 1.0 / s_o);
+    // The marginal ray through the hole's edge, traced exactly (double): its axis crossing bounds
+    // how far spherical aberration can move the peak from the paraxial focus.
+    auto axis_crossing = [&](double h_mask) {
+        const double dz = mask_z - s_o, len = std::hypot(h_mask, dz);
+        double d[2] = {h_mask / len, dz / len}, o[2] = {0, s_o};  // (y, z)
+        auto hit = [&](double sign) {  // sign +1: first (entering) root, -1: exit root from inside
+            const double b = o[0] * d[0] + o[1] * d[1], c = o[0] * o[0] + o[1] * o[1] - R * R;
+            const double t = -b - sign * std::sqrt(b * b - c);
+            o[0] += t * d[0];
+            o[1] += t * d[1];
+        };
+        auto refract = [&](double eta, double nx, double ny) {
+            const double ci = -(d[0] * nx + d[1] * ny), k = 1 - eta * eta * (1 - ci * ci);
+            const double s = eta * ci - std::sqrt(k);
+            d[0] = eta * d[0] + s * nx;
+            d[1] = eta * d[1] + s * ny;
+        };
+        hit(1);
+        refract(1 / n, o[0] / R, o[1] / R);
+        hit(-1);
+        refract(n, -o[0] / R, -o[1] / R);
+        return o[1] - o[0] / d[0] * d[1];  // z where y = 0
+    };
+    const double z_marginal = axis_crossing(hole), z_paraxial = axis_crossing(1e-4);
+    ASSERT_NEAR(z_paraxial, -s_i, 1e-3) << "the paraxial formula and the exact trace disagree";
+
+    std::vector<test::TestPoint> ball = test::sphere_points({0, 0, 0}, R, 60000);
+    std::vector<test::TestPoint> mask;
+    for (const test::TestPoint& p : test::rect_points({-1, -1, mask_z}, {2, 0, 0}, {0, 2, 0}, {0, 0, 1}, 150))
+        if (std::hypot(p.position[0], p.position[1]) > hole + p.radius) mask.push_back(p);
+    std::vector<test::TestPoint> strip =
+        test::rect_points({-0.3, 0, -2.5}, {0.6, 0, 0}, {0, 0, 1.95}, {0, 1, 0}, 200);
+    test::TestModel mb = test::make_model(ball, {0, 0, 0}), mm = test::make_model(mask, {0, 0, 0}),
+                    ms = test::make_model(strip, {0, 0, 0});
+    const rt::RenderScene rs =
+        test::load_gi_scene(R"({
+        "lights": [{"type": "point", "position": [0, 0, 2]}],
+        "materials": [{"name": "matte"},
+                      {"name": "glass", "refractive_index": 1.5, "transmissivity": 1, "diffuse_reflectance": 0}],
+        "models": [{"name": "ball", "pool": "a.pool", "material": "glass"},
+                   {"name": "mask", "pool": "b.pool", "material": "matte"},
+                   {"name": "strip", "pool": "c.pool", "material": "matte"}]})",
+                            {test::make_pool(mb), test::make_pool(mm), test::make_pool(ms)});
+    photons::ShootOptions o;
+    o.params.face_res = 256;
+    o.params.per_pixel = 4;
+    o.backend = "cpu";
+    const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    std::vector<photons::PhotonDeposit> on_strip;
+    for (const photons::PhotonDeposit& d : r.deposits)
+        if (d.model == 2) on_strip.push_back(d);
+    ASSERT_GT(on_strip.size(), 300u);
+    const double root_min[3] = {-1.3, -1.3, -2.6};
+    photons::GatherOptions g;
+    g.depth = 8;  // edges of 2.6 / 256 ~ 0.01
+    g.radius_edges = 2;
+    const gi::GiOctree tree = photons::build_caustic_octree(on_strip, root_min, 2.6, g);
+    const core::GiOctreeView v = gi::view_of(tree);
+    double best_z = 0, best = -1;
+    for (double z = -0.6; z > -2.4; z -= 0.005) {
+        const core::Vec3 e =
+            core::caustic_radiance(core::CausticView{v}, core::Vec3{0, 0, float(z)}, core::Vec3{0, 1, 0});
+        if (e.x > best) {
+            best = e.x;
+            best_z = z;
+        }
+    }
+    const double tolerance = std::fabs(z_paraxial - z_marginal) + 2 * tree.info.gather_radius + 0.01;
+    EXPECT_NEAR(best_z, -s_i, tolerance)
+        << "peak at z " << best_z << ", paraxial focus " << -s_i << ", marginal " << z_marginal;
+    EXPECT_LT(tolerance, 0.2 * s_i) << "the test aperture is not paraxial enough to mean anything";
+    // Seen from below the strip (normal -y) there is no caustic.
+    EXPECT_EQ(
+        core::caustic_radiance(core::CausticView{v}, core::Vec3{0, 0, float(best_z)}, core::Vec3{0, -1, 0}).x,
+        0.0f);
+}
+
+TEST(Photons, CausticOctreeEstimatesAKnownIrradiance) {
+    // Deposits spread uniformly over a unit square of the plane y = 0 carrying a total flux P give
+    // E = P / area everywhere inside (eq. 5.1-5.2 is a normalised kernel).
+    std::vector<photons::PhotonDeposit> deps;
+    const int side = 300;
+    const float flux = 2.0f / (side * side);  // P = 2 on an area of 1: E = 2
+    for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j) {
+            const std::uint64_t h = photons::hash64(i * 1000003ull + j);
+            photons::PhotonDeposit d{};
+            d.position[0] = (i + photons::unit_float(h)) / side - 0.5f;
+            d.position[2] = (j + photons::unit_float(photons::hash64(h))) / side - 0.5f;
+            d.flux[0] = d.flux[1] = d.flux[2] = flux;
+            d.normal[1] = 1;
+            deps.push_back(d);
+        }
+    const double root_min[3] = {-1, -1, -1};
+    photons::GatherOptions g;
+    g.depth = 7;  // edge 2 / 128
+    g.radius_edges = 1.5f;
+    const gi::GiOctree tree = photons::build_caustic_octree(deps, root_min, 2.0, g);
+    const core::GiOctreeView v = gi::view_of(tree);
+    double sum = 0;
+    int n = 0;
+    for (int i = 0; i < 40; ++i) {
+        const core::Vec3 p{-0.4f + 0.8f * i / 39.0f, 0.0f, 0.3f - 0.6f * ((i * 7) % 40) / 39.0f};
+        const core::Vec3 e = core::caustic_radiance(core::CausticView{v}, p, core::Vec3{0, 1, 0});
+        EXPECT_NEAR(e.y, 2.0, 0.15) << "at " << p.x << ", " << p.z;
+        sum += e.y;
+        ++n;
+    }
+    EXPECT_NEAR(sum / n, 2.0, 0.04);
+    // Far from any deposit: nothing.
+    EXPECT_EQ(core::caustic_radiance(core::CausticView{v}, core::Vec3{0, 0.5f, 0}, core::Vec3{0, 1, 0}).y,
+              0.0f);
+}
+
+TEST(Photons, Rgb9e5RoundTrip) {
+    for (float v : {1e-6f, 0.003f, 0.5f, 1.0f, 7.25f, 1234.5f, 60000.0f}) {
+        const core::Vec3 c{v, v * 0.5f, v * 0.25f};
+        const core::Vec3 d = core::decode_rgb9e5(core::encode_rgb9e5(c));
+        EXPECT_NEAR(d.x, c.x, c.x * 2.0f / 512 + 6e-8f) << v;  // + the smallest step, 2^-24
+        EXPECT_NEAR(d.y, c.y, c.x * 2.0f / 512 + 6e-8f) << v;
+        EXPECT_NEAR(d.z, c.z, c.x * 2.0f / 512 + 6e-8f) << v;
+    }
+    EXPECT_EQ(core::encode_rgb9e5(core::Vec3{-1, std::nanf(""), 0}), 0u);
+}
+
+TEST(Photons, LoaderRejectsBrokenSections) {
+    std::vector<gi::LeafValues> leaves(2);
+    for (std::uint64_t k = 0; k < 2; ++k) {
+        leaves[k] = {};
+        leaves[k].key = k * 9;
+    }
+    const double root_min[3] = {0, 0, 0};
+    gi::GiOctree tree = gi::build_octree(leaves, root_min, 1.0, 2);
+    tree.info.gather_radius = 0.1f;
+    auto pool_with = [&](const gi::GiOctree& t) {
+        test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1, 500), {0, 0, 0});
+        const auto base = test::make_pool(m);  // carried sections are views: keep it alive
+        pool::PoolWriter w;
+        w.carry_over(*base);
+        w.add_array(pool::SectionType::caustic_info, std::vector<pool::GiInfo>{t.info});
+        w.add_array(pool::SectionType::caustic_nodes, t.nodes);
+        w.add_array(pool::SectionType::caustic_leaves, t.leaves);
+        return pool::PoolFile::from_bytes(w.serialize(), "m.pool");
+    };
+    const core::CausticView ok = rt::load_caustic_view(pool_with(tree));
+    EXPECT_EQ(ok.tree.leaf_count, 2u);
+    gi::GiOctree bad = tree;
+    bad.nodes[0] = pool::make_node(pool::NodeType::internal, 0);  // its own child
+    try {
+        rt::load_caustic_view(pool_with(bad));
+        FAIL() << "accepted a node pointing backwards";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("m.pool: section caustic_nodes"), std::string::npos) << e.what();
+    }
+    bad = tree;
+    bad.info.depth = 3;  // leaves at level 2
+    EXPECT_THROW(rt::load_caustic_view(pool_with(bad)), Error);
+    bad = tree;
+    bad.info.scale = -1;
+    EXPECT_THROW(rt::load_caustic_view(pool_with(bad)), Error);
+}
+
+TEST(GiBuild, RadixSortAndMortonAgreeWithTheStandardLibrary) {
+    std::vector<std::uint64_t> keys(300000);
+    for (std::size_t i = 0; i < keys.size(); ++i)
+        keys[i] = photons::hash64(i) & ((1ull << 40) - 1) & ~0xffull;
+    const std::vector<std::uint32_t> order = gi::radix_order(keys, 40);
+    std::vector<std::uint32_t> expected(keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) expected[i] = static_cast<std::uint32_t>(i);
+    std::stable_sort(expected.begin(), expected.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
+    EXPECT_EQ(order, expected);
+    std::vector<std::uint64_t> u = keys, su = keys;
+    gi::sort_unique(u, 40);
+    std::sort(su.begin(), su.end());
+    su.erase(std::unique(su.begin(), su.end()), su.end());
+    EXPECT_EQ(u, su);
+    for (std::uint32_t x : {0u, 1u, 12345u, (1u << 21) - 1})
+        for (std::uint32_t y : {0u, 7u, (1u << 20)}) {
+            std::uint32_t a, b, c;
+            gi::demorton3(gi::morton3(x, y, 99u), a, b, c);
+            EXPECT_EQ(a, x);
+            EXPECT_EQ(b, y);
+            EXPECT_EQ(c, 99u);
+        }
+    EXPECT_EQ(gi::morton3(1, 0, 0), 1u);
+    EXPECT_EQ(gi::morton3(0, 1, 0), 2u);
+    EXPECT_EQ(gi::morton3(0, 0, 1), 4u);
+}
+
+TEST(Photons, RendererAddsTheCausticTimesTheAlbedo) {
+    // A plane whose pool carries a caustic octree of uniform irradiance E = 2 (deposits as in
+    // CausticOctreeEstimatesAKnownIrradiance): with render.caustics on, a camera ray hitting it
+    // gains diffuse x d x E; with it off (or the sections absent, with a warning) nothing changes.
+    test::TestModel m =
+        test::make_model(test::rect_points({-0.5, 0, -0.5}, {1, 0, 0}, {0, 0, 1}, {0, 1, 0}, 120), {0, 0, 0});
+    std::vector<photons::PhotonDeposit> deps;
+    const int side = 200;
+    for (int i = 0; i < side; ++i)
+        for (int j = 0; j < side; ++j) {
+            photons::PhotonDeposit d{};
+            d.position[0] = (i + 0.5f) / side - 0.5f;
+            d.position[2] = (j + 0.5f) / side - 0.5f;
+            d.flux[0] = d.flux[1] = d.flux[2] = 2.0f / (side * side);
+            d.normal[1] = 1;
+            deps.push_back(d);
+        }
+    double root_min[3], root_size;
+    std::uint32_t depth;
+    const auto plain = test::make_pool(m);
+    gi::splat_root(*plain, root_min, root_size, depth);
+    photons::GatherOptions g;
+    g.depth = depth + 1;
+    g.radius_edges = 1.5f;
+    const gi::GiOctree tree = photons::build_caustic_octree(deps, root_min, root_size, g);
+    pool::PoolWriter w;
+    w.carry_over(*plain);
+    w.add_array(pool::SectionType::caustic_info, std::vector<pool::GiInfo>{tree.info});
+    w.add_array(pool::SectionType::caustic_nodes, tree.nodes);
+    w.add_array(pool::SectionType::caustic_leaves, tree.leaves);
+    const auto with =
+        std::make_shared<const pool::PoolFile>(pool::PoolFile::from_bytes(w.serialize(), "plane.pool"));
+    auto scene = [](bool caustics) {
+        return std::string(R"({"lights": [{"type": "point", "position": [0, 1, 0], "casts_shadows": false}],
+            "materials": [{"name": "m", "ambient": [0, 0, 0], "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0],
+                           "diffuse_reflectance": 0.8, "use_point_colors": false}],
+            "models": [{"name": "plane", "pool": "plane.pool"}],
+            "environment": {"color": [0, 0, 0]}, "render": {"caustics": )") +
+               (caustics ? "true" : "false") + "}}";
+    };
+    const core::Ray down{core::Vec3{0.1f, 1.0f, 0.05f}, core::Vec3{0, -1, 0}, core::k_inf, 0u};
+    auto radiance = [&](const rt::RenderScene& rs) {
+        core::RayCounters c;
+        return core::trace_ray(rs.view(), down, c);
+    };
+    const rt::RenderScene on = test::load_gi_scene(scene(true), {with});
+    const rt::RenderScene off = test::load_gi_scene(scene(false), {with});
+    const rt::RenderScene missing = test::load_gi_scene(scene(true), {plain});
+    const core::Vec3 a = radiance(on), b = radiance(off), c = radiance(missing);
+    EXPECT_NEAR(a.y - b.y, 0.5 * 0.8 * 2.0, 0.05);
+    EXPECT_EQ(b.y, c.y);
+    bool warned = false;
+    for (const std::string& s : missing.warnings())
+        warned = warned || s.find("no caustic octree") != std::string::npos;
+    EXPECT_TRUE(warned);
+}
