@@ -181,6 +181,7 @@ TEST(GpuSurfaces, IsoMlsAndPatchesMatchTheCpu) {
     // with shadows and a reflective floor, and a mirror patch beside the sphere.
     const rt::BackendAvailability a = rt::backend_availability();
     if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
     TempDir dir("prt-gpu-surfaces");
     const auto sphere = sphere_pool_all_surfaces(dir.path, 40000);
     const auto bpt = flat_patch_file(dir.path, -1.5, -1.5, 0, 3);

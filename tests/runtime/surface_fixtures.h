@@ -26,6 +26,25 @@ struct TempDir {
     ~TempDir() { std::filesystem::remove_all(path); }
 };
 
+/// Whether the tools these fixtures run were built (prt-radii needs FLANN); tests skip otherwise.
+inline bool surface_tools_built(std::string* missing = nullptr) {
+    for (const char* t : {"prt-synth", "prt-radii", "prt-octree", "prt-iso", "prt-mls", "prt-patches"}) {
+        if (!std::filesystem::exists(std::filesystem::path(PRT_BIN_DIR) / t)) {
+            if (missing) *missing = t;
+            return false;
+        }
+    }
+    return true;
+}
+
+/// Skips the current test when a tool is missing.
+#define PRT_SKIP_WITHOUT_SURFACE_TOOLS()                                                          \
+    do {                                                                                          \
+        std::string missing_tool_;                                                                \
+        if (!::prt::test::surface_tools_built(&missing_tool_))                                    \
+            GTEST_SKIP() << missing_tool_ << " was not built (prt-radii needs FLANN): no test pools"; \
+    } while (0)
+
 /// Runs a tool and fails the test with its stderr when it fails.
 inline void must_run(const std::string& tool, const std::string& args, const std::filesystem::path& dir) {
     const ToolRun r = run_tool(tool, args, dir);

@@ -71,8 +71,9 @@ class SurfacesTest : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
         s_dir = new TempDir("prt-surfaces-test");
-        s_sphere = sphere_pool_all_surfaces(s_dir->path, 40000);
+        if (surface_tools_built()) s_sphere = sphere_pool_all_surfaces(s_dir->path, 40000);
     }
+    void SetUp() override { PRT_SKIP_WITHOUT_SURFACE_TOOLS(); }
     static void TearDownTestSuite() {
         delete s_dir;
         s_dir = nullptr;
@@ -165,6 +166,7 @@ TEST_F(SurfacesTest, ShadowsFallFromEverySurface) {
 }
 
 TEST(Patches, AFlatPatchIsHitOnItsPlaneAndMixesWithPointModels) {
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
     // prt-patches marks a single patch oriented (no conflicts), so the renderer applies the
     // seamless rule (thesis 3.6): rays from +z see its front face.
     TempDir dir("prt-surfaces-patch");
@@ -215,6 +217,7 @@ TEST(Patches, AFlatPatchIsHitOnItsPlaneAndMixesWithPointModels) {
 }
 
 TEST(Patches, AMirrorPatchReflectsTheBackgroundNeverItself) {
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
     TempDir dir("prt-surfaces-mirror");
     const auto bpt = flat_patch_file(dir.path, -1, -1, 0, 2);
     const auto pool_path = dir.path / "m.pool";

@@ -1,9 +1,14 @@
 // The only file of the runtime that includes OpenImageIO (built when PRT_HAVE_PRT_WITH_OIIO).
 #include <OpenImageIO/imageio.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "prt/error.h"
 #include "prt/runtime/image.h"
@@ -57,16 +62,54 @@ void write_oiio(const std::filesystem::path& path, const Image& image, float exp
     }
 }
 
+namespace {
+/// OpenImageIO's messages may span several lines (and repeat the file name); errors here are one line.
+std::string one_line(std::string message) {
+    for (char& c : message)
+        if (c == '\n' || c == '\r') c = ' ';
+    while (!message.empty() && message.back() == ' ') message.pop_back();
+    return message.empty() ? std::string("unknown reason") : message;
+}
+
+/// Silences file descriptor 2 while alive: libpng (under OpenImageIO 2.4) prints "libpng error:
+/// ..." to stderr itself before OpenImageIO reports the same problem, which would break the
+/// one-line error rule. Reading images happens while loading, not while rendering, so the short
+/// window in which other threads' stderr output is lost costs nothing.
+class QuietStderr {
+public:
+    QuietStderr() {
+        std::fflush(stderr);
+        m_saved = ::dup(2);
+        const int null_fd = ::open("/dev/null", O_WRONLY);
+        if (m_saved >= 0 && null_fd >= 0) ::dup2(null_fd, 2);
+        if (null_fd >= 0) ::close(null_fd);
+    }
+    ~QuietStderr() {
+        std::fflush(stderr);
+        if (m_saved >= 0) {
+            ::dup2(m_saved, 2);
+            ::close(m_saved);
+        }
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+    int m_saved = -1;
+};
+}  // namespace
+
 FloatImage read_oiio(const std::filesystem::path& path) {
+    QuietStderr quiet;
     auto in = OIIO::ImageInput::open(path.string());
-    if (!in) throw Error(path.string() + ": cannot read image (" + OIIO::geterror() + ")");
+    if (!in) throw Error(path.string() + ": cannot read image (" + one_line(OIIO::geterror()) + ")");
     const OIIO::ImageSpec& spec = in->spec();
     if (spec.width <= 0 || spec.height <= 0 || spec.nchannels <= 0)
         throw Error(path.string() + ": empty image");
     const int channels = spec.nchannels;
     std::vector<float> px(static_cast<std::size_t>(spec.width) * spec.height * channels);
     if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) {
-        throw Error(path.string() + ": cannot read pixels (" + in->geterror() + ")");
+        throw Error(path.string() + ": cannot read pixels (" + one_line(in->geterror()) + ")");
     }
     // 8-bit images are display-encoded (sRGB); float images are linear already.
     const bool srgb =
@@ -77,7 +120,9 @@ FloatImage read_oiio(const std::filesystem::path& path) {
     img.rgb.resize(static_cast<std::size_t>(img.width) * img.height * 3);
     for (std::size_t i = 0; i < static_cast<std::size_t>(img.width) * img.height; ++i) {
         for (int c = 0; c < 3; ++c) {
-            float v = px[i * channels + std::min(c, channels - 1)];
+            // Grey (1 channel) and grey + alpha (2 channels) replicate the grey channel; RGB(A) takes
+            // the first three (a 2-channel image used to take its alpha as green).
+            float v = px[i * channels + (channels >= 3 ? c : 0)];
             if (srgb) v = v <= 0.04045f ? v / 12.92f : std::pow((v + 0.055f) / 1.055f, 2.4f);
             img.rgb[i * 3 + c] = std::isfinite(v) ? v : 0.0f;
         }

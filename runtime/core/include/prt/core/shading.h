@@ -37,8 +37,12 @@ PRT_HD PRT_INLINE Vec3 srgb_to_linear(Vec3 c) {
 
 /// The background seen along unit direction `d` (render frame = world orientation, +y up):
 /// a latitude-longitude image (bilinear, u wraps) or the constant color, times the intensity.
+/// Image convention (tests/runtime/environment_test.cpp): column u = 0.5 + atan2(d.x, -d.z) / 2 pi
+/// (the image centre straight ahead along -z, +x to its right), row v = acos(d.y) / pi (row 0 = +y).
 PRT_HD inline Vec3 background(const EnvironmentView& env, Vec3 d) {
     if (env.image == nullptr || env.width == 0 || env.height == 0) return env.color * env.intensity;
+    // A non-finite direction has no texel (and float-to-int of NaN is undefined): no radiance.
+    if (!is_finite(d)) return Vec3{0, 0, 0};
     const float u = 0.5f + atan2f(d.x, -d.z) * (0.5f / k_pi);
     const float v = acosf(clampf(d.y, -1.0f, 1.0f)) * (1.0f / k_pi);
     const float fx = u * static_cast<float>(env.width) - 0.5f;
