@@ -101,6 +101,15 @@ std::vector<BenchScenario> bench_scenarios(const core::RenderParams& base) {
     r.params.max_bounces = 4;
     r.params.min_ray_weight = 0.0f;  // every bounce is traced
     all.push_back(r);
+    // Issue 5's second target: shadows and 4 bounces together (not run by default: --scenarios).
+    BenchScenario f{"full4",
+                    "primary + 4 bounces of reflection (reflectivity 0.8) + shadow rays at every hit", base,
+                    true, 0.5};
+    f.params.shadows = 1;
+    f.params.reflections = 1;
+    f.params.max_bounces = 4;
+    f.params.min_ray_weight = 0.0f;
+    all.push_back(f);
     return all;
 }
 

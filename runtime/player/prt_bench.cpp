@@ -236,7 +236,9 @@ int main(int argc, char** argv) {
                 ->check(CLI::Range(1u, 100000u));
             app.add_option("--warmup", o.warmup, "Untimed frames before timing")
                 ->check(CLI::Range(0u, 100000u));
-            app.add_option("--scenarios", o.scenarios, "Comma-separated subset of primary,shadow,reflect4");
+            app.add_option("--scenarios", o.scenarios,
+                           "Comma-separated subset of primary, shadow, reflect4 and full4 (shadows + 4 "
+                           "bounces; not in the default)");
             app.add_option("--json", o.json, "Write the results as JSON to this file");
             app.add_flag("--profile", o.profile,
                          "Also trace the shadow and reflect4 frames on the host, recording each ray's work: "

@@ -322,6 +322,13 @@ private:
                                                    rgba_target(req), m_counters.data());
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
+        if (m_surface_mask == core::k_mask_patches && !sampling) {
+            // Patch-only scenes: double-precision Newton without the point surfaces' registers.
+            z ? launch(render_kernel<true, 4, core::k_mask_patches>)
+              : launch(render_kernel<false, 4, core::k_mask_patches>);
+            PRT_CUDA_CHECK_LAUNCH();
+            return;
+        }
         if (m_surface_mask != core::k_mask_splats || sampling) {
             // The general kernel (every surface, sampling) exists for the default occupancy only.
             z ? launch(render_kernel<true, 4, core::k_mask_all>)
