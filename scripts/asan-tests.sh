@@ -3,6 +3,9 @@
 # into BUILD_DIR and runs the CPU test suite (ctest -L cpu) under them. Prints how long the build
 # and the tests took. Any sanitizer report fails the test that triggered it (UBSan is not
 # recoverable in this build; ASan aborts; LeakSanitizer reports make the process exit non-zero).
+# Installs nothing: g++ from scripts/install-deps.sh brings libasan and libubsan (Debian's
+# libgcc-12-dev depends on them); clang and libFuzzer are for scripts/fuzz.sh only. Run by .ci/run
+# after the README's test command.
 #
 # Usage: scripts/asan-tests.sh [--clean] [ctest arguments...]
 #   --clean    remove BUILD_DIR first (a clean build, as CI would do)
@@ -10,7 +13,7 @@
 #   CMAKE_ARGS (extra configure arguments, e.g. "-DPRT_WITH_PCL=OFF").
 set -euo pipefail
 if [ "${1:-}" = "-h" ] || [ "${1:-}" = "--help" ]; then
-    sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
+    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
     exit 0
 fi
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -30,6 +33,8 @@ export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
 
 start=$(date +%s)
 mkdir -p "$build"
+# g++, the compiler scripts/build.sh gets on Debian, unless CC/CXX say otherwise.
+export CC=${CC:-gcc} CXX=${CXX:-g++}
 # shellcheck disable=SC2086 # CMAKE_ARGS holds several arguments
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DPRT_SANITIZE=ON -DPRT_WITH_CUDA=OFF \
     ${CMAKE_ARGS:-} >"$build/asan-configure.log" 2>&1 || { cat "$build/asan-configure.log" >&2; exit 1; }

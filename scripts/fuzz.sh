@@ -4,7 +4,7 @@
 # time, and prints executions, coverage and findings per target. Not part of every CI run.
 #
 # Usage: scripts/fuzz.sh [options] [TARGET...]
-#   TARGET             ply pcd xyz obj off ply-mesh scene pool (default: all of them)
+#   TARGET             ply pcd xyz obj off ply-mesh scene pool patches (default: all of them)
 #   -t, --time SECONDS time per target (default 60)
 #   -b, --build DIR    build folder (default: build-fuzz at the repository root)
 #   -j, --jobs N       compile jobs (default: $JOBS, else 2)
@@ -22,7 +22,7 @@ set -euo pipefail
 usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; }
 
 root=$(cd "$(dirname "$0")/.." && pwd)
-all_targets=(ply pcd xyz obj off ply-mesh scene pool)  # patches: add here with its entry (tests/fuzz)
+all_targets=(ply pcd xyz obj off ply-mesh scene pool patches)
 seconds=60
 build=$root/build-fuzz
 jobs=${JOBS:-2}

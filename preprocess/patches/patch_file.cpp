@@ -19,6 +19,20 @@ namespace {
 /// Elements reserved before reading (more grow as lines arrive).
 constexpr std::uint64_t k_reserve_max = 1u << 16;
 
+/// Fewest bytes of text one element can take: a .bpt patch ("3 3" and 16 lines "0 0 0"), a
+/// Newell index line (16 one-digit indices and 15 separators), a vertex line ("0 0 0").
+constexpr std::uint64_t k_min_bpt_patch_bytes = 4 + 16 * 6;
+constexpr std::uint64_t k_min_index_line_bytes = 32;
+constexpr std::uint64_t k_min_vertex_bytes = 6;
+
+/// How many of `count` claimed elements to reserve: never more than the text can hold (a short
+/// file claiming pool::k_max_patches patches reserves almost nothing; issue 10, found by the
+/// resource-limit tests), nor more than k_reserve_max elements.
+std::uint64_t reserve_count(std::uint64_t count, std::string_view text, std::uint64_t min_bytes,
+                            std::uint64_t cap = k_reserve_max) {
+    return std::min({count, text.size() / min_bytes + 1, cap});
+}
+
 /// Longest token quoted back in an error message.
 constexpr std::size_t k_quote_max = 40;
 
@@ -176,7 +190,7 @@ PatchSet parse_bpt(std::string_view text, const std::string& label) {
     const std::uint64_t count = read_count(reader, "patch count", pool::k_max_patches, "(empty file)");
     // Storage grows with the lines actually read: a header claiming millions of patches in a short
     // file allocates nothing up front.
-    set.nets.reserve(std::min<std::uint64_t>(count, k_reserve_max));
+    set.nets.reserve(reserve_count(count, text, k_min_bpt_patch_bytes));
     for (std::uint64_t p = 0; p < count; ++p) {
         const std::string name = "patch " + std::to_string(p + 1);
         std::string_view line;
@@ -209,8 +223,8 @@ PatchSet parse_newell(std::string_view text, const std::string& label) {
     const std::uint64_t count = read_count(reader, "patch count", pool::k_max_patches, "(empty file)");
     std::vector<std::uint32_t> indices;
     std::vector<std::size_t> lines;
-    indices.reserve(std::min<std::uint64_t>(count, k_reserve_max) * 16);
-    lines.reserve(std::min<std::uint64_t>(count, k_reserve_max));
+    indices.reserve(reserve_count(count, text, k_min_index_line_bytes) * 16);
+    lines.reserve(reserve_count(count, text, k_min_index_line_bytes));
     std::string_view line;
     for (std::uint64_t p = 0; p < count; ++p) {
         const std::string name = "patch " + std::to_string(p + 1);
@@ -230,7 +244,7 @@ PatchSet parse_newell(std::string_view text, const std::string& label) {
     const std::uint64_t vcount =
         read_count(reader, "vertex count", std::uint64_t(pool::k_max_patches) * 16, "after the patches");
     std::vector<pool::PatchPoint> vertices;
-    vertices.reserve(std::min<std::uint64_t>(vcount, k_reserve_max * 16));
+    vertices.reserve(reserve_count(vcount, text, k_min_vertex_bytes, k_reserve_max * 16));
     for (std::uint64_t v = 0; v < vcount; ++v) {
         if (!reader.next(line))
             reader.fail_eof("after " + std::to_string(v) + " of the " + std::to_string(vcount) +

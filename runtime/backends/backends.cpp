@@ -2,6 +2,9 @@
 #include <algorithm>
 #include <chrono>
 #include <future>
+#include <memory>
+#include <string>
+#include <utility>
 
 #include "prt/cpu/cpu_backend.h"
 #include "prt/error.h"
@@ -13,6 +16,24 @@
 namespace prt::rt {
 
 namespace {
+
+/// --backend auto where CUDA cannot run: the CPU backend, whose device() also says why the GPU
+/// was not used (issue 10: the fallback gives one note, the tools' backend line, not silence and
+/// not a stack of messages; --quiet silences it with the rest).
+class AutoFallbackBackend final : public Backend {
+public:
+    AutoFallbackBackend(std::unique_ptr<Backend> cpu, std::string why)
+        : m_cpu(std::move(cpu)), m_why(std::move(why)) {}
+
+    std::string name() const override { return m_cpu->name(); }
+    std::string device() const override { return m_cpu->device() + " (--backend auto: " + m_why + ")"; }
+    UploadStats set_scene(const core::SceneView& scene) override { return m_cpu->set_scene(scene); }
+    FrameStats render(const FrameRequest& req, Image& image) override { return m_cpu->render(req, image); }
+
+private:
+    std::unique_ptr<Backend> m_cpu;
+    std::string m_why;
+};
 
 #ifdef PRT_HAVE_CUDA
 /// seed 002 (hybrid CPU+GPU): each frame's rows are split between the GPU and the CPU in
@@ -95,7 +116,9 @@ std::unique_ptr<Backend> make_backend(const std::string& name, const BackendOpti
     if (name == "cuda" || name == "hybrid" || name == "auto") {
         const BackendAvailability a = backend_availability();
         if (!a.cuda_device) {
-            if (name == "auto") return cpu::make_cpu_backend(options.cpu_threads);
+            if (name == "auto")
+                return std::make_unique<AutoFallbackBackend>(cpu::make_cpu_backend(options.cpu_threads),
+                                                             a.cuda_why);
             throw Error("--backend " + name + ": " + a.cuda_why + " (use --backend cpu)");
         }
 #ifdef PRT_HAVE_CUDA

@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "import.h"
+#include "patch_file.h"
 #include "point_cloud.h"
 #include "prt/error.h"
 #include "prt/formats/pool.h"
@@ -238,6 +240,112 @@ Result pool_entry(Bytes input) {
     return raw;
 }
 
+// ---- Bezier patch files ----------------------------------------------------------------------
+
+/// Appends a double in its shortest form that reads back to the same bits (std::to_chars).
+void put_number(std::string& out, double v) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, v);
+    out.append(buf, r.ptr);
+}
+
+/// Accepted nets written back as a patch file of `format` (.bpt: count, "3 3", 16 points per
+/// patch; Newell: every patch with its own 16 vertices), numbers in shortest round-trip form.
+std::string patch_text(const std::vector<pool::PatchControlNet>& nets, patches::PatchFormat format) {
+    std::string s = std::to_string(nets.size()) + "\n";
+    const bool bpt = format == patches::PatchFormat::bpt;
+    if (!bpt)
+        for (std::size_t p = 0; p < nets.size(); ++p)
+            for (int k = 0; k < 16; ++k) s += std::to_string(16 * p + k + 1) + (k == 15 ? "\n" : ",");
+    if (!bpt) s += std::to_string(16 * nets.size()) + "\n";
+    for (const pool::PatchControlNet& net : nets) {
+        if (bpt) s += "3 3\n";
+        for (const pool::PatchPoint& q : net.p) {
+            put_number(s, q.x);
+            s += bpt ? ' ' : ',';
+            put_number(s, q.y);
+            s += bpt ? ' ' : ',';
+            put_number(s, q.z);
+            s += '\n';
+        }
+    }
+    return s;
+}
+
+/// Oracles on a patch set a reader accepted: at least one and at most pool::k_max_patches nets,
+/// the format it says it read, finite control points, and writing the nets back as .bpt and as
+/// Newell text reads back (by content detection) to the same format and the same bits.
+std::string check_patches(const patches::PatchSet& set, patches::PatchFormat expected) {
+    using patches::PatchFormat;
+    if (set.nets.empty()) return "accepted a file without patches";
+    if (set.nets.size() > pool::k_max_patches) return "accepted more patches than pool::k_max_patches";
+    const bool format_ok =
+        expected == PatchFormat::automatic ? set.format != PatchFormat::automatic : set.format == expected;
+    if (!format_ok) return std::string("read as ") + patches::patch_format_name(set.format);
+    for (const pool::PatchControlNet& net : set.nets)
+        for (const pool::PatchPoint& q : net.p)
+            if (!std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+                return "non-finite control point";
+    for (const PatchFormat format : {PatchFormat::bpt, PatchFormat::newell}) {
+        const std::string text = patch_text(set.nets, format);
+        patches::PatchSet back;
+        try {
+            back = patches::parse_patches(text, "round-trip", PatchFormat::automatic);
+        } catch (const Error& e) {
+            return std::string("written back as ") + patches::patch_format_name(format) +
+                   " it does not parse: " + e.what();
+        }
+        if (back.format != format)
+            return std::string("written back as ") + patches::patch_format_name(format) +
+                   " it is detected as " + patches::patch_format_name(back.format);
+        if (back.nets.size() != set.nets.size() ||
+            std::memcmp(back.nets.data(), set.nets.data(), set.nets.size() * sizeof(pool::PatchControlNet)) !=
+                0)
+            return std::string("written back as ") + patches::patch_format_name(format) + " the nets changed";
+    }
+    return {};
+}
+
+/// One reading of a patch input; folds its outcome into `r` (the first rejection's message is
+/// kept, any acceptance counts, the first oracle violation wins).
+template <class Read>
+void patch_attempt(Result& r, Read read, const std::string& label, patches::PatchFormat expected) {
+    Result one;
+    try {
+        const patches::PatchSet set = read();
+        one.accepted = true;
+        one.violation = check_patches(set, expected);
+    } catch (const Error& e) {
+        one.message = e.what();
+        check_message(one, label);
+    }
+    r.accepted = r.accepted || one.accepted;
+    if (r.message.empty()) r.message = one.message;
+    if (r.violation.empty() && !one.violation.empty())
+        r.violation = patches::patch_format_name(expected) + std::string(" reading: ") + one.violation;
+}
+
+/// The input's text through parse_patches with content detection (what prt-patches does with a
+/// file not named .bpt; its rejection is the entry's message), then through read_patch_file as
+/// input.bpt (the extension selects the .bpt parser), then parsed as Newell.
+Result patch_entry(Bytes input) {
+    using patches::PatchFormat;
+    const std::string text(reinterpret_cast<const char*>(input.data()), input.size());
+    const std::string label = "fuzz.patches";
+    Result r;
+    patch_attempt(
+        r, [&] { return patches::parse_patches(text, label, PatchFormat::automatic); }, label,
+        PatchFormat::automatic);
+    const fs::path path = write_input(input, "bpt");
+    patch_attempt(
+        r, [&] { return patches::read_patch_file(path, PatchFormat::automatic); }, path.string(),
+        PatchFormat::bpt);
+    patch_attempt(
+        r, [&] { return patches::parse_patches(text, label, PatchFormat::newell); }, label,
+        PatchFormat::newell);
+    return r;
+}
+
 }  // namespace
 
 const fs::path& scratch_dir() {
@@ -277,6 +385,8 @@ Result run(Target target, Bytes input) {
             return scene_entry(input);
         case Target::pool:
             return pool_entry(input);
+        case Target::patches:
+            return patch_entry(input);
     }
     return {};
 }

@@ -23,7 +23,8 @@ namespace prt::fuzz {
 struct Result {
     bool accepted = false;  ///< the reader produced a result (points, pool, scene)
     std::string message;    ///< the prt::Error message when rejected (meshes: also when accepted
-                            ///< as vertices but refused for sampling)
+                            ///< as vertices but refused for sampling; patches: also when one of
+                            ///< its three readings refused it)
     std::string violation;  ///< non-empty: an oracle failed (a bug even though nothing crashed)
 };
 
@@ -40,8 +41,8 @@ enum class Target {
     ply_mesh,  ///< the same for a .ply with faces (precheck by our PLY reader, then OpenMesh's)
     scene,     ///< formats: parse_scene, then to_json/parse_scene round trip
     pool,      ///< formats: PoolFile::from_bytes (full validation), then every section read
-    // patches: the .bpt/Newell reader (preprocess/patches, parse_patches) gets its entry here once
-    // its API settles: add `patches` to this enum, k_targets, run() and tests/fuzz/CMakeLists.txt.
+    patches,   ///< preprocess/patches: parse_patches with content detection (.bpt or Newell),
+               ///< read_patch_file on input.bpt (the .bpt parser), parse_patches as Newell
 };
 
 struct TargetInfo {
@@ -53,6 +54,7 @@ struct TargetInfo {
 inline constexpr TargetInfo k_targets[] = {
     {Target::ply, "ply"}, {Target::pcd, "pcd"},           {Target::xyz, "xyz"},     {Target::obj, "obj"},
     {Target::off, "off"}, {Target::ply_mesh, "ply-mesh"}, {Target::scene, "scene"}, {Target::pool, "pool"},
+    {Target::patches, "patches"},
 };
 
 /// Whether this build has the library a target needs (PCL for pcd, OpenMesh for the meshes).

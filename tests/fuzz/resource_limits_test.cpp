@@ -1,5 +1,6 @@
 // Resource limits (issue 10): a header that claims 10^15 points (PLY element counts, PCD POINTS and
-// WIDTH x HEIGHT, OFF counts, pool section counts) is refused before anything is allocated for
+// WIDTH x HEIGHT, OFF counts, pool section counts, patch and vertex counts of patch files) is
+// refused before anything is allocated for
 // it: fast, with one line, never std::bad_alloc. This binary replaces the global operator new to
 // record the largest single request made while a reader runs; readers may allocate small fixed
 // buffers, but nothing that grows with the claimed count.
@@ -21,6 +22,7 @@
 #include <vector>
 
 #include "fuzz_entries.h"
+#include "prt/formats/patch_layout.h"
 #include "prt/formats/pool.h"
 
 namespace {
@@ -337,3 +339,39 @@ TEST(ResourceLimits, TheAllocationCounterSeesALargeRequest) {
 }
 
 }  // namespace
+
+// ---- Bezier patch files (.bpt and Newell): counts up to pool::k_max_patches are legal, so a
+// short file claiming that many must not reserve storage for them.
+
+/// One flat bicubic patch's 16 control point lines.
+std::string flat_points(char separator) {
+    std::string s;
+    for (int k = 0; k < 16; ++k)
+        s += std::to_string(k % 4) + separator + std::to_string(k / 4) + separator + "0\n";
+    return s;
+}
+
+TEST(ResourceLimits, PatchBptCountAtTheLimit) {
+    const std::string n = std::to_string(prt::pool::k_max_patches);
+    expect_refused(Target::patches, n + "\n3 3\n" + flat_points(' '),
+                   "unexpected end of file after 1 of the " + n + " patches the header announces");
+}
+
+TEST(ResourceLimits, PatchBptCountTenToTheFifteen) {
+    expect_refused(
+        Target::patches, k_count + "\n3 3\n" + flat_points(' '),
+        "the patch count " + k_count + " exceeds the limit of " + std::to_string(prt::pool::k_max_patches));
+}
+
+TEST(ResourceLimits, PatchNewellCountsAtTheLimit) {
+    // The patch count at its limit: one index line; then, for a one-patch file, the vertex count
+    // at its limit (16 per patch) with one vertex line.
+    const std::string n = std::to_string(prt::pool::k_max_patches);
+    std::string indices;
+    for (int k = 1; k <= 16; ++k) indices += std::to_string(k) + (k < 16 ? "," : "\n");
+    expect_refused(Target::patches, n + "\n" + indices,
+                   "unexpected end of file after 1 of the " + n + " patches the header announces");
+    const std::string v = std::to_string(std::uint64_t(prt::pool::k_max_patches) * 16);
+    expect_refused(Target::patches, "1\n" + indices + v + "\n0,0,0\n",
+                   "unexpected end of file after 1 of the " + v + " vertices the header announces");
+}

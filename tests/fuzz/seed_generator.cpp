@@ -1,8 +1,10 @@
 // prt-fuzz-seeds OUT_DIR: writes the binary part of the fuzz seed corpus into OUT_DIR/TARGET/
 // (binary PLY in both byte orders, PCD binary and binary_compressed, pool files with every
-// section type the reader validates). The text seeds live in tests/fuzz/corpus/TARGET/; binary
-// files are generated here instead of being committed. Run by scripts/fuzz.sh.
+// section type the reader validates) and a generated grid of Bezier patches (full-precision
+// numbers, both patch formats). The text seeds live in tests/fuzz/corpus/TARGET/; binary and
+// larger files are generated here instead of being committed. Run by scripts/fuzz.sh.
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -183,9 +185,44 @@ void save_pool(const fs::path& path, const std::vector<std::byte>& bytes) {
 
 }  // namespace
 
+/// A 3 x 3 grid of bicubic patches over a wavy height field, neighbours sharing their edge
+/// control points: .bpt (every patch with its 16 points) or Newell (shared vertices indexed once,
+/// comma separated). Coordinates printed with 17 significant digits and exponents.
+std::string patch_grid(bool newell) {
+    constexpr int k_grid = 3;               // patches per side
+    constexpr int k_side = 3 * k_grid + 1;  // control points per side
+    const auto vertex = [](int i, int j) { return i * k_side + j; };
+    std::vector<std::string> points;
+    for (int i = 0; i < k_side; ++i)
+        for (int j = 0; j < k_side; ++j) {
+            char line[128];
+            const double x = j / 3.0, y = i / 3.0, z = 0.25 * std::sin(x) * std::cos(1.7 * y) - 1e-7;
+            std::snprintf(line, sizeof line, newell ? "%.17g,%.17g,%.17e\n" : "%.17g %.17g %.17e\n", x, y, z);
+            points.emplace_back(line);
+        }
+    std::string s = std::to_string(k_grid * k_grid) + "\n";
+    for (int pi = 0; pi < k_grid; ++pi)
+        for (int pj = 0; pj < k_grid; ++pj) {
+            if (!newell) s += "3 3\n";
+            for (int k = 0; k < 16; ++k) {
+                const int v = vertex(3 * pi + k / 4, 3 * pj + k % 4);
+                if (newell)
+                    s += std::to_string(v + 1) + (k == 15 ? "\n" : ",");
+                else
+                    s += points[v];
+            }
+        }
+    if (newell) {
+        s += std::to_string(points.size()) + "\n";
+        for (const std::string& p : points) s += p;
+    }
+    return s;
+}
+
 int main(int argc, char** argv) {
     if (argc != 2) {
-        std::fprintf(stderr, "usage: prt-fuzz-seeds OUT_DIR\n  writes OUT_DIR/{ply,ply-mesh,pcd,pool}/*\n");
+        std::fprintf(stderr,
+                     "usage: prt-fuzz-seeds OUT_DIR\n  writes OUT_DIR/{ply,ply-mesh,pcd,pool,patches}/*\n");
         return 2;
     }
     const fs::path out = argv[1];
@@ -215,6 +252,8 @@ int main(int argc, char** argv) {
         save_pool(out / "pool" / "points.pool", pool_full(false, false));
         save_pool(out / "pool" / "octree.pool", pool_full(true, false));
         save_pool(out / "pool" / "octree-unknown-section.pool", pool_full(true, true));
+        save(out / "patches" / "grid.bpt", patch_grid(false));
+        save(out / "patches" / "grid-newell.txt", patch_grid(true));
     } catch (const std::exception& e) {
         std::fprintf(stderr, "prt-fuzz-seeds: %s\n", e.what());
         return 1;

@@ -212,3 +212,74 @@ TEST_F(PlayerTest, EmbreePeerBenchmarkTracesTheSameSurface) {
 
 }  // namespace
 }  // namespace prt::test
+
+// ---- issue 10 (reliability): a missing device ----------------------------------------------------
+namespace prt::test {
+namespace {
+
+/// How often `needle` occurs in `s`.
+int occurrences(const std::string& s, const std::string& needle) {
+    int n = 0;
+    for (std::size_t at = s.find(needle); at != std::string::npos; at = s.find(needle, at + needle.size()))
+        ++n;
+    return n;
+}
+
+TEST_F(PlayerTest, MissingDeviceIsOneLineAndAutoFallsBackWithOneNote) {
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (a.cuda_device) GTEST_SKIP() << "a CUDA device exists here: nothing is missing";
+    ASSERT_FALSE(a.cuda_why.empty());
+    const std::string pool = (m_dir / "ball.pool").string();
+    const std::string small = " --width 8 --height 8";
+    const std::string bench_args = small + " --frames 1 --warmup 0 --json ";
+
+    // cuda and hybrid: prt-play and prt-bench print exactly one line, the reason, exit 1 and
+    // write nothing.
+    for (const std::string backend : {"cuda", "hybrid"}) {
+        SCOPED_TRACE(backend);
+        const ToolRun play = run_tool(
+            "prt-play",
+            pool + " --headless --backend " + backend + small + " --out " + (m_dir / "x.ppm").string(),
+            m_dir);
+        const ToolRun bench = run_tool(
+            "prt-bench", pool + " --backend " + backend + bench_args + (m_dir / "x.json").string(), m_dir);
+        for (const ToolRun* r : {&play, &bench}) {
+            EXPECT_EQ(r->code, 1);
+            EXPECT_EQ(lines(r->err), 1) << r->err;
+            EXPECT_NE(r->err.find("error: --backend " + backend + ": " + a.cuda_why), std::string::npos)
+                << r->err;
+        }
+        EXPECT_FALSE(fs::exists(m_dir / "x.ppm"));
+        EXPECT_FALSE(fs::exists(m_dir / "x.json"));
+    }
+
+    // auto: renders on the CPU, and the backend line says once why the GPU was not used.
+    const std::string note = "backend cpu on CPU";
+    const std::string why = "(--backend auto: " + a.cuda_why + ")";
+    const fs::path image = m_dir / "auto.ppm";
+    const ToolRun play =
+        run_tool("prt-play", pool + " --headless --backend auto" + small + " --out " + image.string(), m_dir);
+    ASSERT_EQ(play.code, 0) << play.err;
+    EXPECT_TRUE(fs::exists(image));
+    EXPECT_EQ(occurrences(play.err, a.cuda_why), 1) << play.err;
+    EXPECT_NE(play.err.find(why), std::string::npos) << play.err;
+    EXPECT_NE(play.err.find(note), std::string::npos) << play.err;
+    EXPECT_EQ(play.err.find("error"), std::string::npos) << play.err;
+    // --quiet silences the note with the rest.
+    const ToolRun quiet = run_tool(
+        "prt-play", pool + " --headless -q --backend auto" + small + " --out " + image.string(), m_dir);
+    EXPECT_EQ(quiet.code, 0) << quiet.err;
+    EXPECT_EQ(quiet.err, "");
+    // prt-bench: the same note, and the JSON report records it with the device.
+    const fs::path json = m_dir / "auto.json";
+    const ToolRun bench = run_tool("prt-bench", pool + " --backend auto" + bench_args + json.string(), m_dir);
+    ASSERT_EQ(bench.code, 0) << bench.err;
+    EXPECT_EQ(occurrences(bench.err + bench.out, a.cuda_why), 1)
+        << bench.err << bench.out;  // its summary line
+    const auto report = nlohmann::json::parse(slurp(json));
+    EXPECT_EQ(report["backend"], "cpu");
+    EXPECT_NE(report["device"].get<std::string>().find(why), std::string::npos) << report["device"];
+}
+
+}  // namespace
+}  // namespace prt::test

@@ -1,8 +1,9 @@
 // Atomic outputs (issue 10): prt-import killed with SIGKILL at any moment, during reading, cleaning
 // or in the middle of writing its output, leaves the previous pool at the output path intact (it
 // still opens with PoolFile, byte for byte the same) and no partial file there. The only trace a
-// killed run leaves is its own temporary file, PATH.tmp.PID (PoolWriter, formats/POOL.md "Writing"),
-// which a later successful run does not remove; the test pins that down so a change is noticed.
+// killed run leaves is its own temporary file, PATH.tmp.HOST.PID (PoolWriter, formats/POOL.md
+// "Writing"); the next successful write of PATH removes it, because HOST is this host and PID is
+// dead, and never the temporary file of a live writer, of another host or of another PATH.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
@@ -12,6 +13,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstdint>
@@ -111,6 +113,34 @@ protected:
     fs::path m_dir;
 };
 
+/// HOST of the temporary names as formats/POOL.md defines it: gethostname() with every character
+/// other than A-Z a-z 0-9 - _ replaced by '_' ("localhost" when there is no name).
+std::string host_tag() {
+    char name[256] = {};
+    if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "localhost";
+    std::string tag(name);
+    std::replace_if(
+        tag.begin(), tag.end(), [](unsigned char c) { return !std::isalnum(c) && c != '-' && c != '_'; },
+        '_');
+    return tag;
+}
+
+/// The temporary file a writer with this pid uses for `path`.
+fs::path temporary_of(const fs::path& path, pid_t pid) {
+    return path.string() + ".tmp." + host_tag() + "." + std::to_string(pid);
+}
+
+/// Names in `dir` that start with `prefix`, sorted.
+std::vector<std::string> names_with(const fs::path& dir, const std::string& prefix) {
+    std::vector<std::string> out;
+    for (const auto& e : fs::directory_iterator(dir)) {
+        const std::string name = e.path().filename().string();
+        if (name.rfind(prefix, 0) == 0) out.push_back(name);
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
 /// Size of a file, or -1 when it does not exist.
 std::int64_t size_of(const fs::path& p) {
     struct stat st {};
@@ -146,14 +176,14 @@ TEST_F(AtomicWriteTest, KilledImportLeavesThePreviousPoolIntact) {
         {"10% of a run", 0.1, 0},          {"40% of a run", 0.4, 0},
         {"70% of a run", 0.7, 0},          {"90% of a run", 0.9, 0},
         {"temporary file created", -1, 0}, {"temporary file half written", -1, full_size / 2}};
-    std::vector<std::string> stale;  // temporary files of killed runs
+    std::vector<std::string> stale;  // temporary files of killed runs (a later run may remove them)
     std::string current = previous;  // what out.pool must hold: the last complete pool
     int killed_mid_write = 0;        // killed with its temporary file there, out.pool untouched
     int finished_before_kill = 0;    // the rename came first: out.pool is the new, complete pool
     for (const Moment& m : moments) {
         SCOPED_TRACE(m.name);
         const pid_t pid = start(big, out);
-        const fs::path tmp = m_dir / ("out.pool.tmp." + std::to_string(pid));
+        const fs::path tmp = temporary_of(out, pid);
         const auto begin = Clock::now();
         if (m.fraction >= 0) {
             std::this_thread::sleep_for(std::chrono::duration<double>(m.fraction * full_seconds));
@@ -187,7 +217,8 @@ TEST_F(AtomicWriteTest, KilledImportLeavesThePreviousPoolIntact) {
             current = now;
         }
         EXPECT_NO_THROW((void)prt::pool::PoolFile::open(out));
-        // Nothing else appeared but this run's temporary file.
+        // Nothing else appeared but this run's temporary file (earlier killed runs' files are there
+        // too unless a run finished, which removes them).
         for (const auto& e : fs::directory_iterator(m_dir)) {
             const std::string name = e.path().filename().string();
             if (name == "small.ply" || name == "big.ply" || name == "out.pool" || name == "stderr.txt")
@@ -206,27 +237,62 @@ TEST_F(AtomicWriteTest, KilledImportLeavesThePreviousPoolIntact) {
     std::cout << "[ note ] " << killed_mid_write << " runs killed while their output was being written, "
               << finished_before_kill << " finished before the signal arrived\n";
 
-    // A later successful run replaces the pool and leaves no temporary file of its own.
+    // A later successful run replaces the pool and removes the killed runs' temporary files (their
+    // PIDs are dead: each was reaped above) along with leaving none of its own.
+    const std::vector<std::string> before = names_with(m_dir, "out.pool.tmp.");
+    std::uint64_t before_bytes = 0;
+    for (const std::string& name : before) before_bytes += fs::file_size(m_dir / name);
+    EXPECT_GE(before.size(), 1u) << "the run killed as its temporary file appeared left no file";
     const pid_t pid = start(big, out);
     ASSERT_EQ(finish(pid), 0) << slurp(m_dir / "stderr.txt");
     EXPECT_EQ(prt::pool::PoolFile::open(out).model_info().point_count, k_points);
-    EXPECT_FALSE(fs::exists(m_dir / ("out.pool.tmp." + std::to_string(pid))));
-    // Current behaviour (formats/src/pool_writer.cpp): the killed runs' temporary files stay;
-    // nothing removes them. Each is a partial pool that no tool will ever open as PATH.
-    std::vector<std::string> left;
-    std::uint64_t left_bytes = 0;
-    for (const auto& e : fs::directory_iterator(m_dir)) {
-        const std::string name = e.path().filename().string();
-        if (name.rfind("out.pool.tmp.", 0) == 0) {
-            left.push_back(name);
-            left_bytes += fs::file_size(e.path());
-        }
-    }
-    std::sort(left.begin(), left.end());
-    std::sort(stale.begin(), stale.end());
-    EXPECT_EQ(left, stale) << "only the killed runs' temporary files may remain";
+    EXPECT_EQ(names_with(m_dir, "out.pool.tmp."), std::vector<std::string>{})
+        << "stale temporary files of dead writers must be gone after a successful write";
     std::cout << "[ note ] full import " << full_seconds << " s, pool " << full_size << " bytes; "
-              << left.size() << " stale temporary files of killed runs remain (" << left_bytes << " bytes)\n";
+              << before.size() << " stale temporary files of killed runs (" << before_bytes
+              << " bytes) removed by the next successful write\n";
+}
+
+TEST_F(AtomicWriteTest, CleanupSparesLiveWritersOtherHostsAndOtherOutputs) {
+    const fs::path small = m_dir / "small.ply";
+    const fs::path out = m_dir / "out.pool";
+    write_ply(small, 1000, 100.f);
+    // A dead PID (a child that exited and was reaped) and a live one (a child waiting to be killed).
+    const pid_t dead = ::fork();
+    ASSERT_GE(dead, 0);
+    if (dead == 0) ::_exit(0);
+    ASSERT_EQ(finish(dead), 0);
+    const pid_t live = ::fork();
+    ASSERT_GE(live, 0);
+    if (live == 0) {
+        ::pause();
+        ::_exit(0);
+    }
+    ASSERT_EQ(::kill(dead, 0), -1) << "pid " << dead << " was reused at once";
+    ASSERT_EQ(errno, ESRCH);
+
+    const std::string tag = host_tag();
+    const std::string d = std::to_string(dead);
+    const std::vector<std::string> removed{"out.pool.tmp." + tag + "." + d};
+    std::vector<std::string> kept{
+        "out.pool.tmp." + tag + "." + std::to_string(live),        // a live writer
+        "out.pool.tmp." + tag + "." + std::to_string(::getpid()),  // this test, also alive
+        "out.pool.tmp.other-host-" + tag + "." + d,                // another host on a shared folder
+        "other.pool.tmp." + tag + "." + d,                         // another output's temporary file
+        "out.pool.tmp." + tag + "." + d + "x",                     // not a writer's name
+        "out.pool.tmp." + tag + ".0" + d,
+        "out.pool.tmp." + d,  // the name before HOST was added: whose it was is unknown
+    };
+    for (const std::string& name : removed) std::ofstream(m_dir / name) << "partial";
+    for (const std::string& name : kept) std::ofstream(m_dir / name) << "partial";
+
+    const int status = finish(start(small, out));
+    ::kill(live, SIGKILL);
+    finish(live);
+    ASSERT_EQ(status, 0) << slurp(m_dir / "stderr.txt");
+    EXPECT_EQ(prt::pool::PoolFile::open(out).model_info().point_count, 1000u);
+    for (const std::string& name : removed) EXPECT_FALSE(fs::exists(m_dir / name)) << name;
+    for (const std::string& name : kept) EXPECT_TRUE(fs::exists(m_dir / name)) << name;
 }
 
 }  // namespace

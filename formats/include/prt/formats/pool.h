@@ -102,8 +102,9 @@ public:
     void add_provenance(const std::string& tool, const std::string& version,
                         const std::string& parameters_json);
 
-    /// Writes to "PATH.tmp.PID", fsyncs, renames over PATH. On any failure the temporary file is
-    /// removed and PATH is untouched. Returns the bytes written.
+    /// Writes to "PATH.tmp.HOST.PID", fsyncs, renames over PATH; after the rename, removes this
+    /// host's temporary files of PATH left by writers that no longer run (POOL.md "Writing"). On
+    /// any failure the temporary file is removed and PATH is untouched. Returns the bytes written.
     std::uint64_t write(const std::filesystem::path& path) const;
     /// The exact bytes write() would produce (for tests and the fuzz corpus).
     std::vector<std::byte> serialize() const;
