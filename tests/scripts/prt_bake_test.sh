@@ -17,20 +17,9 @@ if ! command -v python3 >/dev/null; then
 fi
 build=$(dirname "$bin")  # prt-bake -B takes the build folder and looks in its bin/
 
-work=$(mktemp -d "${TMPDIR:-/tmp}/prt_bake_test.XXXXXX")
-trap 'rm -rf "$work"' EXIT
-failures=0
-check() {  # check DESCRIPTION COMMAND...: the command must succeed
-    local what=$1
-    shift
-    if "$@"; then
-        echo "ok: $what"
-    else
-        echo "FAILED: $what"
-        failures=$((failures + 1))
-    fi
-}
-contains() { grep -qF -- "$2" "$1"; }
+name=prt_bake_test
+# shellcheck source=check_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/check_lib.sh"
 lacks() { ! grep -qF -- "$2" "$1"; }
 # before FILE A B: the first line holding A comes before the first line holding B.
 before() {
@@ -203,8 +192,4 @@ else
     echo "SKIP: real textured bake (prt-texture or prt-iso not built in $bin)"
 fi
 
-if [ "$failures" -gt 0 ]; then
-    echo "$failures check(s) failed"
-    exit 1
-fi
-echo "all checks passed"
+finish_checks

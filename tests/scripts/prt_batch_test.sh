@@ -12,20 +12,9 @@ if [ ! -x "$bin/prt-import" ] || [ ! -x "$bin/prt-info" ]; then
     exit 77
 fi
 
-work=$(mktemp -d "${TMPDIR:-/tmp}/prt_batch_test.XXXXXX")
-trap 'rm -rf "$work"' EXIT
-failures=0
-check() {  # check DESCRIPTION COMMAND...: the command must succeed
-    local what=$1
-    shift
-    if "$@"; then
-        echo "ok: $what"
-    else
-        echo "FAILED: $what"
-        failures=$((failures + 1))
-    fi
-}
-contains() { grep -qF -- "$2" "$1"; }
+name=prt_batch_test
+# shellcheck source=check_lib.sh
+source "$(dirname "${BASH_SOURCE[0]}")/check_lib.sh"
 valid_pool() { "$bin/prt-info" "$1" >/dev/null 2>&1; }
 
 # sphere_xyz FILE N: N points on a unit sphere with outward normals (a scan prt-radii can handle).
@@ -152,5 +141,4 @@ check "terminated batch: no work folder left" [ -z "$(find "$work/big-out" -name
 sleep 0.5
 check "terminated batch: its prt-import stopped too" [ -z "$(pgrep -f "$big/huge.xyz")" ]
 
-echo "$failures failed checks"
-[ "$failures" = 0 ]
+finish_checks
