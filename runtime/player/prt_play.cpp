@@ -173,14 +173,17 @@ int main(int argc, char** argv) {
     Options o;
     return prt::tool::run(
         argc, argv, "prt-play",
-        "PointRT player: ray traces a pool's splat octree (thesis ch. 2-3, 5) on the CPU or a GPU, in a "
-        "window or "
-        "headless.\nA pool alone renders with a default camera framing the model and one light; with "
+        "PointRT player: ray traces (or path traces) pools on the CPU or a GPU, in a window or headless: "
+        "splats (thesis ch. 2-3, 5), Implicit Surface Octrees (ch. 4), the MLS surface (Wald-Seidel 2005) "
+        "or Bezier patches (seed 002), mixed in one scene.\nA pool alone renders with a default camera "
+        "framing the model and one light; with "
         "--scene, the "
         "scene's camera, lights, materials and settings are used and the pool (if given) replaces the "
         "scene's models.",
         [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("pool", o.pool, "Pool file with the octree sections (prt-octree)")
+            app.add_option(
+                   "pool", o.pool,
+                   "Pool file with a surface's sections (prt-octree, prt-iso, prt-mls or prt-patches)")
                 ->check(CLI::ExistingFile);
             app.add_option("--scene", o.scene, "Scene JSON (formats/SCENE.md)")->check(CLI::ExistingFile);
             app.add_flag(
