@@ -14,6 +14,7 @@
 #include "iso_test_util.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "runtime/tool_run.h"
 
 namespace {
 
@@ -34,19 +35,12 @@ protected:
     void TearDown() override {
         if (!m_dir.empty()) fs::remove_all(m_dir);
     }
+    /// Runs the tool (tests/runtime/tool_run.h), keeping its output for the checks.
     int run(const std::string& args) {
-        const std::string cmd = m_tool.string() + " " + args + " >" + (m_dir / "out.txt").string() + " 2>" +
-                                (m_dir / "err.txt").string();
-        const int status = std::system(cmd.c_str());
-        m_stdout = slurp(m_dir / "out.txt");
-        m_stderr = slurp(m_dir / "err.txt");
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    static std::string slurp(const fs::path& p) {
-        std::ifstream in(p);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return ss.str();
+        const prt::test::ToolRun r = prt::test::run_tool("prt-iso", args, m_dir);
+        m_stdout = r.out;
+        m_stderr = r.err;
+        return r.code;
     }
     std::string path(const std::string& name) const { return (m_dir / name).string(); }
     /// A torus pool (positions, normals, colors; radii and normals optional), offset far from the

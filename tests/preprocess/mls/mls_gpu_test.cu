@@ -11,19 +11,15 @@
 #include <string>
 #include <vector>
 
+#include "gpu_test_util.cuh"
 #include "mls_test_util.h"
 #include "mls_trace.h"
 
 namespace {
 
 using namespace prt;
-
-#define PRT_CUDA_CHECK(call)                                                                          \
-    do {                                                                                              \
-        const cudaError_t prt_err = (call);                                                           \
-        ASSERT_EQ(prt_err, cudaSuccess)                                                               \
-            << #call << " at " << __FILE__ << ":" << __LINE__ << ": " << cudaGetErrorString(prt_err); \
-    } while (0)
+using prt::test::DeviceBuffers;
+using prt::test::have_device;
 
 __global__ void trace_kernel(core::MlsView view, const core::Ray* rays, std::uint32_t n,
                              core::MlsParams params, core::MlsHit* hits, std::uint32_t* found,
@@ -47,37 +43,6 @@ __global__ void occluded_kernel(core::MlsView view, const core::Ray* rays, std::
     const core::Ray r = rays[i];
     occluded[i] =
         core::mls_occluded<float>(view, r.origin, r.dir, r.t_max, core::ray_inside(r), params, st) ? 1u : 0u;
-}
-
-struct DeviceBuffers {
-    std::vector<void*> buffers;
-    ~DeviceBuffers() {
-        for (void* b : buffers) cudaFree(b);
-    }
-    template <class T>
-    T* alloc(std::size_t count) {
-        void* p = nullptr;
-        if (cudaMalloc(&p, std::max<std::size_t>(count, 1) * sizeof(T)) != cudaSuccess) return nullptr;
-        buffers.push_back(p);
-        return static_cast<T*>(p);
-    }
-    template <class T>
-    const T* upload(const T* host, std::size_t count) {
-        T* p = alloc<T>(count);
-        if (p && cudaMemcpy(p, host, count * sizeof(T), cudaMemcpyHostToDevice) != cudaSuccess)
-            return nullptr;
-        return p;
-    }
-};
-
-bool have_device(std::string& why) {
-    int count = 0;
-    const cudaError_t e = cudaGetDeviceCount(&count);
-    if (e != cudaSuccess || count == 0) {
-        why = std::string("no CUDA device: ") + (e != cudaSuccess ? cudaGetErrorString(e) : "none found");
-        return false;
-    }
-    return true;
 }
 
 TEST(MlsGpu, KernelMatchesTheCpu) {

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "gpu_test_util.cuh"
 #include "patch_build.h"
 #include "patch_file.h"
 #include "patch_pool.h"
@@ -25,13 +26,7 @@ using prt::core::PatchHit;
 using prt::core::PatchRay;
 using prt::core::PatchTraceParams;
 using prt::core::PatchView;
-
-#define PRT_CUDA_CHECK(call)                                                                          \
-    do {                                                                                              \
-        const cudaError_t prt_err = (call);                                                           \
-        ASSERT_EQ(prt_err, cudaSuccess)                                                               \
-            << #call << " at " << __FILE__ << ":" << __LINE__ << ": " << cudaGetErrorString(prt_err); \
-    } while (0)
+using prt::test::have_device;
 
 __global__ void trace_kernel(PatchView view, const PatchRay* rays, std::uint32_t n, PatchTraceParams params,
                              PatchHit* hits, std::uint32_t* flags) {
@@ -45,34 +40,8 @@ __global__ void trace_kernel(PatchView view, const PatchRay* rays, std::uint32_t
 /// Device copies of a pool's patch sections (freed on destruction).
 struct DeviceView {
     PatchView view;
-    std::vector<void*> buffers;
-    ~DeviceView() {
-        for (void* b : buffers) cudaFree(b);
-    }
+    prt::test::DeviceBuffers memory;
 };
-
-template <class T>
-const T* upload(DeviceView& d, const T* host, std::size_t count) {
-    void* p = nullptr;
-    if (cudaMalloc(&p, count * sizeof(T)) != cudaSuccess) return nullptr;
-    d.buffers.push_back(p);
-    if (cudaMemcpy(p, host, count * sizeof(T), cudaMemcpyHostToDevice) != cudaSuccess) return nullptr;
-    return static_cast<const T*>(p);
-}
-
-bool have_device(std::string& why) {
-    int count = 0;
-    const cudaError_t e = cudaGetDeviceCount(&count);
-    if (e != cudaSuccess) {
-        why = std::string("no CUDA device: ") + cudaGetErrorString(e);
-        return false;
-    }
-    if (count == 0) {
-        why = "no CUDA device";
-        return false;
-    }
-    return true;
-}
 
 /// Pinhole camera rays (local frame) looking at the view's box centre, z up.
 std::vector<PatchRay> camera_rays(const prt::pool::PatchInfo& info, int size, double az, double el) {
@@ -103,20 +72,17 @@ void compare_on_device(const prt::pool::PoolFile& pool, const std::string& name)
     const auto& info = pool.array<prt::pool::PatchInfo>(prt::pool::SectionType::patch_info)[0];
     DeviceView d;
     d.view = host;
-    d.view.nets = upload(d, host.nets, host.patch_count);
-    d.view.bvh = upload(d, host.bvh, host.bvh_node_count);
-    d.view.nodes = upload(d, host.nodes, std::size_t(host.patch_count) * host.subpatch_nodes);
+    d.view.nets = d.memory.upload(host.nets, host.patch_count);
+    d.view.bvh = d.memory.upload(host.bvh, host.bvh_node_count);
+    d.view.nodes = d.memory.upload(host.nodes, std::size_t(host.patch_count) * host.subpatch_nodes);
     ASSERT_TRUE(d.view.nets && d.view.bvh && d.view.nodes) << "upload failed";
     const int size = 512;
     const std::vector<PatchRay> rays = camera_rays(info, size, -60, 25);
     const std::uint32_t n = static_cast<std::uint32_t>(rays.size());
-    const PatchRay* d_rays = upload(d, rays.data(), n);
-    PatchHit* d_hits = nullptr;
-    std::uint32_t* d_flags = nullptr;
-    PRT_CUDA_CHECK(cudaMalloc(&d_hits, n * sizeof(PatchHit)));
-    d.buffers.push_back(d_hits);
-    PRT_CUDA_CHECK(cudaMalloc(&d_flags, n * sizeof(std::uint32_t)));
-    d.buffers.push_back(d_flags);
+    const PatchRay* d_rays = d.memory.upload(rays.data(), n);
+    PatchHit* d_hits = d.memory.alloc<PatchHit>(n);
+    std::uint32_t* d_flags = d.memory.alloc<std::uint32_t>(n);
+    ASSERT_TRUE(d_rays && d_hits && d_flags) << "device allocation failed";
     const PatchTraceParams params;
     const unsigned block = 128, grid = (n + block - 1) / block;
     trace_kernel<<<grid, block>>>(d.view, d_rays, n, params, d_hits, d_flags);  // warm-up

@@ -12,6 +12,7 @@
 
 #include "patch_pool.h"
 #include "prt/formats/pool.h"
+#include "runtime/tool_run.h"
 
 namespace {
 
@@ -32,19 +33,12 @@ protected:
         if (!m_dir.empty()) fs::remove_all(m_dir);
     }
 
+    /// Runs the tool (tests/runtime/tool_run.h), keeping its output for the checks.
     int run(const std::string& args) {
-        const std::string cmd = m_tool.string() + " " + args + " >" + (m_dir / "out.txt").string() + " 2>" +
-                                (m_dir / "err.txt").string();
-        const int status = std::system(cmd.c_str());
-        m_stdout = slurp(m_dir / "out.txt");
-        m_stderr = slurp(m_dir / "err.txt");
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    static std::string slurp(const fs::path& p) {
-        std::ifstream in(p);
-        std::stringstream ss;
-        ss << in.rdbuf();
-        return ss.str();
+        const prt::test::ToolRun r = prt::test::run_tool("prt-patches", args, m_dir);
+        m_stdout = r.out;
+        m_stderr = r.err;
+        return r.code;
     }
     std::string write(const std::string& name, const std::string& text) {
         std::ofstream(m_dir / name) << text;
@@ -88,7 +82,7 @@ TEST_F(PatchTool, BadFileFailsWithOneLineAndWritesNothing) {
     EXPECT_EQ(run(in + " -o " + path("keep.pool")), 1);
     EXPECT_EQ(m_stderr,
               "prt-patches: error: " + in + ":12: patch 1 control point 10: 'nan' is not a finite number\n");
-    EXPECT_EQ(slurp(path("keep.pool")), "previous contents");
+    EXPECT_EQ(prt::test::slurp(path("keep.pool")), "previous contents");
     EXPECT_EQ(run(in + " -o " + path("new.pool")), 1);
     EXPECT_FALSE(fs::exists(path("new.pool")));
     for (const auto& e : fs::directory_iterator(m_dir))

@@ -69,6 +69,19 @@ struct ModelHit {
     float u = 0.0f, v = 0.0f;
 };
 
+/// ISO and MLS settings for the renderer's rays: the scene's knobs with the seamless face rule
+/// (thesis 3.6 / 4.5.2: f's sign change tells front from back).
+PRT_HD PRT_INLINE IsoParams iso_params_for(const SceneView& s) {
+    IsoParams p = s.params.iso;
+    p.faces = k_iso_faces_by_ray;
+    return p;
+}
+PRT_HD PRT_INLINE MlsParams mls_params_for(const SceneView& s) {
+    MlsParams p = s.params.mls;
+    p.faces = k_mls_faces_by_ray;
+    return p;
+}
+
 /// Patch settings for a ray: the seamless rule (thesis 3.6) on oriented pools; on unoriented ones
 /// both faces count and a ray leaving a patch of this model skips its own start point.
 PRT_HD PRT_INLINE PatchTraceParams patch_params_for(const SceneView& s, const ModelView& mv, std::uint32_t m,
@@ -122,8 +135,7 @@ PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const 
     const bool inside = ray_inside(r);
     if constexpr ((K & k_mask_iso) != 0) {
         if (mv.surface == SurfaceKind::iso) {
-            IsoParams p = s.params.iso;
-            p.faces = k_iso_faces_by_ray;
+            const IsoParams p = iso_params_for(s);
             IsoHit h;
             IsoStats st;
             const bool hit = trace_iso(mv.iso, o, d, t_max, inside, p, h, st);
@@ -140,8 +152,7 @@ PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const 
     }
     if constexpr ((K & k_mask_mls) != 0) {
         if (mv.surface == SurfaceKind::mls) {
-            MlsParams p = s.params.mls;
-            p.faces = k_mls_faces_by_ray;
+            const MlsParams p = mls_params_for(s);
             MlsHit h;
             MlsStats st;
             const bool hit = trace_mls<float>(mv.mls, o, d, t_max, inside, p, h, st);
@@ -240,8 +251,7 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
         bool hit = false;
         if constexpr ((K & k_mask_iso) != 0) {
             if (mv.surface == SurfaceKind::iso) {
-                IsoParams p = s.params.iso;
-                p.faces = k_iso_faces_by_ray;
+                const IsoParams p = iso_params_for(s);
                 IsoStats st;
                 hit = iso_occluded(mv.iso, o, d, r.t_max, inside, p, st);
                 c.leaves += st.leaves;
@@ -251,8 +261,7 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
         }
         if constexpr ((K & k_mask_mls) != 0) {
             if (mv.surface == SurfaceKind::mls) {
-                MlsParams p = s.params.mls;
-                p.faces = k_mls_faces_by_ray;
+                const MlsParams p = mls_params_for(s);
                 MlsStats st;
                 hit = mls_occluded<float>(mv.mls, o, d, r.t_max, inside, p, st);
                 c.leaves += st.cells;
