@@ -312,7 +312,15 @@ ShrinkOutcome shrink_leaf(const BNode& leaf, std::span<const pool::MlsSplat> spl
                 last = j;
                 break;
             }
-        const double new_lo = bounds[first], new_hi = bounds[last + 1];
+        // The kept cell reaches a quarter slice into the free slices beside it. A cut exactly at
+        // the surface (a flat face whose plane a slice bound lands on, as on a synthetic cube at
+        // most scales) leaves the crossing on the cell's boundary, where the renderer's float
+        // sample o + d t0 lands on either side by rounding: from outside it then starts behind
+        // the face (F < 0) and the ray passes through (holes over whole faces). The margin lies
+        // in slices proven free, so F keeps the outside's sign at the new bound.
+        const double margin = 0.25 * (hi - lo) / double(K);
+        const double new_lo = first > 0 ? std::max(lo, double(round_down(bounds[first] - margin))) : lo;
+        const double new_hi = last + 1 < K ? std::min(hi, double(round_up(bounds[last + 1] + margin))) : hi;
         if (new_lo > lo) out.cuts.push_back(Cut{a, true, static_cast<float>(new_lo)});
         if (new_hi < hi) out.cuts.push_back(Cut{a, false, static_cast<float>(new_hi)});
         if (new_lo > lo || new_hi < hi) {
