@@ -2,7 +2,8 @@
 """PointRT speed/accuracy suite (issue 9), driven by scripts/suite/run.sh.
 
 For each model (prt-synth sphere, torus and cube at 100k/1M/10M points; the teapot's Bezier
-patches; the kitten scan from ../shared/data) and each surface setting, it records:
+patches; the real scans of ../shared/data: kitten, bunny, dragon, armadillo, the PCL mug scene) and
+each surface setting, it records:
   preprocessing: seconds and peak resident memory of every tool run (os.wait4 rusage), the
                  surface's bytes per point (prt-accuracy: bytes of the sections the tracer reads);
   speed:         CPU rays/s of primary rays through the core (prt-accuracy, median of runs), and
@@ -15,11 +16,15 @@ patches; the kitten scan from ../shared/data) and each surface setting, it recor
 Output in OUT_DIR: results.json (everything), results.csv (one row per run), pareto.png (CPU time
 per ray against mean hit error, one panel per model), RESULTS.md (the tables), log.txt.
 Python standard library only (no numpy or matplotlib needed; the PNG is written with zlib).
+
+Scans need prt-import with PCL (normal estimation) and OpenMesh (meshes). On a machine without them
+(the GPU host), import them elsewhere with --import-scans DIR and pass --scan-pools DIR there.
 """
 import argparse
 import json
 import os
 import shutil
+import signal
 import subprocess
 import sys
 import time
@@ -29,6 +34,15 @@ import report  # noqa: E402  (same folder)
 
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 SHARED = os.environ.get("PRT_SHARED_DATA_DIR", os.path.join(REPO, "..", "shared", "data"))
+
+# The real scans (../shared/data/README.md): label, path under SHARED, prt-import arguments.
+SCANS = [
+    ("kitten", "points/cgal_kitten/kitten.xyz", []),
+    ("bunny", "points/stanford_bunny/reconstruction/bun_zipper.ply", ["--mesh-mode", "points"]),
+    ("dragon", "points/stanford_dragon/dragon_small.obj", []),
+    ("armadillo", "points/stanford_armadillo/armadillo.off", []),
+    ("mug_scene", "points/pcl/table_scene_mug_stereo_textured.pcd", []),
+]
 
 
 class Suite:
@@ -116,11 +130,15 @@ class Suite:
             pools["iso_L%d" % level] = iso
         return name, n, pools
 
-    def scan(self, label, path):
+    def scan(self, label, path, import_args):
+        """The pools of a real scan: imported here, or taken from --scan-pools (LABEL.pool)."""
         d = os.path.join(self.out, "models", label)
         os.makedirs(d, exist_ok=True)
         imp = os.path.join(d, "import.pool")
-        self.timed(label, "import", [self.tool("prt-import"), path, "-o", imp])
+        if self.args.scan_pools:
+            shutil.copy(os.path.join(self.args.scan_pools, label + ".pool"), imp)
+        else:
+            self.timed(label, "import", [self.tool("prt-import"), path, "-o", imp] + import_args)
         radii = os.path.join(d, "radii.pool")
         self.timed(label, "radii", [self.tool("prt-radii"), imp, "-o", radii])
         oc = os.path.join(d, "octree_X32.pool")
@@ -239,16 +257,21 @@ class Suite:
 
     # ---- prt-bench per surface -------------------------------------------------------------------
 
-    def bench_surface(self, model, surface, pool, camera, light):
-        scene = {"camera": camera, "lights": [{"type": "point", "position": light, "intensity": 1.0}],
-                 "materials": [{"name": "m", "diffuse": [0.8, 0.8, 0.8], "reflectivity": 0.0}],
-                 "models": [{"pool": pool, "surface": surface, "material": "m"}]}
-        sp = os.path.join(self.out, "runs", "scene_%s_%s.json" % (model, surface))
-        with open(sp, "w") as f:
-            json.dump(scene, f, indent=2)
+    def bench_surface(self, model, surface, pool, camera=None, light=None):
+        """prt-bench on one surface; without a camera prt-bench frames the pool itself."""
         js = os.path.join(self.out, "runs", "bench_%s_%s.json" % (model, surface))
         b = self.settings["bench"]
-        cmd = [self.tool("prt-bench"), "--scene", sp, "--backend", b["backend"], "--width", str(b["res"]),
+        if camera is None:
+            where = [pool, "--surface", surface]
+        else:
+            scene = {"camera": camera, "lights": [{"type": "point", "position": light, "intensity": 1.0}],
+                     "materials": [{"name": "m", "diffuse": [0.8, 0.8, 0.8], "reflectivity": 0.0}],
+                     "models": [{"pool": pool, "surface": surface, "material": "m"}]}
+            sp = os.path.join(self.out, "runs", "scene_%s_%s.json" % (model, surface))
+            with open(sp, "w") as f:
+                json.dump(scene, f, indent=2)
+            where = ["--scene", sp]
+        cmd = [self.tool("prt-bench")] + where + ["--backend", b["backend"], "--width", str(b["res"]),
                "--height", str(b["res"]), "--frames", str(b["frames"]), "--warmup", str(b["warmup"]),
                "--json", js, "--quiet"]
         rc, _, out, err = self.run(cmd, check=False)
@@ -272,6 +295,19 @@ class Suite:
         self.bench.append(entry)
 
 
+class Interrupted(Exception):
+    """SIGTERM during a run."""
+
+
+def scan_points(suite, pool):
+    """Points of a pool, from prt-info's first line of counts ("points: N ...")."""
+    _, _, out, _ = suite.run([suite.tool("prt-info"), pool])
+    for line in out.splitlines():
+        if line.startswith("points:"):
+            return int(line.split()[1])
+    return None
+
+
 def settings_for(args):
     quick = args.quick
     s = {
@@ -292,7 +328,7 @@ def settings_for(args):
                   "frames": 20 if args.gpu else 3, "warmup": 3 if args.gpu else 1},
     }
     if args.shapes:
-        s["shapes"] = args.shapes.split(",")
+        s["shapes"] = [] if args.shapes == "none" else args.shapes.split(",")
     if args.sizes:
         s["sizes"] = [int(float(x)) for x in args.sizes.split(",")]
     return s
@@ -300,7 +336,7 @@ def settings_for(args):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("out_dir", help="folder for models, runs, images and the reports (created)")
+    ap.add_argument("out_dir", nargs="?", help="folder for models, runs, images and the reports (created)")
     ap.add_argument("--quick", action="store_true",
                     help="CI-size run: 100k points, fewer settings, 128x128 rays (default: off)")
     ap.add_argument("--gpu", action="store_true",
@@ -308,7 +344,7 @@ def main():
                          "or --sizes (default: off: CPU backend)")
     ap.add_argument("--sizes", default="",
                     help="comma-separated point counts replacing the default sizes (default: by mode)")
-    ap.add_argument("--shapes", default="", help="comma-separated prt-synth shapes (default: sphere,torus,cube)")
+    ap.add_argument("--shapes", default="", help="comma-separated prt-synth shapes, or 'none' (default: sphere,torus,cube)")
     ap.add_argument("--bin", default=os.path.join(REPO, "build", "bin"),
                     help="folder of the built tools (default: REPO/build/bin)")
     ap.add_argument("--publish", action="store_true",
@@ -318,49 +354,96 @@ def main():
                          "status is 1 on a flag (default: none)")
     ap.add_argument("--no-bench", action="store_true", help="skip the prt-bench runs (default: off)")
     ap.add_argument("--note", default="", help="a sentence for RESULTS.md about the machine or the run (default: none)")
+    ap.add_argument("--scans", default="",
+                    help="comma-separated real scans to measure, of: %s; 'none' for none (default: every one "
+                         "present)" % ",".join(x[0] for x in SCANS))
+    ap.add_argument("--scan-pools", default="",
+                    help="folder of pre-imported scans (LABEL.pool) used instead of prt-import (default: import)")
+    ap.add_argument("--import-scans", default="", metavar="DIR",
+                    help="only import the scans into DIR/LABEL.pool (for --scan-pools elsewhere) and exit")
     ap.add_argument("--quiet", action="store_true", help="no progress on stderr (default: off)")
     args = ap.parse_args()
+    wanted = [x for x in SCANS if not args.scans or x[0] in args.scans.split(",")]
+    if args.import_scans:
+        os.makedirs(args.import_scans, exist_ok=True)
+        for label, rel, import_args in wanted:
+            src = os.path.join(SHARED, rel)
+            if not os.path.exists(src):
+                print("suite: %s absent, skipped" % src, file=sys.stderr)
+                continue
+            out = os.path.join(args.import_scans, label + ".pool")
+            subprocess.run([os.path.join(os.path.abspath(args.bin), "prt-import"), src, "-o", out, "--quiet"]
+                           + import_args, check=True)
+            print("suite: %s -> %s" % (src, out), file=sys.stderr)
+        return 0
+    if not args.out_dir:
+        ap.error("the output folder is required (except with --import-scans)")
     s = Suite(args)
     s.settings = settings_for(args)
     started = time.strftime("%Y-%m-%d %H:%M:%S")
-    models = []
-    for n in s.settings["sizes"]:
-        for shape in s.settings["shapes"]:
-            s.say("model %s %d" % (shape, n))
+    models, scans, tp = [], [], None
+
+    def interrupted(signum, frame):
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)  # once: the reports are written next
+        raise Interrupted("signal %d" % signum)
+
+    # `timeout` (scripts/suite/device.sh bounds the run) sends SIGTERM: the reports still get written
+    # with what was measured, and the run is listed as a failure.
+    signal.signal(signal.SIGTERM, interrupted)
+    try:
+        models = []
+        for n in s.settings["sizes"]:
+            for shape in s.settings["shapes"]:
+                s.say("model %s %d" % (shape, n))
+                try:
+                    models.append(s.synthetic(shape, n))
+                except RuntimeError as e:
+                    s.failures.append("%s %d: %s" % (shape, n, e))
+                    s.say("  FAILED: %s" % e)
+        for name, n, pools in models:
+            s.say("measure %s" % name)
+            s.measure_points(name, n, pools)
+        scans = []
+        for label, rel, import_args in ([] if args.scans == "none" else wanted):
+            src = os.path.join(SHARED, rel)
+            if not args.scan_pools and not os.path.exists(src):
+                s.say("%s: %s absent, skipped" % (label, src))
+                continue
+            if args.scan_pools and not os.path.exists(os.path.join(args.scan_pools, label + ".pool")):
+                s.say("%s: not in %s, skipped" % (label, args.scan_pools))
+                continue
+            s.say("scan %s" % label)
             try:
-                models.append(s.synthetic(shape, n))
+                kp = s.scan(label, src, import_args)
+                s.measure_points(label, scan_points(s, kp["mls"]), kp)
+                scans.append((label, kp))
             except RuntimeError as e:
-                s.failures.append("%s %d: %s" % (shape, n, e))
+                s.failures.append("%s: %s" % (label, e))
                 s.say("  FAILED: %s" % e)
-    for name, n, pools in models:
-        s.say("measure %s" % name)
-        s.measure_points(name, n, pools)
-    kitten = os.path.join(SHARED, "points", "cgal_kitten", "kitten.xyz")
-    if os.path.exists(kitten):
-        s.say("scan kitten")
-        try:
-            kp = s.scan("kitten", kitten)
-            s.measure_points("kitten", 5210, kp)
-        except RuntimeError as e:
-            s.failures.append("kitten: %s" % e)
-    else:
-        s.say("kitten: %s absent, skipped" % kitten)
-    tp = s.teapot()
-    if tp:
-        s.say("measure teapot")
-        s.measure_patches(tp)
-    if not args.no_bench and models:
-        name, n, pools = models[0]
-        cam = {"position": [0.0, 1.2, 4.0], "look_at": [0.0, 0.0, 0.0], "fov_y_degrees": 40.0}
-        s.say("prt-bench per surface on %s (%s)" % (name, s.settings["bench"]["backend"]))
-        s.bench_surface(name, "splats", pools["octree_X32"], cam, [2.0, 4.0, 3.0])
-        s.bench_surface(name, "iso", pools["iso_L%d" % s.settings["iso_levels"][-1]], cam, [2.0, 4.0, 3.0])
-        s.bench_surface(name, "mls", pools["mls"], cam, [2.0, 4.0, 3.0])
+        tp = s.teapot()
         if tp:
-            tcam = {"position": [0.0, -9.0, 5.0], "look_at": [0.0, 0.0, 1.5], "up": [0.0, 0.0, 1.0],
-                    "fov_y_degrees": 40.0}
-            s.bench_surface("teapot", "patches", tp["patches_D%d" % s.settings["patch_depths"][0]], tcam,
-                            [3.0, -6.0, 8.0])
+            s.say("measure teapot")
+            s.measure_patches(tp)
+        if not args.no_bench:
+            cam = {"position": [0.0, 1.2, 4.0], "look_at": [0.0, 0.0, 0.0], "fov_y_degrees": 40.0}
+            for name, n, pools in models:
+                s.say("prt-bench per surface on %s (%s)" % (name, s.settings["bench"]["backend"]))
+                s.bench_surface(name, "splats", pools["octree_X32"], cam, [2.0, 4.0, 3.0])
+                s.bench_surface(name, "iso", pools["iso_L%d" % s.settings["iso_levels"][-1]], cam, [2.0, 4.0, 3.0])
+                s.bench_surface(name, "mls", pools["mls"], cam, [2.0, 4.0, 3.0])
+            for label, kp in scans:
+                s.say("prt-bench per surface on %s" % label)
+                s.bench_surface(label, "splats", kp["octree_X32"])
+                s.bench_surface(label, "iso", kp["iso_L%d" % s.settings["iso_levels"][-1]])
+                s.bench_surface(label, "mls", kp["mls"])
+            if tp:
+                tcam = {"position": [0.0, -9.0, 5.0], "look_at": [0.0, 0.0, 1.5], "up": [0.0, 0.0, 1.0],
+                        "fov_y_degrees": 40.0}
+                s.bench_surface("teapot", "patches", tp["patches_D%d" % s.settings["patch_depths"][0]], tcam,
+                                [3.0, -6.0, 8.0])
+    except (Interrupted, KeyboardInterrupt) as e:
+        s.failures.append("interrupted (%s): the reports hold what was measured before" % (e or "Ctrl-C"))
+        s.say("INTERRUPTED: writing the reports")
     meta = {"note": args.note, "started": started, "seconds": time.time() - s.t0, "quick": args.quick, "gpu": args.gpu,
             "host": os.uname().nodename, "cpus": os.cpu_count(), "settings": s.settings,
             "git": subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
