@@ -22,7 +22,7 @@ cmake -S . -B bd -DCMAKE_BUILD_TYPE=Release -DCMAKE_PREFIX_PATH="$PWD/.device-de
     -DPRT_WITH_OPENMESH=OFF -DPRT_WITH_OIIO=OFF -DPRT_WITH_GLFW=OFF -DPRT_WITH_EMBREE=OFF ${PRT_CMAKE_EXTRA:-} >"$work/configure.txt" 2>&1 \
     || { tail -30 "$work/configure.txt"; exit 1; }
 grep -E "prt-radii|FLANN" "$work/configure.txt" | tee -a "$out/device_log.txt"
-targets="prt-synth prt-octree prt-cull prt-iso prt-mls prt-patches prt-import prt-accuracy prt-bench prt-play"
+targets="prt-synth prt-octree prt-cull prt-iso prt-mls prt-patches prt-import prt-info prt-accuracy prt-bench prt-play"
 targets="$targets prt_stability_gpu_tests"
 grep -q "prt-radii.*not built" "$work/configure.txt" || targets="$targets prt-radii"
 stamp "build $targets"
