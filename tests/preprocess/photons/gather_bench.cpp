@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
         static_cast<unsigned long long>(n), g.depth, g.radius_edges, tree.leaves.size(), tree.nodes.size(),
         s);
     std::printf(
-        "gi-gather-bench: bin + corner keys %.3f s, sort corners %.3f s, densities %.3f s, leaves %.3f s, "
+        "gi-gather-bench: bin %.3f s, blocks %.3f s, densities + leaves %.3f s, encode %.3f s, "
         "octree %.3f s\n",
         phases[0], phases[1], phases[2], phases[3], phases[4]);
     std::uint64_t h = 0xcbf29ce484222325ull;
