@@ -44,15 +44,17 @@ namespace {
 
 /// Stable LSD radix sort of `keys` (and `values` alongside, when not null) over the low `bits`
 /// bits, 11 bits per pass; each pass counts and scatters contiguous blocks in parallel.
-void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>* values, std::uint32_t bits,
-                unsigned requested_threads) {
+/// Keys and Values: std::vector or pre::Buffer (whose scratch copies stay uninitialised until the
+/// parallel scatter first touches them).
+template <class Keys, class Values>
+void radix_sort(Keys& keys, Values* values, std::uint32_t bits, unsigned requested_threads) {
     const std::size_t n = keys.size();
     constexpr std::size_t k_buckets = std::size_t{1} << k_digit_bits;
     const unsigned threads = static_cast<unsigned>(
         std::min<std::size_t>(pre::resolve_threads(requested_threads), std::max<std::size_t>(1, n >> 16)));
     const std::size_t block = (n + threads - 1) / std::max(1u, threads);
-    std::vector<std::uint64_t> tmp_keys(n);
-    std::vector<std::uint32_t> tmp_values(values ? n : 0);
+    Keys tmp_keys(n);
+    Values tmp_values(values ? n : 0);
     std::vector<std::size_t> count(threads * k_buckets);
     const std::uint64_t mask = k_buckets - 1;
     for (std::uint32_t shift = 0; shift < bits; shift += k_digit_bits) {
@@ -93,7 +95,7 @@ std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std:
 }
 
 void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits, unsigned threads) {
-    radix_sort(keys, nullptr, bits, threads);
+    radix_sort(keys, static_cast<std::vector<std::uint32_t>*>(nullptr), bits, threads);
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
 }
 
@@ -156,7 +158,7 @@ void CellBins::cell_of(const float p[3], std::uint32_t c[3]) const {
     }
 }
 
-CellBins bin_keys(std::vector<std::uint64_t> keys, const double root_min[3], double root_size,
+CellBins bin_keys(pre::Buffer<std::uint64_t> keys, const double root_min[3], double root_size,
                   std::uint32_t depth, unsigned threads, bool with_map) {
     threads = pre::resolve_threads(threads);
     CellBins b;
@@ -164,7 +166,7 @@ CellBins bin_keys(std::vector<std::uint64_t> keys, const double root_min[3], dou
     b.root_size = root_size;
     for (int a = 0; a < 3; ++a) b.root_min[a] = root_min[a];
     const std::size_t n = keys.size();
-    b.order.resize(n);
+    b.order = pre::Buffer<std::uint32_t>(n);
     pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t begin, std::size_t end, unsigned) {
         for (std::size_t i = begin; i < end; ++i) b.order[i] = static_cast<std::uint32_t>(i);
     });

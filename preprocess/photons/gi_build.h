@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "buffer.h"
 #include "parallel.h"
 #include "prt/core/gi.h"
 #include "prt/formats/gi_layout.h"
@@ -53,7 +54,7 @@ struct CellBins {
     std::uint32_t depth = 0;
     double root_min[3] = {0, 0, 0};
     double root_size = 1.0;
-    std::vector<std::uint32_t> order;       ///< sample indices grouped by cell
+    pre::Buffer<std::uint32_t> order;       ///< sample indices grouped by cell
     std::vector<std::uint64_t> cell_keys;   ///< Morton key per occupied cell, ascending
     std::vector<std::uint32_t> cell_begin;  ///< per occupied cell + 1: range into `order`
     KeyMap map{1};                          ///< cell key -> index into cell_keys
@@ -71,7 +72,7 @@ struct CellBins {
 template <class PositionOf>
 CellBins bin_points(std::size_t count, const double root_min[3], double root_size, std::uint32_t depth,
                     PositionOf position_of, unsigned threads = 0, bool with_map = true);
-CellBins bin_keys(std::vector<std::uint64_t> keys, const double root_min[3], double root_size,
+CellBins bin_keys(pre::Buffer<std::uint64_t> keys, const double root_min[3], double root_size,
                   std::uint32_t depth, unsigned threads = 0, bool with_map = true);
 
 template <class PositionOf>
@@ -81,7 +82,7 @@ CellBins bin_points(std::size_t count, const double root_min[3], double root_siz
     probe.depth = depth;
     probe.root_size = root_size;
     for (int a = 0; a < 3; ++a) probe.root_min[a] = root_min[a];
-    std::vector<std::uint64_t> keys(count);
+    pre::Buffer<std::uint64_t> keys(count);
     pre::parallel_chunks(count, 1 << 16, pre::resolve_threads(threads),
                          [&](std::size_t begin, std::size_t end, unsigned) {
                              for (std::size_t i = begin; i < end; ++i) {
