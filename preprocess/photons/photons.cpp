@@ -8,6 +8,7 @@
 #include <cmath>
 #include <mutex>
 
+#include "buffer.h"
 #include "parallel.h"
 #include "prt/error.h"
 #include "prt/tool.h"
@@ -49,8 +50,89 @@ void add_tally(PhotonTally& t, const PhotonTally& o) {
     t.rays += o.rays;
 }
 
+/// v where mask is all ones, +0 where it is zero (a bit mask: compiles to no branch).
+inline float masked(float v, std::uint32_t mask) {
+    return std::bit_cast<float>(std::bit_cast<std::uint32_t>(v) & mask);
+}
+
 float luminance(const float c[3]) {
     return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+/// A deposit as the density loop reads it (thesis 5.4.2): its offset inside its cell (floats keep
+/// full precision there at any depth), flux and luminance-weighted normal.
+struct Packed {
+    float frac[3];
+    float flux[3];
+    float normal[3];  ///< luminance x normal
+    float lum;
+};
+
+/// A corner's running sums of eq. 5.1-5.2 (before the normalisation).
+struct CornerSum {
+    float value[3];
+    float normal[3];
+    float weight;  ///< sum of kernel x luminance: |normal| / weight says how one-sided it is
+};
+
+/// One corner a cell reaches: its sums and the cell's offset from it (cell - corner, in edges).
+struct Lane {
+    std::uint32_t corner;
+    float offset[3];
+};
+
+constexpr std::size_t k_lanes = 8;
+
+/// Adds the kernel-weighted deposits d[0..n) of one cell to the sums of up to 8 corners, in the
+/// deposits' order: per corner, sum += (1 - r^2 / g^2) x quantity for each deposit with r < g.
+/// The lanes are independent (the compiler vectorises them); a deposit outside g adds +0 to every
+/// sum (a bit mask: no branch to mispredict), which leaves the sum as it was since a sum is never
+/// -0, so each corner's sums are bit for bit those of adding only the deposits within g.
+void accumulate_lanes(const Lane* lanes, std::size_t count, const Packed* d, std::uint32_t n, float inv_g2,
+                      CornerSum* sums) {
+    float ox[k_lanes], oy[k_lanes], oz[k_lanes];
+    float v0[k_lanes], v1[k_lanes], v2[k_lanes], n0[k_lanes], n1[k_lanes], n2[k_lanes], wt[k_lanes];
+    for (std::size_t l = 0; l < k_lanes; ++l) {
+        const bool real = l < count;
+        // A padding lane sits far away (r > g for every deposit) and is not stored back.
+        ox[l] = real ? lanes[l].offset[0] : 1e6f;
+        oy[l] = real ? lanes[l].offset[1] : 0.0f;
+        oz[l] = real ? lanes[l].offset[2] : 0.0f;
+        const CornerSum s = real ? sums[lanes[l].corner] : CornerSum{};
+        v0[l] = s.value[0];
+        v1[l] = s.value[1];
+        v2[l] = s.value[2];
+        n0[l] = s.normal[0];
+        n1[l] = s.normal[1];
+        n2[l] = s.normal[2];
+        wt[l] = s.weight;
+    }
+    for (std::uint32_t j = 0; j < n; ++j) {
+        const Packed& p = d[j];
+        for (std::size_t l = 0; l < k_lanes; ++l) {
+            const float dx = ox[l] + p.frac[0], dy = oy[l] + p.frac[1], dz = oz[l] + p.frac[2];
+            const float r2 = (dx * dx + dy * dy + dz * dz) * inv_g2;
+            const std::uint32_t in = 0u - static_cast<std::uint32_t>(r2 < 1.0f);
+            const float w = 1.0f - r2;
+            v0[l] += masked(w * p.flux[0], in);
+            n0[l] += masked(w * p.normal[0], in);
+            v1[l] += masked(w * p.flux[1], in);
+            n1[l] += masked(w * p.normal[1], in);
+            v2[l] += masked(w * p.flux[2], in);
+            n2[l] += masked(w * p.normal[2], in);
+            wt[l] += masked(w * p.lum, in);
+        }
+    }
+    for (std::size_t l = 0; l < count; ++l) {
+        CornerSum& s = sums[lanes[l].corner];
+        s.value[0] = v0[l];
+        s.value[1] = v1[l];
+        s.value[2] = v2[l];
+        s.normal[0] = n0[l];
+        s.normal[1] = n1[l];
+        s.normal[2] = n2[l];
+        s.weight = wt[l];
+    }
 }
 
 }  // namespace
@@ -175,19 +257,20 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
     // The deposits in cell order, as offsets inside their cell (floats keep full precision there
     // at any depth) with their flux and luminance-weighted normal: the density loop reads them
     // sequentially, cell by cell.
-    struct Packed {
-        float frac[3];
-        float flux[3];
-        float normal[3];  ///< luminance x normal
-        float lum;
-    };
-    std::vector<Packed> packed(deposits.size());
+    pre::Buffer<Packed> packed(deposits.size());  // first touched by the parallel fill
     pre::parallel_chunks(bins.cell_keys.size(), 4096, threads,
                          [&](std::size_t begin, std::size_t end, unsigned) {
                              for (std::size_t c = begin; c < end; ++c) {
                                  std::uint32_t cell[3];
                                  gi::demorton3(bins.cell_keys[c], cell[0], cell[1], cell[2]);
                                  for (std::uint32_t j = bins.cell_begin[c]; j < bins.cell_begin[c + 1]; ++j) {
+                                     // The deposits are read in random order: ask for them early.
+                                     if (j + 16 < deposits.size()) {
+                                         const char* ahead =
+                                             reinterpret_cast<const char*>(&deposits[bins.order[j + 16]]);
+                                         __builtin_prefetch(ahead);
+                                         __builtin_prefetch(ahead + sizeof(PhotonDeposit) - 1);
+                                     }
                                      const PhotonDeposit& d = deposits[bins.order[j]];
                                      double g[3];
                                      bins.grid(d.position, g);
@@ -240,11 +323,6 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
     phase(1);
 
     // thesis 5.4.2, eq. 5.1-5.2: per block, the corners, their density estimates and the leaves.
-    struct CornerSum {
-        float value[3];
-        float normal[3];
-        float weight;  ///< sum of kernel x luminance: |normal| / weight says how one-sided it is
-    };
     struct TaskOut {
         unsigned worker = 0;
         std::size_t corner_begin = 0, corner_count = 0;  ///< into the worker's corner values
@@ -259,7 +337,9 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
         std::vector<std::uint32_t> grid, corner_at, grid_used;
         std::vector<std::int64_t> corner_pos;
         std::vector<CornerSum> sums;
+        std::vector<Lane> lanes;
         std::vector<std::uint64_t> leaf_bits;
+        std::vector<std::uint8_t> row_used;  ///< per (z, y) row of the cell grid: any cell there
     };
     std::vector<TaskOut> task_out(tasks.size());
     std::vector<WorkerOut> worker_out(threads);
@@ -276,10 +356,13 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
         std::vector<std::uint32_t>& grid_used = out.grid_used;
         std::vector<std::int64_t>& corner_pos = out.corner_pos;
         std::vector<CornerSum>& sums = out.sums;
+        std::vector<Lane>& lanes = out.lanes;
+        std::vector<std::uint8_t>& row_used = out.row_used;
         std::vector<std::uint64_t>& leaf_bits = out.leaf_bits;
         if (grid.empty()) {
             grid.assign(static_cast<std::size_t>(W * W * W), k_missing);
             corner_at.assign(static_cast<std::size_t>(C * C * C), k_missing);
+            row_used.assign(static_cast<std::size_t>(W * W), 0);
             leaf_bits.assign((std::size_t{1} << sbits) / 64 + 1, 0);
         }
         for (std::size_t t = begin; t < end; ++t) {
@@ -320,6 +403,7 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
                                 ((c[2] - g0[2]) * W + (c[1] - g0[1])) * W + (c[0] - g0[0]));
                             grid[at] = static_cast<std::uint32_t>(it - bins.cell_keys.begin());
                             grid_used.push_back(at);
+                            row_used[at / W] = 1;
                             // Its corners in this block: c-r+1 .. c+r, within 0..cells.
                             std::int64_t lo[3], hi[3];
                             for (int a = 0; a < 3; ++a) {
@@ -338,46 +422,49 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
                                     }
                         }
                     }
-            // Density estimate at every corner: the cells within g, z, y, x, as the serial gather.
+            // Density estimate at every corner (eq. 5.1-5.2). Each corner must add the deposits of
+            // its cells in reach z, y, x (then in input order), as the serial gather did: sweeping
+            // the cells in that order and pushing each cell's deposits into the corners it reaches
+            // gives every corner exactly that sequence of additions. A cell's corners (8 for g <= 1)
+            // are handled 8 at a time, one per SIMD-friendly lane, the sums held in the lanes for
+            // the cell's deposits and stored back after: the same additions in the same order.
             sums.assign(corner_pos.size(), CornerSum{});
+            for (std::int64_t z = clo[2]; z <= chi[2]; ++z)
+                for (std::int64_t y = clo[1]; y <= chi[1]; ++y) {
+                    const std::int64_t row = (z - g0[2]) * W + (y - g0[1]);
+                    if (!row_used[static_cast<std::size_t>(row)]) continue;  // most rows of a surface
+                    for (std::int64_t x = clo[0]; x <= chi[0]; ++x) {
+                        const std::uint32_t cell = grid[static_cast<std::size_t>(row * W + (x - g0[0]))];
+                        if (cell == k_missing) continue;
+                        const std::int64_t c[3] = {x, y, z};
+                        std::int64_t lo[3], hi[3];
+                        for (int a = 0; a < 3; ++a) {
+                            lo[a] = std::max<std::int64_t>(c[a] - reach + 1, o[a]);
+                            hi[a] = std::min<std::int64_t>({c[a] + reach, o[a] + S, cells});
+                        }
+                        lanes.clear();
+                        for (std::int64_t qz = lo[2]; qz <= hi[2]; ++qz)
+                            for (std::int64_t qy = lo[1]; qy <= hi[1]; ++qy)
+                                for (std::int64_t qx = lo[0]; qx <= hi[0]; ++qx)
+                                    lanes.push_back({corner_at[static_cast<std::size_t>(
+                                                         ((qz - o[2]) * C + (qy - o[1])) * C + (qx - o[0]))],
+                                                     {static_cast<float>(x - qx), static_cast<float>(y - qy),
+                                                      static_cast<float>(z - qz)}});
+                        const std::uint32_t first = bins.cell_begin[cell], last = bins.cell_begin[cell + 1];
+                        for (std::size_t l0 = 0; l0 < lanes.size(); l0 += k_lanes)
+                            accumulate_lanes(&lanes[l0], std::min(k_lanes, lanes.size() - l0), &packed[first],
+                                             last - first, inv_g2, sums.data());
+                    }
+                }
             float task_max = 0.0f;
             for (std::size_t k = 0; k < corner_pos.size(); ++k) {
                 const std::int64_t ca = corner_pos[k];
                 const std::int64_t q[3] = {o[0] + ca % C, o[1] + (ca / C) % C, o[2] + ca / (C * C)};
-                CornerSum s_{};
-                std::int64_t lo[3], hi[3];
-                for (int a = 0; a < 3; ++a) {
-                    lo[a] = std::max<std::int64_t>(0, q[a] - reach);
-                    hi[a] = std::min<std::int64_t>(cells - 1, q[a] + reach - 1);
-                }
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                            const std::uint32_t cell = grid[static_cast<std::size_t>(
-                                ((z - g0[2]) * W + (y - g0[1])) * W + (x - g0[0]))];
-                            if (cell == k_missing) continue;
-                            const float ox = static_cast<float>(x - q[0]);
-                            const float oy = static_cast<float>(y - q[1]);
-                            const float oz = static_cast<float>(z - q[2]);
-                            for (std::uint32_t j = bins.cell_begin[cell]; j < bins.cell_begin[cell + 1];
-                                 ++j) {
-                                const Packed& d = packed[j];
-                                const float dx = ox + d.frac[0], dy = oy + d.frac[1], dz = oz + d.frac[2];
-                                const float r2 = (dx * dx + dy * dy + dz * dz) * inv_g2;
-                                if (!(r2 < 1.0f)) continue;
-                                const float w = 1.0f - r2;
-                                for (int a = 0; a < 3; ++a) {
-                                    s_.value[a] += w * d.flux[a];
-                                    s_.normal[a] += w * d.normal[a];
-                                }
-                                s_.weight += w * d.lum;
-                            }
-                        }
+                CornerSum& s_ = sums[k];
                 for (float& v : s_.value) {
                     v *= norm;
                     if (std::isfinite(v)) task_max = std::max(task_max, v);
                 }
-                sums[k] = s_;
                 out.corner_values.insert(out.corner_values.end(), s_.value, s_.value + 3);
                 // Leaves: every cell of this block with a non-zero corner.
                 if (!(s_.value[0] > 0.0f || s_.value[1] > 0.0f || s_.value[2] > 0.0f)) continue;
@@ -423,7 +510,10 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
                 }
                 leaf_bits[word] = 0;
             }
-            for (std::uint32_t at : grid_used) grid[at] = k_missing;
+            for (std::uint32_t at : grid_used) {
+                grid[at] = k_missing;
+                row_used[at / W] = 0;
+            }
             for (std::int64_t ca : corner_pos) corner_at[static_cast<std::size_t>(ca)] = k_missing;
             to.corner_count = corner_pos.size();
             to.leaf_count = out.leaves.size() - to.leaf_begin;
@@ -441,7 +531,7 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
         leaf_offset[t + 1] = leaf_offset[t] + task_out[t].leaf_count;
     GiOctree tree;
     tree.leaves.resize(leaf_offset.back());
-    std::vector<std::uint64_t> leaf_keys(leaf_offset.back());
+    pre::Buffer<std::uint64_t> leaf_keys(leaf_offset.back());
     const float zero[3] = {0.0f, 0.0f, 0.0f};
     const std::uint32_t encoded_zero = gi::encode_corner(zero, scale);
     pre::parallel_chunks(tasks.size(), 4, threads, [&](std::size_t begin, std::size_t end, unsigned) {
