@@ -56,4 +56,27 @@ void parallel_chunks(std::size_t count, std::size_t chunk, unsigned threads, Bod
     if (error) std::rethrow_exception(error);
 }
 
+/// Stream compaction: calls `out(rank, i)` for every i in [0, count) where `keep(i)` holds, rank
+/// being the number of kept indices before i (so the output keeps the input order whatever the
+/// thread count), and returns how many were kept. Two parallel passes over fixed chunks: count,
+/// then (after an exclusive prefix sum over the chunks) write.
+template <class Keep, class Out>
+std::size_t parallel_select(std::size_t count, unsigned threads, Keep&& keep, Out&& out) {
+    constexpr std::size_t k_chunk = std::size_t{1} << 15;
+    const std::size_t chunks = (count + k_chunk - 1) / k_chunk;
+    std::vector<std::size_t> offset(chunks + 1, 0);
+    parallel_chunks(count, k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        std::size_t n = 0;
+        for (std::size_t i = begin; i < end; ++i) n += keep(i) ? 1 : 0;
+        offset[begin / k_chunk + 1] = n;
+    });
+    for (std::size_t c = 0; c < chunks; ++c) offset[c + 1] += offset[c];
+    parallel_chunks(count, k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        std::size_t rank = offset[begin / k_chunk];
+        for (std::size_t i = begin; i < end; ++i)
+            if (keep(i)) out(rank++, i);
+    });
+    return offset[chunks];
+}
+
 }  // namespace prt::pre

@@ -3,6 +3,7 @@
 #include "gi_build.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <string>
 
@@ -43,14 +44,17 @@ namespace {
 
 /// Stable LSD radix sort of `keys` (and `values` alongside, when not null) over the low `bits`
 /// bits, 11 bits per pass; each pass counts and scatters contiguous blocks in parallel.
-void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>* values, std::uint32_t bits) {
+/// Keys and Values: std::vector or pre::Buffer (whose scratch copies stay uninitialised until the
+/// parallel scatter first touches them).
+template <class Keys, class Values>
+void radix_sort(Keys& keys, Values* values, std::uint32_t bits, unsigned requested_threads) {
     const std::size_t n = keys.size();
     constexpr std::size_t k_buckets = std::size_t{1} << k_digit_bits;
     const unsigned threads = static_cast<unsigned>(
-        std::min<std::size_t>(pre::resolve_threads(0), std::max<std::size_t>(1, n >> 16)));
+        std::min<std::size_t>(pre::resolve_threads(requested_threads), std::max<std::size_t>(1, n >> 16)));
     const std::size_t block = (n + threads - 1) / std::max(1u, threads);
-    std::vector<std::uint64_t> tmp_keys(n);
-    std::vector<std::uint32_t> tmp_values(values ? n : 0);
+    Keys tmp_keys(n);
+    Values tmp_values(values ? n : 0);
     std::vector<std::size_t> count(threads * k_buckets);
     const std::uint64_t mask = k_buckets - 1;
     for (std::uint32_t shift = 0; shift < bits; shift += k_digit_bits) {
@@ -81,16 +85,17 @@ void radix_sort(std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>* va
 
 }  // namespace
 
-std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std::uint32_t bits) {
+std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std::uint32_t bits,
+                                       unsigned threads) {
     std::vector<std::uint64_t> k(keys.begin(), keys.end());
     std::vector<std::uint32_t> order(keys.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
-    radix_sort(k, &order, bits);
+    radix_sort(k, &order, bits, threads);
     return order;
 }
 
-void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits) {
-    radix_sort(keys, nullptr, bits);
+void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits, unsigned threads) {
+    radix_sort(keys, static_cast<std::vector<std::uint32_t>*>(nullptr), bits, threads);
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
 }
 
@@ -110,6 +115,25 @@ void KeyMap::insert(std::uint64_t key, std::uint32_t value) {
             return;
         }
     }
+}
+
+void KeyMap::insert_indices(std::span<const std::uint64_t> keys, unsigned threads) {
+    pre::parallel_chunks(
+        keys.size(), 1 << 14, pre::resolve_threads(threads),
+        [&](std::size_t begin, std::size_t end, unsigned) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint64_t want = keys[i] + 1;
+                for (std::uint64_t h = mix64(keys[i]) & m_mask;; h = (h + 1) & m_mask) {
+                    std::uint64_t seen = 0;
+                    std::atomic_ref<std::uint64_t> slot(m_keys[h]);
+                    if (slot.load(std::memory_order_relaxed) == 0 &&
+                        slot.compare_exchange_strong(seen, want, std::memory_order_relaxed)) {
+                        m_values[h] = static_cast<std::uint32_t>(i);
+                        break;
+                    }
+                }
+            }
+        });
 }
 
 std::uint32_t KeyMap::find(std::uint64_t key) const {
@@ -134,104 +158,154 @@ void CellBins::cell_of(const float p[3], std::uint32_t c[3]) const {
     }
 }
 
-CellBins bin_keys(std::vector<std::uint64_t> keys, const double root_min[3], double root_size,
-                  std::uint32_t depth) {
+CellBins bin_keys(pre::Buffer<std::uint64_t> keys, const double root_min[3], double root_size,
+                  std::uint32_t depth, unsigned threads, bool with_map) {
+    threads = pre::resolve_threads(threads);
     CellBins b;
     b.depth = depth;
     b.root_size = root_size;
     for (int a = 0; a < 3; ++a) b.root_min[a] = root_min[a];
-    b.order = radix_order(keys, 3 * depth);
-    for (std::size_t k = 0; k < b.order.size(); ++k) {
-        const std::uint64_t key = keys[b.order[k]];
-        if (b.cell_keys.empty() || b.cell_keys.back() != key) {
-            b.cell_keys.push_back(key);
-            b.cell_begin.push_back(static_cast<std::uint32_t>(k));
-        }
+    const std::size_t n = keys.size();
+    b.order = pre::Buffer<std::uint32_t>(n);
+    pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) b.order[i] = static_cast<std::uint32_t>(i);
+    });
+    radix_sort(keys, &b.order, 3 * depth, threads);  // keys now sorted
+    // The occupied cells: where the sorted key changes (parallel compaction, order kept).
+    auto starts = [&](std::size_t k) { return k == 0 || keys[k] != keys[k - 1]; };
+    const std::size_t cells = pre::parallel_select(n, threads, starts, [](std::size_t, std::size_t) {});
+    b.cell_keys.resize(cells);
+    b.cell_begin.resize(cells + 1);
+    pre::parallel_select(n, threads, starts, [&](std::size_t rank, std::size_t k) {
+        b.cell_keys[rank] = keys[k];
+        b.cell_begin[rank] = static_cast<std::uint32_t>(k);
+    });
+    b.cell_begin[cells] = static_cast<std::uint32_t>(n);
+    if (with_map) {
+        b.map = KeyMap(b.cell_keys.size());
+        b.map.insert_indices(b.cell_keys, threads);
     }
-    b.cell_begin.push_back(static_cast<std::uint32_t>(b.order.size()));
-    b.map = KeyMap(b.cell_keys.size());
-    for (std::size_t c = 0; c < b.cell_keys.size(); ++c)
-        b.map.insert(b.cell_keys[c], static_cast<std::uint32_t>(c));
     return b;
 }
 
-GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_min[3], double root_size,
-                      std::uint32_t depth) {
+std::vector<std::uint32_t> build_nodes(std::span<const std::uint64_t> keys, std::uint32_t depth,
+                                       unsigned threads) {
     if (depth > pool::k_max_gi_depth)
         throw Error("GI octree depth " + std::to_string(depth) + " above the limit " +
                     std::to_string(pool::k_max_gi_depth));
-    GiOctree t;
-    // Distinct prefixes per level (the internal nodes), from the sorted leaf keys, each level from
-    // the one below it.
-    std::vector<std::vector<std::uint64_t>> prefixes(depth + 1);
-    prefixes[depth].reserve(leaves.size());
-    for (const LeafValues& lv : leaves) prefixes[depth].push_back(lv.key);
+    threads = pre::resolve_threads(threads);
+    if (keys.empty()) return {pool::make_node(pool::NodeType::empty_leaf, 0)};
+    if (depth == 0) return {pool::make_node(pool::NodeType::filled_leaf, 0)};
+    // prefixes[l]: the distinct key prefixes at level l (the internal nodes there, l < depth), from
+    // the level below by parallel compaction; parent[l][j]: the index in prefixes[l - 1] of
+    // prefixes[l][j]'s parent (its rank among the compacted prefixes).
+    std::vector<std::vector<std::uint64_t>> prefixes(depth);
+    std::vector<std::vector<std::uint32_t>> parent(depth + 1);
     for (std::uint32_t l = depth; l-- > 0;) {
-        for (std::uint64_t k : prefixes[l + 1]) {
-            const std::uint64_t p = k >> 3;
-            if (prefixes[l].empty() || prefixes[l].back() != p) prefixes[l].push_back(p);
-        }
+        const std::span<const std::uint64_t> below =
+            l + 1 == depth ? keys : std::span<const std::uint64_t>(prefixes[l + 1]);
+        std::vector<std::uint32_t>& up = parent[l + 1];
+        up.resize(below.size());
+        auto starts = [&](std::size_t k) { return k == 0 || (below[k] >> 3) != (below[k - 1] >> 3); };
+        const std::size_t count =
+            pre::parallel_select(below.size(), threads, starts, [](std::size_t, std::size_t) {});
+        prefixes[l].resize(count);
+        pre::parallel_select(below.size(), threads, starts,
+                             [&](std::size_t rank, std::size_t k) { prefixes[l][rank] = below[k] >> 3; });
+        // Ranks of every element: the compaction rank of its run's start.
+        pre::parallel_chunks(
+            below.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+                // Rank at `begin`: the first prefix >= below[begin] >> 3 (prefixes[l] is sorted).
+                const std::uint64_t p0 = below[begin] >> 3;
+                std::size_t r = static_cast<std::size_t>(
+                    std::lower_bound(prefixes[l].begin(), prefixes[l].end(), p0) - prefixes[l].begin());
+                for (std::size_t k = begin; k < end; ++k) {
+                    if (k > begin && starts(k)) ++r;
+                    up[k] = static_cast<std::uint32_t>(r);
+                }
+            });
     }
-    std::uint64_t node_count = 1;
-    for (std::uint32_t l = 0; l < depth; ++l) node_count += 8ull * prefixes[l].size();
-    if (leaves.empty()) node_count = 1;
+    // Breadth first: level l's nodes (l >= 1) fill 8 slots per internal node of level l - 1, from
+    // base[l]; prefixes[l - 1][i] owns slots base[l] + 8 i .. + 7.
+    std::vector<std::uint64_t> base(depth + 2, 0);
+    base[1] = 1;
+    for (std::uint32_t l = 1; l <= depth; ++l) base[l + 1] = base[l] + 8ull * prefixes[l - 1].size();
+    const std::uint64_t node_count = base[depth + 1];
     if (node_count > pool::k_node_address_max)
         throw Error("GI octree needs " + std::to_string(node_count) + " nodes, more than 2^30");
-    t.nodes.assign(node_count, pool::make_node(pool::NodeType::empty_leaf, 0));
-    if (!leaves.empty()) {
-        if (depth == 0) {
-            t.nodes[0] = pool::make_node(pool::NodeType::filled_leaf, 0);
-        } else {
-            // Breadth first: level l's internal nodes (prefixes[l], in order) own consecutive
-            // groups of 8 slots at level l + 1; slot[j] is where prefixes[l][j]'s node word sits.
-            std::vector<std::uint64_t> slot{0}, next_slot;
-            std::uint64_t next_base = 1;
-            for (std::uint32_t l = 0; l < depth; ++l) {
-                const std::vector<std::uint64_t>& here = prefixes[l];
-                const std::vector<std::uint64_t>& below = prefixes[l + 1];
-                next_slot.assign(below.size(), 0);
-                std::size_t j = 0;  // position in `below`
-                for (std::size_t i = 0; i < here.size(); ++i) {
-                    const std::uint64_t first = next_base + 8 * i;
-                    t.nodes[slot[i]] =
-                        pool::make_node(pool::NodeType::internal, static_cast<std::uint32_t>(first));
-                    for (; j < below.size() && (below[j] >> 3) == here[i]; ++j) {
-                        next_slot[j] = first + (below[j] & 7u);
-                        if (l + 1 == depth)
-                            t.nodes[next_slot[j]] =
-                                pool::make_node(pool::NodeType::filled_leaf, static_cast<std::uint32_t>(j));
-                    }
+    std::vector<std::uint32_t> nodes(node_count, pool::make_node(pool::NodeType::empty_leaf, 0));
+    nodes[0] = pool::make_node(pool::NodeType::internal, 1);
+    for (std::uint32_t l = 1; l <= depth; ++l) {
+        const std::span<const std::uint64_t> here =
+            l == depth ? keys : std::span<const std::uint64_t>(prefixes[l]);
+        const std::vector<std::uint32_t>& up = parent[l];
+        pre::parallel_chunks(
+            here.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+                for (std::size_t j = begin; j < end; ++j) {
+                    const std::uint64_t slot = base[l] + 8ull * up[j] + (here[j] & 7u);
+                    nodes[slot] =
+                        l == depth
+                            ? pool::make_node(pool::NodeType::filled_leaf, static_cast<std::uint32_t>(j))
+                            : pool::make_node(pool::NodeType::internal,
+                                              static_cast<std::uint32_t>(base[l + 1] + 8ull * j));
                 }
-                slot.swap(next_slot);
-                next_base += 8 * here.size();
-            }
-        }
+            });
     }
-    // Encode the leaves with one scale for the map (the largest value maps below RGB9E5's maximum).
-    float max_value = 0.0f;
-    for (const LeafValues& lv : leaves)
-        for (const auto& c : lv.corner)
-            for (float v : c)
-                if (std::isfinite(v)) max_value = std::max(max_value, v);
-    const float scale = max_value > 0.0f ? max_value / 32768.0f : 1.0f;
-    t.leaves.resize(leaves.size());
-    for (std::size_t i = 0; i < leaves.size(); ++i) {
-        pool::GiLeaf& out = t.leaves[i];
-        for (int c = 0; c < 8; ++c)
-            out.corner[c] =
-                core::encode_rgb9e5(core::Vec3{leaves[i].corner[c][0] / scale, leaves[i].corner[c][1] / scale,
-                                               leaves[i].corner[c][2] / scale});
-        for (int a = 0; a < 3; ++a)
-            out.normal[a] =
-                static_cast<std::int8_t>(std::lround(std::clamp(leaves[i].normal[a], -1.0f, 1.0f) * 127.0f));
-        out.reserved = 0;
-    }
+    return nodes;
+}
+
+float map_scale(float max_value) {
+    return max_value > 0.0f ? max_value / 32768.0f : 1.0f;
+}
+
+std::uint32_t encode_corner(const float value[3], float scale) {
+    return core::encode_rgb9e5(core::Vec3{value[0] / scale, value[1] / scale, value[2] / scale});
+}
+
+std::int8_t encode_normal(float n) {
+    return static_cast<std::int8_t>(std::lround(std::clamp(n, -1.0f, 1.0f) * 127.0f));
+}
+
+void fill_info(GiOctree& t, const double root_min[3], double root_size, std::uint32_t depth, float scale) {
     for (int a = 0; a < 3; ++a) t.info.root_min[a] = static_cast<float>(root_min[a]);
     t.info.root_size = static_cast<float>(root_size);
     t.info.depth = depth;
     t.info.node_count = static_cast<std::uint32_t>(t.nodes.size());
     t.info.leaf_count = static_cast<std::uint32_t>(t.leaves.size());
     t.info.scale = scale;
+}
+
+GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_min[3], double root_size,
+                      std::uint32_t depth, unsigned threads) {
+    threads = pre::resolve_threads(threads);
+    GiOctree t;
+    std::vector<std::uint64_t> keys(leaves.size());
+    for (std::size_t i = 0; i < leaves.size(); ++i) keys[i] = leaves[i].key;
+    t.nodes = build_nodes(keys, depth, threads);
+    // One scale for the map: the largest finite corner value (a maximum: any order gives it).
+    constexpr std::size_t k_chunk = 1 << 14;
+    std::vector<float> chunk_max((leaves.size() + k_chunk - 1) / k_chunk, 0.0f);
+    pre::parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        float m = 0.0f;
+        for (std::size_t i = begin; i < end; ++i)
+            for (const auto& c : leaves[i].corner)
+                for (float v : c)
+                    if (std::isfinite(v)) m = std::max(m, v);
+        chunk_max[begin / k_chunk] = m;
+    });
+    float max_value = 0.0f;
+    for (float m : chunk_max) max_value = std::max(max_value, m);
+    const float scale = map_scale(max_value);
+    t.leaves.resize(leaves.size());
+    pre::parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t i = begin; i < end; ++i) {
+            pool::GiLeaf& out = t.leaves[i];
+            for (int c = 0; c < 8; ++c) out.corner[c] = encode_corner(leaves[i].corner[c], scale);
+            for (int a = 0; a < 3; ++a) out.normal[a] = encode_normal(leaves[i].normal[a]);
+            out.reserved = 0;
+        }
+    });
+    fill_info(t, root_min, root_size, depth, scale);
     return t;
 }
 

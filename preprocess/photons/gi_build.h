@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "buffer.h"
 #include "parallel.h"
 #include "prt/core/gi.h"
 #include "prt/formats/gi_layout.h"
@@ -23,16 +24,20 @@ std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z);
 void demorton3(std::uint64_t key, std::uint32_t& x, std::uint32_t& y, std::uint32_t& z);
 
 /// Sorts keys ascending (LSD radix over the low `bits` bits) and returns the permutation:
-/// order[k] = index of the k-th smallest key. Stable.
-std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std::uint32_t bits);
+/// order[k] = index of the k-th smallest key. Stable. `threads` 0: every hardware thread.
+std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std::uint32_t bits,
+                                       unsigned threads = 0);
 /// Sorts and removes duplicates in place (LSD radix over the low `bits` bits).
-void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits);
+void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits, unsigned threads = 0);
 
 /// An open-addressing hash map from 64-bit keys to 32-bit values (insert-only, fixed capacity).
 class KeyMap {
 public:
     explicit KeyMap(std::size_t expected);
     void insert(std::uint64_t key, std::uint32_t value);
+    /// Inserts keys[i] -> i for every i, from `threads` workers (compare-and-swap on the slots);
+    /// the keys must be distinct. Lookups afterwards answer as after serial inserts.
+    void insert_indices(std::span<const std::uint64_t> keys, unsigned threads);
     /// The value of `key`, or k_missing.
     std::uint32_t find(std::uint64_t key) const;
     static constexpr std::uint32_t k_missing = 0xffffffffu;
@@ -49,7 +54,7 @@ struct CellBins {
     std::uint32_t depth = 0;
     double root_min[3] = {0, 0, 0};
     double root_size = 1.0;
-    std::vector<std::uint32_t> order;       ///< sample indices grouped by cell
+    pre::Buffer<std::uint32_t> order;       ///< sample indices grouped by cell
     std::vector<std::uint64_t> cell_keys;   ///< Morton key per occupied cell, ascending
     std::vector<std::uint32_t> cell_begin;  ///< per occupied cell + 1: range into `order`
     KeyMap map{1};                          ///< cell key -> index into cell_keys
@@ -61,22 +66,24 @@ struct CellBins {
     void cell_of(const float p[3], std::uint32_t c[3]) const;
 };
 
-/// Bins `count` points (positions p(i), local frame) at `depth` under the root cube.
+/// Bins `count` points (positions p(i), local frame) at `depth` under the root cube, from
+/// `threads` workers (0: every hardware thread; the result does not depend on it). Without
+/// `with_map`, CellBins::map stays empty (for callers that find cells otherwise).
 template <class PositionOf>
 CellBins bin_points(std::size_t count, const double root_min[3], double root_size, std::uint32_t depth,
-                    PositionOf position_of);
-CellBins bin_keys(std::vector<std::uint64_t> keys, const double root_min[3], double root_size,
-                  std::uint32_t depth);
+                    PositionOf position_of, unsigned threads = 0, bool with_map = true);
+CellBins bin_keys(pre::Buffer<std::uint64_t> keys, const double root_min[3], double root_size,
+                  std::uint32_t depth, unsigned threads = 0, bool with_map = true);
 
 template <class PositionOf>
 CellBins bin_points(std::size_t count, const double root_min[3], double root_size, std::uint32_t depth,
-                    PositionOf position_of) {
+                    PositionOf position_of, unsigned threads, bool with_map) {
     CellBins probe;
     probe.depth = depth;
     probe.root_size = root_size;
     for (int a = 0; a < 3; ++a) probe.root_min[a] = root_min[a];
-    std::vector<std::uint64_t> keys(count);
-    pre::parallel_chunks(count, 1 << 16, pre::resolve_threads(0),
+    pre::Buffer<std::uint64_t> keys(count);
+    pre::parallel_chunks(count, 1 << 16, pre::resolve_threads(threads),
                          [&](std::size_t begin, std::size_t end, unsigned) {
                              for (std::size_t i = begin; i < end; ++i) {
                                  std::uint32_t c[3];
@@ -84,7 +91,7 @@ CellBins bin_points(std::size_t count, const double root_min[3], double root_siz
                                  keys[i] = morton3(c[0], c[1], c[2]);
                              }
                          });
-    return bin_keys(std::move(keys), root_min, root_size, depth);
+    return bin_keys(std::move(keys), root_min, root_size, depth, threads, with_map);
 }
 
 /// A built GI octree: info, node words and leaves, ready for the pool.
@@ -105,9 +112,24 @@ struct LeafValues {
 /// Builds the node words (breadth first, children in Morton order, pool_layout.h) and the encoded
 /// leaves of an octree whose filled leaves are `leaves` (sorted by key, unique) at `depth`; picks
 /// GiInfo::scale so the largest corner value is representable and fills root, depth and counts.
-/// Throws prt::Error when the tree would need more than 2^30 nodes.
+/// Throws prt::Error when the tree would need more than 2^30 nodes. `threads`: as bin_points.
 GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_min[3], double root_size,
-                      std::uint32_t depth);
+                      std::uint32_t depth, unsigned threads = 0);
+
+/// The node words of build_octree for filled leaves at the cells `keys` (Morton keys at `depth`,
+/// sorted, unique); leaf j's word addresses leaf j. Level by level, each level in parallel: the
+/// same words whatever the thread count. Throws prt::Error past 2^30 nodes.
+std::vector<std::uint32_t> build_nodes(std::span<const std::uint64_t> keys, std::uint32_t depth,
+                                       unsigned threads = 0);
+
+/// GiInfo::scale for a map whose largest finite corner value is `max_value` (>= 0): the largest
+/// value maps below RGB9E5's maximum.
+float map_scale(float max_value);
+/// One encoded corner (value / scale, RGB9E5) and one encoded normal component (x 127).
+std::uint32_t encode_corner(const float value[3], float scale);
+std::int8_t encode_normal(float n);
+/// Fills t.info's root, depth, counts (from t.nodes and t.leaves) and scale.
+void fill_info(GiOctree& t, const double root_min[3], double root_size, std::uint32_t depth, float scale);
 
 /// The core's view of a built tree (pointers into `t`), as a loaded pool gives it.
 core::GiOctreeView view_of(const GiOctree& t);

@@ -4,9 +4,11 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <mutex>
 
+#include "buffer.h"
 #include "parallel.h"
 #include "prt/error.h"
 #include "prt/tool.h"
@@ -48,8 +50,89 @@ void add_tally(PhotonTally& t, const PhotonTally& o) {
     t.rays += o.rays;
 }
 
+/// v where mask is all ones, +0 where it is zero (a bit mask: compiles to no branch).
+inline float masked(float v, std::uint32_t mask) {
+    return std::bit_cast<float>(std::bit_cast<std::uint32_t>(v) & mask);
+}
+
 float luminance(const float c[3]) {
     return 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2];
+}
+
+/// A deposit as the density loop reads it (thesis 5.4.2): its offset inside its cell (floats keep
+/// full precision there at any depth), flux and luminance-weighted normal.
+struct Packed {
+    float frac[3];
+    float flux[3];
+    float normal[3];  ///< luminance x normal
+    float lum;
+};
+
+/// A corner's running sums of eq. 5.1-5.2 (before the normalisation).
+struct CornerSum {
+    float value[3];
+    float normal[3];
+    float weight;  ///< sum of kernel x luminance: |normal| / weight says how one-sided it is
+};
+
+/// One corner a cell reaches: its sums and the cell's offset from it (cell - corner, in edges).
+struct Lane {
+    std::uint32_t corner;
+    float offset[3];
+};
+
+constexpr std::size_t k_lanes = 8;
+
+/// Adds the kernel-weighted deposits d[0..n) of one cell to the sums of up to 8 corners, in the
+/// deposits' order: per corner, sum += (1 - r^2 / g^2) x quantity for each deposit with r < g.
+/// The lanes are independent (the compiler vectorises them); a deposit outside g adds +0 to every
+/// sum (a bit mask: no branch to mispredict), which leaves the sum as it was since a sum is never
+/// -0, so each corner's sums are bit for bit those of adding only the deposits within g.
+void accumulate_lanes(const Lane* lanes, std::size_t count, const Packed* d, std::uint32_t n, float inv_g2,
+                      CornerSum* sums) {
+    float ox[k_lanes], oy[k_lanes], oz[k_lanes];
+    float v0[k_lanes], v1[k_lanes], v2[k_lanes], n0[k_lanes], n1[k_lanes], n2[k_lanes], wt[k_lanes];
+    for (std::size_t l = 0; l < k_lanes; ++l) {
+        const bool real = l < count;
+        // A padding lane sits far away (r > g for every deposit) and is not stored back.
+        ox[l] = real ? lanes[l].offset[0] : 1e6f;
+        oy[l] = real ? lanes[l].offset[1] : 0.0f;
+        oz[l] = real ? lanes[l].offset[2] : 0.0f;
+        const CornerSum s = real ? sums[lanes[l].corner] : CornerSum{};
+        v0[l] = s.value[0];
+        v1[l] = s.value[1];
+        v2[l] = s.value[2];
+        n0[l] = s.normal[0];
+        n1[l] = s.normal[1];
+        n2[l] = s.normal[2];
+        wt[l] = s.weight;
+    }
+    for (std::uint32_t j = 0; j < n; ++j) {
+        const Packed& p = d[j];
+        for (std::size_t l = 0; l < k_lanes; ++l) {
+            const float dx = ox[l] + p.frac[0], dy = oy[l] + p.frac[1], dz = oz[l] + p.frac[2];
+            const float r2 = (dx * dx + dy * dy + dz * dz) * inv_g2;
+            const std::uint32_t in = 0u - static_cast<std::uint32_t>(r2 < 1.0f);
+            const float w = 1.0f - r2;
+            v0[l] += masked(w * p.flux[0], in);
+            n0[l] += masked(w * p.normal[0], in);
+            v1[l] += masked(w * p.flux[1], in);
+            n1[l] += masked(w * p.normal[1], in);
+            v2[l] += masked(w * p.flux[2], in);
+            n2[l] += masked(w * p.normal[2], in);
+            wt[l] += masked(w * p.lum, in);
+        }
+    }
+    for (std::size_t l = 0; l < count; ++l) {
+        CornerSum& s = sums[lanes[l].corner];
+        s.value[0] = v0[l];
+        s.value[1] = v1[l];
+        s.value[2] = v2[l];
+        s.normal[0] = n0[l];
+        s.normal[1] = n1[l];
+        s.normal[2] = n2[l];
+        s.weight = wt[l];
+    }
 }
 
 }  // namespace
@@ -139,6 +222,17 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
     return result;
 }
 
+// thesis 5.4.2 + eq. 5.1-5.2, in parallel over blocks of S^3 leaf cells (S = 2^s, Morton-aligned, so
+// a block is a contiguous range of keys and a cell's key is its block's key << 3s | its local key).
+// Each block is one independent task: it places the occupied cells within the gather reach of its
+// corners in a dense local grid (no hash lookups), finds its corners (the lattice points within g of
+// an occupied cell, as the serial gather did), estimates the density at each, and emits its leaves
+// (the cells with a non-zero corner) in local Morton order. Blocks in key order then give the leaves
+// sorted, with no global sort or dedupe. Corners on a block's upper faces are also corners of the
+// next blocks: each block computes them again (the same sum, term for term), a few per cent more
+// density work for no communication. Every corner sum adds the same terms in the same order as the
+// serial gather (cells z, y, x, then deposits in input order within a cell), and the map scale is a
+// maximum, so the tree is byte-identical whatever the thread count.
 GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const double root_min[3],
                               double root_size, const GatherOptions& options) {
     const std::uint32_t depth = options.depth;
@@ -153,8 +247,9 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
         if (options.phase_seconds) options.phase_seconds[k] = now - mark;
         mark = now;
     };
-    const CellBins bins = gi::bin_points(deposits.size(), root_min, root_size, depth,
-                                         [&](std::size_t i) { return deposits[i].position; });
+    const CellBins bins = gi::bin_points(
+        deposits.size(), root_min, root_size, depth, [&](std::size_t i) { return deposits[i].position; },
+        threads, /*with_map=*/false);
     const double ge = options.radius_edges;
     const std::int64_t reach = static_cast<std::int64_t>(std::ceil(ge));
     const std::int64_t cells = std::int64_t{1} << depth;
@@ -162,19 +257,20 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
     // The deposits in cell order, as offsets inside their cell (floats keep full precision there
     // at any depth) with their flux and luminance-weighted normal: the density loop reads them
     // sequentially, cell by cell.
-    struct Packed {
-        float frac[3];
-        float flux[3];
-        float normal[3];  ///< luminance x normal
-        float lum;
-    };
-    std::vector<Packed> packed(deposits.size());
+    pre::Buffer<Packed> packed(deposits.size());  // first touched by the parallel fill
     pre::parallel_chunks(bins.cell_keys.size(), 4096, threads,
                          [&](std::size_t begin, std::size_t end, unsigned) {
                              for (std::size_t c = begin; c < end; ++c) {
                                  std::uint32_t cell[3];
                                  gi::demorton3(bins.cell_keys[c], cell[0], cell[1], cell[2]);
                                  for (std::uint32_t j = bins.cell_begin[c]; j < bins.cell_begin[c + 1]; ++j) {
+                                     // The deposits are read in random order: ask for them early.
+                                     if (j + 16 < deposits.size()) {
+                                         const char* ahead =
+                                             reinterpret_cast<const char*>(&deposits[bins.order[j + 16]]);
+                                         __builtin_prefetch(ahead);
+                                         __builtin_prefetch(ahead + sizeof(PhotonDeposit) - 1);
+                                     }
                                      const PhotonDeposit& d = deposits[bins.order[j]];
                                      double g[3];
                                      bins.grid(d.position, g);
@@ -189,126 +285,275 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
                              }
                          });
     phase(0);
-    // Corners a deposit can reach: lattice points within g of some deposit's cell.
-    std::vector<std::uint64_t> corner_keys;
-    corner_keys.reserve(bins.cell_keys.size() * 8);
-    for (std::uint64_t key : bins.cell_keys) {
-        std::uint32_t c[3];
-        gi::demorton3(key, c[0], c[1], c[2]);
+
+    // The blocks: S = 16 cells a side (the whole lattice when shallower). Block L's task covers
+    // leaves L*S .. L*S+S-1 and corners L*S .. L*S+S (per axis), so it needs the occupied cells
+    // L*S-r .. L*S+S+r-1 (r = ceil(g)): the cells of blocks within `halo` of L. The tasks are the
+    // blocks within `halo` of an occupied block, sorted and unique (a few thousand keys).
+    const std::uint32_t s = std::min<std::uint32_t>(depth, 4);
+    const std::int64_t S = std::int64_t{1} << s;
+    const std::uint32_t sbits = 3 * s;
+    const std::int64_t halo = (S + reach - 1) / S;
+    const std::int64_t last_block = cells >> s;  // corners reach coordinate `cells`
+    const std::int64_t last_cell_block = (cells - 1) >> s;
+    auto starts = [&](std::size_t c) {
+        return c == 0 || (bins.cell_keys[c] >> sbits) != (bins.cell_keys[c - 1] >> sbits);
+    };
+    std::vector<std::uint64_t> occupied(
+        pre::parallel_select(bins.cell_keys.size(), threads, starts, [](std::size_t, std::size_t) {}));
+    pre::parallel_select(bins.cell_keys.size(), threads, starts, [&](std::size_t rank, std::size_t c) {
+        occupied[rank] = bins.cell_keys[c] >> sbits;
+    });
+    std::vector<std::uint64_t> tasks;
+    for (std::uint64_t b : occupied) {
+        std::uint32_t bc[3];
+        gi::demorton3(b, bc[0], bc[1], bc[2]);
         std::int64_t lo[3], hi[3];
         for (int a = 0; a < 3; ++a) {
-            lo[a] = std::max<std::int64_t>(0, c[a] - reach + 1);
-            hi[a] = std::min<std::int64_t>(cells, c[a] + reach);
+            lo[a] = std::max<std::int64_t>(0, std::int64_t{bc[a]} - halo);
+            hi[a] = std::min<std::int64_t>(last_block, std::int64_t{bc[a]} + halo);
         }
         for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
             for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
                 for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-                    corner_keys.push_back(gi::morton3(static_cast<std::uint32_t>(x),
-                                                      static_cast<std::uint32_t>(y),
-                                                      static_cast<std::uint32_t>(z)));
+                    tasks.push_back(gi::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
+                                                static_cast<std::uint32_t>(z)));
     }
-    gi::sort_unique(corner_keys, 3 * (depth + 1));
+    gi::sort_unique(tasks, 3 * (depth - s + 1), threads);
     phase(1);
 
-    // thesis 5.4.2, eq. 5.1-5.2: density estimate at every corner, gathered from the cells within g.
-    struct CornerSum {
-        float value[3];
-        float normal[3];
-        float weight;  ///< sum of kernel x luminance: |normal| / weight says how one-sided it is
+    // thesis 5.4.2, eq. 5.1-5.2: per block, the corners, their density estimates and the leaves.
+    struct TaskOut {
+        unsigned worker = 0;
+        std::size_t corner_begin = 0, corner_count = 0;  ///< into the worker's corner values
+        std::size_t leaf_begin = 0, leaf_count = 0;      ///< into the worker's leaves
     };
-    std::vector<CornerSum> sums(corner_keys.size());
+    struct WorkerOut {
+        std::vector<float> corner_values;  ///< 3 per corner
+        std::vector<std::uint64_t> leaf_keys;
+        std::vector<pool::GiLeaf> leaves;  ///< corner[c]: index into the task's corners (or missing)
+        float max_value = 0.0f;            ///< largest finite corner value
+        // Scratch: the dense grids are left all-missing after each task.
+        std::vector<std::uint32_t> grid, corner_at, grid_used;
+        std::vector<std::int64_t> corner_pos;
+        std::vector<CornerSum> sums;
+        std::vector<Lane> lanes;
+        std::vector<std::uint64_t> leaf_bits;
+        std::vector<std::uint8_t> row_used;  ///< per (z, y) row of the cell grid: any cell there
+    };
+    std::vector<TaskOut> task_out(tasks.size());
+    std::vector<WorkerOut> worker_out(threads);
     const double edge_scene = bins.edge() * options.render_scale;
     const float norm = static_cast<float>(2.0 / (k_pi * (ge * edge_scene) * (ge * edge_scene)));
     const float inv_g2 = static_cast<float>(1.0 / (ge * ge));
-    pre::parallel_chunks(
-        corner_keys.size(), 4096, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-            for (std::size_t k = begin; k < end; ++k) {
-                std::uint32_t q[3];
-                gi::demorton3(corner_keys[k], q[0], q[1], q[2]);
-                CornerSum s{};
-                std::int64_t lo[3], hi[3];
-                for (int a = 0; a < 3; ++a) {
-                    lo[a] = std::max<std::int64_t>(0, std::int64_t{q[a]} - reach);
-                    hi[a] = std::min<std::int64_t>(cells - 1, std::int64_t{q[a]} + reach - 1);
-                }
-                for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                        for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                            const std::uint32_t cell = bins.map.find(
-                                gi::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
-                                            static_cast<std::uint32_t>(z)));
-                            if (cell == KeyMap::k_missing) continue;
-                            const float ox = static_cast<float>(x - std::int64_t{q[0]});
-                            const float oy = static_cast<float>(y - std::int64_t{q[1]});
-                            const float oz = static_cast<float>(z - std::int64_t{q[2]});
-                            for (std::uint32_t j = bins.cell_begin[cell]; j < bins.cell_begin[cell + 1];
-                                 ++j) {
-                                const Packed& d = packed[j];
-                                const float dx = ox + d.frac[0], dy = oy + d.frac[1], dz = oz + d.frac[2];
-                                const float r2 = (dx * dx + dy * dy + dz * dz) * inv_g2;
-                                if (!(r2 < 1.0f)) continue;
-                                const float w = 1.0f - r2;
-                                for (int a = 0; a < 3; ++a) {
-                                    s.value[a] += w * d.flux[a];
-                                    s.normal[a] += w * d.normal[a];
-                                }
-                                s.weight += w * d.lum;
-                            }
-                        }
-                for (float& v : s.value) v *= norm;
-                sums[k] = s;
-            }
-        });
-    phase(2);
-    KeyMap corner_map(corner_keys.size());
-    for (std::size_t k = 0; k < corner_keys.size(); ++k)
-        corner_map.insert(corner_keys[k], static_cast<std::uint32_t>(k));
-
-    // Leaves: every cell with a non-zero corner.
-    std::vector<std::uint64_t> leaf_keys;
-    for (std::size_t k = 0; k < corner_keys.size(); ++k) {
-        if (!(sums[k].value[0] > 0.0f || sums[k].value[1] > 0.0f || sums[k].value[2] > 0.0f)) continue;
-        std::uint32_t q[3];
-        gi::demorton3(corner_keys[k], q[0], q[1], q[2]);
-        for (std::uint32_t c = 0; c < 8; ++c) {
-            std::int64_t v[3];
-            bool inside = true;
-            for (int a = 0; a < 3; ++a) {
-                v[a] = std::int64_t{q[a]} - static_cast<std::int64_t>((c >> a) & 1u);
-                inside = inside && v[a] >= 0 && v[a] < cells;
-            }
-            if (inside)
-                leaf_keys.push_back(gi::morton3(static_cast<std::uint32_t>(v[0]),
-                                                static_cast<std::uint32_t>(v[1]),
-                                                static_cast<std::uint32_t>(v[2])));
+    const std::int64_t W = S + 2 * reach;  // the dense cell grid's side
+    const std::int64_t C = S + 1;          // the dense corner grid's side
+    constexpr std::uint32_t k_missing = KeyMap::k_missing;
+    pre::parallel_chunks(tasks.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        WorkerOut& out = worker_out[worker];
+        std::vector<std::uint32_t>& grid = out.grid;
+        std::vector<std::uint32_t>& corner_at = out.corner_at;
+        std::vector<std::uint32_t>& grid_used = out.grid_used;
+        std::vector<std::int64_t>& corner_pos = out.corner_pos;
+        std::vector<CornerSum>& sums = out.sums;
+        std::vector<Lane>& lanes = out.lanes;
+        std::vector<std::uint8_t>& row_used = out.row_used;
+        std::vector<std::uint64_t>& leaf_bits = out.leaf_bits;
+        if (grid.empty()) {
+            grid.assign(static_cast<std::size_t>(W * W * W), k_missing);
+            corner_at.assign(static_cast<std::size_t>(C * C * C), k_missing);
+            row_used.assign(static_cast<std::size_t>(W * W), 0);
+            leaf_bits.assign((std::size_t{1} << sbits) / 64 + 1, 0);
         }
-    }
-    gi::sort_unique(leaf_keys, 3 * depth);
-    std::vector<LeafValues> leaves(leaf_keys.size());
-    pre::parallel_chunks(leaf_keys.size(), 4096, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-        for (std::size_t i = begin; i < end; ++i) {
-            LeafValues& lv = leaves[i];
-            lv.key = leaf_keys[i];
-            std::uint32_t c0[3];
-            gi::demorton3(lv.key, c0[0], c0[1], c0[2]);
-            double n[3] = {0, 0, 0}, w = 0;
-            for (std::uint32_t c = 0; c < 8; ++c) {
-                const std::uint32_t k = corner_map.find(
-                    gi::morton3(c0[0] + (c & 1u), c0[1] + ((c >> 1) & 1u), c0[2] + ((c >> 2) & 1u)));
-                for (int a = 0; a < 3; ++a)
-                    lv.corner[c][a] = k == KeyMap::k_missing ? 0.0f : sums[k].value[a];
-                if (k == KeyMap::k_missing) continue;
-                for (int a = 0; a < 3; ++a) n[a] += sums[k].normal[a];
-                w += sums[k].weight;
+        for (std::size_t t = begin; t < end; ++t) {
+            TaskOut& to = task_out[t];
+            to.worker = worker;
+            to.corner_begin = out.corner_values.size() / 3;
+            to.leaf_begin = out.leaves.size();
+            std::uint32_t bl[3];
+            gi::demorton3(tasks[t], bl[0], bl[1], bl[2]);
+            std::int64_t o[3], g0[3], clo[3], chi[3];  // block origin, grid origin, cell range
+            for (int a = 0; a < 3; ++a) {
+                o[a] = std::int64_t{bl[a]} * S;
+                g0[a] = o[a] - reach;
+                clo[a] = std::max<std::int64_t>(0, o[a] - reach);
+                chi[a] = std::min<std::int64_t>(cells - 1, o[a] + S + reach - 1);
             }
-            const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            // One-sided when the weighted normals mostly agree: |sum w n| >= w / 2.
-            for (int a = 0; a < 3; ++a)
-                lv.normal[a] = (w > 0 && len >= 0.5 * w) ? static_cast<float>(n[a] / len) : 0.0f;
+            // The occupied cells in reach: the blocks covering clo..chi, cell by cell.
+            grid_used.clear();
+            corner_pos.clear();
+            for (std::int64_t bz = clo[2] >> s; bz <= (chi[2] >> s); ++bz)
+                for (std::int64_t by = clo[1] >> s; by <= (chi[1] >> s); ++by)
+                    for (std::int64_t bx = clo[0] >> s; bx <= (chi[0] >> s); ++bx) {
+                        if (bx > last_cell_block || by > last_cell_block || bz > last_cell_block) continue;
+                        const std::uint64_t prefix =
+                            gi::morton3(static_cast<std::uint32_t>(bx), static_cast<std::uint32_t>(by),
+                                        static_cast<std::uint32_t>(bz));
+                        const auto first =
+                            std::lower_bound(bins.cell_keys.begin(), bins.cell_keys.end(), prefix << sbits);
+                        const auto last =
+                            std::lower_bound(first, bins.cell_keys.end(), (prefix + 1) << sbits);
+                        for (auto it = first; it != last; ++it) {
+                            std::uint32_t c[3];
+                            gi::demorton3(*it, c[0], c[1], c[2]);
+                            bool inside = true;
+                            for (int a = 0; a < 3; ++a) inside = inside && c[a] >= clo[a] && c[a] <= chi[a];
+                            if (!inside) continue;
+                            const std::uint32_t at = static_cast<std::uint32_t>(
+                                ((c[2] - g0[2]) * W + (c[1] - g0[1])) * W + (c[0] - g0[0]));
+                            grid[at] = static_cast<std::uint32_t>(it - bins.cell_keys.begin());
+                            grid_used.push_back(at);
+                            row_used[at / W] = 1;
+                            // Its corners in this block: c-r+1 .. c+r, within 0..cells.
+                            std::int64_t lo[3], hi[3];
+                            for (int a = 0; a < 3; ++a) {
+                                lo[a] = std::max<std::int64_t>(std::int64_t{c[a]} - reach + 1, o[a]);
+                                hi[a] = std::min<std::int64_t>({std::int64_t{c[a]} + reach, o[a] + S, cells});
+                            }
+                            for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                                        const std::int64_t ca =
+                                            ((z - o[2]) * C + (y - o[1])) * C + (x - o[0]);
+                                        std::uint32_t& k = corner_at[static_cast<std::size_t>(ca)];
+                                        if (k != k_missing) continue;
+                                        k = static_cast<std::uint32_t>(corner_pos.size());
+                                        corner_pos.push_back(ca);
+                                    }
+                        }
+                    }
+            // Density estimate at every corner (eq. 5.1-5.2). Each corner must add the deposits of
+            // its cells in reach z, y, x (then in input order), as the serial gather did: sweeping
+            // the cells in that order and pushing each cell's deposits into the corners it reaches
+            // gives every corner exactly that sequence of additions. A cell's corners (8 for g <= 1)
+            // are handled 8 at a time, one per SIMD-friendly lane, the sums held in the lanes for
+            // the cell's deposits and stored back after: the same additions in the same order.
+            sums.assign(corner_pos.size(), CornerSum{});
+            for (std::int64_t z = clo[2]; z <= chi[2]; ++z)
+                for (std::int64_t y = clo[1]; y <= chi[1]; ++y) {
+                    const std::int64_t row = (z - g0[2]) * W + (y - g0[1]);
+                    if (!row_used[static_cast<std::size_t>(row)]) continue;  // most rows of a surface
+                    for (std::int64_t x = clo[0]; x <= chi[0]; ++x) {
+                        const std::uint32_t cell = grid[static_cast<std::size_t>(row * W + (x - g0[0]))];
+                        if (cell == k_missing) continue;
+                        const std::int64_t c[3] = {x, y, z};
+                        std::int64_t lo[3], hi[3];
+                        for (int a = 0; a < 3; ++a) {
+                            lo[a] = std::max<std::int64_t>(c[a] - reach + 1, o[a]);
+                            hi[a] = std::min<std::int64_t>({c[a] + reach, o[a] + S, cells});
+                        }
+                        lanes.clear();
+                        for (std::int64_t qz = lo[2]; qz <= hi[2]; ++qz)
+                            for (std::int64_t qy = lo[1]; qy <= hi[1]; ++qy)
+                                for (std::int64_t qx = lo[0]; qx <= hi[0]; ++qx)
+                                    lanes.push_back({corner_at[static_cast<std::size_t>(
+                                                         ((qz - o[2]) * C + (qy - o[1])) * C + (qx - o[0]))],
+                                                     {static_cast<float>(x - qx), static_cast<float>(y - qy),
+                                                      static_cast<float>(z - qz)}});
+                        const std::uint32_t first = bins.cell_begin[cell], last = bins.cell_begin[cell + 1];
+                        for (std::size_t l0 = 0; l0 < lanes.size(); l0 += k_lanes)
+                            accumulate_lanes(&lanes[l0], std::min(k_lanes, lanes.size() - l0), &packed[first],
+                                             last - first, inv_g2, sums.data());
+                    }
+                }
+            float task_max = 0.0f;
+            for (std::size_t k = 0; k < corner_pos.size(); ++k) {
+                const std::int64_t ca = corner_pos[k];
+                const std::int64_t q[3] = {o[0] + ca % C, o[1] + (ca / C) % C, o[2] + ca / (C * C)};
+                CornerSum& s_ = sums[k];
+                for (float& v : s_.value) {
+                    v *= norm;
+                    if (std::isfinite(v)) task_max = std::max(task_max, v);
+                }
+                out.corner_values.insert(out.corner_values.end(), s_.value, s_.value + 3);
+                // Leaves: every cell of this block with a non-zero corner.
+                if (!(s_.value[0] > 0.0f || s_.value[1] > 0.0f || s_.value[2] > 0.0f)) continue;
+                for (std::uint32_t c = 0; c < 8; ++c) {
+                    std::int64_t v[3];
+                    bool inside = true;
+                    for (int a = 0; a < 3; ++a) {
+                        v[a] = q[a] - static_cast<std::int64_t>((c >> a) & 1u);
+                        inside = inside && v[a] >= o[a] && v[a] < o[a] + S && v[a] < cells;
+                    }
+                    if (!inside) continue;
+                    const std::uint64_t m = gi::morton3(static_cast<std::uint32_t>(v[0] - o[0]),
+                                                        static_cast<std::uint32_t>(v[1] - o[1]),
+                                                        static_cast<std::uint32_t>(v[2] - o[2]));
+                    leaf_bits[m >> 6] |= std::uint64_t{1} << (m & 63u);
+                }
+            }
+            out.max_value = std::max(out.max_value, task_max);
+            // The leaves in local Morton order: the flux-weighted normal from their corners.
+            for (std::size_t word = 0; word < leaf_bits.size(); ++word) {
+                for (std::uint64_t bits = leaf_bits[word]; bits != 0; bits &= bits - 1) {
+                    const std::uint64_t m = (word << 6) | static_cast<std::uint64_t>(std::countr_zero(bits));
+                    std::uint32_t l[3];
+                    gi::demorton3(m, l[0], l[1], l[2]);
+                    pool::GiLeaf leaf{};
+                    double n[3] = {0, 0, 0}, w = 0;
+                    for (std::uint32_t c = 0; c < 8; ++c) {
+                        const std::uint32_t k =
+                            corner_at[((l[2] + ((c >> 2) & 1u)) * C + l[1] + ((c >> 1) & 1u)) * C + l[0] +
+                                      (c & 1u)];
+                        leaf.corner[c] = k;
+                        if (k == k_missing) continue;
+                        for (int a = 0; a < 3; ++a) n[a] += sums[k].normal[a];
+                        w += sums[k].weight;
+                    }
+                    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                    // One-sided when the weighted normals mostly agree: |sum w n| >= w / 2.
+                    for (int a = 0; a < 3; ++a)
+                        leaf.normal[a] = gi::encode_normal(
+                            (w > 0 && len >= 0.5 * w) ? static_cast<float>(n[a] / len) : 0.0f);
+                    out.leaves.push_back(leaf);
+                    out.leaf_keys.push_back((tasks[t] << sbits) | m);
+                }
+                leaf_bits[word] = 0;
+            }
+            for (std::uint32_t at : grid_used) {
+                grid[at] = k_missing;
+                row_used[at / W] = 0;
+            }
+            for (std::int64_t ca : corner_pos) corner_at[static_cast<std::size_t>(ca)] = k_missing;
+            to.corner_count = corner_pos.size();
+            to.leaf_count = out.leaves.size() - to.leaf_begin;
         }
     });
+    phase(2);
+
+    // One scale for the map (the largest corner value: every positive corner is some leaf's), then
+    // the leaves in task order, their corners encoded once per task.
+    float max_value = 0.0f;
+    for (const WorkerOut& w : worker_out) max_value = std::max(max_value, w.max_value);
+    const float scale = gi::map_scale(max_value);
+    std::vector<std::size_t> leaf_offset(tasks.size() + 1, 0);
+    for (std::size_t t = 0; t < tasks.size(); ++t)
+        leaf_offset[t + 1] = leaf_offset[t] + task_out[t].leaf_count;
+    GiOctree tree;
+    tree.leaves.resize(leaf_offset.back());
+    pre::Buffer<std::uint64_t> leaf_keys(leaf_offset.back());
+    const float zero[3] = {0.0f, 0.0f, 0.0f};
+    const std::uint32_t encoded_zero = gi::encode_corner(zero, scale);
+    pre::parallel_chunks(tasks.size(), 4, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        std::vector<std::uint32_t> encoded;
+        for (std::size_t t = begin; t < end; ++t) {
+            const TaskOut& to = task_out[t];
+            const WorkerOut& w = worker_out[to.worker];
+            encoded.resize(to.corner_count);
+            for (std::size_t k = 0; k < to.corner_count; ++k)
+                encoded[k] = gi::encode_corner(&w.corner_values[3 * (to.corner_begin + k)], scale);
+            for (std::size_t i = 0; i < to.leaf_count; ++i) {
+                pool::GiLeaf leaf = w.leaves[to.leaf_begin + i];
+                for (std::uint32_t& c : leaf.corner) c = c == k_missing ? encoded_zero : encoded[c];
+                tree.leaves[leaf_offset[t] + i] = leaf;
+                leaf_keys[leaf_offset[t] + i] = w.leaf_keys[to.leaf_begin + i];
+            }
+        }
+    });
+    std::vector<WorkerOut>().swap(worker_out);
     phase(3);
-    GiOctree tree = gi::build_octree(leaves, root_min, root_size, depth);
+    tree.nodes = gi::build_nodes(leaf_keys, depth, threads);
+    gi::fill_info(tree, root_min, root_size, depth, scale);
     phase(4);
     tree.info.gather_radius = static_cast<float>(ge * bins.edge());
     tree.info.cos_threshold = options.cos_threshold;

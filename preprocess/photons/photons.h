@@ -52,7 +52,8 @@ struct GatherOptions {
     float render_scale = 1.0f;   ///< the model's scale in the scene (irradiance per scene area)
     float cos_threshold = 0.0f;  ///< lookup normal test (GiInfo::cos_threshold)
     unsigned threads = 0;
-    /// When set: seconds spent binning, on corner keys, estimating densities, on leaves, building.
+    /// When set: seconds spent binning the deposits, listing the blocks, on the corners' densities
+    /// and the leaves (one pass per block), encoding the leaves, building the nodes.
     double* phase_seconds = nullptr;  ///< 5 doubles
 };
 
@@ -60,7 +61,8 @@ struct GatherOptions {
 /// leaves at `depth` wherever a deposit lies within g of one of their corners; each corner holds
 /// the density estimate E(q) = sum 2 / (pi g^2) (1 - |q - p|^2 / g^2) flux over the deposits
 /// within g (g in scene units, so E is irradiance in the scene's units); each leaf the
-/// flux-weighted mean deposit normal (zero when the deposits came from both sides).
+/// flux-weighted mean deposit normal (zero when the deposits came from both sides). Parallel over
+/// `threads` workers; the tree is byte-identical whatever their number.
 GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const double root_min[3],
                               double root_size, const GatherOptions& options);
 

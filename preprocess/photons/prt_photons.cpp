@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
         [&](const prt::tool::CommonOptions& common) {
             using namespace prt;
             const double start = tool::now_seconds();
+            double load_seconds = 0;  // scene, pools and the render scene
             const scene::Scene sc = scene::load_scene(scene_path);
             if (sc.models.empty()) throw Error(scene_path + ": no models");
             std::string why;
@@ -131,6 +132,7 @@ int main(int argc, char** argv) {
                 }
                 const core::SceneView view = rs.view();
                 lights = view.light_count;
+                load_seconds = tool::now_seconds() - start;
                 const std::uint64_t total = photons::photons_per_light(shoot.params) * view.light_count;
                 tool::note(common.quiet,
                            "prt-photons: %u lights x %llu photons (%u x %u x 6 faces x %u), backend %s",
@@ -149,6 +151,7 @@ int main(int argc, char** argv) {
 
             const double gather_start = tool::now_seconds();
             std::uint64_t leaves = 0;
+            double gather_phases[5] = {0, 0, 0, 0, 0};  // summed over the pools
             for (std::size_t p = 0; p < jobs.size(); ++p) {
                 PoolJob& job = jobs[p];
                 if (job.deposits.empty()) continue;
@@ -158,7 +161,10 @@ int main(int argc, char** argv) {
                 g.render_scale = job.scale;
                 g.cos_threshold = cos_threshold;
                 g.threads = shoot.threads;
+                double phases[5] = {0, 0, 0, 0, 0};
+                g.phase_seconds = phases;
                 job.tree = photons::build_caustic_octree(job.deposits, job.root_min, job.root_size, g);
+                for (int k = 0; k < 5; ++k) gather_phases[k] += phases[k];
                 const photons::PhotonTally& t = shot.tally;
                 job.tree->info.total[0] = 0.0f;
                 for (const photons::PhotonDeposit& d : job.deposits)
@@ -185,9 +191,11 @@ int main(int argc, char** argv) {
                                                {"cos_threshold", cos_threshold},
                                                {"seed", shoot.params.seed},
                                                {"scene", scene_path}};
+            const double write_start = tool::now_seconds();
             for (std::size_t p = 0; p < jobs.size(); ++p)
                 gi::write_gi_pool(pool_paths[p], gi::k_caustic_sections,
                                   jobs[p].tree ? &*jobs[p].tree : nullptr, "prt-photons", parameters.dump());
+            const double write_seconds = tool::now_seconds() - write_start;
 
             const photons::PhotonTally& t = shot.tally;
             auto lum = [](const double c[3]) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
@@ -207,8 +215,17 @@ int main(int argc, char** argv) {
                 "prt-photons: power: direct %.2f %%, deposited (x albedo share) %.2f %%, absorbed %.2f %%, "
                 "escaped %.2f %%, cut at the bounce limit %.4f %%",
                 pct(t.direct), pct(t.deposited), pct(t.absorbed), pct(t.escaped), pct(t.truncated));
-            tool::note(common.quiet, "prt-photons: gather %.3f s (%llu leaves); total %.3f s", gather_seconds,
-                       static_cast<unsigned long long>(leaves), tool::now_seconds() - start);
+            const double total_seconds = tool::now_seconds() - start;
+            tool::note(
+                common.quiet,
+                "prt-photons: gather %.3f s (%llu leaves: bin %.3f s, blocks %.3f s, densities + leaves "
+                "%.3f s, encode %.3f s, octree %.3f s)",
+                gather_seconds, static_cast<unsigned long long>(leaves), gather_phases[0], gather_phases[1],
+                gather_phases[2], gather_phases[3], gather_phases[4]);
+            tool::note(common.quiet,
+                       "prt-photons: phases: load %.3f s, trace %.3f s, gather %.3f s, pool writes %.3f s; "
+                       "total %.3f s",
+                       load_seconds, shot.seconds, gather_seconds, write_seconds, total_seconds);
             if (!stats_json.empty()) {
                 auto rgb = [](const double c[3]) { return nlohmann::json::array({c[0], c[1], c[2]}); };
                 const nlohmann::json j = {
@@ -231,6 +248,15 @@ int main(int argc, char** argv) {
                     {"trace_seconds", shot.kernel_seconds},
                     {"photons_per_second", shot.seconds > 0 ? double(t.photons) / shot.seconds : 0.0},
                     {"gather_seconds", gather_seconds},
+                    {"gather_phase_seconds",
+                     {{"bin", gather_phases[0]},
+                      {"blocks", gather_phases[1]},
+                      {"densities_leaves", gather_phases[2]},
+                      {"encode", gather_phases[3]},
+                      {"octree", gather_phases[4]}}},
+                    {"load_seconds", load_seconds},
+                    {"write_seconds", write_seconds},
+                    {"total_seconds", total_seconds},
                     {"leaves", leaves}};
                 std::ofstream out(stats_json);
                 out << j.dump(2) << "\n";

@@ -6,7 +6,11 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstring>
+#include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -209,6 +213,217 @@ TEST(Photons, CausticOctreeEstimatesAKnownIrradiance) {
     // Far from any deposit: nothing.
     EXPECT_EQ(core::caustic_radiance(core::CausticView{v}, core::Vec3{0, 0.5f, 0}, core::Vec3{0, 1, 0}).y,
               0.0f);
+}
+
+namespace {
+
+// A serial caustic gather written straight from thesis 5.4.2 / eq. 5.1-5.2, with ordered maps and
+// no blocks, hashes or threads: the reference the parallel build_caustic_octree must match. Sums
+// are in double (so they match to rounding, not bit for bit); the kernel test r^2 < g^2 is the
+// same float expression, so the corner and leaf sets must match exactly.
+struct ReferenceGather {
+    std::vector<std::uint64_t> keys;  ///< leaves, Morton order
+    std::vector<std::array<std::array<double, 3>, 8>> corner;
+    std::vector<std::array<double, 3>> normal;
+    double max_value = 0;
+    std::vector<std::uint32_t> nodes;  ///< breadth first, from sets of prefixes per level
+};
+
+ReferenceGather reference_gather(const std::vector<photons::PhotonDeposit>& deps, const double root_min[3],
+                                 double root_size, std::uint32_t depth, float radius_edges, float scale) {
+    using Cell = std::array<std::int64_t, 3>;
+    const std::int64_t cells = std::int64_t{1} << depth;
+    const double ge = radius_edges;
+    const std::int64_t r = static_cast<std::int64_t>(std::ceil(ge));
+    std::map<Cell, std::vector<std::size_t>> in_cell;
+    std::vector<std::array<float, 3>> frac(deps.size());
+    for (std::size_t i = 0; i < deps.size(); ++i) {
+        Cell c;
+        for (int a = 0; a < 3; ++a) {
+            const double g = (static_cast<double>(deps[i].position[a]) - root_min[a]) / root_size *
+                             static_cast<double>(cells);
+            c[a] = static_cast<std::int64_t>(std::clamp(std::floor(g), 0.0, static_cast<double>(cells - 1)));
+            frac[i][a] = static_cast<float>(g - static_cast<double>(c[a]));
+        }
+        in_cell[c].push_back(i);
+    }
+    struct Sum {
+        double value[3] = {0, 0, 0}, normal[3] = {0, 0, 0}, weight = 0;
+    };
+    std::map<Cell, Sum> corners;
+    for (const auto& [c, list] : in_cell)
+        for (std::int64_t z = std::max<std::int64_t>(0, c[2] - r + 1); z <= std::min(cells, c[2] + r); ++z)
+            for (std::int64_t y = std::max<std::int64_t>(0, c[1] - r + 1); y <= std::min(cells, c[1] + r);
+                 ++y)
+                for (std::int64_t x = std::max<std::int64_t>(0, c[0] - r + 1); x <= std::min(cells, c[0] + r);
+                     ++x)
+                    corners[Cell{x, y, z}];
+    const double edge = root_size / static_cast<double>(cells) * scale;
+    const double norm = 2.0 / (k_pi * (ge * edge) * (ge * edge));
+    const float inv_g2 = static_cast<float>(1.0 / (ge * ge));
+    for (auto& [q, sum] : corners)
+        for (const auto& [c, list] : in_cell) {
+            bool near = true;
+            for (int a = 0; a < 3; ++a) near = near && c[a] >= q[a] - r && c[a] <= q[a] + r - 1;
+            if (!near) continue;
+            for (std::size_t i : list) {
+                float d2 = 0;
+                const float dx = static_cast<float>(c[0] - q[0]) + frac[i][0];
+                const float dy = static_cast<float>(c[1] - q[1]) + frac[i][1];
+                const float dz = static_cast<float>(c[2] - q[2]) + frac[i][2];
+                d2 = (dx * dx + dy * dy + dz * dz) * inv_g2;
+                if (!(d2 < 1.0f)) continue;
+                const double w = 1.0 - d2;
+                const double l =
+                    0.2126 * deps[i].flux[0] + 0.7152 * deps[i].flux[1] + 0.0722 * deps[i].flux[2];
+                for (int a = 0; a < 3; ++a) {
+                    sum.value[a] += w * deps[i].flux[a] * norm;
+                    sum.normal[a] += w * l * deps[i].normal[a];
+                }
+                sum.weight += w * l;
+            }
+        }
+    std::map<std::uint64_t, Cell> leaves;  // by Morton key
+    for (const auto& [q, sum] : corners) {
+        if (!(sum.value[0] > 0 || sum.value[1] > 0 || sum.value[2] > 0)) continue;
+        for (int d = 0; d < 8; ++d) {
+            const Cell v{q[0] - (d & 1), q[1] - ((d >> 1) & 1), q[2] - ((d >> 2) & 1)};
+            if (std::min({v[0], v[1], v[2]}) < 0 || std::max({v[0], v[1], v[2]}) >= cells) continue;
+            leaves[gi::morton3(static_cast<std::uint32_t>(v[0]), static_cast<std::uint32_t>(v[1]),
+                               static_cast<std::uint32_t>(v[2]))] = v;
+        }
+    }
+    ReferenceGather ref;
+    for (const auto& [key, v] : leaves) {
+        ref.keys.push_back(key);
+        std::array<std::array<double, 3>, 8> corner{};
+        double n[3] = {0, 0, 0}, w = 0;
+        for (int c = 0; c < 8; ++c) {
+            const auto it = corners.find(Cell{v[0] + (c & 1), v[1] + ((c >> 1) & 1), v[2] + ((c >> 2) & 1)});
+            if (it == corners.end()) continue;
+            for (int a = 0; a < 3; ++a) {
+                corner[c][a] = it->second.value[a];
+                ref.max_value = std::max(ref.max_value, corner[c][a]);
+                n[a] += it->second.normal[a];
+            }
+            w += it->second.weight;
+        }
+        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        std::array<double, 3> nn{0, 0, 0};
+        if (w > 0 && len >= 0.5 * w)
+            for (int a = 0; a < 3; ++a) nn[a] = n[a] / len;
+        ref.corner.push_back(corner);
+        ref.normal.push_back(nn);
+    }
+    // Nodes: the internal nodes of each level as ordered sets, laid out breadth first (8 slots per
+    // internal node, children in Morton order; pool_layout.h).
+    std::vector<std::set<std::uint64_t>> level(depth + 1);
+    level[depth].insert(ref.keys.begin(), ref.keys.end());
+    for (std::uint32_t l = depth; l-- > 0;)
+        for (std::uint64_t k : level[l + 1]) level[l].insert(k >> 3);
+    ref.nodes.assign(1, pool::make_node(pool::NodeType::empty_leaf, 0));
+    if (ref.keys.empty()) return ref;
+    if (depth == 0) {
+        ref.nodes[0] = pool::make_node(pool::NodeType::filled_leaf, 0);
+        return ref;
+    }
+    std::map<std::uint64_t, std::size_t> slot_of{{0, 0}};  // node of a prefix at the current level
+    for (std::uint32_t l = 0; l < depth; ++l) {
+        std::map<std::uint64_t, std::size_t> next;
+        std::size_t i = 0, leaf = 0;
+        const std::size_t base = ref.nodes.size();
+        ref.nodes.resize(base + 8 * level[l].size(), pool::make_node(pool::NodeType::empty_leaf, 0));
+        for (std::uint64_t p : level[l]) {
+            ref.nodes[slot_of.at(p)] =
+                pool::make_node(pool::NodeType::internal, static_cast<std::uint32_t>(base + 8 * i));
+            for (std::uint64_t child = p << 3; child < (p << 3) + 8; ++child)
+                if (level[l + 1].count(child)) next[child] = base + 8 * i + (child & 7);
+            ++i;
+        }
+        if (l + 1 == depth)
+            for (const auto& [k, slot] : next)
+                ref.nodes[slot] =
+                    pool::make_node(pool::NodeType::filled_leaf, static_cast<std::uint32_t>(leaf++));
+        slot_of.swap(next);
+    }
+    return ref;
+}
+
+/// Deposits in every octant: a blurred shell with colours and both-sided normals, plus a floor on
+/// the plane y = 0 (a cell boundary at every depth) and a dense clump.
+std::vector<photons::PhotonDeposit> mixed_deposits(std::size_t n) {
+    std::vector<photons::PhotonDeposit> deps(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint64_t h = photons::hash64(i + 17);
+        const float u = photons::unit_float(h), v = photons::unit_float(photons::hash64(h)),
+                    w = photons::unit_float(photons::hash64(h + 1));
+        photons::PhotonDeposit& d = deps[i];
+        d = {};
+        const float z = 2 * u - 1, s = std::sqrt(std::max(0.0f, 1 - z * z)), t = 6.2831853f * v;
+        const float dir[3] = {s * std::cos(t), s * std::sin(t), z};
+        for (int a = 0; a < 3; ++a) {
+            if (i % 3 == 0) {
+                d.position[a] = a == 1 ? 0.0f : 1.6f * (a == 0 ? u : v) - 0.8f;
+                d.normal[a] = a == 1 ? 1.0f : 0.0f;
+            } else if (i % 7 == 1) {
+                d.position[a] = 0.3f + 0.05f * dir[a] * w;
+                d.normal[a] = dir[a];
+            } else {
+                d.position[a] = (0.6f + 0.05f * w) * dir[a];
+                d.normal[a] = (i % 2 ? 1.0f : -1.0f) * dir[a];
+            }
+            d.flux[a] = 1e-3f * (0.5f + w * static_cast<float>(a + 1));
+        }
+    }
+    return deps;
+}
+
+}  // namespace
+
+TEST(Photons, CausticOctreeMatchesASerialReferenceWhateverTheThreads) {
+    const std::vector<photons::PhotonDeposit> deps = mixed_deposits(6000);
+    const double root_min[3] = {-1, -1, -1};
+    struct Case {
+        std::uint32_t depth;
+        float radius;
+    };
+    for (const Case cs : {Case{6, 1.0f}, Case{5, 1.6f}, Case{4, 0.5f}, Case{2, 3.0f}, Case{0, 1.0f}}) {
+        SCOPED_TRACE("depth " + std::to_string(cs.depth) + ", radius " + std::to_string(cs.radius));
+        photons::GatherOptions g;
+        g.depth = cs.depth;
+        g.radius_edges = cs.radius;
+        g.render_scale = 2.0f;
+        g.threads = 1;
+        const gi::GiOctree one = photons::build_caustic_octree(deps, root_min, 2.0, g);
+        for (unsigned threads : {3u, 8u}) {  // byte-identical whatever the thread count
+            g.threads = threads;
+            const gi::GiOctree many = photons::build_caustic_octree(deps, root_min, 2.0, g);
+            EXPECT_EQ(many.nodes, one.nodes);
+            ASSERT_EQ(many.leaves.size(), one.leaves.size());
+            EXPECT_EQ(
+                std::memcmp(many.leaves.data(), one.leaves.data(), one.leaves.size() * sizeof(pool::GiLeaf)),
+                0);
+            EXPECT_EQ(std::memcmp(&many.info, &one.info, sizeof one.info), 0);
+        }
+        const ReferenceGather ref = reference_gather(deps, root_min, 2.0, cs.depth, cs.radius, 2.0f);
+        ASSERT_GT(ref.keys.size(), 0u);
+        EXPECT_EQ(one.nodes, ref.nodes);  // same leaves at the same places
+        ASSERT_EQ(one.leaves.size(), ref.keys.size());
+        EXPECT_NEAR(one.info.scale, ref.max_value / 32768.0, ref.max_value / 32768.0 * 1e-5);
+        const double step = one.info.scale * 6e-8;  // RGB9E5's smallest step, in values
+        for (std::size_t j = 0; j < ref.keys.size(); ++j) {
+            for (int c = 0; c < 8; ++c) {
+                const core::Vec3 e = core::decode_rgb9e5(one.leaves[j].corner[c]) * one.info.scale;
+                const double top = std::max({ref.corner[j][c][0], ref.corner[j][c][1], ref.corner[j][c][2]});
+                const double got[3] = {e.x, e.y, e.z};
+                for (int a = 0; a < 3; ++a)
+                    ASSERT_NEAR(got[a], ref.corner[j][c][a], top * 2.0 / 512 + step)
+                        << "leaf " << j << " corner " << c;
+            }
+            for (int a = 0; a < 3; ++a)
+                ASSERT_NEAR(one.leaves[j].normal[a], ref.normal[j][a] * 127.0, 1.0) << "leaf " << j;
+        }
+    }
 }
 
 TEST(Photons, Rgb9e5RoundTrip) {

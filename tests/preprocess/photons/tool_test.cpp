@@ -60,6 +60,13 @@ TEST(PhotonsTool, WritesCausticsIntoThePoolsInPlace) {
         // The glass ball receives no deposit (no diffuse share): no caustic sections.
         EXPECT_FALSE(rt::has_caustics(pool::PoolFile::open(dir / "ball.pool")));
     }
+    // Without --quiet: the phase times (trace, gather and its phases, pool writes) on stderr.
+    r = test::run_tool("prt-photons",
+                       (dir / "scene.json").string() + " --face-res 32 --per-pixel 1 --backend cpu", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    for (const char* phase : {"phases: load ", ", trace ", ", gather ", ", pool writes ", "; total ",
+                              "leaves: bin ", "densities + leaves ", "octree "})
+        EXPECT_NE(r.err.find(phase), std::string::npos) << phase << " in\n" << r.err;
     // Without the ball there are no specular paths: the old caustic sections go away.
     std::string no_ball = k_scene;
     no_ball.replace(no_ball.find(",\n             {\"name\": \"ball\""), std::string::npos, "]}");
