@@ -94,7 +94,11 @@ PRT_HD inline PatchEval patch_eval(const pool::PatchControlNet& net, double u, d
     bernstein3(u, bu, dbu);
     bernstein3(v, bv, dbv);
     PatchEval e{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-    PRT_UNROLL
+    // Row by row, not unrolled on the device: unrolled, the compiler hoists all 48 coordinates out
+    // of Newton's loop (96 registers per thread, spilled under the megakernel's register limit).
+#if defined(__CUDACC__)
+#pragma unroll 1
+#endif
     for (int i = 0; i < 4; ++i) {
         DVec3 row{0, 0, 0}, drow{0, 0, 0};  // sum over v of this u-row, and its v-derivative
         PRT_UNROLL
