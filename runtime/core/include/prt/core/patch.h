@@ -298,8 +298,10 @@ PRT_HD PRT_INLINE std::uint32_t bvh_cull_words(const PatchView& view) {
 
 /// The unit normal of a root (patch_normal with the ray's reverse as the fallback). Out of line on
 /// the device: the traversal loop calls it only for oriented pools, and once per ray at the end.
-PRT_HD PRT_NOINLINE inline DVec3 root_normal(const pool::PatchControlNet& net, double u, double v, const PatchEval& ev,
-                                      DVec3 dir) {
+/// Out-of-line functions take values, never the caller's query or hit by reference: an address
+/// passed to a call would keep those in local memory throughout the traversal loop.
+PRT_HD PRT_NOINLINE inline DVec3 root_normal(const pool::PatchControlNet& net, double u, double v, PatchEval ev,
+                                             DVec3 dir) {
     return patch_normal(net, u, v, ev, dir * (-1.0 / length(dir)));
 }
 
@@ -337,7 +339,7 @@ PRT_HD inline bool accept_root(const PatchView& view, std::uint32_t patch, const
 
 /// Completes a hit recorded by accept_root: position Q(u, v), the unit normal and the face, the
 /// same values accept_root computed for its tests (same evaluation, same (u, v)).
-PRT_HD PRT_NOINLINE inline void finish_patch_hit(const PatchView& view, const PatchQuery& q, PatchHit& hit) {
+PRT_HD inline void finish_patch_hit(const PatchView& view, const PatchQuery& q, PatchHit& hit) {
     const pool::PatchControlNet& net = view.nets[hit.patch];
     const PatchEval ev = patch_eval(net, hit.u, hit.v);
     hit.position = ev.q;
@@ -442,28 +444,33 @@ struct PatchScratch {
     std::uint32_t apex_tried = 0;           ///< edges whose apex solve already ran
 };
 
+/// The apex solves for one leaf (at most one per edge, so at most four).
+struct ApexRoots {
+    NewtonResult root[4];
+    std::uint32_t count = 0;      ///< solves run (converged or not)
+    std::uint32_t collapsed = 0;  ///< collapsed_edges() of the net
+    std::uint32_t tried = 0;      ///< edges solved so far for this (ray, patch), these included
+};
+
 /// The apex solves of patch_leaf_newton for leaf domain `d` (touching an edge of the patch): once
-/// per collapsed edge the leaf touches. Out of line on the device (rare, and heavy in registers).
-PRT_HD PRT_NOINLINE inline bool patch_leaf_apex(const PatchView& view, std::uint32_t patch, const PatchDomain& d,
-                                         PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
-                                         PatchStats* stats, PatchScratch* scratch) {
-    const pool::PatchControlNet& net = view.nets[patch];
+/// per collapsed edge the leaf touches and that is not in `tried` (`collapsed` = 0xffffffff: not
+/// known yet). Out of line on the device (rare, and heavy in registers); the caller accepts the
+/// roots in order.
+PRT_HD PRT_NOINLINE inline ApexRoots patch_leaf_apex(const pool::PatchControlNet& net, PatchDomain d,
+                                                     RayPlanes planes, PatchTraceParams params, double tolerance,
+                                                     std::uint32_t collapsed, std::uint32_t tried) {
+    ApexRoots r;
+    r.collapsed = collapsed == 0xffffffffu ? collapsed_edges(net) : collapsed;
+    r.tried = tried;
     const bool touches[4] = {d.u0 == 0.0, d.u1 == 1.0, d.v0 == 0.0, d.v1 == 1.0};
-    if (scratch->collapsed == 0xffffffffu) scratch->collapsed = collapsed_edges(net);
-    bool found = false;
     for (std::uint32_t e = 0; e < 4; ++e) {
-        if (!touches[e] || !((scratch->collapsed >> e) & 1u) || ((scratch->apex_tried >> e) & 1u)) continue;
-        scratch->apex_tried |= 1u << e;
+        if (!touches[e] || !((r.collapsed >> e) & 1u) || ((r.tried >> e) & 1u)) continue;
+        r.tried |= 1u << e;
         // only roots within the leaves along the edge: s up to the leaf's extent across it
         const double max_s = e < 2 ? d.u1 - d.u0 : d.v1 - d.v0;
-        const NewtonResult ar = patch_apex_newton(net, e, q.planes, params, q.tolerance, max_s);
-        if (stats) {
-            ++stats->newton_runs;
-            stats->newton_iterations += ar.iterations;
-        }
-        found = accept_root(view, patch, ar, q, params, hit) || found;
+        r.root[r.count++] = patch_apex_newton(net, e, planes, params, tolerance, max_s);
     }
-    return found;
+    return r;
 }
 
 /// Tries Newton from the centre of subpatch leaf `k` of patch `patch` (and, where the leaf touches
@@ -486,7 +493,19 @@ PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch,
     if (!(d.u0 == 0.0 || d.u1 == 1.0 || d.v0 == 0.0 || d.v1 == 1.0)) return false;
     // only patches with a collapsed edge go further (known after the first apex call)
     if (scratch->collapsed == 0u) return false;
-    return patch_leaf_apex(view, patch, d, q, params, hit, stats, scratch);
+    const ApexRoots ar = patch_leaf_apex(view.nets[patch], d, q.planes, params, q.tolerance, scratch->collapsed,
+                                         scratch->apex_tried);
+    scratch->collapsed = ar.collapsed;
+    scratch->apex_tried = ar.tried;
+    bool found = false;
+    for (std::uint32_t i = 0; i < ar.count; ++i) {
+        if (stats) {
+            ++stats->newton_runs;
+            stats->newton_iterations += ar.root[i].iterations;
+        }
+        found = accept_root(view, patch, ar.root[i], q, params, hit) || found;
+    }
+    return found;
 }
 
 /// seed 002, 5.3.2 and 5.4: descends the subpatch tree of `patch` front to back, skipping boxes
@@ -585,17 +604,19 @@ PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const
     float t_root = 0.0f;
     if (stats) ++stats->bvh_nodes;
     if (!box_hit(q.box, view.bvh[0].lo, view.bvh[0].hi, static_cast<float>(q.best_t), t_root)) return false;
-    constexpr std::uint32_t k_bvh_entry = 0xffffffffu;  // stack_sub value of a BVH node entry
-    // entry: stack_sub == k_bvh_entry: BVH node stack_node; else subpatch node stack_sub of the
+    // A stack entry is 8 bytes (one local-memory access): a node and its box's entry distance. The
+    // node is BVH node `code`, or with k_sub_entry set subpatch node `code & ~k_sub_entry` of the
     // current patch (entries of one patch's tree lie above every BVH entry pushed before it, so
-    // they are all popped before the traversal leaves that patch).
-    std::uint32_t stack_node[k_patch_stack];
-    std::uint32_t stack_sub[k_patch_stack];
-    float stack_t[k_patch_stack];
+    // they are all popped before the traversal leaves that patch). BVH nodes are < 2^23.
+    constexpr std::uint32_t k_sub_entry = 0x80000000u;
+    constexpr std::uint32_t k_no_leaf = 0xffffffffu;
+    struct alignas(8) Entry {
+        std::uint32_t code;
+        float t;
+    };
+    Entry stack[k_patch_stack];
     std::uint32_t sp = 0;
-    stack_node[sp] = 0;
-    stack_sub[sp] = k_bvh_entry;
-    stack_t[sp++] = t_root;
+    stack[sp++] = Entry{0u, t_root};
     const std::uint32_t first_leaf = (1u << view.subpatch_depth) - 1u;
     const std::uint32_t cull_words = patch_cull_words(view);
     std::uint32_t patch = 0;                      // the patch whose subpatch tree is on the stack
@@ -603,51 +624,48 @@ PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const
     PatchScratch scratch;
     bool found = false;
     for (;;) {
-        // Traversal until this thread holds a subpatch leaf (leaf != k_bvh_entry) or is done.
-        std::uint32_t leaf = k_bvh_entry;
+        // Traversal until this thread holds a subpatch leaf (leaf != k_no_leaf) or is done.
+        std::uint32_t leaf = k_no_leaf;
         while (sp > 0) {
-            --sp;
-            const std::uint32_t i = stack_node[sp];
-            const std::uint32_t k = stack_sub[sp];
-            const float t_near = stack_t[sp];
+            const Entry e = stack[--sp];
+            const float t_near = e.t;
             if (static_cast<double>(t_near) > q.best_t) continue;  // beyond the nearest hit (5.4)
+            const bool bvh_entry = (e.code & k_sub_entry) == 0u;
             const float* lo[2];
             const float* hi[2];
-            std::uint32_t c[2], ck[2];
+            std::uint32_t c[2];
             bool culled[2] = {false, false};
-            if (k == k_bvh_entry) {
+            if (bvh_entry) {
+                const std::uint32_t i = e.code;
                 const pool::PatchBvhNode& node = view.bvh[i];
                 if (node.patch >= 0) {  // enter the patch: its root's box is this leaf's
                     patch = static_cast<std::uint32_t>(node.patch);
                     nodes = view.nodes + static_cast<std::size_t>(patch) * view.subpatch_nodes;
                     scratch = PatchScratch{};
                     if (stats) ++stats->patches;
-                    stack_node[sp] = i;
-                    stack_sub[sp] = 0;
-                    stack_t[sp++] = t_near;
+                    stack[sp++] = Entry{k_sub_entry, t_near};  // subpatch root, node 0
                     continue;
                 }
                 c[0] = i + 1;
                 c[1] = view.bvh[i + 1].skip;
-                ck[0] = ck[1] = k_bvh_entry;
                 for (int j = 0; j < 2; ++j) {
                     lo[j] = view.bvh[c[j]].lo;
                     hi[j] = view.bvh[c[j]].hi;
                     if (use_bvh_cull) culled[j] = cull_bit(cull->bvh_words, c[j]);
                 }
             } else {
+                const std::uint32_t k = e.code & ~k_sub_entry;
                 if (k >= first_leaf) {
                     leaf = k;
                     break;
                 }
-                c[0] = c[1] = i;
-                ck[0] = 2 * k + 1;
-                ck[1] = 2 * k + 2;
                 const std::size_t cull_base = static_cast<std::size_t>(patch) * cull_words * 32u;
                 for (int j = 0; j < 2; ++j) {
-                    lo[j] = nodes[ck[j]].lo;
-                    hi[j] = nodes[ck[j]].hi;
-                    if (use_node_cull) culled[j] = cull_bit(cull->node_words, cull_base + ck[j]);
+                    const std::uint32_t ck = 2 * k + 1 + static_cast<std::uint32_t>(j);
+                    c[j] = ck | k_sub_entry;
+                    lo[j] = nodes[ck].lo;
+                    hi[j] = nodes[ck].hi;
+                    if (use_node_cull) culled[j] = cull_bit(cull->node_words, cull_base + ck);
                 }
             }
             const float limit = static_cast<float>(q.best_t);
@@ -659,22 +677,14 @@ PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const
                     continue;
                 }
                 h[j] = box_hit(q.box, lo[j], hi[j], limit, tc[j]);
-                if (stats) ++(k == k_bvh_entry ? stats->bvh_nodes : stats->subpatch_boxes);
+                if (stats) ++(bvh_entry ? stats->bvh_nodes : stats->subpatch_boxes);
             }
             // Push the far child first so the near one is popped next.
             const int near_j = (h[0] && h[1]) ? (tc[1] < tc[0] ? 1 : 0) : (h[0] ? 0 : 1);
-            if (h[0] && h[1] && sp < k_patch_stack) {
-                stack_node[sp] = c[1 - near_j];
-                stack_sub[sp] = ck[1 - near_j];
-                stack_t[sp++] = tc[1 - near_j];
-            }
-            if (h[near_j] && sp < k_patch_stack) {
-                stack_node[sp] = c[near_j];
-                stack_sub[sp] = ck[near_j];
-                stack_t[sp++] = tc[near_j];
-            }
+            if (h[0] && h[1] && sp < k_patch_stack) stack[sp++] = Entry{c[1 - near_j], tc[1 - near_j]};
+            if (h[near_j] && sp < k_patch_stack) stack[sp++] = Entry{c[near_j], tc[near_j]};
         }
-        if (leaf == k_bvh_entry) break;
+        if (leaf == k_no_leaf) break;
         if (patch_leaf_newton(view, patch, leaf, q, params, hit, stats, &scratch)) {
             found = true;
             if (q.any) return true;
