@@ -81,6 +81,16 @@ struct PatchTraceParams {
     double edge_tolerance = 1e-7;
     /// The residual growing this many steps in a row means divergence (seed 002, 3).
     std::uint32_t max_residual_increases = 3;
+    /// Stagnation: this many steps in a row without halving the smallest residual so far also end
+    /// the run as diverged (0: off). From a subpatch leaf's centre Newton converges quadratically,
+    /// or it cycles without converging (seed 002's "starts to diverge" in another form): such runs
+    /// would otherwise take all max_iterations steps (16% of the steps on the teapot).
+    std::uint32_t max_stalled_steps = 4;
+    /// A run whose iterate comes within this distance (parameter space, max norm) of the root
+    /// already accepted on the same patch for this ray stops there (NewtonStatus::known_root): it
+    /// converges to that root, which cannot make the hit nearer. Neighbouring leaves overlap, and
+    /// their runs mostly find the same root (0: off).
+    double duplicate_radius = 1e-4;
     std::uint32_t faces = k_patch_faces_both;  ///< PatchFaces
     /// Self-intersection guard for secondary rays on unoriented pools: roots on patch skip_patch
     /// within skip_radius (parameter space, max norm) of (skip_u, skip_v) are ignored.
@@ -146,6 +156,7 @@ enum class NewtonStatus : std::uint32_t {
     diverged = 2,        ///< residual kept growing, or became NaN
     left_domain = 3,     ///< an iterate left [-margin, 1 + margin]^2
     singular = 4,        ///< the Jacobian cannot be inverted (ray parallel to the surface there)
+    known_root = 5,      ///< the iterate reached the known root (PatchTraceParams::duplicate_radius)
 };
 
 struct NewtonResult {
@@ -155,13 +166,15 @@ struct NewtonResult {
 };
 
 /// seed 002, eq. 3-4: (u, v) <- (u, v) - J^-1 R(u, v), R = (n1.Q + d1, n2.Q + d2), from (u0, v0),
-/// in double precision. `tolerance` is absolute (local units).
+/// in double precision. `tolerance` is absolute (local units). With known_radius > 0 an iterate
+/// within known_radius of (known_u, known_v) ends the run (NewtonStatus::known_root).
 PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const RayPlanes& planes, double u0,
-                                        double v0, const PatchTraceParams& params, double tolerance) {
+                                        double v0, const PatchTraceParams& params, double tolerance,
+                                        double known_u = 0.0, double known_v = 0.0, double known_radius = 0.0) {
     NewtonResult r{u0, v0, 0, NewtonStatus::no_convergence};
     double u = u0, v = v0;
-    double previous = 0.0;
-    std::uint32_t increases = 0;
+    double previous = 0.0, smallest = 0.0;
+    std::uint32_t increases = 0, stalled = 0;
     const double lo = -params.domain_margin, hi = 1.0 + params.domain_margin;
     for (std::uint32_t it = 0;; ++it) {
         const PatchEval e = patch_eval(net, u, v);
@@ -191,6 +204,13 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
         } else {
             increases = 0;
         }
+        if (it == 0 || err < 0.5 * smallest) {
+            smallest = err;
+            stalled = 0;
+        } else if (params.max_stalled_steps > 0 && ++stalled >= params.max_stalled_steps) {
+            r.status = NewtonStatus::diverged;
+            return r;
+        }
         previous = err;
         const double j11 = dot(planes.n1, e.qu), j12 = dot(planes.n1, e.qv);
         const double j21 = dot(planes.n2, e.qu), j22 = dot(planes.n2, e.qv);
@@ -208,6 +228,13 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
             r.v = v;
             r.iterations = it + 1;
             r.status = NewtonStatus::left_domain;
+            return r;
+        }
+        if (fabs(u - known_u) < known_radius && fabs(v - known_v) < known_radius) {
+            r.u = u;
+            r.v = v;
+            r.iterations = it + 1;
+            r.status = NewtonStatus::known_root;
             return r;
         }
     }
@@ -265,6 +292,8 @@ struct PatchQuery {
     double tolerance;   ///< absolute Newton tolerance (params.tolerance * view.extent)
     double best_t;      ///< nearest accepted hit so far (ray.t_max initially)
     std::uint32_t any;  ///< stop at the first accepted hit (shadow rays)
+    std::uint32_t best_patch;  ///< patch of the last accepted root (k_no_patch: none yet)
+    double best_u, best_v;     ///< its parameters (PatchTraceParams::duplicate_radius)
 };
 
 /// Prepares a query; false for a ray whose direction is zero or not finite (it hits nothing).
@@ -277,6 +306,8 @@ PRT_HD PRT_INLINE bool make_patch_query(const PatchView& view, const PatchRay& r
     q.box = make_box_ray(ray);
     q.tolerance = params.tolerance * view.extent;
     q.best_t = ray.t_max;
+    q.best_patch = k_no_patch;
+    q.best_u = q.best_v = 0.0;
     q.any = any_hit ? 1u : 0u;
     return true;
 }
@@ -329,6 +360,9 @@ PRT_HD inline bool accept_root(const PatchView& view, std::uint32_t patch, const
         hit.front = dn < 0.0 ? 1u : 0u;
     }
     q.best_t = t;
+    q.best_patch = patch;
+    q.best_u = u;
+    q.best_v = v;
     hit.t = t;
     hit.u = u;
     hit.v = v;
@@ -481,9 +515,12 @@ PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch,
                                      PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
                                      PatchStats* stats, PatchScratch* scratch = nullptr) {
     const PatchDomain d = subpatch_domain(k);
-    // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch.
+    // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch. Runs heading for the
+    // root already accepted on this patch stop early (PatchTraceParams::duplicate_radius).
+    const bool known = q.best_patch == patch;
     const NewtonResult nr =
-        patch_newton(view.nets[patch], q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance);
+        patch_newton(view.nets[patch], q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance,
+                     q.best_u, q.best_v, known ? params.duplicate_radius : 0.0);
     if (stats) {
         ++stats->newton_runs;
         stats->newton_iterations += nr.iterations;
