@@ -234,6 +234,12 @@ TEST(PatchIntersect, NewtonReportsItsFailureModes) {
     EXPECT_EQ(r.iterations, 1u);
     EXPECT_NEAR(r.u, 0.25, 1e-15);
     EXPECT_NEAR(r.v, 0.75, 1e-15);
+    // heading for a known root: stops when within the radius of it
+    r = prt::core::patch_newton(plane, planes, 0.5, 0.5, p, 1e-12, 0.25, 0.75, 1e-4);
+    EXPECT_EQ(r.status, prt::core::NewtonStatus::known_root);
+    EXPECT_EQ(r.iterations, 1u);
+    r = prt::core::patch_newton(plane, planes, 0.5, 0.5, p, 1e-12, 0.3, 0.75, 1e-4);  // another root
+    EXPECT_EQ(r.status, prt::core::NewtonStatus::converged);
     // no more steps than allowed
     p.max_iterations = 0;
     planes = prt::core::make_ray_planes({0.3, 0.3, 1}, {0, 0, -1});

@@ -234,6 +234,37 @@ TEST(Teapot, MatchesFinelyTessellatedReference) {
     }
 }
 
+/// The early stops of Newton (PatchTraceParams::max_stalled_steps, duplicate_radius) only end runs
+/// that would not change the hit: with them off, every ray of three views gets the same hit.
+TEST(Teapot, NewtonEarlyStopsKeepEveryHit) {
+    REQUIRE_TEAPOT();
+    const BuiltPool bp = build_pool(teapot_nets());
+    PatchTraceParams off;
+    off.max_stalled_steps = 0;
+    off.duplicate_radius = 0.0;
+    const PatchTraceParams on;
+    ASSERT_GT(on.max_stalled_steps, 0u);
+    ASSERT_GT(on.duplicate_radius, 0.0);
+    for (const auto& [az, el] : std::vector<std::pair<double, double>>{{-60, 25}, {90, 70}, {200, -30}}) {
+        int hits = 0;
+        prt::core::PatchStats st_on, st_off;
+        for (const auto& [o, d] : camera_rays(k_centre, k_radius, az, el, 128)) {
+            const auto ray = local_ray(bp, o, d);
+            PatchHit a, b;
+            const bool got_on = prt::core::trace_patches(bp.view, ray, on, a, &st_on);
+            const bool got_off = prt::core::trace_patches(bp.view, ray, off, b, &st_off);
+            ASSERT_EQ(got_on, got_off) << "view " << az << "," << el;
+            if (!got_on) continue;
+            ++hits;
+            EXPECT_NEAR(a.t, b.t, 1e-9 * b.t);
+            EXPECT_EQ(a.patch, b.patch);
+        }
+        EXPECT_GT(hits, 2000);
+        // and they save Newton steps
+        EXPECT_LT(st_on.newton_iterations, st_off.newton_iterations) << "view " << az << "," << el;
+    }
+}
+
 TEST(Teapot, SilhouetteSweepHasOneTransitionAndNoNaN) {
     REQUIRE_TEAPOT();
     const BuiltPool bp = build_pool(teapot_nets());

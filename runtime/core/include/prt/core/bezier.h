@@ -94,19 +94,51 @@ PRT_HD inline PatchEval patch_eval(const pool::PatchControlNet& net, double u, d
     bernstein3(u, bu, dbu);
     bernstein3(v, bv, dbv);
     PatchEval e{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-    PRT_UNROLL
+    // Row by row, not unrolled on the device: unrolled, the compiler hoists all 48 coordinates out
+    // of Newton's loop (96 registers per thread, spilled under the megakernel's register limit).
+    // B_i(u) and B_i'(u) rotate through registers instead of being indexed by i.
+    double b0 = bu[0], b1 = bu[1], b2 = bu[2], b3 = bu[3];
+    double d0 = dbu[0], d1 = dbu[1], d2 = dbu[2], d3 = dbu[3];
+#if defined(__CUDA_ARCH__)
+    // A row's 4 points are 96 contiguous bytes: 16-byte loads where the net is 16-byte aligned
+    // (device arrays are; each net is 384 bytes).
+    const bool aligned16 = (reinterpret_cast<unsigned long long>(&net) & 15u) == 0;
+#pragma unroll 1
+#endif
     for (int i = 0; i < 4; ++i) {
+        double c[12];  // x, y, z of the row's 4 points
+#if defined(__CUDA_ARCH__)
+        if (aligned16) {
+            const double2* r = reinterpret_cast<const double2*>(&net.p[4 * i]);
+#pragma unroll
+            for (int k = 0; k < 6; ++k) {
+                const double2 w = r[k];
+                c[2 * k] = w.x;
+                c[2 * k + 1] = w.y;
+            }
+        } else
+#endif
+        {
+            PRT_UNROLL
+            for (int j = 0; j < 4; ++j) {
+                c[3 * j] = net.p[4 * i + j].x;
+                c[3 * j + 1] = net.p[4 * i + j].y;
+                c[3 * j + 2] = net.p[4 * i + j].z;
+            }
+        }
         DVec3 row{0, 0, 0}, drow{0, 0, 0};  // sum over v of this u-row, and its v-derivative
         PRT_UNROLL
         for (int j = 0; j < 4; ++j) {
-            const DVec3 p = dvec3(net.p[4 * i + j]);
+            const DVec3 p{c[3 * j], c[3 * j + 1], c[3 * j + 2]};
             row = row + p * bv[j];
             drow = drow + p * dbv[j];
         }
-        e.q = e.q + row * bu[i];
-        e.qu = e.qu + row * dbu[i];
-        e.qv = e.qv + drow * bu[i];
-        e.quv = e.quv + drow * dbu[i];
+        e.q = e.q + row * b0;
+        e.qu = e.qu + row * d0;
+        e.qv = e.qv + drow * b0;
+        e.quv = e.quv + drow * d0;
+        b0 = b1, b1 = b2, b2 = b3;
+        d0 = d1, d1 = d2, d2 = d3;
     }
     return e;
 }

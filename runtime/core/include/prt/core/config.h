@@ -15,6 +15,14 @@
 #endif
 
 #if defined(__CUDACC__)
+/// Keeps a rarely taken, register-hungry path out of its caller's register allocation on the
+/// device (a call instead of inlining); the host compiler decides for itself.
+#define PRT_NOINLINE __noinline__
+#else
+#define PRT_NOINLINE
+#endif
+
+#if defined(__CUDACC__)
 /// Unrolls the following short fixed-count loop (per-axis loops) in device code.
 #define PRT_UNROLL _Pragma("unroll")
 #else

@@ -81,6 +81,16 @@ struct PatchTraceParams {
     double edge_tolerance = 1e-7;
     /// The residual growing this many steps in a row means divergence (seed 002, 3).
     std::uint32_t max_residual_increases = 3;
+    /// Stagnation: this many steps in a row without halving the smallest residual so far also end
+    /// the run as diverged (0: off). From a subpatch leaf's centre Newton converges quadratically,
+    /// or it cycles without converging (seed 002's "starts to diverge" in another form): such runs
+    /// would otherwise take all max_iterations steps (16% of the steps on the teapot).
+    std::uint32_t max_stalled_steps = 4;
+    /// A run whose iterate comes within this distance (parameter space, max norm) of the root
+    /// already accepted on the same patch for this ray stops there (NewtonStatus::known_root): it
+    /// converges to that root, which cannot make the hit nearer. Neighbouring leaves overlap, and
+    /// their runs mostly find the same root (0: off).
+    double duplicate_radius = 1e-4;
     std::uint32_t faces = k_patch_faces_both;  ///< PatchFaces
     /// Self-intersection guard for secondary rays on unoriented pools: roots on patch skip_patch
     /// within skip_radius (parameter space, max norm) of (skip_u, skip_v) are ignored.
@@ -146,6 +156,7 @@ enum class NewtonStatus : std::uint32_t {
     diverged = 2,        ///< residual kept growing, or became NaN
     left_domain = 3,     ///< an iterate left [-margin, 1 + margin]^2
     singular = 4,        ///< the Jacobian cannot be inverted (ray parallel to the surface there)
+    known_root = 5,      ///< the iterate reached the known root (PatchTraceParams::duplicate_radius)
 };
 
 struct NewtonResult {
@@ -155,13 +166,15 @@ struct NewtonResult {
 };
 
 /// seed 002, eq. 3-4: (u, v) <- (u, v) - J^-1 R(u, v), R = (n1.Q + d1, n2.Q + d2), from (u0, v0),
-/// in double precision. `tolerance` is absolute (local units).
+/// in double precision. `tolerance` is absolute (local units). With known_radius > 0 an iterate
+/// within known_radius of (known_u, known_v) ends the run (NewtonStatus::known_root).
 PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const RayPlanes& planes, double u0,
-                                        double v0, const PatchTraceParams& params, double tolerance) {
+                                        double v0, const PatchTraceParams& params, double tolerance,
+                                        double known_u = 0.0, double known_v = 0.0, double known_radius = 0.0) {
     NewtonResult r{u0, v0, 0, NewtonStatus::no_convergence};
     double u = u0, v = v0;
-    double previous = 0.0;
-    std::uint32_t increases = 0;
+    double previous = 0.0, smallest = 0.0;
+    std::uint32_t increases = 0, stalled = 0;
     const double lo = -params.domain_margin, hi = 1.0 + params.domain_margin;
     for (std::uint32_t it = 0;; ++it) {
         const PatchEval e = patch_eval(net, u, v);
@@ -191,6 +204,13 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
         } else {
             increases = 0;
         }
+        if (it == 0 || err < 0.5 * smallest) {
+            smallest = err;
+            stalled = 0;
+        } else if (params.max_stalled_steps > 0 && ++stalled >= params.max_stalled_steps) {
+            r.status = NewtonStatus::diverged;
+            return r;
+        }
         previous = err;
         const double j11 = dot(planes.n1, e.qu), j12 = dot(planes.n1, e.qv);
         const double j21 = dot(planes.n2, e.qu), j22 = dot(planes.n2, e.qv);
@@ -208,6 +228,13 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
             r.v = v;
             r.iterations = it + 1;
             r.status = NewtonStatus::left_domain;
+            return r;
+        }
+        if (fabs(u - known_u) < known_radius && fabs(v - known_v) < known_radius) {
+            r.u = u;
+            r.v = v;
+            r.iterations = it + 1;
+            r.status = NewtonStatus::known_root;
             return r;
         }
     }
@@ -265,6 +292,8 @@ struct PatchQuery {
     double tolerance;   ///< absolute Newton tolerance (params.tolerance * view.extent)
     double best_t;      ///< nearest accepted hit so far (ray.t_max initially)
     std::uint32_t any;  ///< stop at the first accepted hit (shadow rays)
+    std::uint32_t best_patch;  ///< patch of the last accepted root (k_no_patch: none yet)
+    double best_u, best_v;     ///< its parameters (PatchTraceParams::duplicate_radius)
 };
 
 /// Prepares a query; false for a ray whose direction is zero or not finite (it hits nothing).
@@ -277,6 +306,8 @@ PRT_HD PRT_INLINE bool make_patch_query(const PatchView& view, const PatchRay& r
     q.box = make_box_ray(ray);
     q.tolerance = params.tolerance * view.extent;
     q.best_t = ray.t_max;
+    q.best_patch = k_no_patch;
+    q.best_u = q.best_v = 0.0;
     q.any = any_hit ? 1u : 0u;
     return true;
 }
@@ -296,9 +327,20 @@ PRT_HD PRT_INLINE std::uint32_t bvh_cull_words(const PatchView& view) {
     return (view.bvh_node_count + 31u) / 32u;
 }
 
+/// The unit normal of a root (patch_normal with the ray's reverse as the fallback). Out of line on
+/// the device: the traversal loop calls it only for oriented pools, and once per ray at the end.
+/// Out-of-line functions take values, never the caller's query or hit by reference: an address
+/// passed to a call would keep those in local memory throughout the traversal loop.
+PRT_HD PRT_NOINLINE inline DVec3 root_normal(const pool::PatchControlNet& net, double u, double v, PatchEval ev,
+                                             DVec3 dir) {
+    return patch_normal(net, u, v, ev, dir * (-1.0 / length(dir)));
+}
+
 /// Accepts a Newton result as a hit if it converged inside the patch (within edge_tolerance), is
 /// not the skipped start point, lies in (0, q.best_t) and faces the right way; then updates
-/// q.best_t and `hit`.
+/// q.best_t and the hit's t, u, v, patch and iterations (and front for k_patch_faces_by_ray).
+/// position, normal and front are left to finish_patch_hit(), once per ray after the traversal:
+/// the traversal loop then keeps neither them nor patch_normal's code in registers.
 PRT_HD inline bool accept_root(const PatchView& view, std::uint32_t patch, const NewtonResult& nr,
                                PatchQuery& q, const PatchTraceParams& params, PatchHit& hit) {
     if (nr.status != NewtonStatus::converged) return false;
@@ -312,20 +354,31 @@ PRT_HD inline bool accept_root(const PatchView& view, std::uint32_t patch, const
     const PatchEval ev = patch_eval(net, u, v);
     const double t = dot(ev.q - q.ray.origin, q.ray.dir) / dot(q.ray.dir, q.ray.dir);
     if (!(t > 0.0 && t < q.best_t)) return false;
-    const DVec3 dir_unit = q.ray.dir * (1.0 / length(q.ray.dir));
-    const DVec3 n = patch_normal(net, u, v, ev, -dir_unit);
-    const double dn = dot(q.ray.dir, n);
-    if (params.faces == k_patch_faces_by_ray && !(q.ray.inside ? dn > 0.0 : dn < 0.0)) return false;
+    if (params.faces == k_patch_faces_by_ray) {
+        const double dn = dot(q.ray.dir, root_normal(net, u, v, ev, q.ray.dir));
+        if (!(q.ray.inside ? dn > 0.0 : dn < 0.0)) return false;
+        hit.front = dn < 0.0 ? 1u : 0u;
+    }
     q.best_t = t;
+    q.best_patch = patch;
+    q.best_u = u;
+    q.best_v = v;
     hit.t = t;
     hit.u = u;
     hit.v = v;
     hit.patch = patch;
-    hit.front = dn < 0.0 ? 1u : 0u;
-    hit.position = ev.q;
-    hit.normal = n;
     hit.iterations = nr.iterations;
     return true;
+}
+
+/// Completes a hit recorded by accept_root: position Q(u, v), the unit normal and the face, the
+/// same values accept_root computed for its tests (same evaluation, same (u, v)).
+PRT_HD inline void finish_patch_hit(const PatchView& view, const PatchQuery& q, PatchHit& hit) {
+    const pool::PatchControlNet& net = view.nets[hit.patch];
+    const PatchEval ev = patch_eval(net, hit.u, hit.v);
+    hit.position = ev.q;
+    hit.normal = root_normal(net, hit.u, hit.v, ev, q.ray.dir);
+    hit.front = dot(q.ray.dir, hit.normal) < 0.0 ? 1u : 0u;
 }
 
 /// Collapsed edges of a net (all four control points equal): bit 0 u = 0, bit 1 u = 1,
@@ -425,38 +478,69 @@ struct PatchScratch {
     std::uint32_t apex_tried = 0;           ///< edges whose apex solve already ran
 };
 
+/// The apex solves for one leaf (at most one per edge, so at most four).
+struct ApexRoots {
+    NewtonResult root[4];
+    std::uint32_t count = 0;      ///< solves run (converged or not)
+    std::uint32_t collapsed = 0;  ///< collapsed_edges() of the net
+    std::uint32_t tried = 0;      ///< edges solved so far for this (ray, patch), these included
+};
+
+/// The apex solves of patch_leaf_newton for leaf domain `d` (touching an edge of the patch): once
+/// per collapsed edge the leaf touches and that is not in `tried` (`collapsed` = 0xffffffff: not
+/// known yet). Out of line on the device (rare, and heavy in registers); the caller accepts the
+/// roots in order.
+PRT_HD PRT_NOINLINE inline ApexRoots patch_leaf_apex(const pool::PatchControlNet& net, PatchDomain d,
+                                                     RayPlanes planes, PatchTraceParams params, double tolerance,
+                                                     std::uint32_t collapsed, std::uint32_t tried) {
+    ApexRoots r;
+    r.collapsed = collapsed == 0xffffffffu ? collapsed_edges(net) : collapsed;
+    r.tried = tried;
+    const bool touches[4] = {d.u0 == 0.0, d.u1 == 1.0, d.v0 == 0.0, d.v1 == 1.0};
+    for (std::uint32_t e = 0; e < 4; ++e) {
+        if (!touches[e] || !((r.collapsed >> e) & 1u) || ((r.tried >> e) & 1u)) continue;
+        r.tried |= 1u << e;
+        // only roots within the leaves along the edge: s up to the leaf's extent across it
+        const double max_s = e < 2 ? d.u1 - d.u0 : d.v1 - d.v0;
+        r.root[r.count++] = patch_apex_newton(net, e, planes, params, tolerance, max_s);
+    }
+    return r;
+}
+
 /// Tries Newton from the centre of subpatch leaf `k` of patch `patch` (and, where the leaf touches
 /// a collapsed edge and that fails, the apex solve once per edge); on a valid root nearer than
-/// q.best_t updates q.best_t and `hit` and returns true.
+/// q.best_t updates q.best_t and `hit` (as accept_root: finish_patch_hit completes it) and returns
+/// true.
 PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch, std::uint32_t k,
                                      PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
                                      PatchStats* stats, PatchScratch* scratch = nullptr) {
-    const pool::PatchControlNet& net = view.nets[patch];
     const PatchDomain d = subpatch_domain(k);
-    // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch.
+    // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch. Runs heading for the
+    // root already accepted on this patch stop early (PatchTraceParams::duplicate_radius).
+    const bool known = q.best_patch == patch;
     const NewtonResult nr =
-        patch_newton(net, q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance);
+        patch_newton(view.nets[patch], q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance,
+                     q.best_u, q.best_v, known ? params.duplicate_radius : 0.0);
     if (stats) {
         ++stats->newton_runs;
         stats->newton_iterations += nr.iterations;
     }
     if (accept_root(view, patch, nr, q, params, hit)) return true;
     if (!scratch) return false;
-    const bool touches[4] = {d.u0 == 0.0, d.u1 == 1.0, d.v0 == 0.0, d.v1 == 1.0};
-    if (!(touches[0] || touches[1] || touches[2] || touches[3])) return false;
-    if (scratch->collapsed == 0xffffffffu) scratch->collapsed = collapsed_edges(net);
+    if (!(d.u0 == 0.0 || d.u1 == 1.0 || d.v0 == 0.0 || d.v1 == 1.0)) return false;
+    // only patches with a collapsed edge go further (known after the first apex call)
+    if (scratch->collapsed == 0u) return false;
+    const ApexRoots ar = patch_leaf_apex(view.nets[patch], d, q.planes, params, q.tolerance, scratch->collapsed,
+                                         scratch->apex_tried);
+    scratch->collapsed = ar.collapsed;
+    scratch->apex_tried = ar.tried;
     bool found = false;
-    for (std::uint32_t e = 0; e < 4; ++e) {
-        if (!touches[e] || !((scratch->collapsed >> e) & 1u) || ((scratch->apex_tried >> e) & 1u)) continue;
-        scratch->apex_tried |= 1u << e;
-        // only roots within the leaves along the edge: s up to the leaf's extent across it
-        const double max_s = e < 2 ? d.u1 - d.u0 : d.v1 - d.v0;
-        const NewtonResult ar = patch_apex_newton(net, e, q.planes, params, q.tolerance, max_s);
+    for (std::uint32_t i = 0; i < ar.count; ++i) {
         if (stats) {
             ++stats->newton_runs;
-            stats->newton_iterations += ar.iterations;
+            stats->newton_iterations += ar.root[i].iterations;
         }
-        found = accept_root(view, patch, ar, q, params, hit) || found;
+        found = accept_root(view, patch, ar.root[i], q, params, hit) || found;
     }
     return found;
 }
@@ -464,10 +548,10 @@ PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch,
 /// seed 002, 5.3.2 and 5.4: descends the subpatch tree of `patch` front to back, skipping boxes
 /// beyond the nearest hit so far, and runs Newton from every leaf reached. `root_t_near` is the
 /// entry distance of the patch's box (already tested in the BVH). Returns true if a hit was
-/// accepted (q.best_t and `hit` updated).
-PRT_HD inline bool intersect_patch(const PatchView& view, std::uint32_t patch, float root_t_near,
-                                   PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
-                                   PatchStats* stats, const PatchCullMask* cull = nullptr) {
+/// accepted (q.best_t and `hit` updated as by accept_root; intersect_patch completes it).
+PRT_HD inline bool intersect_patch_tree(const PatchView& view, std::uint32_t patch, float root_t_near,
+                                        PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
+                                        PatchStats* stats, const PatchCullMask* cull = nullptr) {
     if (stats) ++stats->patches;
     const pool::SubpatchNode* nodes = view.nodes + static_cast<std::size_t>(patch) * view.subpatch_nodes;
     const std::size_t cull_base = static_cast<std::size_t>(patch) * patch_cull_words(view) * 32u;
@@ -518,65 +602,132 @@ PRT_HD inline bool intersect_patch(const PatchView& view, std::uint32_t patch, f
     return found;
 }
 
+/// intersect_patch_tree with the hit completed (finish_patch_hit): one (ray, patch) pair of the
+/// data-parallel split (seed 002, 5.3.2-5.3.3).
+PRT_HD inline bool intersect_patch(const PatchView& view, std::uint32_t patch, float root_t_near,
+                                   PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
+                                   PatchStats* stats, const PatchCullMask* cull = nullptr) {
+    if (!intersect_patch_tree(view, patch, root_t_near, q, params, hit, stats, cull)) return false;
+    finish_patch_hit(view, q, hit);
+    return true;
+}
+
 // ---- Whole rays: BVH traversal with early termination (seed 002, 5.1 and 5.4) ----------------------
 
 /// Traversal stack entries for the BVH (a valid pool's BVH is at most k_max_patch_bvh_depth deep,
 /// and ordered traversal keeps at most one pending sibling per level).
 inline constexpr std::uint32_t k_patch_bvh_stack = pool::k_max_patch_bvh_depth + 2;
+/// Entries of the one stack of trace_patch_query: the BVH's, then those of one subpatch tree on top.
+inline constexpr std::uint32_t k_patch_stack = k_patch_bvh_stack + pool::k_max_subpatch_depth + 2;
 
-/// Runs a prepared query through the BVH front to back: children are visited nearest box first,
-/// boxes beyond the nearest hit are skipped (early termination), and each patch leaf goes through
-/// intersect_patch. The right child of interior node i is bvh[i + 1].skip.
+/// Runs a prepared query through the mixed hierarchy of seed 002, 5.1, front to back: children are
+/// visited nearest box first, boxes beyond the nearest hit are skipped (early termination, 5.4),
+/// and every subpatch leaf reached runs Newton from its centre (5.3.2-5.3.3). The right child of
+/// interior BVH node i is bvh[i + 1].skip.
+///
+/// The two levels share one stack and one loop (entries are a BVH node, or a subpatch node of the
+/// patch being entered; both boxes have the same layout), and Newton runs outside the traversal
+/// loop, "while-while" (Aila and Laine 2009): a thread leaves the inner loop only when it has a
+/// leaf (or nothing left), so on the GPU a warp's threads reach the expensive double-precision
+/// Newton together instead of one by one between other threads' box tests. The order in which one
+/// ray visits boxes and leaves is exactly the nested traversal's (intersect_patch_tree per patch),
+/// so the hits are the same.
 PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const PatchTraceParams& params,
                                      PatchHit& hit, PatchStats* stats, const PatchCullMask* cull) {
     if (view.bvh_node_count == 0) return false;
-    const bool use_cull = cull && cull->bvh_words && !q.ray.inside;
-    if (use_cull && cull_bit(cull->bvh_words, 0)) return false;
+    const bool use_bvh_cull = cull && cull->bvh_words && !q.ray.inside;
+    const bool use_node_cull = cull && cull->node_words && !q.ray.inside;
+    if (use_bvh_cull && cull_bit(cull->bvh_words, 0)) return false;
     float t_root = 0.0f;
     if (stats) ++stats->bvh_nodes;
     if (!box_hit(q.box, view.bvh[0].lo, view.bvh[0].hi, static_cast<float>(q.best_t), t_root)) return false;
-    std::uint32_t stack_node[k_patch_bvh_stack];
-    float stack_t[k_patch_bvh_stack];
+    // A stack entry is 8 bytes (one local-memory access): a node and its box's entry distance. The
+    // node is BVH node `code`, or with k_sub_entry set subpatch node `code & ~k_sub_entry` of the
+    // current patch (entries of one patch's tree lie above every BVH entry pushed before it, so
+    // they are all popped before the traversal leaves that patch). BVH nodes are < 2^23.
+    constexpr std::uint32_t k_sub_entry = 0x80000000u;
+    constexpr std::uint32_t k_no_leaf = 0xffffffffu;
+    struct alignas(8) Entry {
+        std::uint32_t code;
+        float t;
+    };
+    Entry stack[k_patch_stack];
     std::uint32_t sp = 0;
-    stack_node[sp] = 0;
-    stack_t[sp++] = t_root;
+    stack[sp++] = Entry{0u, t_root};
+    const std::uint32_t first_leaf = (1u << view.subpatch_depth) - 1u;
+    const std::uint32_t cull_words = patch_cull_words(view);
+    std::uint32_t patch = 0;                      // the patch whose subpatch tree is on the stack
+    const pool::SubpatchNode* nodes = view.nodes;  // its nodes
+    PatchScratch scratch;
     bool found = false;
-    while (sp > 0) {
-        --sp;
-        const std::uint32_t i = stack_node[sp];
-        const float t_near = stack_t[sp];
-        if (static_cast<double>(t_near) > q.best_t) continue;
-        const pool::PatchBvhNode& node = view.bvh[i];
-        if (node.patch >= 0) {
-            if (intersect_patch(view, static_cast<std::uint32_t>(node.patch), t_near, q, params, hit, stats,
-                                cull)) {
-                found = true;
-                if (q.any) return true;
+    for (;;) {
+        // Traversal until this thread holds a subpatch leaf (leaf != k_no_leaf) or is done.
+        std::uint32_t leaf = k_no_leaf;
+        while (sp > 0) {
+            const Entry e = stack[--sp];
+            const float t_near = e.t;
+            if (static_cast<double>(t_near) > q.best_t) continue;  // beyond the nearest hit (5.4)
+            const bool bvh_entry = (e.code & k_sub_entry) == 0u;
+            const float* lo[2];
+            const float* hi[2];
+            std::uint32_t c[2];
+            bool culled[2] = {false, false};
+            if (bvh_entry) {
+                const std::uint32_t i = e.code;
+                const pool::PatchBvhNode& node = view.bvh[i];
+                if (node.patch >= 0) {  // enter the patch: its root's box is this leaf's
+                    patch = static_cast<std::uint32_t>(node.patch);
+                    nodes = view.nodes + static_cast<std::size_t>(patch) * view.subpatch_nodes;
+                    scratch = PatchScratch{};
+                    if (stats) ++stats->patches;
+                    stack[sp++] = Entry{k_sub_entry, t_near};  // subpatch root, node 0
+                    continue;
+                }
+                c[0] = i + 1;
+                c[1] = view.bvh[i + 1].skip;
+                for (int j = 0; j < 2; ++j) {
+                    lo[j] = view.bvh[c[j]].lo;
+                    hi[j] = view.bvh[c[j]].hi;
+                    if (use_bvh_cull) culled[j] = cull_bit(cull->bvh_words, c[j]);
+                }
+            } else {
+                const std::uint32_t k = e.code & ~k_sub_entry;
+                if (k >= first_leaf) {
+                    leaf = k;
+                    break;
+                }
+                const std::size_t cull_base = static_cast<std::size_t>(patch) * cull_words * 32u;
+                for (int j = 0; j < 2; ++j) {
+                    const std::uint32_t ck = 2 * k + 1 + static_cast<std::uint32_t>(j);
+                    c[j] = ck | k_sub_entry;
+                    lo[j] = nodes[ck].lo;
+                    hi[j] = nodes[ck].hi;
+                    if (use_node_cull) culled[j] = cull_bit(cull->node_words, cull_base + ck);
+                }
             }
-            continue;
-        }
-        const std::uint32_t c[2] = {i + 1, view.bvh[i + 1].skip};
-        const float limit = static_cast<float>(q.best_t);
-        float tc[2] = {0.0f, 0.0f};
-        bool h[2];
-        for (int j = 0; j < 2; ++j) {
-            if (use_cull && cull_bit(cull->bvh_words, c[j])) {
-                h[j] = false;
-                continue;
+            const float limit = static_cast<float>(q.best_t);
+            float tc[2] = {0.0f, 0.0f};
+            bool h[2];
+            for (int j = 0; j < 2; ++j) {
+                if (culled[j]) {
+                    h[j] = false;
+                    continue;
+                }
+                h[j] = box_hit(q.box, lo[j], hi[j], limit, tc[j]);
+                if (stats) ++(bvh_entry ? stats->bvh_nodes : stats->subpatch_boxes);
             }
-            h[j] = box_hit(q.box, view.bvh[c[j]].lo, view.bvh[c[j]].hi, limit, tc[j]);
-            if (stats) ++stats->bvh_nodes;
+            // Push the far child first so the near one is popped next.
+            const int near_j = (h[0] && h[1]) ? (tc[1] < tc[0] ? 1 : 0) : (h[0] ? 0 : 1);
+            if (h[0] && h[1] && sp < k_patch_stack) stack[sp++] = Entry{c[1 - near_j], tc[1 - near_j]};
+            if (h[near_j] && sp < k_patch_stack) stack[sp++] = Entry{c[near_j], tc[near_j]};
         }
-        const int near_j = (h[0] && h[1]) ? (tc[1] < tc[0] ? 1 : 0) : (h[0] ? 0 : 1);
-        if (h[0] && h[1] && sp < k_patch_bvh_stack) {
-            stack_node[sp] = c[1 - near_j];
-            stack_t[sp++] = tc[1 - near_j];
-        }
-        if (h[near_j] && sp < k_patch_bvh_stack) {
-            stack_node[sp] = c[near_j];
-            stack_t[sp++] = tc[near_j];
+        if (leaf == k_no_leaf) break;
+        if (patch_leaf_newton(view, patch, leaf, q, params, hit, stats, &scratch)) {
+            found = true;
+            if (q.any) return true;
         }
     }
+    if (found) finish_patch_hit(view, q, hit);
     return found;
 }
 

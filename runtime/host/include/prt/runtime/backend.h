@@ -77,7 +77,7 @@ struct BackendOptions {
     unsigned cpu_threads = 0;          ///< 0: all hardware threads
     bool cuda_wavefront = false;       ///< several kernels per frame (thesis 2.4) instead of one
     bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
-    int cuda_min_blocks = 0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4)
+    int cuda_min_blocks = 0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
     bool cuda_max_l1 = true;  ///< prefer L1 over shared memory for the megakernel
 };
 
