@@ -81,6 +81,7 @@ struct Options {
     // patches
     std::uint32_t patch_iterations = 16;
     double patch_tolerance = 1e-12;
+    std::string patch_precision = "double";
     std::uint32_t reference_grid = 64;
 };
 
@@ -541,12 +542,14 @@ void run_surface(const Options& o, const pool::PoolFile& p, const View& view, Me
         m.settings = {{"subpatch_depth", v.subpatch_depth},
                       {"max_iterations", o.patch_iterations},
                       {"tolerance", o.patch_tolerance},
-                      {"precision", "double"}};
+                      {"precision", o.patch_precision}};
+        const bool f32 = o.patch_precision == "float";
         measure(o, view, m, [&](const core::Ray& r, PixelResult& out) {
             core::PatchHit h;
             core::PatchStats st;
-            if (core::trace_patches(v, core::make_patch_ray(r.origin, r.dir, core::k_inf, false), pp, h,
-                                    &st)) {
+            const core::PatchRay ray = core::make_patch_ray(r.origin, r.dir, core::k_inf, false);
+            if (f32 ? core::trace_patches<core::PatchPrecision::f32>(v, ray, pp, h, &st)
+                    : core::trace_patches(v, ray, pp, h, &st)) {
                 out.hit = true;
                 out.t = h.t;
                 out.position = add(view.origin, D3{h.position.x, h.position.y, h.position.z});
@@ -822,6 +825,10 @@ int main(int argc, char** argv) {
                    "--patch-tolerance", o.patch_tolerance,
                    "patches: Newton residual tolerance, relative to the model extent")
                 ->check(CLI::Range(1e-16, 1e-1));
+            app.add_option("--patch-precision", o.patch_precision,
+                           "patches: Newton in double (the renderer's, seed 002) or float; the hit is "
+                           "evaluated in double at the root either way")
+                ->check(CLI::IsMember({"double", "float"}));
             app.add_option("--reference-grid", o.reference_grid,
                            "patches: reference tessellation, grid cells per patch edge")
                 ->check(CLI::Range(8u, 1024u));

@@ -238,8 +238,11 @@ class Suite:
         for key, pool in pools.items():
             for it in self.settings["patch_iterations"]:
                 for tol in self.settings["patch_tolerances"]:
-                    self.accuracy("teapot", None, "patches", pool, [key], "D%s_it%d_tol%g" % (key[-1], it, tol),
-                                  ["--patch-iterations", str(it), "--patch-tolerance", str(tol)])
+                    for prec in self.settings["patch_precisions"]:
+                        self.accuracy("teapot", None, "patches", pool, [key],
+                                      "D%s_it%d_tol%g%s" % (key[-1], it, tol, "_f32" if prec == "float" else ""),
+                                      ["--patch-iterations", str(it), "--patch-tolerance", str(tol),
+                                       "--patch-precision", prec])
 
     def image_errors(self, model, ref):
         for row in self.rows:
@@ -322,6 +325,7 @@ def settings_for(args):
         "patch_depths": [4, 6, 8],
         "patch_iterations": [4, 16] if quick else [2, 4, 8, 16],
         "patch_tolerances": [1e-12] if quick else [1e-6, 1e-12],
+        "patch_precisions": ["double", "float"],
         "res": 128 if quick else 256,
         "repeat": 5 if quick else 3,
         "bench": {"backend": "cuda" if args.gpu else "cpu", "res": 1024 if args.gpu else (128 if quick else 256),

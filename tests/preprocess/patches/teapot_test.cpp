@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 
@@ -262,6 +263,41 @@ TEST(Teapot, NewtonEarlyStopsKeepEveryHit) {
         EXPECT_GT(hits, 2000);
         // and they save Newton steps
         EXPECT_LT(st_on.newton_iterations, st_off.newton_iterations) << "view " << az << "," << el;
+    }
+}
+
+/// Newton in float (issue 9's float-versus-double trade, PatchPrecision::f32): the same hits as
+/// double but for rays at silhouettes and patch borders, within float accuracy of them, and
+/// measurably less accurate than double (the float path really is float).
+TEST(Teapot, FloatNewtonStaysWithinFloatAccuracy) {
+    REQUIRE_TEAPOT();
+    const BuiltPool bp = build_pool(teapot_nets());
+    const PatchTraceParams params;
+    for (const auto& [az, el] : std::vector<std::pair<double, double>>{{-60, 25}, {90, 70}, {200, -30}}) {
+        int both = 0, flips = 0;
+        double worst = 0.0;
+        for (const auto& [o, d] : camera_rays(k_centre, k_radius, az, el, 128)) {
+            const auto ray = local_ray(bp, o, d);
+            PatchHit a, b;
+            const bool got64 = prt::core::trace_patches(bp.view, ray, params, a);
+            const bool got32 = prt::core::trace_patches<prt::core::PatchPrecision::f32>(bp.view, ray, params, b);
+            if (got32) {
+                ASSERT_TRUE(std::isfinite(b.t) && prt::core::is_finite(b.normal));
+            }
+            if (got64 != got32) {
+                ++flips;
+                continue;
+            }
+            if (!got64) continue;
+            ++both;
+            const double c = std::max(std::fabs(dot3(v3(a.normal), d)), 0.05);
+            worst = std::max(worst, std::fabs(a.t - b.t) * c / k_radius);
+        }
+        std::printf("view %g,%g: %d hits, %d flips, worst |dt| cos / radius %.3g\n", az, el, both, flips, worst);
+        EXPECT_GT(both, 2000) << "view " << az << "," << el;
+        EXPECT_LE(flips, both / 200) << "view " << az << "," << el;
+        EXPECT_LT(worst, 1e-5) << "view " << az << "," << el;
+        EXPECT_GT(worst, 1e-9) << "view " << az << "," << el << ": no float rounding seen";
     }
 }
 

@@ -143,6 +143,35 @@ PRT_HD inline PatchEval patch_eval(const pool::PatchControlNet& net, double u, d
     return e;
 }
 
+/// Q, dQ/du and dQ/dv in single precision (the suite's float-versus-double trade, issue 9): the
+/// same Bernstein form as patch_eval, with the control points rounded to float.
+struct PatchEvalF {
+    Vec3 q, qu, qv;
+};
+
+PRT_HD inline PatchEvalF patch_eval_f32(const pool::PatchControlNet& net, float u, float v) {
+    const float su = 1.0f - u, sv = 1.0f - v;
+    const float bu[4] = {su * su * su, 3.0f * u * su * su, 3.0f * u * u * su, u * u * u};
+    const float dbu[4] = {-3.0f * su * su, 3.0f * su * (su - 2.0f * u), 3.0f * u * (2.0f * su - u), 3.0f * u * u};
+    const float bv[4] = {sv * sv * sv, 3.0f * v * sv * sv, 3.0f * v * v * sv, v * v * v};
+    const float dbv[4] = {-3.0f * sv * sv, 3.0f * sv * (sv - 2.0f * v), 3.0f * v * (2.0f * sv - v), 3.0f * v * v};
+    PatchEvalF e{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    for (int i = 0; i < 4; ++i) {
+        Vec3 row{0, 0, 0}, drow{0, 0, 0};
+        PRT_UNROLL
+        for (int j = 0; j < 4; ++j) {
+            const pool::PatchPoint& c = net.p[4 * i + j];
+            const Vec3 p{static_cast<float>(c.x), static_cast<float>(c.y), static_cast<float>(c.z)};
+            row = row + p * bv[j];
+            drow = drow + p * dbv[j];
+        }
+        e.q = e.q + row * bu[i];
+        e.qu = e.qu + row * dbu[i];
+        e.qv = e.qv + drow * bu[i];
+    }
+    return e;
+}
+
 /// Size (relative to the control net's extent) under which a partial derivative counts as
 /// vanished: a collapsed patch edge. Rounding leaves ~1e-16 there; 1e-9 from the edge the
 /// derivative is already this small, and the limit normal used instead is off by O(1e-9).

@@ -9,6 +9,7 @@
 //     PatchHit hit;
 //     if (trace_patches(view, ray, params, hit)) ... hit.t, hit.position, hit.normal, hit.front
 //     bool shadowed = patches_occluded(view, shadow_ray, params);
+//     trace_patches<PatchPrecision::f32>(...): Newton in float (the suite's trade; not the renderer's)
 // Data-parallel split of seed 002, 5.3 (traverse / recheck + newton kernels):
 //     patch_bvh_candidates() per ray -> (ray, patch) pairs -> intersect_patch() per pair.
 // Back-face culling per view (5.2), oriented pools only (PatchInfo::flags & k_patch_oriented):
@@ -165,6 +166,50 @@ struct NewtonResult {
     NewtonStatus status;
 };
 
+/// The stopping rules Newton's runs share (patch_newton, patch_newton_f32), seed 002, 3.
+struct NewtonTrack {
+    double previous = 0.0, smallest = 0.0;
+    std::uint32_t increases = 0, stalled = 0;
+
+    /// After the convergence test of step `it` with residual `err`: true when the run diverges
+    /// (the residual grew max_residual_increases steps in a row, or stagnated: max_stalled_steps
+    /// steps without halving its smallest value).
+    PRT_HD PRT_INLINE bool diverging(double err, std::uint32_t it, const PatchTraceParams& params) {
+        if (it > 0 && err > previous) {
+            if (++increases >= params.max_residual_increases) return true;
+        } else {
+            increases = 0;
+        }
+        if (it == 0 || err < 0.5 * smallest) {
+            smallest = err;
+            stalled = 0;
+        } else if (params.max_stalled_steps > 0 && ++stalled >= params.max_stalled_steps) {
+            return true;
+        }
+        previous = err;
+        return false;
+    }
+};
+
+/// After the update of step `it` to (u, v): true (with r's status set) when the iterate left
+/// [-margin, 1 + margin]^2 (NaN too) or came within known_radius of the known root.
+PRT_HD PRT_INLINE bool newton_stops_at(double u, double v, std::uint32_t it, const PatchTraceParams& params,
+                                       double known_u, double known_v, double known_radius, NewtonResult& r) {
+    const double lo = -params.domain_margin, hi = 1.0 + params.domain_margin;
+    NewtonStatus status;
+    if (!(u >= lo && u <= hi && v >= lo && v <= hi))
+        status = NewtonStatus::left_domain;
+    else if (fabs(u - known_u) < known_radius && fabs(v - known_v) < known_radius)
+        status = NewtonStatus::known_root;
+    else
+        return false;
+    r.u = u;
+    r.v = v;
+    r.iterations = it + 1;
+    r.status = status;
+    return true;
+}
+
 /// seed 002, eq. 3-4: (u, v) <- (u, v) - J^-1 R(u, v), R = (n1.Q + d1, n2.Q + d2), from (u0, v0),
 /// in double precision. `tolerance` is absolute (local units). With known_radius > 0 an iterate
 /// within known_radius of (known_u, known_v) ends the run (NewtonStatus::known_root).
@@ -173,9 +218,7 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
                                         double known_u = 0.0, double known_v = 0.0, double known_radius = 0.0) {
     NewtonResult r{u0, v0, 0, NewtonStatus::no_convergence};
     double u = u0, v = v0;
-    double previous = 0.0, smallest = 0.0;
-    std::uint32_t increases = 0, stalled = 0;
-    const double lo = -params.domain_margin, hi = 1.0 + params.domain_margin;
+    NewtonTrack track;
     for (std::uint32_t it = 0;; ++it) {
         const PatchEval e = patch_eval(net, u, v);
         const double r1 = dot(planes.n1, e.q) + planes.d1;
@@ -196,22 +239,10 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
             r.status = NewtonStatus::no_convergence;
             return r;
         }
-        if (it > 0 && err > previous) {
-            if (++increases >= params.max_residual_increases) {
-                r.status = NewtonStatus::diverged;
-                return r;
-            }
-        } else {
-            increases = 0;
-        }
-        if (it == 0 || err < 0.5 * smallest) {
-            smallest = err;
-            stalled = 0;
-        } else if (params.max_stalled_steps > 0 && ++stalled >= params.max_stalled_steps) {
+        if (track.diverging(err, it, params)) {
             r.status = NewtonStatus::diverged;
             return r;
         }
-        previous = err;
         const double j11 = dot(planes.n1, e.qu), j12 = dot(planes.n1, e.qv);
         const double j21 = dot(planes.n2, e.qu), j22 = dot(planes.n2, e.qv);
         const double det = j11 * j22 - j12 * j21;
@@ -223,20 +254,66 @@ PRT_HD inline NewtonResult patch_newton(const pool::PatchControlNet& net, const 
         const double inv = 1.0 / det;
         u -= (j22 * r1 - j12 * r2) * inv;
         v -= (j11 * r2 - j21 * r1) * inv;
-        if (!(u >= lo && u <= hi && v >= lo && v <= hi)) {  // NaN leaves too
-            r.u = u;
-            r.v = v;
-            r.iterations = it + 1;
-            r.status = NewtonStatus::left_domain;
+        if (newton_stops_at(u, v, it, params, known_u, known_v, known_radius, r)) return r;
+    }
+}
+
+/// Which arithmetic Newton runs in (issue 9's float-versus-double trade). The renderer (CPU and
+/// CUDA backends) uses f64, as seed 002, 5.3.3 does; f32 is for measuring what double buys.
+enum class PatchPrecision : std::uint32_t { f64 = 0, f32 = 1 };
+
+/// patch_newton in single precision: the planes, Q and its derivatives (patch_eval_f32), the
+/// residuals and the Jacobian in float, with the same stopping rules. A float residual cannot fall
+/// below the rounding of the terms it is made of, so convergence is |r_i| <= max(tolerance,
+/// 16 eps_f (|Q|_1 + |d_i|)): far from the origin that floor, not `tolerance`, is the accuracy.
+/// The root (u, v) is returned in double, for accept_root's double evaluation of the hit.
+PRT_HD inline NewtonResult patch_newton_f32(const pool::PatchControlNet& net, const RayPlanes& planes, double u0,
+                                            double v0, const PatchTraceParams& params, double tolerance,
+                                            double known_u = 0.0, double known_v = 0.0, double known_radius = 0.0) {
+    constexpr float k_eps = 1.1920929e-7f;  // FLT_EPSILON
+    const Vec3 n1 = to_vec3(planes.n1), n2 = to_vec3(planes.n2);
+    const float d1 = static_cast<float>(planes.d1), d2 = static_cast<float>(planes.d2);
+    const float tol = static_cast<float>(tolerance);
+    NewtonResult r{u0, v0, 0, NewtonStatus::no_convergence};
+    float u = static_cast<float>(u0), v = static_cast<float>(v0);
+    NewtonTrack track;
+    for (std::uint32_t it = 0;; ++it) {
+        const PatchEvalF e = patch_eval_f32(net, u, v);
+        const float p1 = dot(n1, e.q), p2 = dot(n2, e.q);
+        const float r1 = p1 + d1, r2 = p2 + d2;
+        r.u = u;
+        r.v = v;
+        r.iterations = it;
+        if (!(r1 == r1 && r2 == r2)) {
+            r.status = NewtonStatus::diverged;
             return r;
         }
-        if (fabs(u - known_u) < known_radius && fabs(v - known_v) < known_radius) {
-            r.u = u;
-            r.v = v;
-            r.iterations = it + 1;
-            r.status = NewtonStatus::known_root;
+        // rounding of Q's Bernstein sums and of the dot products: relative to |Q|, not to n . Q
+        const float q1 = fabsf(e.q.x) + fabsf(e.q.y) + fabsf(e.q.z);
+        const float floor1 = 16.0f * k_eps * (q1 + fabsf(d1)), floor2 = 16.0f * k_eps * (q1 + fabsf(d2));
+        if (fabsf(r1) <= (tol > floor1 ? tol : floor1) && fabsf(r2) <= (tol > floor2 ? tol : floor2)) {
+            r.status = NewtonStatus::converged;
             return r;
         }
+        if (it >= params.max_iterations) {
+            r.status = NewtonStatus::no_convergence;
+            return r;
+        }
+        if (track.diverging(fabsf(r1) > fabsf(r2) ? fabsf(r1) : fabsf(r2), it, params)) {
+            r.status = NewtonStatus::diverged;
+            return r;
+        }
+        const float j11 = dot(n1, e.qu), j12 = dot(n1, e.qv);
+        const float j21 = dot(n2, e.qu), j22 = dot(n2, e.qv);
+        const float det = j11 * j22 - j12 * j21;
+        if (!(fabsf(det) > 1e-6f * (fabsf(j11 * j22) + fabsf(j12 * j21)))) {
+            r.status = NewtonStatus::singular;
+            return r;
+        }
+        const float inv = 1.0f / det;
+        u -= (j22 * r1 - j12 * r2) * inv;
+        v -= (j11 * r2 - j21 * r1) * inv;
+        if (newton_stops_at(u, v, it, params, known_u, known_v, known_radius, r)) return r;
     }
 }
 
@@ -511,6 +588,7 @@ PRT_HD PRT_NOINLINE inline ApexRoots patch_leaf_apex(const pool::PatchControlNet
 /// a collapsed edge and that fails, the apex solve once per edge); on a valid root nearer than
 /// q.best_t updates q.best_t and `hit` (as accept_root: finish_patch_hit completes it) and returns
 /// true.
+template <PatchPrecision P = PatchPrecision::f64>
 PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch, std::uint32_t k,
                                      PatchQuery& q, const PatchTraceParams& params, PatchHit& hit,
                                      PatchStats* stats, PatchScratch* scratch = nullptr) {
@@ -518,9 +596,13 @@ PRT_HD inline bool patch_leaf_newton(const PatchView& view, std::uint32_t patch,
     // seed 002, 5.3.2: the initial value is the centre of the leaf subpatch. Runs heading for the
     // root already accepted on this patch stop early (PatchTraceParams::duplicate_radius).
     const bool known = q.best_patch == patch;
-    const NewtonResult nr =
-        patch_newton(view.nets[patch], q.planes, 0.5 * (d.u0 + d.u1), 0.5 * (d.v0 + d.v1), params, q.tolerance,
-                     q.best_u, q.best_v, known ? params.duplicate_radius : 0.0);
+    const double u0 = 0.5 * (d.u0 + d.u1), v0 = 0.5 * (d.v0 + d.v1);
+    const double known_radius = known ? params.duplicate_radius : 0.0;
+    NewtonResult nr;
+    if constexpr (P == PatchPrecision::f32)
+        nr = patch_newton_f32(view.nets[patch], q.planes, u0, v0, params, q.tolerance, q.best_u, q.best_v, known_radius);
+    else
+        nr = patch_newton(view.nets[patch], q.planes, u0, v0, params, q.tolerance, q.best_u, q.best_v, known_radius);
     if (stats) {
         ++stats->newton_runs;
         stats->newton_iterations += nr.iterations;
@@ -632,6 +714,7 @@ inline constexpr std::uint32_t k_patch_stack = k_patch_bvh_stack + pool::k_max_s
 /// Newton together instead of one by one between other threads' box tests. The order in which one
 /// ray visits boxes and leaves is exactly the nested traversal's (intersect_patch_tree per patch),
 /// so the hits are the same.
+template <PatchPrecision P = PatchPrecision::f64>
 PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const PatchTraceParams& params,
                                      PatchHit& hit, PatchStats* stats, const PatchCullMask* cull) {
     if (view.bvh_node_count == 0) return false;
@@ -722,7 +805,7 @@ PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const
             if (h[near_j] && sp < k_patch_stack) stack[sp++] = Entry{c[near_j], tc[near_j]};
         }
         if (leaf == k_no_leaf) break;
-        if (patch_leaf_newton(view, patch, leaf, q, params, hit, stats, &scratch)) {
+        if (patch_leaf_newton<P>(view, patch, leaf, q, params, hit, stats, &scratch)) {
             found = true;
             if (q.any) return true;
         }
@@ -733,21 +816,23 @@ PRT_HD inline bool trace_patch_query(const PatchView& view, PatchQuery& q, const
 
 /// The nearest hit of `ray` with the patches (t in (0, ray.t_max)). `cull` (optional) holds the
 /// back-face bits built for this ray's origin; it is ignored for inside rays.
+template <PatchPrecision P = PatchPrecision::f64>
 PRT_HD inline bool trace_patches(const PatchView& view, const PatchRay& ray, const PatchTraceParams& params,
                                  PatchHit& hit, PatchStats* stats = nullptr,
                                  const PatchCullMask* cull = nullptr) {
     PatchQuery q;
     if (!make_patch_query(view, ray, params, false, q)) return false;
-    return trace_patch_query(view, q, params, hit, stats, cull);
+    return trace_patch_query<P>(view, q, params, hit, stats, cull);
 }
 
 /// Whether any patch meets `ray` at t in (0, ray.t_max) (shadow rays: stops at the first hit, 5.4).
+template <PatchPrecision P = PatchPrecision::f64>
 PRT_HD inline bool patches_occluded(const PatchView& view, const PatchRay& ray,
                                     const PatchTraceParams& params, PatchStats* stats = nullptr) {
     PatchQuery q;
     if (!make_patch_query(view, ray, params, true, q)) return false;
     PatchHit hit;
-    return trace_patch_query(view, q, params, hit, stats, nullptr);
+    return trace_patch_query<P>(view, q, params, hit, stats, nullptr);
 }
 
 /// seed 002, 5.3.1 (traverse kernel): the stackless depth-first walk with skip pointers, writing
