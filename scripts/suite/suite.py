@@ -327,7 +327,7 @@ def settings_for(args):
         "patch_tolerances": [1e-12] if quick else [1e-6, 1e-12],
         "patch_precisions": ["double", "float"],
         "res": 128 if quick else 256,
-        "repeat": 5 if quick else 3,
+        "repeat": 15 if quick else 3,
         "bench": {"backend": "cuda" if args.gpu else "cpu", "res": 1024 if args.gpu else (128 if quick else 256),
                   "frames": 20 if args.gpu else 3, "warmup": 3 if args.gpu else 1},
     }
