@@ -134,10 +134,10 @@ class Suite:
         """The pools of a real scan: imported here, or taken from --scan-pools (LABEL.pool)."""
         d = os.path.join(self.out, "models", label)
         os.makedirs(d, exist_ok=True)
-        imp = os.path.join(d, "import.pool")
-        if self.args.scan_pools:
-            shutil.copy(os.path.join(self.args.scan_pools, label + ".pool"), imp)
+        if self.args.scan_pools:  # read in place: the tools only read their input
+            imp = os.path.join(self.args.scan_pools, label + ".pool")
         else:
+            imp = os.path.join(d, "import.pool")
             self.timed(label, "import", [self.tool("prt-import"), path, "-o", imp] + import_args)
         radii = os.path.join(d, "radii.pool")
         self.timed(label, "radii", [self.tool("prt-radii"), imp, "-o", radii])
@@ -395,7 +395,6 @@ def main():
     # with what was measured, and the run is listed as a failure.
     signal.signal(signal.SIGTERM, interrupted)
     try:
-        models = []
         for n in s.settings["sizes"]:
             for shape in s.settings["shapes"]:
                 s.say("model %s %d" % (shape, n))
