@@ -36,6 +36,9 @@ std::uint32_t expected_element_size(SectionType t) {
         case SectionType::colors: return sizeof(Rgba8);
         case SectionType::radii: return sizeof(float);
         case SectionType::material_ids: return sizeof(std::uint32_t);
+        case SectionType::intensities: return sizeof(float);
+        case SectionType::sensors: return sizeof(Sensor);
+        case SectionType::scan_ids: return sizeof(std::uint16_t);
         case SectionType::octree_info: return sizeof(OctreeInfo);
         case SectionType::octree_nodes: return sizeof(std::uint32_t);
         case SectionType::leaf_info: return sizeof(std::uint32_t);
@@ -47,7 +50,8 @@ std::uint32_t expected_element_size(SectionType t) {
 
 bool is_per_point(SectionType t) {
     return t == SectionType::positions || t == SectionType::normals || t == SectionType::colors ||
-           t == SectionType::radii || t == SectionType::material_ids;
+           t == SectionType::radii || t == SectionType::material_ids || t == SectionType::intensities ||
+           t == SectionType::scan_ids;
 }
 
 }  // namespace
@@ -234,6 +238,31 @@ void PoolFile::validate() {
                          std::to_string(info.point_count) + " points");
 
     // -- cross-references ---------------------------------------------------------------------
+    if (const SectionEntry* se = find(SectionType::sensors)) {
+        if (se->count == 0 || se->count > k_max_sensors)
+            fail(se, std::to_string(se->count) + " sensors, expected 1 to " + std::to_string(k_max_sensors));
+        const auto sensors = array<Sensor>(SectionType::sensors);
+        for (std::size_t i = 0; i < sensors.size(); ++i) {
+            const Sensor& s = sensors[i];
+            const double* p = s.position;
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+                fail(se, "sensor " + std::to_string(i) + ": position not finite");
+            if (s.kind != k_sensor_point && s.kind != k_sensor_direction)
+                fail(se, "sensor " + std::to_string(i) + ": unknown kind " + std::to_string(s.kind));
+            const double len = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            if (s.kind == k_sensor_direction && !(std::abs(len - 1.0) <= 1e-6))
+                fail(se, "sensor " + std::to_string(i) + ": direction not of unit length");
+        }
+    }
+    if (const SectionEntry* ids = find(SectionType::scan_ids)) {
+        const SectionEntry* se = find(SectionType::sensors);
+        if (!se) fail(ids, "scan_ids without a sensors section");
+        const auto v = array<std::uint16_t>(SectionType::scan_ids);
+        for (std::size_t i = 0; i < v.size(); ++i)
+            if (v[i] >= se->count)
+                fail(ids, "point " + std::to_string(i) + ": scan " + std::to_string(v[i]) + " but " +
+                              std::to_string(se->count) + " sensors");
+    }
     const SectionEntry* oi = find(SectionType::octree_info);
     const SectionEntry* on = find(SectionType::octree_nodes);
     const SectionEntry* li = find(SectionType::leaf_info);

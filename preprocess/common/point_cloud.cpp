@@ -87,12 +87,16 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
         if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
         if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
         if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
+        if (cloud.has_intensities()) cloud.intensities[out] = cloud.intensities[i];
+        if (cloud.has_scan_ids()) cloud.scan_ids[out] = cloud.scan_ids[i];
         ++out;
     }
     cloud.positions.resize(out);
     if (cloud.has_normals()) cloud.normals.resize(out);
     if (cloud.has_colors()) cloud.colors.resize(out);
     if (cloud.has_radii()) cloud.radii.resize(out);
+    if (cloud.has_intensities()) cloud.intensities.resize(out);
+    if (cloud.has_scan_ids()) cloud.scan_ids.resize(out);
     report.kept = out;
     return report;
 }
@@ -141,6 +145,12 @@ void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
     else writer.remove(pool::SectionType::colors);
     if (cloud.has_radii()) writer.add_array(pool::SectionType::radii, cloud.radii);
     else writer.remove(pool::SectionType::radii);
+    if (cloud.has_intensities()) writer.add_array(pool::SectionType::intensities, cloud.intensities);
+    else writer.remove(pool::SectionType::intensities);
+    if (!cloud.sensors.empty()) writer.add_array(pool::SectionType::sensors, cloud.sensors);
+    else writer.remove(pool::SectionType::sensors);
+    if (cloud.has_scan_ids()) writer.add_array(pool::SectionType::scan_ids, cloud.scan_ids);
+    else writer.remove(pool::SectionType::scan_ids);
 }
 
 PointCloud read_point_sections(const pool::PoolFile& pool) {
@@ -156,6 +166,12 @@ PointCloud read_point_sections(const pool::PoolFile& pool) {
     cloud.colors.assign(col.begin(), col.end());
     const auto rad = pool.array<float>(pool::SectionType::radii);
     cloud.radii.assign(rad.begin(), rad.end());
+    const auto inten = pool.array<float>(pool::SectionType::intensities);
+    cloud.intensities.assign(inten.begin(), inten.end());
+    const auto ids = pool.array<std::uint16_t>(pool::SectionType::scan_ids);
+    cloud.scan_ids.assign(ids.begin(), ids.end());
+    const auto sensors = pool.array<pool::Sensor>(pool::SectionType::sensors);
+    cloud.sensors.assign(sensors.begin(), sensors.end());
     cloud.flags = info.flags;
     return cloud;
 }

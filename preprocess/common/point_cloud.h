@@ -18,12 +18,17 @@ struct PointCloud {
     std::vector<pool::Float3> normals;             ///< unit, or empty
     std::vector<pool::Rgba8> colors;               ///< or empty
     std::vector<float> radii;                      ///< splat radii, world units, or empty
+    std::vector<float> intensities;                ///< scanner return intensity as read, or empty
+    std::vector<std::uint16_t> scan_ids;           ///< index into sensors per point, or empty
+    std::vector<pool::Sensor> sensors;             ///< the scans' sensors (world frame), or empty
     std::uint32_t flags = 0;                       ///< pool::ModelFlags
 
     std::size_t size() const { return positions.size(); }
     bool has_normals() const { return !normals.empty(); }
     bool has_colors() const { return !colors.empty(); }
     bool has_radii() const { return !radii.empty(); }
+    bool has_intensities() const { return !intensities.empty(); }
+    bool has_scan_ids() const { return !scan_ids.empty(); }
 };
 
 /// Counts of points dropped or repaired while cleaning input: never silent (issue: bad input).
@@ -43,8 +48,8 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates = true);
 /// Axis-aligned bounds of the positions (world frame); {+inf, -inf} when empty.
 std::array<std::array<double, 3>, 2> bounds(const PointCloud& cloud);
 
-/// Adds model_info, positions and whichever of normals/colors/radii the cloud has to `writer`
-/// (replacing any present). The local origin is the bounding-box centre. Throws on an empty cloud.
+/// Adds model_info, positions and whichever of normals/colors/radii/intensities/scan_ids/sensors the
+/// cloud has to `writer` (replacing any present, removing the absent ones). The local origin is the bounding-box centre. Throws on an empty cloud.
 void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer);
 
 /// Reads the point sections of a pool back to world-frame doubles.

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -266,6 +267,48 @@ TEST(PoolValidation, OctreeCrossReferences) {
     auto type3 = root_with_leaves();
     type3[2] = 3u << 30;
     expect_error(make_octree_pool(type3, {0, 2}, {s, s}), "invalid node type");
+}
+
+namespace {
+std::vector<std::byte> make_scan_pool(std::vector<Sensor> sensors, std::vector<std::uint16_t> ids) {
+    auto cloud = make_cloud(4);
+    cloud.sensors = std::move(sensors);
+    cloud.scan_ids = std::move(ids);
+    cloud.intensities = {0.5f, 1.f, 2.f, 3.f};
+    PoolWriter w;
+    prt::pre::write_point_sections(cloud, w);
+    return w.serialize();
+}
+}  // namespace
+
+TEST(PoolValidation, SensorsAndScanIds) {
+    const Sensor at{{1, 2, 3}, k_sensor_point, 0}, far{{0, 0, 1}, k_sensor_direction, 0};
+    EXPECT_EQ(open_error(make_scan_pool({at, far}, {0, 1, 1, 0})), "");
+    {  // the point sections come back, intensities and sensors included
+        const PoolFile p = PoolFile::from_bytes(make_scan_pool({at, far}, {0, 1, 1, 0}), "ok.pool");
+        const auto back = prt::pre::read_point_sections(p);
+        ASSERT_EQ(back.sensors.size(), 2u);
+        EXPECT_EQ(back.sensors[1].kind, k_sensor_direction);
+        EXPECT_EQ(back.scan_ids, (std::vector<std::uint16_t>{0, 1, 1, 0}));
+        EXPECT_EQ(back.intensities, (std::vector<float>{0.5f, 1.f, 2.f, 3.f}));
+    }
+    expect_error(make_scan_pool({at}, {0, 1, 0, 0}), "section scan_ids: point 1: scan 1 but 1 sensors");
+    expect_error(make_scan_pool({}, {0, 0, 0, 0}), "section scan_ids: scan_ids without a sensors section");
+    Sensor bad_kind = at;
+    bad_kind.kind = 7;
+    expect_error(make_scan_pool({bad_kind}, {}), "section sensors: sensor 0: unknown kind 7");
+    Sensor not_unit = far;
+    not_unit.position[2] = 2;
+    expect_error(make_scan_pool({at, not_unit}, {}), "section sensors: sensor 1: direction not of unit length");
+    Sensor nan = at;
+    nan.position[0] = std::nan("");
+    expect_error(make_scan_pool({nan}, {}), "section sensors: sensor 0: position not finite");
+    auto short_ids = make_scan_pool({at}, {0, 0, 0, 0});
+    SectionEntry& e = entry_of(short_ids, SectionType::scan_ids);
+    e.count = 3;
+    e.size = 6;
+    reseal(short_ids);
+    expect_error(short_ids, "section scan_ids: 3 elements but model_info says 4");
 }
 
 TEST(PoolValidation, MissingRequiredSectionNamesIt) {

@@ -44,6 +44,9 @@ enum class SectionType : std::uint32_t {
     colors = 5,        ///< Rgba8 per point
     radii = 6,         ///< float per point: splat radius (prt-radii, thesis 3.1)
     material_ids = 7,  ///< uint32 per point: index into the scene's material list
+    intensities = 8,   ///< float per point: the scanner's return intensity, as read (PLY/PCD intensity)
+    sensors = 9,       ///< Sensor per scan: where its scanner stood (or the direction to it), world frame
+    scan_ids = 10,     ///< uint16 per point: index into sensors of the scan that measured the point
     octree_info = 16,  ///< one OctreeInfo (prt-octree, thesis 2.2 / 3.2)
     octree_nodes = 17, ///< uint32 per node: 2-bit type + 30-bit address (OctreeNode helpers)
     leaf_info = 18,    ///< uint32 per filled leaf + 1: begin index into splats (thesis 3.2)
@@ -83,6 +86,9 @@ inline constexpr std::uint32_t section_version(SectionType type) {
         case SectionType::colors: return 1;
         case SectionType::radii: return 1;
         case SectionType::material_ids: return 1;
+        case SectionType::intensities: return 1;
+        case SectionType::sensors: return 1;
+        case SectionType::scan_ids: return 1;
         case SectionType::octree_info: return 1;
         case SectionType::octree_nodes: return 1;
         case SectionType::leaf_info: return 1;
@@ -120,6 +126,9 @@ inline constexpr const char* section_name(SectionType type) {
         case SectionType::colors: return "colors";
         case SectionType::radii: return "radii";
         case SectionType::material_ids: return "material_ids";
+        case SectionType::intensities: return "intensities";
+        case SectionType::sensors: return "sensors";
+        case SectionType::scan_ids: return "scan_ids";
         case SectionType::octree_info: return "octree_info";
         case SectionType::octree_nodes: return "octree_nodes";
         case SectionType::leaf_info: return "leaf_info";
@@ -201,6 +210,25 @@ struct ModelInfo {
 };
 static_assert(sizeof(ModelInfo) == 64);
 static_assert(offsetof(ModelInfo, point_count) == 48);
+
+/// One scan's sensor (section sensors; real scans, issue 15). Normals estimated at import are
+/// oriented toward the sensor of the scan each point came from (section scan_ids; a pool with one
+/// sensor and no scan_ids: every point's). World frame, double, like ModelInfo::origin.
+struct Sensor {
+    double position[3];      ///< 0: k_sensor_point: the scanner's position; k_sensor_direction: the
+                             ///<    unit direction from the scene toward a sensor at infinity
+    std::uint32_t kind;      ///< 24: SensorKind
+    std::uint32_t reserved;  ///< 28: 0
+};
+static_assert(sizeof(Sensor) == 32);
+static_assert(offsetof(Sensor, kind) == 24);
+
+enum SensorKind : std::uint32_t {
+    k_sensor_point = 0,      ///< a scanner position (PCD VIEWPOINT, a PLY camera, a pose's origin)
+    k_sensor_direction = 1,  ///< a far sensor: rays arrive from this direction (bun.conf's +z)
+};
+/// scan_ids are 16-bit: a pool holds at most this many sensors.
+inline constexpr std::uint32_t k_max_sensors = 65536;
 
 /// ModelInfo::flags bits.
 enum ModelFlags : std::uint32_t {
