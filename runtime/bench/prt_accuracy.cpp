@@ -54,6 +54,7 @@
 #include "prt/runtime/image.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
+#include "surface_probe.h"
 
 namespace {
 
@@ -67,22 +68,14 @@ struct Options {
     std::uint32_t width = 256, height = 256, threads = 0, repeat = 3;
     float fov = 40.0f;
     std::vector<double> view{0.55, 0.45, 0.7};
-    // splats
-    bool deep = false;
-    std::uint32_t leaf_culling = 2;
-    float blend_window = 1.0f;
-    // iso
-    std::string iso_storage = "q8";
-    std::uint32_t iso_refine = 2;
-    float iso_samples = 4.0f;
-    // mls
-    std::uint32_t mls_k = 4, mls_refine = 1;
-    std::string mls_precision = "float";
-    // patches
-    std::uint32_t patch_iterations = 16;
-    double patch_tolerance = 1e-12;
-    std::string patch_precision = "double";
-    std::uint32_t reference_grid = 64;
+    bench::SurfaceSettings s = both_faces();
+    std::uint32_t reference_grid = 64;  // patches
+    /// prt-accuracy measures the MLS surface with both faces (its figures since issue 9).
+    static bench::SurfaceSettings both_faces() {
+        bench::SurfaceSettings s;
+        s.mls_both_faces = true;
+        return s;
+    }
 };
 
 /// What one primary ray found.
@@ -438,14 +431,6 @@ void set_hit(PixelResult& r, const View& view, const core::Ray& ray, double t, V
     r.normal = normal;
 }
 
-/// Payload bytes of the sections of `types` the pool holds.
-std::uint64_t section_bytes(const pool::PoolFile& p, std::initializer_list<pool::SectionType> types) {
-    std::uint64_t n = 0;
-    for (pool::SectionType t : types)
-        if (const pool::SectionEntry* e = p.find(t)) n += e->size;
-    return n;
-}
-
 struct Measured {
     std::vector<PixelResult> px;
     std::vector<double> seconds;
@@ -453,113 +438,30 @@ struct Measured {
     std::uint64_t bytes = 0;  ///< bytes of the sections this surface reads
 };
 
-template <class Trace>
-void measure(const Options& o, const View& view, Measured& m, Trace&& trace) {
+/// The surface's image (warm-up) and --repeat timed runs, through the core's per-ray functions.
+void run_surface(const Options& o, const View& view, Measured& m, std::shared_ptr<const pool::PoolFile> shared) {
+    const bench::SurfaceProbe probe(std::move(shared), o.surface, o.s);
+    m.bytes = probe.bytes();
+    m.settings = probe.settings();
     const unsigned threads = pre::resolve_threads(o.threads);
+    auto trace = [&](const core::Ray& r, PixelResult& out) {
+        bench::ProbeHit h;
+        if (!probe.trace(r, h)) return;
+        if (h.has_position) {  // patches: the hit evaluated in double at the root
+            out.hit = true;
+            out.t = h.t;
+            out.position = add(view.origin, h.position);
+            out.normal = h.normal;
+        } else {
+            set_hit(out, view, r, h.t, h.normal);
+        }
+    };
     trace_image(view, threads, m.px, trace);  // warm-up (and the image)
     for (std::uint32_t r = 0; r < o.repeat; ++r) {
         std::vector<PixelResult> tmp;
         m.seconds.push_back(trace_image(view, threads, tmp, trace));
     }
-}
-
-void run_surface(const Options& o, const pool::PoolFile& p, const View& view, Measured& m,
-                 std::shared_ptr<const pool::PoolFile> shared) {
-    std::atomic<std::uint64_t> work{0}, truncated{0};
-    auto per_ray = [&](const std::atomic<std::uint64_t>& w) {  // all traced rays: warm-up + timed runs
-        return double(w.load()) / double(m.px.size() * (o.repeat + 1));
-    };
-    if (o.surface == "splats") {
-        // RenderScene derives the leaf bounds the renderer culls with (runtime/host).
-        scene::Scene sc;
-        const rt::RenderScene rs = rt::RenderScene::from_pools(sc, {shared});
-        const core::ModelView& mv = rs.models().at(0).view;
-        m.bytes = rs.bytes();
-        const core::BlendOptions blend{o.blend_window, o.deep};
-        m.settings = {
-            {"deep_blending", o.deep}, {"leaf_culling", o.leaf_culling}, {"blend_window", o.blend_window}};
-        measure(o, view, m, [&](const core::Ray& r, PixelResult& out) {
-            core::SplatSample s{};
-            core::WalkStats ws;
-            if (core::closest_hit_splats(mv.octree, mv.colors, r.origin, r.dir, false, core::k_inf, blend,
-                                         1u << 16, s, ws, o.leaf_culling))
-                set_hit(out, view, r, s.t, s.normal);
-            work += ws.splat_tests;
-            truncated += ws.truncated;
-        });
-        m.work = {{"splat_tests_per_ray", per_ray(work)}};
-    } else if (o.surface == "iso") {
-        const core::IsoView v = iso::load_iso_view(p, o.iso_storage == "q8");
-        if ((o.iso_storage == "q8") != (v.use_q8 && v.leaves_q8 != nullptr))
-            throw Error(o.pool + ": the pool has no " + o.iso_storage + " ISO leaves (prt-iso --storage)");
-        m.bytes = section_bytes(p, {pool::SectionType::iso_info, pool::SectionType::iso_nodes,
-                                    o.iso_storage == "q8" ? pool::SectionType::iso_leaves_q8
-                                                          : pool::SectionType::iso_leaves_f32});
-        core::IsoParams ip;
-        ip.refine_steps = o.iso_refine;
-        ip.samples = o.iso_samples;
-        m.settings = {{"storage", o.iso_storage}, {"refine", o.iso_refine}, {"samples", o.iso_samples}};
-        measure(o, view, m, [&](const core::Ray& r, PixelResult& out) {
-            core::IsoHit h;
-            core::IsoStats st;
-            if (core::trace_iso(v, r.origin, r.dir, core::k_inf, false, ip, h, st))
-                set_hit(out, view, r, h.t, h.normal);
-            work += st.evaluations;
-            truncated += st.truncated;
-        });
-        m.work = {{"evaluations_per_ray", per_ray(work)}};
-    } else if (o.surface == "mls") {
-        const core::MlsView v = mls::load_mls_view(p);
-        m.bytes = section_bytes(p, {pool::SectionType::mls_info, pool::SectionType::mls_nodes,
-                                    pool::SectionType::mls_refs, pool::SectionType::mls_splats});
-        core::MlsParams mp;
-        mp.samples = o.mls_k;
-        mp.refine_steps = o.mls_refine;
-        m.settings = {{"k", o.mls_k}, {"refine", o.mls_refine}, {"precision", o.mls_precision}};
-        auto body = [&](auto real) {
-            using Real = decltype(real);
-            measure(o, view, m, [&](const core::Ray& r, PixelResult& out) {
-                core::MlsHit h;
-                core::MlsStats st;
-                if (core::trace_mls<Real>(v, r.origin, r.dir, core::k_inf, false, mp, h, st))
-                    set_hit(out, view, r, h.t, h.normal);
-                work += st.evaluations;
-                truncated += st.truncated;
-            });
-        };
-        if (o.mls_precision == "double")
-            body(0.0);
-        else
-            body(0.0f);
-        m.work = {{"evaluations_per_ray", per_ray(work)}};
-    } else {
-        const core::PatchView v = patches::load_patch_view(p);
-        m.bytes = section_bytes(p, {pool::SectionType::patch_info, pool::SectionType::patch_control_points,
-                                    pool::SectionType::patch_bvh, pool::SectionType::patch_subpatch_boxes});
-        core::PatchTraceParams pp;
-        pp.max_iterations = o.patch_iterations;
-        pp.tolerance = o.patch_tolerance;
-        m.settings = {{"subpatch_depth", v.subpatch_depth},
-                      {"max_iterations", o.patch_iterations},
-                      {"tolerance", o.patch_tolerance},
-                      {"precision", o.patch_precision}};
-        const bool f32 = o.patch_precision == "float";
-        measure(o, view, m, [&](const core::Ray& r, PixelResult& out) {
-            core::PatchHit h;
-            core::PatchStats st;
-            const core::PatchRay ray = core::make_patch_ray(r.origin, r.dir, core::k_inf, false);
-            if (f32 ? core::trace_patches<core::PatchPrecision::f32>(v, ray, pp, h, &st)
-                    : core::trace_patches(v, ray, pp, h, &st)) {
-                out.hit = true;
-                out.t = h.t;
-                out.position = add(view.origin, D3{h.position.x, h.position.y, h.position.z});
-                out.normal = core::to_vec3(h.normal);
-            }
-            work += st.newton_iterations;
-        });
-        m.work = {{"newton_iterations_per_ray", per_ray(work)}};
-    }
-    m.work["truncated_walks"] = truncated.load();
+    m.work = probe.work();
 }
 
 void accuracy(const Options& o, const tool::CommonOptions& common) {
@@ -625,7 +527,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     tool::note(common.quiet, "prt-accuracy: %s, %ux%u rays, 1 warm-up + %u timed runs\n", o.surface.c_str(),
                o.width, o.height, o.repeat);
     Measured m;
-    run_surface(o, p, view, m, shared);
+    run_surface(o, view, m, shared);
 
     // Figures.
     std::vector<double> hit_err, depth_err, normal_deg;
@@ -797,38 +699,7 @@ int main(int argc, char** argv) {
             app.add_option(
                 "--image", o.image,
                 "Write the shaded image (.ppm/.pfm always; .png/.exr with OpenImageIO) (default: none)");
-            app.add_flag("--deep-blending", o.deep,
-                         "splats: blend across leaf borders, thesis 3.5 (default: off)");
-            app.add_option("--leaf-culling", o.leaf_culling,
-                           "splats: 0 none, 1 cones, 2 cones + slabs")
-                ->check(CLI::Range(0u, 2u));
-            app.add_option("--blend-window", o.blend_window, "splats: blending window in radii")
-                ->check(CLI::Range(0.0f, 100.0f));
-            app.add_option("--iso-storage", o.iso_storage, "iso: q8 or f32 leaves")
-                ->check(CLI::IsMember({"q8", "f32"}));
-            app.add_option("--iso-refine", o.iso_refine,
-                           "iso: Illinois refinement steps, 0 = off")
-                ->check(CLI::Range(0u, 32u));
-            app.add_option("--iso-samples", o.iso_samples, "iso: sample intervals per leaf edge")
-                ->check(CLI::Range(1.0f, 64.0f));
-            app.add_option("--mls-k", o.mls_k, "mls: samples per cell interval, WS05 3.2.2's k")
-                ->check(CLI::Range(2u, 256u));
-            app.add_option("--mls-refine", o.mls_refine, "mls: Illinois refinement steps")
-                ->check(CLI::Range(0u, 32u));
-            app.add_option("--mls-precision", o.mls_precision,
-                           "mls: float or double accumulation")
-                ->check(CLI::IsMember({"float", "double"}));
-            app.add_option("--patch-iterations", o.patch_iterations,
-                           "patches: Newton iteration cap")
-                ->check(CLI::Range(1u, 256u));
-            app.add_option(
-                   "--patch-tolerance", o.patch_tolerance,
-                   "patches: Newton residual tolerance, relative to the model extent")
-                ->check(CLI::Range(1e-16, 1e-1));
-            app.add_option("--patch-precision", o.patch_precision,
-                           "patches: Newton in double (the renderer's, seed 002) or float; the hit is "
-                           "evaluated in double at the root either way")
-                ->check(CLI::IsMember({"double", "float"}));
+            bench::add_surface_options(app, o.s);
             app.add_option("--reference-grid", o.reference_grid,
                            "patches: reference tessellation, grid cells per patch edge")
                 ->check(CLI::Range(8u, 1024u));

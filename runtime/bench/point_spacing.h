@@ -1,0 +1,53 @@
+// PointRT fidelity measurement (issue 15): where a scan has data and how dense it is there.
+//
+// An exact k-d tree over the input points (double, world frame), written here so that the
+// measure does not depend on the k-NN code the pipeline uses (prt-radii, prt-iso).
+//
+// Local spacing. On a surface sampled with density rho (points per unit area), the distance to the
+// k-th nearest neighbour is about r_k = sqrt(k / (pi rho)); the spacing of a square grid of that
+// density is 1 / sqrt(rho) = r_k sqrt(pi / k). The local spacing of point i is that estimate with
+// k = 8 (k_spacing_neighbours): s_i = r_8(i) sqrt(pi / 8). It is the unit of every distance the
+// fidelity tool reports, so a figure means the same on a 1 mm and on a 1 km scan.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace prt::bench {
+
+using P3 = std::array<double, 3>;
+
+/// Neighbours used for the local spacing estimate.
+inline constexpr std::uint32_t k_spacing_neighbours = 8;
+
+class PointIndex {
+public:
+    /// Builds the tree over `points` (copied). Throws prt::Error when fewer than 2 points.
+    explicit PointIndex(std::vector<P3> points);
+
+    std::size_t size() const { return m_points.size(); }
+    const P3& point(std::uint32_t i) const { return m_points[i]; }
+
+    /// The nearest point to q: its index and distance.
+    std::uint32_t nearest(const P3& q, double& distance) const;
+    /// Distances to the k nearest points of q (ascending; fewer when the tree holds fewer),
+    /// excluding index `skip` (use ~0u for none).
+    void knn(const P3& q, std::uint32_t k, std::uint32_t skip, std::vector<double>& out) const;
+
+    /// The local spacing s_i of every point (see the header), computed on `threads` threads.
+    std::vector<double> local_spacing(unsigned threads) const;
+
+private:
+    struct Node {
+        double lo[3], hi[3];       // box of the node's points
+        std::uint32_t begin, end;  // range in m_order
+        std::uint32_t left = 0;    // first child (the second follows it); 0 for a leaf
+    };
+
+    std::vector<P3> m_points;
+    std::vector<std::uint32_t> m_order;
+    std::vector<Node> m_nodes;
+};
+
+}  // namespace prt::bench

@@ -1,0 +1,570 @@
+// prt-fidelity (issue 15): how faithfully each surface of a pool reproduces a real reference, seen
+// from several views, as a viewer would see it.
+//
+// The reference is a triangle mesh (the Stanford bunny's zippered reconstruction for its range
+// scans; the mesh a sampled model came from) ray cast by independent code (mesh_reference.h: a
+// plain BVH in double), or, for a prt-synth pool, the analytic shape of its provenance. The
+// surfaces are traced through the core's own per-ray functions (surface_probe.h). Every distance is
+// in units of the local point spacing s (point_spacing.h: sqrt(area per point) from the 8 nearest
+// input points), so the figures mean the same at every scale and density.
+//
+// Per pixel of each view (a pinhole camera on the bounding sphere of the reference, aimed at its
+// centre, directions spread over the sphere):
+//   covered    the reference's first hit h is a front face and lies within C spacings of an input
+//              point (C = --coverage, 2): the scan has data there. A single range scan is judged
+//              only on the part it saw. Back-face hits (looking into an open mesh) are not covered.
+//   hole       a covered pixel where the surface is missed, or hit more than F spacings (along
+//              the reference normal) behind h: the ray went through (F = --tolerance, 2).
+//   false hit  the surface is hit at x more than F spacings from the reference surface (any pixel).
+//   good       the other covered pixels with a surface hit: depth error |t - t_ref| / s (along the
+//              ray), surface distance |t - t_ref| |cos| / s (along the reference normal), normal
+//              error (degrees between the traced normal and the reference's, oriented to the ray).
+// Rates are per covered pixel. Images (--images DIR) show each view's reference and each surface,
+// shaded, and a classification map: grey good, red holes, blue false hits, dark green covered by
+// nothing (no data), black background.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "mesh.h"
+#include "mesh_reference.h"
+#include "parallel.h"
+#include "point_cloud.h"
+#include "point_spacing.h"
+#include "prt/core/camera.h"
+#include "prt/formats/pool.h"
+#include "prt/runtime/image.h"
+#include "prt/tool.h"
+#include "surface_probe.h"
+
+namespace {
+
+using namespace prt;
+using bench::D3;
+
+struct Options {
+    std::string pool, reference, points, json, images;
+    std::vector<std::string> surfaces;
+    std::uint32_t views = 6, width = 1024, height = 1024, threads = 0;
+    float fov = 30.0f;
+    double coverage = 2.0, tolerance = 2.0;
+    bench::SurfaceSettings s;
+};
+
+D3 add(const D3& a, const D3& b) {
+    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
+}
+D3 sub(const D3& a, const D3& b) {
+    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+D3 mul(const D3& a, double s) {
+    return {a[0] * s, a[1] * s, a[2] * s};
+}
+double dot(const D3& a, const D3& b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+double norm(const D3& a) {
+    return std::sqrt(dot(a, a));
+}
+
+// ---- the reference ------------------------------------------------------------------------------
+
+/// The true surface: first hit along a ray (world frame, d unit) and distance from a point.
+class Reference {
+public:
+    virtual ~Reference() = default;
+    /// First hit: t, point, unit normal oriented as the surface is (outward), and whether the ray
+    /// meets its front.
+    virtual bool intersect(const D3& o, const D3& d, bench::MeshHit& hit) const = 0;
+    virtual double distance(const D3& p) const = 0;
+    virtual D3 lo() const = 0;
+    virtual D3 hi() const = 0;
+    virtual nlohmann::json describe() const = 0;
+};
+
+class MeshTruth final : public Reference {
+public:
+    explicit MeshTruth(const std::string& path) : m_path(path), m_mesh(load(path)) {}
+    bool intersect(const D3& o, const D3& d, bench::MeshHit& hit) const override {
+        return m_mesh.intersect(o, d, std::numeric_limits<double>::infinity(), hit);
+    }
+    double distance(const D3& p) const override { return m_mesh.distance(p); }
+    D3 lo() const override { return m_mesh.bounds_min(); }
+    D3 hi() const override { return m_mesh.bounds_max(); }
+    nlohmann::json describe() const override {
+        return {{"kind", "mesh"},
+                {"path", m_path},
+                {"triangles", m_mesh.triangle_count()},
+                {"orientation_flipped", m_mesh.flipped()}};
+    }
+
+private:
+    static bench::MeshReference load(const std::string& path) {
+        pre::import::precheck_mesh_file(path);
+        pre::import::Report report;
+        const pre::import::MeshData m = pre::import::read_mesh(path, report, true);
+        std::vector<std::array<std::uint32_t, 3>> tris;
+        for (std::size_t f = 0; f < m.face_count(); ++f) {  // polygons as triangle fans
+            const std::uint32_t b = m.face_begin[f], e = m.face_begin[f + 1];
+            for (std::uint32_t k = b + 1; k + 1 < e; ++k)
+                tris.push_back({m.face_indices[b], m.face_indices[k], m.face_indices[k + 1]});
+        }
+        try {
+            return bench::MeshReference(m.vertices, std::move(tris));
+        } catch (const Error& e) {
+            throw Error(path + ": " + e.what());
+        }
+    }
+    std::string m_path;
+    bench::MeshReference m_mesh;
+};
+
+// ---- views --------------------------------------------------------------------------------------
+
+struct View {
+    core::PinholeCamera camera;  ///< the pool's local frame
+    D3 origin{};                 ///< world position of the local frame's origin
+    D3 direction{};              ///< from the centre toward the eye
+    std::uint32_t width = 0, height = 0;
+};
+
+/// `count` directions spread over the sphere (a spherical Fibonacci set), turned so that none lies
+/// along a coordinate axis (axis-aligned views make planes of scans exactly grazing).
+std::vector<D3> view_directions(std::uint32_t count) {
+    std::vector<D3> dirs;
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (std::uint32_t i = 0; i < count; ++i) {
+        const double y = 1.0 - (2.0 * i + 1.0) / count;
+        const double r = std::sqrt(std::max(0.0, 1.0 - y * y));
+        const double phi = golden * i + 0.3;
+        dirs.push_back({r * std::cos(phi), y * 0.96 + 0.02, r * std::sin(phi)});
+        dirs.back() = mul(dirs.back(), 1.0 / norm(dirs.back()));
+    }
+    return dirs;
+}
+
+View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, const D3& dir) {
+    const D3 centre = mul(add(lo, hi), 0.5);
+    const double diag = norm(sub(hi, lo));
+    const double dist = 0.5 * diag / std::sin(0.5 * o.fov * M_PI / 180.0);
+    const D3 eye = add(centre, mul(dir, dist));
+    auto local = [&](const D3& a) {
+        return core::Vec3{float(a[0] - origin[0]), float(a[1] - origin[1]), float(a[2] - origin[2])};
+    };
+    View v;
+    v.origin = origin;
+    v.direction = dir;
+    v.width = o.width;
+    v.height = o.height;
+    const core::Vec3 up = std::abs(dir[1]) > 0.95 ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
+    v.camera = core::make_pinhole(local(eye), local(centre), up, o.fov, o.width, o.height);
+    return v;
+}
+
+// ---- per-pixel results --------------------------------------------------------------------------
+
+enum class RefClass : std::uint8_t { background, back_face, uncovered, covered };
+enum class PixClass : std::uint8_t { none, good, hole, false_hit };
+
+struct RefPixel {
+    RefClass cls = RefClass::background;
+    double t = 0;
+    D3 point{}, normal{};  ///< normal oriented toward the ray
+    double spacing = 0;    ///< local spacing at the hit (nearest input point's)
+};
+
+struct SurfPixel {
+    bool hit = false;
+    float t = 0;
+    core::Vec3 normal{0, 0, 1};
+};
+
+/// Mean, median, p90 and max of a sample.
+nlohmann::json summary(std::vector<float> v) {
+    if (v.empty()) return nullptr;
+    std::sort(v.begin(), v.end());
+    double sum = 0;
+    for (float x : v) sum += x;
+    auto q = [&](double f) { return double(v[std::min(v.size() - 1, std::size_t(f * double(v.size())))]); };
+    return {{"mean", sum / double(v.size())},
+            {"median", q(0.5)},
+            {"p90", q(0.9)},
+            {"max", double(v.back())},
+            {"count", v.size()}};
+}
+
+struct Tally {
+    std::uint64_t covered = 0, holes = 0, false_hits = 0, good = 0, hits = 0;
+    std::vector<float> depth, distance, normal_deg;
+    double seconds = 0;
+    std::uint64_t rays = 0;
+    void merge(const Tally& t) {
+        covered += t.covered, holes += t.holes, false_hits += t.false_hits, good += t.good, hits += t.hits;
+        depth.insert(depth.end(), t.depth.begin(), t.depth.end());
+        distance.insert(distance.end(), t.distance.begin(), t.distance.end());
+        normal_deg.insert(normal_deg.end(), t.normal_deg.begin(), t.normal_deg.end());
+        seconds += t.seconds, rays += t.rays;
+    }
+    nlohmann::json json(bool with_samples) const {
+        nlohmann::json j = {{"covered_pixels", covered},
+                            {"surface_hits", hits},
+                            {"holes", holes},
+                            {"false_hits", false_hits},
+                            {"good", good},
+                            {"hole_rate", covered ? double(holes) / double(covered) : 0.0},
+                            {"false_hit_rate", covered ? double(false_hits) / double(covered) : 0.0}};
+        if (with_samples) {
+            j["depth_error_spacings"] = summary(depth);
+            j["surface_distance_spacings"] = summary(distance);
+            j["normal_error_degrees"] = summary(normal_deg);
+            j["rays_per_s"] = seconds > 0 ? double(rays) / seconds : 0.0;
+        }
+        return j;
+    }
+};
+
+std::uint32_t pack(double r, double g, double b) {
+    auto c = [](double v) { return std::uint32_t(std::lround(std::clamp(v, 0.0, 1.0) * 255)); };
+    return c(r) | (c(g) << 8) | (c(b) << 16) | (0xffu << 24);
+}
+
+void write_rgba(const std::filesystem::path& path, std::uint32_t w, std::uint32_t h,
+                const std::vector<std::uint32_t>& px) {
+    rt::Image img;
+    img.resize(w, h);
+    img.rgba8 = px;
+    for (std::size_t i = 0; i < px.size(); ++i)
+        for (int k = 0; k < 3; ++k)
+            img.rgb[3 * i + k] = std::pow(float((px[i] >> (8 * k)) & 0xffu) / 255.f, 2.2f);
+    rt::write_image(path, img);
+}
+
+/// Headlight Lambert grey of a normal seen along d.
+double shade(const D3& n, const D3& d) {
+    return 0.12 + 0.85 * std::abs(dot(n, d));
+}
+
+// ---- the measurement ----------------------------------------------------------------------------
+
+void fidelity(Options o, const tool::CommonOptions& common) {
+    auto shared = std::make_shared<const pool::PoolFile>(pool::PoolFile::open(o.pool));
+    const pool::PoolFile& p = *shared;
+    const pool::ModelInfo& mi = p.model_info();
+    const D3 origin{mi.origin[0], mi.origin[1], mi.origin[2]};
+    const unsigned threads = pre::resolve_threads(o.threads);
+
+    // Surfaces: the ones asked for, or every one the pool holds.
+    if (o.surfaces.empty()) {
+        if (p.has(pool::SectionType::splats)) o.surfaces.push_back("splats");
+        if (p.has(pool::SectionType::iso_info)) o.surfaces.push_back("iso");
+        if (p.has(pool::SectionType::mls_info)) o.surfaces.push_back("mls");
+        if (o.surfaces.empty())
+            throw Error(o.pool + ": holds no surface (run prt-octree, prt-iso or prt-mls)");
+    }
+    std::vector<std::unique_ptr<bench::SurfaceProbe>> probes;
+    for (const std::string& s : o.surfaces)
+        probes.push_back(std::make_unique<bench::SurfaceProbe>(shared, s, o.s));
+
+    // The input points: where the scan has data, and its local spacing.
+    const double t_start = tool::now_seconds();
+    std::vector<D3> pts;
+    {
+        std::unique_ptr<pool::PoolFile> other;
+        if (!o.points.empty()) other = std::make_unique<pool::PoolFile>(pool::PoolFile::open(o.points));
+        const pre::PointCloud cloud = pre::read_point_sections(other ? *other : p);
+        pts = cloud.positions;
+    }
+    if (pts.size() < 16) throw Error((o.points.empty() ? o.pool : o.points) + ": fewer than 16 points");
+    const bench::PointIndex index(pts);
+    const std::vector<double> spacing = index.local_spacing(threads);
+    std::vector<double> sorted_spacing = spacing;
+    std::sort(sorted_spacing.begin(), sorted_spacing.end());
+
+    std::unique_ptr<Reference> truth = std::make_unique<MeshTruth>(o.reference);
+    tool::note(common.quiet, "prt-fidelity: %zu input points (median spacing %.4g), reference %s, %.2f s",
+               pts.size(), sorted_spacing[sorted_spacing.size() / 2], truth->describe().dump().c_str(),
+               tool::now_seconds() - t_start);
+
+    const std::vector<D3> dirs = view_directions(o.views);
+    std::vector<Tally> totals(probes.size());
+    nlohmann::json per_view = nlohmann::json::array();
+    std::uint64_t ref_covered = 0, ref_uncovered = 0, ref_back = 0, ref_pixels = 0;
+    const std::size_t npx = std::size_t(o.width) * o.height;
+    if (!o.images.empty()) std::filesystem::create_directories(o.images);
+    tool::Progress progress("prt-fidelity: views", o.views, common.quiet);
+
+    for (std::uint32_t vi = 0; vi < o.views; ++vi) {
+        const View view = make_view(o, origin, truth->lo(), truth->hi(), dirs[vi]);
+        auto world_ray = [&](std::uint32_t x, std::uint32_t y, D3& wo, D3& wd) {
+            const core::Ray r = core::primary_ray(view.camera, x, y, view.width, view.height);
+            wo = add(origin, D3{r.origin.x, r.origin.y, r.origin.z});
+            wd = D3{r.dir.x, r.dir.y, r.dir.z};
+            return r;
+        };
+        // Reference pass.
+        std::vector<RefPixel> ref(npx);
+        pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+            for (std::size_t y = y0; y < y1; ++y)
+                for (std::uint32_t x = 0; x < o.width; ++x) {
+                    D3 wo, wd;
+                    world_ray(x, std::uint32_t(y), wo, wd);
+                    RefPixel& r = ref[y * o.width + x];
+                    bench::MeshHit h;
+                    if (!truth->intersect(wo, wd, h)) continue;
+                    r.t = h.t;
+                    r.point = h.point;
+                    r.normal = dot(h.normal, wd) < 0 ? h.normal : mul(h.normal, -1.0);
+                    if (!h.front) {
+                        r.cls = RefClass::back_face;
+                        continue;
+                    }
+                    double d;
+                    const std::uint32_t ni = index.nearest(h.point, d);
+                    r.spacing = spacing[ni];
+                    r.cls = d <= o.coverage * r.spacing ? RefClass::covered : RefClass::uncovered;
+                }
+        });
+        std::uint64_t covered = 0;
+        for (const RefPixel& r : ref) {
+            ref_pixels += r.cls != RefClass::background;
+            covered += r.cls == RefClass::covered;
+            ref_uncovered += r.cls == RefClass::uncovered;
+            ref_back += r.cls == RefClass::back_face;
+        }
+        ref_covered += covered;
+        nlohmann::json vj = {{"direction", view.direction},
+                             {"covered_pixels", covered},
+                             {"surfaces", nlohmann::json::object()}};
+        if (!o.images.empty()) {
+            std::vector<std::uint32_t> img(npx, pack(0, 0, 0));
+            for (std::uint32_t y = 0; y < o.height; ++y)
+                for (std::uint32_t x = 0; x < o.width; ++x) {
+                    const RefPixel& r = ref[std::size_t(y) * o.width + x];
+                    D3 wo, wd;
+                    world_ray(x, y, wo, wd);
+                    const double g = shade(r.normal, wd);
+                    if (r.cls == RefClass::covered) img[std::size_t(y) * o.width + x] = pack(g, g, g);
+                    if (r.cls == RefClass::uncovered)
+                        img[std::size_t(y) * o.width + x] = pack(0.2 * g, 0.45 * g, 0.2 * g);
+                    if (r.cls == RefClass::back_face)
+                        img[std::size_t(y) * o.width + x] = pack(0.4 * g, 0.3 * g, 0.1 * g);
+                }
+            write_rgba(std::filesystem::path(o.images) / ("reference_view" + std::to_string(vi) + ".png"),
+                       o.width, o.height, img);
+        }
+
+        for (std::size_t si = 0; si < probes.size(); ++si) {
+            const bench::SurfaceProbe& probe = *probes[si];
+            std::vector<SurfPixel> surf(npx);
+            const double t0 = tool::now_seconds();
+            pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+                for (std::size_t y = y0; y < y1; ++y)
+                    for (std::uint32_t x = 0; x < o.width; ++x) {
+                        const core::Ray r =
+                            core::primary_ray(view.camera, x, std::uint32_t(y), view.width, view.height);
+                        bench::ProbeHit h;
+                        SurfPixel& s = surf[y * o.width + x];
+                        if (probe.trace(r, h)) s.hit = true, s.t = float(h.t), s.normal = h.normal;
+                    }
+            });
+            const double secs = tool::now_seconds() - t0;
+            // Classification (per row, then merged).
+            std::vector<Tally> rows(o.height);
+            std::vector<PixClass> cls(npx, PixClass::none);
+            pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+                for (std::size_t y = y0; y < y1; ++y) {
+                    Tally& t = rows[y];
+                    for (std::uint32_t x = 0; x < o.width; ++x) {
+                        const std::size_t i = y * o.width + x;
+                        const RefPixel& r = ref[i];
+                        const SurfPixel& s = surf[i];
+                        D3 wo, wd;
+                        world_ray(x, std::uint32_t(y), wo, wd);
+                        const bool is_covered = r.cls == RefClass::covered;
+                        t.covered += is_covered;
+                        if (!s.hit) {
+                            if (is_covered) ++t.holes, cls[i] = PixClass::hole;
+                            continue;
+                        }
+                        ++t.hits;
+                        const D3 xw = add(wo, mul(wd, double(s.t)));
+                        double dn;
+                        const double sx = spacing[index.nearest(xw, dn)];
+                        // False hit: farther than F spacings from the reference surface. Near the
+                        // reference hit, that distance is bounded by |x - h| without a query.
+                        const bool near_ref =
+                            r.cls != RefClass::background && norm(sub(xw, r.point)) <= o.tolerance * sx;
+                        if (!near_ref && truth->distance(xw) > o.tolerance * sx) {
+                            ++t.false_hits, cls[i] = PixClass::false_hit;
+                            continue;
+                        }
+                        if (!is_covered) continue;
+                        const double cosr = std::abs(dot(r.normal, wd));
+                        const double behind = (double(s.t) - r.t) * cosr;
+                        if (behind > o.tolerance * r.spacing) {
+                            ++t.holes, cls[i] = PixClass::hole;
+                            continue;
+                        }
+                        ++t.good, cls[i] = PixClass::good;
+                        t.depth.push_back(float(std::abs(double(s.t) - r.t) / r.spacing));
+                        t.distance.push_back(float(std::abs(double(s.t) - r.t) * cosr / r.spacing));
+                        const D3 n{s.normal.x, s.normal.y, s.normal.z};
+                        const double c = std::clamp(dot(n, r.normal) / std::max(1e-30, norm(n)), -1.0, 1.0);
+                        t.normal_deg.push_back(float(std::acos(c) * 180.0 / M_PI));
+                    }
+                }
+            });
+            Tally view_tally;
+            for (const Tally& t : rows) view_tally.merge(t);
+            view_tally.seconds = secs;
+            view_tally.rays = npx;
+            vj["surfaces"][probe.surface()] = view_tally.json(false);
+            totals[si].merge(view_tally);
+            if (!o.images.empty()) {
+                std::vector<std::uint32_t> shaded(npx, pack(0, 0, 0)), map(npx, pack(0, 0, 0));
+                for (std::uint32_t y = 0; y < o.height; ++y)
+                    for (std::uint32_t x = 0; x < o.width; ++x) {
+                        const std::size_t i = std::size_t(y) * o.width + x;
+                        D3 wo, wd;
+                        world_ray(x, y, wo, wd);
+                        const SurfPixel& s = surf[i];
+                        const double g = s.hit ? shade(D3{s.normal.x, s.normal.y, s.normal.z}, wd) : 0.0;
+                        if (s.hit) shaded[i] = pack(g, g, g);
+                        switch (cls[i]) {
+                            case PixClass::good:
+                                map[i] = pack(g, g, g);
+                                break;
+                            case PixClass::hole:
+                                map[i] = pack(1, 0.1, 0.1);
+                                break;
+                            case PixClass::false_hit:
+                                map[i] = pack(0.15, 0.35, 1);
+                                break;
+                            case PixClass::none:
+                                if (ref[i].cls == RefClass::uncovered || ref[i].cls == RefClass::back_face)
+                                    map[i] = pack(0.05, 0.25, 0.05);
+                                else if (s.hit)
+                                    map[i] = pack(0.5 * g, 0.5 * g, 0.5 * g);
+                                break;
+                        }
+                    }
+                const std::string stem = probe.surface() + "_view" + std::to_string(vi);
+                write_rgba(std::filesystem::path(o.images) / (stem + ".png"), o.width, o.height, shaded);
+                write_rgba(std::filesystem::path(o.images) / (stem + "_class.png"), o.width, o.height, map);
+            }
+        }
+        per_view.push_back(vj);
+        progress.update(vi + 1);
+    }
+    progress.finish();
+
+    nlohmann::json j;
+    j["pool"] = o.pool;
+    j["points"] = o.points.empty() ? o.pool : o.points;
+    j["reference"] = truth->describe();
+    j["views"] = o.views;
+    j["width"] = o.width;
+    j["height"] = o.height;
+    j["fov_degrees"] = o.fov;
+    j["coverage_spacings"] = o.coverage;
+    j["tolerance_spacings"] = o.tolerance;
+    j["threads"] = threads;
+    j["input_points"] = pts.size();
+    j["spacing"] = {{"median", sorted_spacing[sorted_spacing.size() / 2]},
+                    {"p10", sorted_spacing[sorted_spacing.size() / 10]},
+                    {"p90", sorted_spacing[sorted_spacing.size() * 9 / 10]}};
+    j["reference_pixels"] = {{"covered", ref_covered},
+                             {"uncovered", ref_uncovered},
+                             {"back_face", ref_back},
+                             {"total", ref_pixels}};
+    for (std::size_t si = 0; si < probes.size(); ++si) {
+        nlohmann::json sj = totals[si].json(true);
+        sj["settings"] = probes[si]->settings();
+        sj["surface_bytes"] = probes[si]->bytes();
+        sj["work"] = probes[si]->work();
+        j["surfaces"][probes[si]->surface()] = sj;
+        auto med = [&](const char* k) {
+            return sj[k].is_null() ? std::nan("") : sj[k]["median"].get<double>();
+        };
+        std::printf(
+            "%s %s: holes %.3f%%, false hits %.3f%% of %llu covered pixels; depth error median %.3f, surface "
+            "distance median %.3f spacings; normal error median %.2f deg; %.2f Mrays/s\n",
+            o.pool.c_str(), probes[si]->surface().c_str(), 100.0 * sj["hole_rate"].get<double>(),
+            100.0 * sj["false_hit_rate"].get<double>(), static_cast<unsigned long long>(totals[si].covered),
+            med("depth_error_spacings"), med("surface_distance_spacings"), med("normal_error_degrees"),
+            sj["rays_per_s"].get<double>() * 1e-6);
+    }
+    j["per_view"] = per_view;
+    if (!o.json.empty()) {
+        const std::string tmp = o.json + ".tmp";
+        {
+            std::ofstream f(tmp);
+            f << j.dump(2) << "\n";
+            if (!f) throw Error(o.json + ": cannot write");
+        }
+        std::filesystem::rename(tmp, o.json);
+    }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    return prt::tool::run(
+        argc, argv, "prt-fidelity",
+        "Fidelity of a pool's surfaces (splats, iso, mls) against a real reference (issue 15): from --views "
+        "views of --width x --height pixels, the holes (the reference is hit where the scan has data and the "
+        "surface is missed), false hits (the surface hit more than --tolerance local spacings from the "
+        "reference), depth and normal errors, in units of the local point spacing. The reference mesh is ray "
+        "cast by an independent BVH in double. --images writes each view shaded and classified (grey good, "
+        "red "
+        "holes, blue false hits, dark green reference without data).",
+        [&](CLI::App& app, prt::tool::CommonOptions&) {
+            app.add_option("pool", o.pool, "Pool with the surfaces' sections")
+                ->required()
+                ->check(CLI::ExistingFile);
+            app.add_option("--reference", o.reference,
+                           "Reference mesh (.ply with faces, .obj, .off, .stl), in the pool's world frame")
+                ->required()
+                ->check(CLI::ExistingFile);
+            app.add_option(
+                   "--surface", o.surfaces,
+                   "Surfaces to measure, comma separated: splats, iso, mls (default: every one the pool "
+                   "holds)")
+                ->delimiter(',')
+                ->check(CLI::IsMember({"splats", "iso", "mls"}));
+            app.add_option(
+                   "--points", o.points,
+                   "Pool whose points say where the scan has data and its spacing (default: the pool's "
+                   "own points)")
+                ->check(CLI::ExistingFile);
+            app.add_option("--views", o.views, "Views, spread over the sphere around the reference")
+                ->check(CLI::Range(1u, 256u));
+            app.add_option("--width", o.width, "Image width")->check(CLI::Range(8u, 8192u));
+            app.add_option("--height", o.height, "Image height")->check(CLI::Range(8u, 8192u));
+            app.add_option("--fov", o.fov,
+                           "Vertical field of view, degrees (the reference's bounding sphere fills it)")
+                ->check(CLI::Range(1.0f, 120.0f));
+            app.add_option("--coverage", o.coverage,
+                           "A reference hit within this many local spacings of an input point has data")
+                ->check(CLI::Range(0.1, 100.0));
+            app.add_option("--tolerance", o.tolerance,
+                           "A surface hit farther than this many local spacings from the reference is false; "
+                           "one this far behind the reference hit is a hole")
+                ->check(CLI::Range(0.1, 100.0));
+            app.add_option("-j,--threads", o.threads, "Threads (0 = all hardware threads)");
+            app.add_option("--json", o.json, "Write the figures as JSON to this file (default: none)");
+            app.add_option("--images", o.images,
+                           "Write each view's reference, surfaces and classification maps into this folder "
+                           "(default: none)");
+            prt::bench::add_surface_options(app, o.s);
+        },
+        [&](const prt::tool::CommonOptions& common) { fidelity(o, common); });
+}
