@@ -76,6 +76,8 @@ void validate(const BuildOptions& o) {
     if (o.knn < 1 || o.knn > 1024) throw Error("k of the k-NN radius must be in [1, 1024]");
     if (!(o.knn_clamp == 0.0f || (o.knn_clamp >= 1.0f && std::isfinite(o.knn_clamp))))
         throw Error("the k-NN clamp factor must be 0 (off) or at least 1");
+    if (!(o.data_reach == 0.0f || (o.data_reach >= 0.25f && o.data_reach <= 3.0f)))
+        throw Error("the data reach must be 0 (off) or in [0.25, 3] radii");
 }
 
 namespace {
@@ -112,6 +114,7 @@ struct PointSet {
     std::vector<double> support;      ///< support x sigma_i: the corner evaluation's reach
     std::vector<double> rho;          ///< radius of the influence disk (passive leaves)
     std::vector<double> reach;        ///< max(support, rho): what the index is built for
+    std::vector<double> data2;        ///< (data_reach x r_i)^2: how far from p_i the data "is" (issue 15)
     std::vector<std::uint8_t> col;    ///< 3n sRGB
     std::vector<std::uint64_t> code;  ///< sorted
 };
@@ -817,6 +820,7 @@ struct CornerValue {
     double f = 0;
     float n[3] = {0, 0, 1};
     float color[3] = {255, 255, 255};
+    bool supported = true;  ///< the corner's projection onto the local surface lies near data
 };
 
 /// LSD radix sort of (key, slot) pairs by key, 11 bits per pass, passes over constant digits skipped.
@@ -842,9 +846,9 @@ void radix_sort(std::vector<std::pair<std::uint64_t, std::uint32_t>>& v) {
 
 /// Per-thread candidate buffer of the corner evaluation (structure of arrays).
 struct Candidates {
-    std::vector<double> px, py, pz, nx, ny, nz, sup2, inv2s2, wn, cr, cg, cb;
+    std::vector<double> px, py, pz, nx, ny, nz, sup2, inv2s2, wn, cr, cg, cb, data2;
     void clear() {
-        for (auto* v : {&px, &py, &pz, &nx, &ny, &nz, &sup2, &inv2s2, &wn, &cr, &cg, &cb}) v->clear();
+        for (auto* v : {&px, &py, &pz, &nx, &ny, &nz, &sup2, &inv2s2, &wn, &cr, &cg, &cb, &data2}) v->clear();
     }
     void add(const PointSet& ps, std::uint32_t id) {
         px.push_back(ps.pos[3 * id]);
@@ -860,6 +864,7 @@ struct Candidates {
         cr.push_back(ps.col[3 * id]);
         cg.push_back(ps.col[3 * id + 1]);
         cb.push_back(ps.col[3 * id + 2]);
+        data2.push_back(ps.data2.empty() ? 0.0 : ps.data2[id]);
     }
 };
 
@@ -898,8 +903,38 @@ CornerValue finish(const Sums& s) {
     return v;
 }
 
+/// Issue 15 (no surface where there is no data): the point where Q projects onto the plane the
+/// corner value describes (p(Q) and n(Q) of eq. 4.2) must lie within data_reach x r_i of some
+/// point i. Beyond the edge of a scan f extrapolates the last points' plane into a sheet, and
+/// across a hole it spans the hole; this test stops both at about one radius of the data (a gap
+/// wider than 2 data_reach r is not bridged). Only candidates (points whose support reaches the
+/// corner's box) are tried: a corner farther than (support - data_reach) radii from its plane is
+/// unsupported anyway.
+/// `point(j, p, reach2)` gives candidate j's position and (data_reach r_j)^2, j < m.
+template <class Point>
+bool near_data(const Sums& s, const double q[3], std::size_t m, Point&& point) {
+    const double inv = 1.0 / s.w;
+    const double n[3] = {s.nx * inv, s.ny * inv, s.nz * inv};
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(len > 1e-12) || !std::isfinite(len)) return false;       // normals cancel: no plane
+    const double qp[3] = {-s.px * inv, -s.py * inv, -s.pz * inv};  // Q - p
+    const double f = (qp[0] * n[0] + qp[1] * n[1] + qp[2] * n[2]) / len;
+    // projection of Q onto the plane, relative to Q
+    const double o[3] = {-f * n[0] / len, -f * n[1] / len, -f * n[2] / len};
+    for (std::size_t j = 0; j < m; ++j) {
+        double p[3], reach2;
+        point(j, p, reach2);
+        const double dx = q[0] + o[0] - p[0], dy = q[1] + o[1] - p[1], dz = q[2] + o[2] - p[2];
+        if (dx * dx + dy * dy + dz * dz <= reach2) return true;
+    }
+    return false;
+}
+
 /// A corner no point's support reaches: eq. 4.1-4.3 over the points within d_min + support x
-/// sigma_max (see iso_build.h), weights scaled by their largest value in log space.
+/// sigma_max (see iso_build.h), weights scaled by their largest value in log space. Such corners
+/// are those of coarse leaves (level of detail, thesis 4.6) or far from the data; near_data
+/// decides which over the same points: a coarse leaf's corner projects onto data, a corner
+/// beyond the data's edge does not.
 CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const double q[3], double support,
                          double sigma_max, double start_radius, std::vector<std::uint32_t>& ids) {
     double radius = start_radius;
@@ -932,7 +967,13 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
         sums.add(std::exp(log_weight(id) - lmax), p[0] - q[0], p[1] - q[1], p[2] - q[2], n[0], n[1], n[2],
                  ps.col[3 * id], ps.col[3 * id + 1], ps.col[3 * id + 2]);
     }
-    return finish(sums);
+    CornerValue v = finish(sums);
+    if (!ps.data2.empty())
+        v.supported = near_data(sums, q, ids.size(), [&](std::size_t j, double p[3], double& reach2) {
+            for (int a = 0; a < 3; ++a) p[a] = ps.pos[3 * ids[j] + a];
+            reach2 = ps.data2[ids[j]];
+        });
+    return v;
 }
 
 /// Per-thread buffers of CornerEvaluator.
@@ -941,6 +982,7 @@ struct EvaluatorScratch {
     std::vector<double> d2, arg, w;
     Candidates cand;
     std::uint64_t far = 0, counted = 0;  ///< corners beyond every support; points counted
+    std::uint64_t unsupported = 0;       ///< corners whose projection lies away from the data
 };
 
 /// thesis 4.2-4.3: eq. 4.1-4.3 at corners, all inside one box, from one gather of the points whose
@@ -991,10 +1033,18 @@ struct CornerEvaluator {
             if (sums.count > 0 && sums.w > 0) {
                 out[k] = finish(sums);
                 s.counted += sums.count;
+                if (!ps.data2.empty()) {
+                    out[k].supported = near_data(sums, q, m, [&](std::size_t j, double p[3], double& reach2) {
+                        p[0] = cand.px[j], p[1] = cand.py[j], p[2] = cand.pz[j];
+                        reach2 = cand.data2[j];
+                    });
+                    s.unsupported += !out[k].supported;
+                }
             } else {
                 std::vector<std::uint32_t> ids;
                 out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, ids);
                 ++s.far;
+                s.unsupported += !out[k].supported;
             }
         }
     }
@@ -1133,6 +1183,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         std::sort(order.begin(), order.end());
         ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
         ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
+        if (o.data_reach > 0) ps.data2.resize(n);
         for (std::size_t i = 0; i < n; ++i) {
             const std::uint32_t j = order[i].second;
             const std::uint32_t src = keep[j];
@@ -1146,6 +1197,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
             ps.support[i] = o.support * ps.sigma[i];
             ps.rho[i] = std::max(radius[j], ps.sigma[i]);
             ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
+            if (o.data_reach > 0) ps.data2[i] = (o.data_reach * radius[j]) * (o.data_reach * radius[j]);
             ps.code[i] = order[i].first;
         }
     }
@@ -1215,7 +1267,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         if ((corner_keys[i] >> block_shift) != (corner_keys[i - 1] >> block_shift)) blocks.push_back(i);
     blocks.push_back(corner_keys.size());
     std::vector<CornerValue> corners(corner_keys.size());
-    std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0};
+    std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
     const double corner_step = frame.edge(k_code_level);
     pre::parallel_chunks(
         blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
@@ -1240,8 +1292,10 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
             }
             far += scratch.far;
             counted += scratch.counted;
+            unsupported += scratch.unsupported;
         });
     st.far_corners = far.load();
+    st.unsupported_corners = unsupported.load();
     st.mean_neighbours_x100 = corner_keys.size() > st.far_corners
                                   ? 100 * counted.load() / (corner_keys.size() - st.far_corners)
                                   : 0;
@@ -1251,11 +1305,23 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
 
     // -- 5b. surface closure ----------------------------------------------------------------------------
     t0 = Clock::now();
-    auto sign_mask = [&](std::uint32_t node) {  // bit c: corner c has f > 0
+    // bit c: corner c has f > 0. A leaf with a corner away from the data (near_data) holds no
+    // surface: its mask is 0, so the closure does not grow from it and step 6 empties it.
+    auto sign_mask = [&](std::uint32_t node) {
         const std::uint32_t f = leaf_slot[node];
         std::uint32_t m = 0;
-        for (std::uint32_t c = 0; c < 8; ++c) m |= (corners[slot_corner[8 * f + c]].f > 0 ? 1u : 0u) << c;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            const CornerValue& v = corners[slot_corner[8 * f + c]];
+            if (!v.supported) return 0u;
+            m |= (v.f > 0 ? 1u : 0u) << c;
+        }
         return m;
+    };
+    auto unsupported_leaf = [&](std::uint32_t node) {
+        const std::uint32_t f = leaf_slot[node];
+        for (std::uint32_t c = 0; c < 8; ++c)
+            if (!corners[slot_corner[8 * f + c]].supported) return true;
+        return false;
     };
     std::vector<std::uint32_t> near_ids;
     SurfaceClosure closure(tree, o.max_level,
@@ -1285,7 +1351,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         corners.resize(corner_base + 8 * added.size());
         for (std::size_t k = 0; k < 8 * added.size(); ++k)
             slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
-        std::atomic<std::uint64_t> far_added{0};
+        std::atomic<std::uint64_t> far_added{0}, unsupported_added{0};
         pre::parallel_chunks(added.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
             EvaluatorScratch scratch;
             for (std::size_t k = b; k < e; ++k) {
@@ -1297,8 +1363,10 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
                 evaluator.evaluate(qs, 8, blo, bhi, &corners[corner_base + 8 * k], scratch);
             }
             far_added += scratch.far;
+            unsupported_added += scratch.unsupported;
         });
         st.far_corners += far_added.load();
+        st.unsupported_corners += unsupported_added.load();
         st.corner_slots += 8 * added.size();
         frontier.swap(added);
     }
@@ -1314,6 +1382,8 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         const std::uint32_t m = sign_mask(static_cast<std::uint32_t>(i));
         if (m != 0 && m != 0xffu) {
             keep_node[i] = 1;
+        } else if (unsupported_leaf(static_cast<std::uint32_t>(i))) {
+            ++st.unsupported_leaves;
         } else {
             ++st.uncrossed_leaves;
             if (!o.drop_uncrossed) keep_node[i] = 1;

@@ -23,6 +23,10 @@
 //      evaluated, and so on until no face leads to an empty leaf; 2:1 balance is kept. This
 //      catches what the disks of step 3 miss (noisy scans, where the smoothed surface leaves the
 //      disks; coarse levels of detail, where disks are small against leaves);
+//   5c. data support (issue 15): a corner whose projection onto its local plane lies farther than
+//      data_reach x r_i from every point i is unsupported (and so is a corner no point's support
+//      reaches); the closure does not grow from leaves with such a corner, and step 6 empties them:
+//      no sheets past a scan's edges or across holes wider than about 2 data_reach r;
 //   6. filled leaves whose 8 corners share one sign hold no surface (trilinear interpolation is
 //      a convex combination of the corners) and become empty leaves; subtrees without a filled
 //      leaf collapse into one empty leaf;
@@ -86,6 +90,12 @@ struct BuildOptions {
     bool balance = true;         ///< thesis 4.5.1: 2:1 level balance of filled leaves
     bool closure = true;         ///< step 5b: fill the leaves the surface leads into
     bool drop_uncrossed = true;  ///< step 6 (leaves without a sign change become empty)
+    /// Step 5c (issue 15, no surface where there is no data): a corner holds surface only when its
+    /// projection onto the local plane (p(Q), n(Q) of eq. 4.2) lies within data_reach x r_i of some
+    /// point i; a leaf with another corner is empty. Gaps in the data wider than about
+    /// 2 data_reach r (r: the points' radius, the k-th neighbour distance) are not bridged and no
+    /// sheet grows past a scan's edge. 0 turns it off (the thesis's behaviour).
+    float data_reach = 1.0f;
     Storage storage = Storage::q8;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
 };
@@ -109,6 +119,8 @@ struct BuildStats {
     std::uint64_t mean_neighbours_x100 = 0;  ///< 100 x mean points counted per corner
     std::uint64_t closure_leaves = 0;        ///< leaves filled by the surface closure (step 5b)
     std::uint64_t uncrossed_leaves = 0;      ///< filled leaves without a sign change (emptied in step 6)
+    std::uint64_t unsupported_corners = 0;   ///< corners whose projection lies away from the data (5c)
+    std::uint64_t unsupported_leaves = 0;    ///< filled leaves emptied for such a corner (5c, step 6)
     std::uint64_t leaves = 0;                ///< filled leaves written
     std::uint64_t nodes = 0;                 ///< node words written
     std::uint32_t depth = 0;                 ///< deepest filled leaf

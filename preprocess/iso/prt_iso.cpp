@@ -27,7 +27,9 @@ above --max-level (level of detail, thesis 4.6). Empty leaves touched by a point
 become passive leaves (4.3.1); filled leaves next to leaves more than one level finer are split
 (2:1 balance, 4.5.1); where a leaf's face has corners of both signs the surface goes on behind it,
 and the leaves there are filled too (surface closure); leaves whose corners all share one sign
-hold no surface and are dropped.
+hold no surface and are dropped. No surface where there is no data (issue 15): a leaf holds surface
+only when every corner projects onto its local plane within --data-reach radii of some point, so no
+sheet grows past a scan's edges and gaps wider than about 2 x data-reach radii stay open.
 Storage: one byte per component, 56 bytes per leaf (--storage q8, thesis 4.4), floats (f32, 160
 bytes), or both. Writes OUTPUT with iso_info, iso_nodes and the leaf arrays; the other sections are
 carried over.)";
@@ -75,6 +77,12 @@ int main(int argc, char** argv) {
             app.add_flag("--no-closure", no_closure,
                          "Do not fill the leaves behind faces the surface crosses (the surface closure; "
                          "leaves holes on noisy scans and coarse levels)");
+            app.add_option(
+                   "--data-reach", options.data_reach,
+                   "A corner holds surface only where its projection onto the local plane lies within "
+                   "this many radii of a point: gaps wider than about twice that stay open and no sheet "
+                   "grows past the data (0 = off, the thesis's extrapolation)")
+                ->check(CLI::Range(0.0f, 3.0f));
             app.add_flag("--keep-uncrossed", keep_uncrossed,
                          "Keep filled leaves whose corners share one sign (they hold no surface)");
             app.add_option("-j,--threads", options.threads, "Worker threads (0 = all hardware threads)");
@@ -151,6 +159,7 @@ int main(int argc, char** argv) {
                 {"balance", options.balance},
                 {"closure", options.closure},
                 {"drop_uncrossed", options.drop_uncrossed},
+                {"data_reach", options.data_reach},
                 {"storage", storage}};
             writer.add_provenance("prt-iso", PRT_VERSION, parameters.dump());
             const std::uint64_t bytes = writer.write(output);
@@ -173,6 +182,8 @@ int main(int argc, char** argv) {
                                           {"balance_splits", st.balance_splits},
                                           {"closure_leaves", st.closure_leaves},
                                           {"uncrossed_leaves", st.uncrossed_leaves},
+                                          {"unsupported_corners", st.unsupported_corners},
+                                          {"unsupported_leaves", st.unsupported_leaves},
                                           {"leaves", st.leaves},
                                           {"leaves_per_level", per_level},
                                           {"nodes", st.nodes},
@@ -204,13 +215,15 @@ int main(int argc, char** argv) {
             tool::note(
                 common.quiet,
                 "prt-iso: %llu active + %llu passive leaves (%llu split to min level, %llu by 2:1 balance), "
-                "%llu more by the surface closure; %llu without a sign change dropped",
+                "%llu more by the surface closure; %llu without a sign change and %llu away from the data "
+                "dropped",
                 static_cast<unsigned long long>(st.active_leaves),
                 static_cast<unsigned long long>(st.passive_leaves),
                 static_cast<unsigned long long>(st.min_level_splits),
                 static_cast<unsigned long long>(st.balance_splits),
                 static_cast<unsigned long long>(st.closure_leaves),
-                static_cast<unsigned long long>(st.uncrossed_leaves));
+                static_cast<unsigned long long>(st.uncrossed_leaves),
+                static_cast<unsigned long long>(st.unsupported_leaves));
             tool::note(
                 common.quiet,
                 "prt-iso: %llu corners (%.2f points each, %llu beyond every support) for %llu corner slots",

@@ -27,23 +27,6 @@ double distance_sq(const P3& a, const P3& b) {
     return x * x + y * y + z * z;
 }
 
-/// The k smallest values seen so far (a max-heap of at most k entries).
-struct KBest {
-    std::uint32_t k;
-    std::vector<double>& heap;
-    double worst() const { return heap.size() < k ? std::numeric_limits<double>::infinity() : heap.front(); }
-    void offer(double d2) {
-        if (heap.size() < k) {
-            heap.push_back(d2);
-            std::push_heap(heap.begin(), heap.end());
-        } else if (d2 < heap.front()) {
-            std::pop_heap(heap.begin(), heap.end());
-            heap.back() = d2;
-            std::push_heap(heap.begin(), heap.end());
-        }
-    }
-};
-
 }  // namespace
 
 PointIndex::PointIndex(std::vector<P3> points) : m_points(std::move(points)) {
@@ -112,17 +95,37 @@ std::uint32_t PointIndex::nearest(const P3& q, double& distance) const {
 }
 
 void PointIndex::knn(const P3& q, std::uint32_t k, std::uint32_t skip, std::vector<double>& out) const {
+    std::vector<std::uint32_t> idx;
+    knn_indices(q, skip == ~0u ? k : k + 1, idx);
     out.clear();
-    KBest best{k, out};
+    for (std::uint32_t i : idx)
+        if (i != skip && out.size() < k) out.push_back(std::sqrt(distance_sq(m_points[i], q)));
+}
+
+void PointIndex::knn_indices(const P3& q, std::uint32_t k, std::vector<std::uint32_t>& out) const {
+    // (distance^2, index) pairs in a max-heap of at most k
+    std::vector<std::pair<double, std::uint32_t>> heap;
+    auto worst = [&] {
+        return heap.size() < k ? std::numeric_limits<double>::infinity() : heap.front().first;
+    };
     std::uint32_t stack[128];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
         const Node& n = m_nodes[stack[--top]];
-        if (box_distance_sq(n.lo, n.hi, q) >= best.worst()) continue;
+        if (box_distance_sq(n.lo, n.hi, q) >= worst()) continue;
         if (n.left == 0) {
-            for (std::uint32_t i = n.begin; i < n.end; ++i)
-                if (m_order[i] != skip) best.offer(distance_sq(m_points[m_order[i]], q));
+            for (std::uint32_t i = n.begin; i < n.end; ++i) {
+                const double d = distance_sq(m_points[m_order[i]], q);
+                if (heap.size() < k) {
+                    heap.push_back({d, m_order[i]});
+                    std::push_heap(heap.begin(), heap.end());
+                } else if (d < heap.front().first) {
+                    std::pop_heap(heap.begin(), heap.end());
+                    heap.back() = {d, m_order[i]};
+                    std::push_heap(heap.begin(), heap.end());
+                }
+            }
             continue;
         }
         const Node &a = m_nodes[n.left], &b = m_nodes[n.left + 1];
@@ -130,8 +133,9 @@ void PointIndex::knn(const P3& q, std::uint32_t k, std::uint32_t skip, std::vect
         stack[top++] = a_first ? n.left + 1 : n.left;
         stack[top++] = a_first ? n.left : n.left + 1;
     }
-    std::sort(out.begin(), out.end());
-    for (double& d : out) d = std::sqrt(d);
+    std::sort(heap.begin(), heap.end());
+    out.clear();
+    for (const auto& e : heap) out.push_back(e.second);
 }
 
 std::vector<double> PointIndex::local_spacing(unsigned threads) const {

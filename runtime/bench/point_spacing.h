@@ -34,6 +34,8 @@ public:
     /// Distances to the k nearest points of q (ascending; fewer when the tree holds fewer),
     /// excluding index `skip` (use ~0u for none).
     void knn(const P3& q, std::uint32_t k, std::uint32_t skip, std::vector<double>& out) const;
+    /// Indices of the k nearest points of q, nearest first.
+    void knn_indices(const P3& q, std::uint32_t k, std::vector<std::uint32_t>& out) const;
 
     /// The local spacing s_i of every point (see the header), computed on `threads` threads.
     std::vector<double> local_spacing(unsigned threads) const;

@@ -10,9 +10,14 @@
 //
 // Per pixel of each view (a pinhole camera on the bounding sphere of the reference, aimed at its
 // centre, directions spread over the sphere):
-//   covered    the reference's first hit h is a front face and lies within C spacings of an input
-//              point (C = --coverage, 2): the scan has data there. A single range scan is judged
-//              only on the part it saw. Back-face hits (looking into an open mesh) are not covered.
+//   covered    the reference's first hit h is a front face, lies within C spacings of an input
+//              point (C = --coverage, 2) and is surrounded by the input points within that distance
+//              (projected on the reference's tangent plane, no angular gap of 180 degrees or more):
+//              the scan has data there. A single range scan is judged only on the part it saw.
+//              Back-face hits (looking into an open mesh) are not covered.
+//   edge       within C spacings of an input point but outside the data's edge (not surrounded):
+//              a surface may end there or go on; its misses are counted apart (edge holes, which
+//              with the covered holes give the rate of the plain "within C spacings" rule).
 //   hole       a covered pixel where the surface is missed, or hit more than F spacings (along
 //              the reference normal) behind h: the ray went through (F = --tolerance, 2).
 //   false hit  the surface is hit at x more than F spacings from the reference surface (any pixel).
@@ -21,7 +26,7 @@
 //              error (degrees between the traced normal and the reference's, oriented to the ray).
 // Rates are per covered pixel. Images (--images DIR) show each view's reference and each surface,
 // shaded, and a classification map: grey good, red holes, blue false hits, dark green covered by
-// nothing (no data), black background.
+// nothing (no data), orange missed at the data's edge, black background.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -170,8 +175,8 @@ View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, c
 
 // ---- per-pixel results --------------------------------------------------------------------------
 
-enum class RefClass : std::uint8_t { background, back_face, uncovered, covered };
-enum class PixClass : std::uint8_t { none, good, hole, false_hit };
+enum class RefClass : std::uint8_t { background, back_face, uncovered, edge, covered };
+enum class PixClass : std::uint8_t { none, good, hole, false_hit, edge_hole };
 
 struct RefPixel {
     RefClass cls = RefClass::background;
@@ -201,12 +206,13 @@ nlohmann::json summary(std::vector<float> v) {
 }
 
 struct Tally {
-    std::uint64_t covered = 0, holes = 0, false_hits = 0, good = 0, hits = 0;
+    std::uint64_t covered = 0, holes = 0, false_hits = 0, good = 0, hits = 0, edge = 0, edge_holes = 0;
     std::vector<float> depth, distance, normal_deg;
     double seconds = 0;
     std::uint64_t rays = 0;
     void merge(const Tally& t) {
         covered += t.covered, holes += t.holes, false_hits += t.false_hits, good += t.good, hits += t.hits;
+        edge += t.edge, edge_holes += t.edge_holes;
         depth.insert(depth.end(), t.depth.begin(), t.depth.end());
         distance.insert(distance.end(), t.distance.begin(), t.distance.end());
         normal_deg.insert(normal_deg.end(), t.normal_deg.begin(), t.normal_deg.end());
@@ -219,7 +225,11 @@ struct Tally {
                             {"false_hits", false_hits},
                             {"good", good},
                             {"hole_rate", covered ? double(holes) / double(covered) : 0.0},
-                            {"false_hit_rate", covered ? double(false_hits) / double(covered) : 0.0}};
+                            {"false_hit_rate", covered ? double(false_hits) / double(covered) : 0.0},
+                            {"edge_pixels", edge},
+                            {"edge_holes", edge_holes},
+                            {"hole_rate_with_edges",
+                             covered + edge ? double(holes + edge_holes) / double(covered + edge) : 0.0}};
         if (with_samples) {
             j["depth_error_spacings"] = summary(depth);
             j["surface_distance_spacings"] = summary(distance);
@@ -244,6 +254,31 @@ void write_rgba(const std::filesystem::path& path, std::uint32_t w, std::uint32_
         for (int k = 0; k < 3; ++k)
             img.rgb[3 * i + k] = std::pow(float((px[i] >> (8 * k)) & 0xffu) / 255.f, 2.2f);
     rt::write_image(path, img);
+}
+
+/// Whether h is surrounded by the input points within `radius` (k-NN, at most 16): projected on the
+/// plane of normal n, they leave no angular gap of pi or more around h, so h is inside the data, not
+/// past its edge.
+bool surrounded(const bench::PointIndex& index, const D3& h, const D3& n, double radius,
+                std::vector<std::uint32_t>& idx, std::vector<double>& angles) {
+    index.knn_indices(h, 16, idx);
+    // a basis of the tangent plane
+    const D3 a = std::abs(n[0]) < 0.9 ? D3{1, 0, 0} : D3{0, 1, 0};
+    D3 u{a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
+    u = mul(u, 1.0 / norm(u));
+    const D3 v{n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
+    angles.clear();
+    for (std::uint32_t i : idx) {
+        const D3 e = sub(index.point(i), h);
+        if (dot(e, e) > radius * radius) break;
+        const double x = dot(e, u), y = dot(e, v);
+        if (x * x + y * y > 0) angles.push_back(std::atan2(y, x));
+    }
+    if (angles.size() < 3) return false;
+    std::sort(angles.begin(), angles.end());
+    double gap = angles.front() + 2 * M_PI - angles.back();
+    for (std::size_t i = 1; i < angles.size(); ++i) gap = std::max(gap, angles[i] - angles[i - 1]);
+    return gap < M_PI;
 }
 
 /// Headlight Lambert grey of a normal seen along d.
@@ -295,7 +330,7 @@ void fidelity(Options o, const tool::CommonOptions& common) {
     const std::vector<D3> dirs = view_directions(o.views);
     std::vector<Tally> totals(probes.size());
     nlohmann::json per_view = nlohmann::json::array();
-    std::uint64_t ref_covered = 0, ref_uncovered = 0, ref_back = 0, ref_pixels = 0;
+    std::uint64_t ref_covered = 0, ref_uncovered = 0, ref_back = 0, ref_pixels = 0, ref_edge = 0;
     const std::size_t npx = std::size_t(o.width) * o.height;
     if (!o.images.empty()) std::filesystem::create_directories(o.images);
     tool::Progress progress("prt-fidelity: views", o.views, common.quiet);
@@ -311,6 +346,8 @@ void fidelity(Options o, const tool::CommonOptions& common) {
         // Reference pass.
         std::vector<RefPixel> ref(npx);
         pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+            std::vector<std::uint32_t> idx;
+            std::vector<double> angles;
             for (std::size_t y = y0; y < y1; ++y)
                 for (std::uint32_t x = 0; x < o.width; ++x) {
                     D3 wo, wd;
@@ -328,13 +365,19 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                     double d;
                     const std::uint32_t ni = index.nearest(h.point, d);
                     r.spacing = spacing[ni];
-                    r.cls = d <= o.coverage * r.spacing ? RefClass::covered : RefClass::uncovered;
+                    if (d > o.coverage * r.spacing)
+                        r.cls = RefClass::uncovered;
+                    else if (surrounded(index, h.point, r.normal, o.coverage * r.spacing, idx, angles))
+                        r.cls = RefClass::covered;
+                    else
+                        r.cls = RefClass::edge;
                 }
         });
         std::uint64_t covered = 0;
         for (const RefPixel& r : ref) {
             ref_pixels += r.cls != RefClass::background;
             covered += r.cls == RefClass::covered;
+            ref_edge += r.cls == RefClass::edge;
             ref_uncovered += r.cls == RefClass::uncovered;
             ref_back += r.cls == RefClass::back_face;
         }
@@ -355,6 +398,8 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                         img[std::size_t(y) * o.width + x] = pack(0.2 * g, 0.45 * g, 0.2 * g);
                     if (r.cls == RefClass::back_face)
                         img[std::size_t(y) * o.width + x] = pack(0.4 * g, 0.3 * g, 0.1 * g);
+                    if (r.cls == RefClass::edge)
+                        img[std::size_t(y) * o.width + x] = pack(0.9 * g, 0.6 * g, 0.2 * g);
                 }
             write_rgba(std::filesystem::path(o.images) / ("reference_view" + std::to_string(vi) + ".png"),
                        o.width, o.height, img);
@@ -389,8 +434,10 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                         world_ray(x, std::uint32_t(y), wo, wd);
                         const bool is_covered = r.cls == RefClass::covered;
                         t.covered += is_covered;
+                        t.edge += r.cls == RefClass::edge;
                         if (!s.hit) {
                             if (is_covered) ++t.holes, cls[i] = PixClass::hole;
+                            if (r.cls == RefClass::edge) ++t.edge_holes, cls[i] = PixClass::edge_hole;
                             continue;
                         }
                         ++t.hits;
@@ -405,7 +452,12 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                             ++t.false_hits, cls[i] = PixClass::false_hit;
                             continue;
                         }
-                        if (!is_covered) continue;
+                        if (!is_covered) {
+                            if (r.cls == RefClass::edge &&
+                                (double(s.t) - r.t) * std::abs(dot(r.normal, wd)) > o.tolerance * r.spacing)
+                                ++t.edge_holes, cls[i] = PixClass::edge_hole;
+                            continue;
+                        }
                         const double cosr = std::abs(dot(r.normal, wd));
                         const double behind = (double(s.t) - r.t) * cosr;
                         if (behind > o.tolerance * r.spacing) {
@@ -447,6 +499,9 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                             case PixClass::false_hit:
                                 map[i] = pack(0.15, 0.35, 1);
                                 break;
+                            case PixClass::edge_hole:
+                                map[i] = pack(1, 0.6, 0.1);
+                                break;
                             case PixClass::none:
                                 if (ref[i].cls == RefClass::uncovered || ref[i].cls == RefClass::back_face)
                                     map[i] = pack(0.05, 0.25, 0.05);
@@ -481,6 +536,7 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                     {"p10", sorted_spacing[sorted_spacing.size() / 10]},
                     {"p90", sorted_spacing[sorted_spacing.size() * 9 / 10]}};
     j["reference_pixels"] = {{"covered", ref_covered},
+                             {"edge", ref_edge},
                              {"uncovered", ref_uncovered},
                              {"back_face", ref_back},
                              {"total", ref_pixels}};
@@ -494,11 +550,13 @@ void fidelity(Options o, const tool::CommonOptions& common) {
             return sj[k].is_null() ? std::nan("") : sj[k]["median"].get<double>();
         };
         std::printf(
-            "%s %s: holes %.3f%%, false hits %.3f%% of %llu covered pixels; depth error median %.3f, surface "
-            "distance median %.3f spacings; normal error median %.2f deg; %.2f Mrays/s\n",
+            "%s %s: holes %.3f%% (%.3f%% with the data's edges), false hits %.3f%% of %llu covered pixels; "
+            "depth error median %.3f, surface distance median %.3f spacings; normal error median %.2f deg; "
+            "%.2f Mrays/s\n",
             o.pool.c_str(), probes[si]->surface().c_str(), 100.0 * sj["hole_rate"].get<double>(),
-            100.0 * sj["false_hit_rate"].get<double>(), static_cast<unsigned long long>(totals[si].covered),
-            med("depth_error_spacings"), med("surface_distance_spacings"), med("normal_error_degrees"),
+            100.0 * sj["hole_rate_with_edges"].get<double>(), 100.0 * sj["false_hit_rate"].get<double>(),
+            static_cast<unsigned long long>(totals[si].covered), med("depth_error_spacings"),
+            med("surface_distance_spacings"), med("normal_error_degrees"),
             sj["rays_per_s"].get<double>() * 1e-6);
     }
     j["per_view"] = per_view;
