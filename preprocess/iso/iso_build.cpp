@@ -936,7 +936,8 @@ bool near_data(const Sums& s, const double q[3], std::size_t m, Point&& point) {
 /// decides which over the same points: a coarse leaf's corner projects onto data, a corner
 /// beyond the data's edge does not.
 CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const double q[3], double support,
-                         double sigma_max, double start_radius, std::vector<std::uint32_t>& ids) {
+                         double sigma_max, double start_radius, bool one_side,
+                         std::vector<std::uint32_t>& ids) {
     double radius = start_radius;
     double d_min2 = std::numeric_limits<double>::infinity();
     for (int round = 0; round < 80 && !std::isfinite(d_min2); ++round, radius *= 2) {
@@ -959,7 +960,16 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
         const double s = ps.sigma[id];
         return -d2 / (2 * s * s) - std::log(s);  // log of eq. 4.1 up to the constant sqrt(2 pi)
     };
-    for (std::uint32_t id : ids) lmax = std::max(lmax, log_weight(id));
+    std::uint32_t heaviest = ids.empty() ? 0 : ids[0];
+    for (std::uint32_t id : ids)
+        if (log_weight(id) > lmax) lmax = log_weight(id), heaviest = id;
+    if (one_side) {  // as in CornerEvaluator::evaluate: the heaviest point's side only
+        const double* nb = &ps.nrm[3 * heaviest];
+        std::erase_if(ids, [&](std::uint32_t id) {
+            const double* n = &ps.nrm[3 * id];
+            return n[0] * nb[0] + n[1] * nb[1] + n[2] * nb[2] < 0;
+        });
+    }
     Sums sums;
     for (std::uint32_t id : ids) {
         const double* p = &ps.pos[3 * id];
@@ -993,6 +1003,7 @@ struct CornerEvaluator {
     double support;       ///< in sigmas
     double sigma_max;     ///< largest sigma (far corners)
     double start_radius;  ///< first search radius for far corners
+    bool one_side;        ///< BuildOptions::one_side
 
     /// The `count` corners at qs[3 k .. 3 k + 2], all within the closed box [blo, bhi], into out[k].
     void evaluate(const double* qs, std::size_t count, const double blo[3], const double bhi[3],
@@ -1022,6 +1033,22 @@ struct CornerEvaluator {
                 arg[inside] = -d2[j] * cand.inv2s2[j];
                 inside += d2[j] <= cand.sup2[j];
             }
+            if (one_side && inside > 1) {
+                // The side of the surface Q belongs to: the normal of its heaviest point; points
+                // of the other side (normals more than 90 degrees away) do not count.
+                std::size_t best = 0;
+                for (std::size_t i = 1; i < inside; ++i)
+                    if (arg[i] > arg[best]) best = i;
+                const std::uint32_t b = idx[best];
+                std::size_t same = 0;
+                for (std::size_t i = 0; i < inside; ++i) {
+                    const std::uint32_t j = idx[i];
+                    if (cand.nx[j] * cand.nx[b] + cand.ny[j] * cand.ny[b] + cand.nz[j] * cand.nz[b] < 0)
+                        continue;
+                    idx[same] = j, arg[same] = arg[i], ++same;
+                }
+                inside = same;
+            }
             // arg >= -support^2 / 2 >= -50: inside exp_nonpositive's domain
             for (std::size_t i = 0; i < inside; ++i) w[i] = detail::exp_nonpositive(arg[i]);
             Sums sums;
@@ -1042,7 +1069,7 @@ struct CornerEvaluator {
                 }
             } else {
                 std::vector<std::uint32_t> ids;
-                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, ids);
+                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, ids);
                 ++s.far;
                 s.unsupported += !out[k].supported;
             }
@@ -1226,7 +1253,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     t0 = Clock::now();
     std::vector<double> sorted_support(ps.support);
     std::nth_element(sorted_support.begin(), sorted_support.begin() + n / 2, sorted_support.end());
-    const CornerEvaluator evaluator{index, ps, o.support, sigma_max, 2 * sorted_support[n / 2]};
+    const CornerEvaluator evaluator{index, ps, o.support, sigma_max, 2 * sorted_support[n / 2], o.one_side};
     // Every evaluated filled leaf owns 8 corner slots; slot_corner maps them into `corners`.
     // leaf_slot: node -> its evaluated leaf (UINT32_MAX for nodes never evaluated).
     std::vector<std::uint32_t> filled;

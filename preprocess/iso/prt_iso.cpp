@@ -29,7 +29,8 @@ become passive leaves (4.3.1); filled leaves next to leaves more than one level 
 and the leaves there are filled too (surface closure); leaves whose corners all share one sign
 hold no surface and are dropped. No surface where there is no data (issue 15): a leaf holds surface
 only when every corner projects onto its local plane within --data-reach radii of some point, so no
-sheet grows past a scan's edges and gaps wider than about 2 x data-reach radii stay open.
+sheet grows past a scan's edges and gaps wider than about 2 x data-reach radii stay open; and only
+the points on the side of a corner's heaviest point count there, so thin parts keep both sides.
 Storage: one byte per component, 56 bytes per leaf (--storage q8, thesis 4.4), floats (f32, 160
 bytes), or both. Writes OUTPUT with iso_info, iso_nodes and the leaf arrays; the other sections are
 carried over.)";
@@ -39,7 +40,8 @@ carried over.)";
 int main(int argc, char** argv) {
     std::string input, output, radius = "auto", storage = "q8", stats_json;
     prt::iso::BuildOptions options;
-    bool no_passive = false, no_balance = false, no_closure = false, keep_uncrossed = false;
+    bool no_passive = false, no_balance = false, no_closure = false, keep_uncrossed = false,
+         both_sides = false;
     return prt::tool::run(
         argc, argv, "prt-iso", k_description,
         [&](CLI::App& app, prt::tool::CommonOptions&) {
@@ -83,6 +85,11 @@ int main(int argc, char** argv) {
                    "this many radii of a point: gaps wider than about twice that stay open and no sheet "
                    "grows past the data (0 = off, the thesis's extrapolation)")
                 ->check(CLI::Range(0.0f, 3.0f));
+            app.add_flag(
+                "--both-sides", both_sides,
+                "Let every point within its support count at a corner (thesis eq. 4.1-4.3 as written); "
+                "by default only those on the side of the corner's heaviest point (normals within 90 "
+                "degrees of its), so the two sides of a thin part do not cancel");
             app.add_flag("--keep-uncrossed", keep_uncrossed,
                          "Keep filled leaves whose corners share one sign (they hold no surface)");
             app.add_option("-j,--threads", options.threads, "Worker threads (0 = all hardware threads)");
@@ -97,6 +104,7 @@ int main(int argc, char** argv) {
             options.balance = !no_balance;
             options.closure = !no_closure;
             options.drop_uncrossed = !keep_uncrossed;
+            options.one_side = !both_sides;
             try {
                 iso::validate(options);
             } catch (const Error& e) {
@@ -160,6 +168,7 @@ int main(int argc, char** argv) {
                 {"closure", options.closure},
                 {"drop_uncrossed", options.drop_uncrossed},
                 {"data_reach", options.data_reach},
+                {"one_side", options.one_side},
                 {"storage", storage}};
             writer.add_provenance("prt-iso", PRT_VERSION, parameters.dump());
             const std::uint64_t bytes = writer.write(output);

@@ -43,11 +43,12 @@ bool hits(const core::IsoView& v, double x, double z) {
                            p, h, st);
 }
 
-iso::IsoModel build(const PointSet& s, float data_reach) {
+iso::IsoModel build(const PointSet& s, float data_reach, bool one_side = true) {
     iso::BuildOptions o;
     o.max_level = 9;
     o.threads = 2;
     o.data_reach = data_reach;
+    o.one_side = one_side;
     o.storage = iso::Storage::f32;
     return iso::build_iso(s.input(), o);
 }
@@ -100,4 +101,38 @@ TEST(IsoSupport, WideHolesStayOpenNarrowGapsAreBridged) {
     EXPECT_EQ(centre_hit, 0) << "the middle of a hole 12 spacings wide is bridged";
     EXPECT_TRUE(hits(v, 0.5, 0.5)) << "a single missing point leaves a hole";
     EXPECT_TRUE(hits(v, 0.5 + 0.3 * k_h, 0.5 - 0.2 * k_h));
+}
+
+TEST(IsoSupport, ThinPartsKeepBothSides) {
+    // A plate 1.2 spacings thick: two sheets with opposite normals, closer than the Gaussians' reach.
+    PointSet s;
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> j(-0.2 * k_h, 0.2 * k_h);
+    const double half = 0.6 * k_h;
+    for (double x = -0.5; x <= 0.5 + 1e-9; x += k_h)
+        for (double z = -0.5; z <= 0.5 + 1e-9; z += k_h)
+            for (int side : {1, -1}) {
+                s.positions.push_back({float(x + j(rng)), float(side * half), float(z + j(rng))});
+                s.normals.push_back({0.0f, float(side), 0.0f});
+            }
+    const iso::IsoModel one = build(s, 1.0f, true), both = build(s, 1.0f, false);
+    const core::IsoView v1 = view_of(one), v2 = view_of(both);
+    int rays = 0, hit_one = 0, near_top = 0, near_top_both = 0;
+    for (double x = -0.4; x <= 0.4; x += 0.0173)
+        for (double z = -0.4; z <= 0.4; z += 0.031) {
+            ++rays;
+            core::IsoHit h;
+            core::IsoStats st;
+            const core::IsoParams p;
+            const core::Vec3 o{float(x), 1.0f, float(z)}, d{0, -1, 0};
+            if (core::trace_iso(v1, o, d, core::k_inf, false, p, h, st)) {
+                ++hit_one;
+                near_top += std::abs((1.0 - h.t) - half) < 0.5 * k_h && h.normal.y > 0.9f;
+            }
+            if (core::trace_iso(v2, o, d, core::k_inf, false, p, h, st))
+                near_top_both += std::abs((1.0 - h.t) - half) < 0.5 * k_h && h.normal.y > 0.9f;
+        }
+    EXPECT_EQ(hit_one, rays) << "the plate's top is hit everywhere";
+    EXPECT_EQ(near_top, rays) << "at the top sheet, facing up";
+    EXPECT_LT(near_top_both, rays / 2) << "with both sides counted the sheets cancel: the test can tell";
 }
