@@ -11,12 +11,15 @@
 int main(int argc, char** argv) {
     std::string input, output;
     prt::pre::RadiiParams params;
-    std::string stats_json;
+    std::string stats_json, scope = "local";
     return prt::tool::run(
         argc, argv, "prt-radii",
         "Splat radii (thesis 3.1): each point's radius is the distance to its k-th nearest neighbour "
-        "(exact k-NN, FLANN kd-tree, all cores). Outliers are clamped: with m the median radius, radii "
-        "above F*m become F*m (F = --clamp-factor). Reads the positions of INPUT (local frame) and writes "
+        "(exact k-NN, FLANN kd-tree, all cores). Outliers are clamped: with m the median raw radius of the "
+        "point's k neighbours (--clamp-scope local) or of the whole model (global), radii above F*m become "
+        "F*m "
+        "(F = --clamp-factor): an isolated point among dense ones is clamped, a sparse region is not. Reads "
+        "the positions of INPUT (local frame) and writes "
         "OUTPUT with a radii section; the other sections are carried over, an existing octree (which "
         "depends on the radii) is dropped.",
         [&](CLI::App& app, prt::tool::CommonOptions&) {
@@ -28,8 +31,14 @@ int main(int argc, char** argv) {
                 ->check(CLI::Range(1u, 1024u));
             app.add_option(
                    "--clamp-factor", params.clamp_factor,
-                   "Clamp radii above this factor times the median radius to that value (0 = no clamping)")
+                   "Clamp radii above this factor times the median radius of --clamp-scope to that value "
+                   "(0 = no clamping)")
                 ->check(CLI::Range(0.0f, 1.0e6f));
+            app.add_option(
+                   "--clamp-scope", scope,
+                   "local: the median raw radius of the point's k neighbours (uneven scans keep their "
+                   "sparse regions); global: the whole model's median radius")
+                ->check(CLI::IsMember({"local", "global"}));
             app.add_option("-j,--threads", params.threads, "Worker threads (0 = all hardware threads)");
             app.add_option("--stats-json", stats_json,
                            "Also write the statistics as JSON to this file (benchmarks)");
@@ -42,6 +51,7 @@ int main(int argc, char** argv) {
             if (positions.size() <= params.k)
                 throw Error(input + ": " + std::to_string(positions.size()) +
                             " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
+            params.scope = pre::parse_clamp_scope(scope);
             tool::Progress progress("prt-radii: k-NN search", positions.size(), common.quiet);
             pre::RadiiStats stats;
             std::vector<float> radii;
@@ -62,7 +72,8 @@ int main(int argc, char** argv) {
                 writer.remove(t);
             }
             writer.add_array(pool::SectionType::radii, std::move(radii));
-            const nlohmann::json parameters = {{"k", params.k}, {"clamp_factor", params.clamp_factor}};
+            const nlohmann::json parameters = {
+                {"k", params.k}, {"clamp_factor", params.clamp_factor}, {"clamp_scope", scope}};
             writer.add_provenance("prt-radii", PRT_VERSION, parameters.dump());
             const std::uint64_t bytes = writer.write(output);
 
@@ -91,7 +102,14 @@ int main(int argc, char** argv) {
                        "prt-radii: %llu points, k = %u: radius min %.6g, median %.6g, mean %.6g, max %.6g",
                        static_cast<unsigned long long>(stats.points), params.k, stats.min, stats.median,
                        stats.mean, stats.max);
-            if (params.clamp_factor > 0)
+            if (params.clamp_factor > 0 && params.scope == pre::ClampScope::local)
+                tool::note(common.quiet,
+                           "prt-radii: clamped %llu radii (%.3f%%) to %.3g x the median radius of their %u "
+                           "neighbours",
+                           static_cast<unsigned long long>(stats.clamped),
+                           100.0 * double(stats.clamped) / double(stats.points), double(params.clamp_factor),
+                           params.k);
+            else if (params.clamp_factor > 0)
                 tool::note(common.quiet,
                            "prt-radii: clamped %llu radii (%.3f%%) to %.3g x median %.6g = %.6g",
                            static_cast<unsigned long long>(stats.clamped),

@@ -60,8 +60,19 @@ std::vector<std::uint32_t> morton_order(std::span<const pool::Float3> p, unsigne
 
 }  // namespace
 
+const char* clamp_scope_name(ClampScope s) {
+    return s == ClampScope::local ? "local" : "global";
+}
+
+ClampScope parse_clamp_scope(const std::string& name) {
+    if (name == "local") return ClampScope::local;
+    if (name == "global") return ClampScope::global;
+    throw Error("unknown clamp scope '" + name + "' (local or global)");
+}
+
 std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::uint32_t k, unsigned threads,
-                                 const std::function<void(std::uint64_t)>& progress, RadiiStats* stats) {
+                                 const std::function<void(std::uint64_t)>& progress, RadiiStats* stats,
+                                 std::vector<std::uint32_t>* neighbours) {
     static_assert(sizeof(pool::Float3) == 3 * sizeof(float));
     const std::size_t n = positions.size();
     if (k == 0) throw Error("k-NN radii: k must be at least 1");
@@ -87,16 +98,28 @@ std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::u
     // which keeps them in cache (input order may be random).
     const std::vector<std::uint32_t> order = morton_order(positions, threads);
     std::vector<float> radii(n);
+    if (neighbours) neighbours->assign(n * std::size_t(k), 0);
     std::atomic<std::uint64_t> done{0};
     const flann::SearchParams search(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false);
     parallel_chunks(n, 4096, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
         // k + 1 results: the query point itself is found at distance 0.
         flann::KNNSimpleResultSet<float> result(k + 1);
+        std::vector<std::size_t> ids(k + 1);
+        std::vector<float> d2(k + 1);
         for (std::size_t j = b; j < e; ++j) {
             const std::uint32_t i = order[j];
             result.clear();
             index.findNeighbors(result, &positions[i].x, search);
             radii[i] = std::sqrt(result.worstDist());
+            if (neighbours) {
+                // the k others: the query itself is among the k + 1 (first, unless coincident
+                // points tie with it)
+                result.copy(ids.data(), d2.data(), k + 1);
+                std::uint32_t* out = neighbours->data() + std::size_t(i) * k;
+                std::uint32_t m = 0;
+                for (std::uint32_t t = 0; t <= k && m < k; ++t)
+                    if (ids[t] != i) out[m++] = static_cast<std::uint32_t>(ids[t]);
+            }
         }
         const std::uint64_t total = done.fetch_add(e - b) + (e - b);
         if (worker == 0 && progress) progress(total);
@@ -149,12 +172,45 @@ void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stat
     stats.median = median_of(radii);
 }
 
+void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_t>& neighbours,
+                       std::uint32_t k, float clamp_factor, RadiiStats& stats, unsigned threads) {
+    if (!(clamp_factor > 0) || !std::isfinite(clamp_factor))
+        throw Error("k-NN radii: the local clamp factor must be finite and > 0");
+    const std::size_t n = radii.size();
+    if (neighbours.size() != n * std::size_t(k)) throw Error("k-NN radii: neighbour list of the wrong size");
+    std::vector<float> out(radii);
+    std::atomic<std::uint64_t> clamped{0};
+    parallel_chunks(n, 4096, resolve_threads(threads), [&](std::size_t b, std::size_t e, unsigned) {
+        std::vector<float> v(k);
+        std::uint64_t c = 0;
+        for (std::size_t i = b; i < e; ++i) {
+            for (std::uint32_t j = 0; j < k; ++j) v[j] = radii[neighbours[i * k + j]];
+            std::nth_element(v.begin(), v.begin() + k / 2, v.end());
+            const float limit = clamp_factor * v[k / 2];
+            if (radii[i] > limit) out[i] = limit, ++c;
+        }
+        clamped += c;
+    });
+    clamp_radii(radii, 0.0f, stats);  // raw_median (no global clamp)
+    const double raw_median = stats.raw_median;
+    radii.swap(out);
+    clamp_radii(radii, 0.0f, stats);  // the statistics of the result
+    stats.raw_median = raw_median;
+    stats.clamped = clamped.load();
+}
+
 std::vector<float> compute_radii(std::span<const pool::Float3> positions, const RadiiParams& params,
                                  RadiiStats* stats, const std::function<void(std::uint64_t)>& progress) {
     const double start = tool::now_seconds();
     RadiiStats local;
-    std::vector<float> radii = knn_distances(positions, params.k, params.threads, progress, &local);
-    clamp_radii(radii, params.clamp_factor, local);
+    const bool local_clamp = params.scope == ClampScope::local && params.clamp_factor > 0;
+    std::vector<std::uint32_t> neighbours;
+    std::vector<float> radii = knn_distances(positions, params.k, params.threads, progress, &local,
+                                             local_clamp ? &neighbours : nullptr);
+    if (local_clamp)
+        clamp_radii_local(radii, neighbours, params.k, params.clamp_factor, local, params.threads);
+    else
+        clamp_radii(radii, params.clamp_factor, local);
     local.seconds = tool::now_seconds() - start;
     if (stats) *stats = local;
     return radii;

@@ -5,16 +5,31 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "prt/formats/pool_layout.h"
 
 namespace prt::pre {
 
+/// What a radius is compared with before it is clamped (RadiiParams::clamp_factor).
+enum class ClampScope : std::uint32_t {
+    /// The median raw radius of the point's own k neighbours (issue 15): an isolated point among
+    /// dense ones is clamped, a sparse region (far from the scanner, grazing, decimated) is not.
+    local,
+    /// The median radius of the whole model (the rule before issue 15): on scans whose density
+    /// varies by more than the factor it clamps whole regions and leaves holes between them.
+    global,
+};
+/// "local", "global"; parse throws prt::Error on another name.
+const char* clamp_scope_name(ClampScope s);
+ClampScope parse_clamp_scope(const std::string& name);
+
 struct RadiiParams {
     std::uint32_t k = 9;        ///< thesis 3.1: radius = distance to the k-th nearest neighbour
-    float clamp_factor = 3.0f;  ///< radii above clamp_factor x the median radius are clamped to it; 0 = off
-    unsigned threads = 0;       ///< worker threads; 0 = every hardware thread
+    float clamp_factor = 3.0f;  ///< radii above clamp_factor x the scope's median are clamped to it; 0 = off
+    ClampScope scope = ClampScope::local;
+    unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
 };
 
 struct RadiiStats {
@@ -22,7 +37,7 @@ struct RadiiStats {
     std::uint64_t clamped = 0;  ///< radii lowered to the clamp limit
     std::uint64_t zero = 0;     ///< radii equal to 0 (k or more coincident neighbours): prt-octree skips them
     double raw_median = 0;      ///< median k-NN distance before clamping
-    double clamp_limit = 0;     ///< clamp_factor x raw_median (0 when clamping is off)
+    double clamp_limit = 0;     ///< global scope: clamp_factor x raw_median (0 otherwise)
     double min = 0, median = 0, mean = 0, max = 0;  ///< of the final radii
     double seconds_index = 0, seconds_search = 0, seconds = 0;
 };
@@ -30,17 +45,25 @@ struct RadiiStats {
 /// Distance from every point to its k-th nearest other point (exact k-NN through a FLANN
 /// KDTreeSingleIndex, searched from `threads` threads). Coincident points count as neighbours at
 /// distance 0. Throws prt::Error when there are not more than k points. `progress`, if set, is
-/// called from one thread with the number of points done.
+/// called from one thread with the number of points done. With `neighbours`, also the indices
+/// of each point's k nearest other points (neighbours[i * k + j], nearest first).
 std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::uint32_t k, unsigned threads,
                                  const std::function<void(std::uint64_t)>& progress = {},
-                                 RadiiStats* stats = nullptr);
+                                 RadiiStats* stats = nullptr,
+                                 std::vector<std::uint32_t>* neighbours = nullptr);
 
 /// The documented outlier rule: with m the median of `radii` and F = clamp_factor > 0, every radius
 /// above F * m becomes F * m (isolated points otherwise get disks spanning the model). Fills the
 /// clamp fields and the statistics of the result in `stats`.
 void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stats);
 
-/// knn_distances() then clamp_radii().
+/// The local rule (issue 15): with m_i the median raw radius of point i's k neighbours
+/// (`neighbours` as knn_distances gives them) and F = clamp_factor > 0, a radius above F * m_i
+/// becomes F * m_i. Fills the statistics of the result in `stats`.
+void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_t>& neighbours,
+                       std::uint32_t k, float clamp_factor, RadiiStats& stats, unsigned threads = 0);
+
+/// knn_distances() then the clamp of params.scope.
 std::vector<float> compute_radii(std::span<const pool::Float3> positions, const RadiiParams& params,
                                  RadiiStats* stats = nullptr,
                                  const std::function<void(std::uint64_t)>& progress = {});

@@ -76,9 +76,10 @@ TEST(KnnRadii, ClampRuleAndStatistics) {
     EXPECT_FLOAT_EQ(four[0], 2.5f);
 }
 
-TEST(KnnRadii, ComputeRadiiClampsTheOutlier) {
+TEST(KnnRadii, ComputeRadiiClampsTheOutlierGlobally) {
     const std::vector<Float3> p = mixed_points();
     prt::pre::RadiiParams params;
+    params.scope = prt::pre::ClampScope::global;
     prt::pre::RadiiStats stats;
     const std::vector<float> r = prt::pre::compute_radii(p, params, &stats);
     const std::vector<double> raw = prt::test::brute_force_knn(p, 9);
@@ -98,6 +99,64 @@ TEST(KnnRadii, ComputeRadiiClampsTheOutlier) {
     }
     EXPECT_GE(expected_clamped, 1u);  // at least the far outlier
     EXPECT_EQ(stats.clamped, expected_clamped);
+}
+
+/// Brute force: the indices of each point's k nearest other points (ties by index).
+std::vector<std::vector<std::size_t>> brute_neighbours(const std::vector<Float3>& p, std::uint32_t k) {
+    std::vector<std::vector<std::size_t>> out(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        std::vector<std::pair<double, std::size_t>> d;
+        for (std::size_t j = 0; j < p.size(); ++j) {
+            if (j == i) continue;
+            const double x = double(p[i].x) - p[j].x, y = double(p[i].y) - p[j].y,
+                         z = double(p[i].z) - p[j].z;
+            d.push_back({x * x + y * y + z * z, j});
+        }
+        std::partial_sort(d.begin(), d.begin() + k, d.end());
+        for (std::uint32_t t = 0; t < k; ++t) out[i].push_back(d[t].second);
+    }
+    return out;
+}
+
+TEST(KnnRadii, LocalClampKeepsSparseRegionsAndClampsIsolatedPoints) {
+    // A dense square (spacing 0.01), a square 8 times sparser beside it, one point floating 1.0
+    // above the dense one: the global rule clamps the whole sparse square, the local one only the
+    // floating point.
+    std::vector<Float3> p;
+    for (int i = 0; i < 30; ++i)
+        for (int j = 0; j < 30; ++j) p.push_back({0.01f * i + 0.001f * (j % 3), 0, 0.01f * j});
+    for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) p.push_back({1 + 0.08f * i, 0, 0.08f * j + 0.004f * (i % 2)});
+    p.push_back({0.15f, 1.0f, 0.15f});
+    const std::uint32_t k = 9;
+    const std::vector<double> raw = prt::test::brute_force_knn(p, k);
+    const auto nb = brute_neighbours(p, k);
+    prt::pre::RadiiParams params;  // local, factor 3
+    prt::pre::RadiiStats stats;
+    const std::vector<float> r = prt::pre::compute_radii(p, params, &stats);
+    std::uint64_t expected = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        std::vector<double> v;
+        for (std::size_t j : nb[i]) v.push_back(raw[j]);
+        std::sort(v.begin(), v.end());
+        const double limit = 3.0 * v[k / 2];
+        if (raw[i] > limit * (1 + 1e-5)) {
+            ++expected;
+            EXPECT_NEAR(r[i], limit, 1e-5 * limit) << i;
+        } else if (raw[i] < limit * (1 - 1e-5)) {
+            EXPECT_NEAR(r[i], raw[i], 1e-5 * raw[i] + 1e-7) << i;
+        }
+    }
+    EXPECT_EQ(stats.clamped, expected);
+    EXPECT_LT(r.back(), 0.5 * raw.back()) << "the floating point is clamped";
+    for (std::size_t i = 900; i < 900 + 144; ++i)
+        EXPECT_NEAR(r[i], raw[i], 1e-5 * raw[i]) << "sparse point " << i;
+    // the global rule clamps most of the sparse square
+    params.scope = prt::pre::ClampScope::global;
+    const std::vector<float> g = prt::pre::compute_radii(p, params, &stats);
+    int sparse_clamped = 0;
+    for (std::size_t i = 900; i < 900 + 144; ++i) sparse_clamped += g[i] < 0.99 * raw[i];
+    EXPECT_GT(sparse_clamped, 100);
 }
 
 }  // namespace
