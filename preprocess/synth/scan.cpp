@@ -33,8 +33,10 @@ constexpr double k_uniform_margin = 0.1;
 /// Albedo of every part of a shape other than the room (whose parts' albedo is their color's
 /// luminance, so the red and green walls are darker than the white ones).
 constexpr double k_albedo = 0.8;
-/// The most rays a scan may cast (its grid before the field's cone is cut out).
+/// The most rays a scan may cast (its grid before the field's cone is cut out), and the most scan
+/// lines (each costs ~72 bytes of bookkeeping; 1e7 is a line step of 3.6e-5 degrees all round).
 constexpr double k_max_rays = 4294967295.0;
+constexpr double k_max_lines = 1e7;
 
 Vec3 add(const Vec3& a, const Vec3& b) {
     return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
@@ -300,6 +302,9 @@ ScanResult scan(const ScanOptions& options,
         const double nk = double(std::max<std::int64_t>(0, f.k1 - f.k0 + 1));
         const double nj = double(std::max<std::int64_t>(0, f.j1 - f.j0 + 1));
         grid_rays += nk * nj;
+        if (nj > 0 && double(lines.size()) + nk > k_max_lines)
+            throw Error("the scan pattern has more than " + num(k_max_lines) +
+                        " scan lines: increase --line-step");
         if (grid_rays > k_max_rays)
             throw Error("the scan pattern has more than " + num(k_max_rays) +
                         " rays: increase --sample-step or --line-step");

@@ -620,7 +620,8 @@ TEST(PrtSynthScanTool, BadOptionsFailWithOneLine) {
              Bad{"sphere --scan --outliers 1.5" + o, 1, "--outliers"},
              Bad{"sphere --scan --range-noise -1" + o, 1, "--range-noise"},
              Bad{"sphere --scan --scan-axis 0,0,0" + o, 1, "--scan-axis"},
-             Bad{"sphere --scan --sample-step 1e-5 --line-step 1e-5" + o, 1, "more than"},
+             Bad{"sphere --scan --sample-step 1e-5 --line-step 1e-5" + o, 1, "rays"},
+             Bad{"sphere --scan --sample-step 10 --line-step 1e-7" + o, 1, "scan lines"},
              Bad{"sphere --scan -o /nonexistent-dir/x.pool", 1, "/nonexistent-dir/x.pool"},
          }) {
         const ToolRun r = dir.run(b.args);
