@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <nlohmann/json.hpp>
+#include <utility>
 
 #include "prt/error.h"
 
@@ -99,8 +100,8 @@ const char* shape_name(ShapeKind kind) {
 }
 
 ShapeKind shape_kind(const std::string& name) {
-    for (ShapeKind k :
-         {ShapeKind::sphere, ShapeKind::torus, ShapeKind::cube, ShapeKind::plane, ShapeKind::room, ShapeKind::ring})
+    for (ShapeKind k : {ShapeKind::sphere, ShapeKind::torus, ShapeKind::cube, ShapeKind::plane,
+                        ShapeKind::room, ShapeKind::ring})
         if (name == shape_name(k)) return k;
     throw Error("unknown shape \"" + name + "\" (expected sphere, torus, cube, plane, room or ring)");
 }
@@ -291,13 +292,17 @@ SurfacePoint closest(const Ring& ring, const Vec3& p) {
     const double rho = std::hypot(p[0], p[2]);
     const Vec3 radial = rho > 0 ? Vec3{p[0] / rho, 0, p[2] / rho} : Vec3{1, 0, 0};
     const double mid = ring.radius + 0.5 * ring.thickness;
-    const SurfacePoint b = closest_box({0.5 * ring.thickness, 0.5 * ring.height, 1.0}, {rho - mid, p[1], 0.0});
+    const SurfacePoint b =
+        closest_box({0.5 * ring.thickness, 0.5 * ring.height, 1.0}, {rho - mid, p[1], 0.0});
     SurfacePoint r;
     const double rho_s = mid + b.point[0];
     r.point = {radial[0] * rho_s, b.point[1], radial[2] * rho_s};
     r.normal = {radial[0] * b.normal[0], b.normal[1], radial[2] * b.normal[0]};
     r.signed_distance = b.signed_distance;
-    r.part = b.part == 1 ? k_ring_inner : b.part == 0 ? k_ring_outer : b.part == 2 ? k_ring_top : k_ring_part_count;
+    r.part = b.part == 1   ? k_ring_inner
+             : b.part == 0 ? k_ring_outer
+             : b.part == 2 ? k_ring_top
+                           : k_ring_part_count;
     return r;
 }
 
@@ -326,6 +331,387 @@ SurfacePoint closest(const Shape& shape, const Vec3& world_point) {
     }
     r.point = add(mul(r.point, shape.scale), shape.offset);
     r.signed_distance *= shape.scale;
+    return r;
+}
+
+// ---- Ray casting ---------------------------------------------------------------------------------
+
+namespace {
+
+constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+/// A first hit in a shape's own frame (scale 1, no offset); t along the unit direction.
+struct LocalHit {
+    double t = 0;
+    Vec3 point{};
+    Vec3 normal{};
+    int part = 0;
+};
+using MaybeHit = std::optional<LocalHit>;
+
+/// Both roots t0 <= t1 of |f + t u|^2 = r^2 for the unit direction u and the offset f of the ray
+/// origin from the centre, or false. Haines et al. (Ray Tracing Gems 2019, ch. 7): the discriminant
+/// from the perpendicular offset at closest approach, and the smaller root from the product of the
+/// roots, so neither a distant origin nor an origin near the surface loses digits.
+bool sphere_roots(const Vec3& f, const Vec3& u, double r, double& t0, double& t1) {
+    const double b = -dot(f, u);  // closest approach
+    const double q = norm(add(f, mul(u, b)));
+    const double disc = (r - q) * (r + q);
+    if (!(disc >= 0)) return false;
+    const double s = std::sqrt(disc);
+    const double fl = norm(f);
+    const double c = (fl - r) * (fl + r);  // t0 t1
+    if (b > 0) {
+        t1 = b + s;
+        t0 = c / t1;
+    } else if (b < 0) {
+        t0 = b - s;
+        t1 = c / t0;
+    } else {
+        t0 = -s;
+        t1 = s;
+    }
+    if (t0 > t1) std::swap(t0, t1);
+    return true;
+}
+
+/// The first root in [0, t_max] of a pair t0 <= t1 (entry, exit of a convex solid), with which.
+bool first_root(double t0, double t1, double t_max, double& t, bool& exiting) {
+    if (t0 >= 0) {
+        t = t0;
+        exiting = false;
+    } else if (t1 >= 0) {
+        t = t1;
+        exiting = true;
+    } else {
+        return false;
+    }
+    return t <= t_max;
+}
+
+MaybeHit sphere_hit(const Vec3& center, double r, const Vec3& o, const Vec3& u, double t_max) {
+    double t0, t1, t;
+    bool exiting;
+    if (!sphere_roots(sub(o, center), u, r, t0, t1) || !first_root(t0, t1, t_max, t, exiting)) return {};
+    LocalHit h;
+    h.t = t;
+    const Vec3 w = sub(add(o, mul(u, t)), center);
+    const double l = norm(w);
+    h.normal = l > 0 ? mul(w, 1.0 / l) : Vec3{0, 1, 0};
+    h.point = add(center, mul(h.normal, r));  // on the sphere to rounding
+    return h;
+}
+
+/// Slabs (Kay and Kajiya 1986): entry and exit of the line o + t u (all t) with the box [-h, h],
+/// and the axis of each; false when the line misses the box.
+bool box_roots(const Vec3& half, const Vec3& o, const Vec3& u, double& t0, int& a0, double& t1, int& a1) {
+    t0 = -k_inf;
+    t1 = k_inf;
+    a0 = a1 = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (u[a] == 0) {
+            if (std::fabs(o[a]) > half[a]) return false;
+            continue;
+        }
+        double ta = (-half[a] - o[a]) / u[a], tb = (half[a] - o[a]) / u[a];
+        if (ta > tb) std::swap(ta, tb);
+        if (ta > t0) t0 = ta, a0 = a;
+        if (tb < t1) t1 = tb, a1 = a;
+    }
+    return t0 <= t1;
+}
+
+/// First crossing of the box [-h, h]'s surface; part = face 2 axis + (negative side), normal outward.
+MaybeHit box_hit(const Vec3& half, const Vec3& o, const Vec3& u, double t_max) {
+    double t0, t1, t;
+    int a0, a1;
+    bool exiting;
+    if (!box_roots(half, o, u, t0, a0, t1, a1) || !first_root(t0, t1, t_max, t, exiting)) return {};
+    const int axis = exiting ? a1 : a0;
+    // Entering through the face the ray faces; leaving through the one it moves towards.
+    const double side = (u[axis] > 0) == exiting ? 1.0 : -1.0;
+    LocalHit h;
+    h.t = t;
+    for (int a = 0; a < 3; ++a) h.point[a] = std::clamp(o[a] + t * u[a], -half[a], half[a]);
+    h.point[axis] = side * half[axis];
+    h.normal = {0, 0, 0};
+    h.normal[axis] = side;
+    h.part = 2 * axis + (side < 0 ? 1 : 0);
+    return h;
+}
+
+MaybeHit plane_hit(const Plane& s, const Vec3& o, const Vec3& u, double t_max) {
+    if (u[1] == 0) return {};  // in or parallel to the plane: grazing, no crossing
+    const double t = -o[1] / u[1];
+    if (!(t >= 0 && t <= t_max)) return {};
+    const double h = 0.5 * s.size;
+    LocalHit r;
+    r.t = t;
+    r.point = {o[0] + t * u[0], 0.0, o[2] + t * u[2]};
+    if (std::fabs(r.point[0]) > h || std::fabs(r.point[2]) > h) return {};
+    r.normal = {0, 1, 0};
+    return r;
+}
+
+MaybeHit room_hit(const Room& room, const Vec3& o, const Vec3& u, double t_max) {
+    const double hs = 0.5 * room.size;
+    MaybeHit best = box_hit({hs, hs, hs}, o, u, t_max);
+    if (best) {  // the walls: the box's faces with normals into the room
+        static constexpr int k_face_part[6] = {k_room_right_wall, k_room_left_wall,  k_room_ceiling,
+                                               k_room_floor,      k_room_front_wall, k_room_back_wall};
+        best->part = k_face_part[best->part];
+        best->normal = mul(best->normal, -1.0);
+    }
+    if (MaybeHit s = sphere_hit(room.sphere_center, room.sphere_radius, o, u, t_max);
+        s && (!best || s->t < best->t)) {
+        s->part = k_room_sphere;
+        best = s;
+    }
+    const double yaw = room.cube_yaw_degrees * k_pi / 180.0;
+    const double he = 0.5 * room.cube_edge;
+    if (MaybeHit c =
+            box_hit({he, he, he}, rotate_y(sub(o, room.cube_center), -yaw), rotate_y(u, -yaw), t_max);
+        c && (!best || c->t < best->t)) {
+        c->point = add(rotate_y(c->point, yaw), room.cube_center);
+        c->normal = rotate_y(c->normal, yaw);
+        c->part = k_room_cube;
+        best = c;
+    }
+    return best;
+}
+
+/// A closed interval of the ray parameter with what bounds it at each end (RingPart, or
+/// k_ring_part_count for the bottom).
+struct Span {
+    double lo = -k_inf, hi = k_inf;
+    int lo_part = 0, hi_part = 0;
+};
+
+/// Where the line o + t u (u unit) is within distance `radius` of the y axis: false if nowhere,
+/// `span` the whole line when the line is parallel to the axis and inside.
+bool cylinder_span(double radius, const Vec3& o, const Vec3& u, int part, Span& span) {
+    const double a = u[0] * u[0] + u[2] * u[2];
+    const double wl = std::hypot(o[0], o[2]);
+    span = Span{-k_inf, k_inf, part, part};
+    if (a == 0) return wl <= radius;
+    // The 2D closest-approach quadratic (as sphere_roots), direction (u_x, u_z) of length sqrt(a).
+    const double b = -(o[0] * u[0] + o[2] * u[2]) / a;
+    const double q = std::hypot(o[0] + b * u[0], o[2] + b * u[2]);
+    const double disc = (radius - q) * (radius + q) / a;
+    if (!(disc >= 0)) return false;
+    const double s = std::sqrt(disc);
+    const double c = (wl - radius) * (wl + radius) / a;
+    double t0, t1;
+    if (b > 0) {
+        t1 = b + s;
+        t0 = c / t1;
+    } else if (b < 0) {
+        t0 = b - s;
+        t1 = c / t0;
+    } else {
+        t0 = -s;
+        t1 = s;
+    }
+    span.lo = std::min(t0, t1);
+    span.hi = std::max(t0, t1);
+    return true;
+}
+
+/// The ring as a solid: (inside the outer cylinder and the slab |y| <= h/2) minus the open inside
+/// of the inner cylinder; its boundary points along the ray in order, the first one >= 0 wins.
+MaybeHit ring_hit(const Ring& ring, const Vec3& o, const Vec3& u, double t_max) {
+    const double hh = 0.5 * ring.height, outer = ring.radius + ring.thickness;
+    Span band;
+    if (!cylinder_span(outer, o, u, k_ring_outer, band)) return {};
+    if (u[1] == 0) {
+        if (std::fabs(o[1]) > hh) return {};
+    } else {
+        double ta = (-hh - o[1]) / u[1], tb = (hh - o[1]) / u[1];
+        int pa = k_ring_part_count, pb = k_ring_top;  // y = -h/2 (bottom), y = +h/2 (top)
+        if (ta > tb) std::swap(ta, tb), std::swap(pa, pb);
+        if (ta > band.lo) band.lo = ta, band.lo_part = pa;
+        if (tb < band.hi) band.hi = tb, band.hi_part = pb;
+    }
+    if (band.lo > band.hi) return {};
+    std::array<std::pair<double, int>, 4> ends;
+    int n = 0;
+    Span hole;
+    if (!cylinder_span(ring.radius, o, u, k_ring_inner, hole)) {
+        ends[n++] = {band.lo, band.lo_part};
+        ends[n++] = {band.hi, band.hi_part};
+    } else {
+        if (hole.lo == -k_inf && hole.hi == k_inf) return {};  // along the axis, inside the hole
+        if (band.lo <= std::min(band.hi, hole.lo)) {
+            ends[n++] = {band.lo, band.lo_part};
+            ends[n++] =
+                hole.lo < band.hi ? std::pair{hole.lo, int(k_ring_inner)} : std::pair{band.hi, band.hi_part};
+        }
+        if (std::max(band.lo, hole.hi) <= band.hi) {
+            ends[n++] =
+                hole.hi > band.lo ? std::pair{hole.hi, int(k_ring_inner)} : std::pair{band.lo, band.lo_part};
+            ends[n++] = {band.hi, band.hi_part};
+        }
+    }
+    for (int i = 0; i < n; ++i) {
+        const auto [t, part] = ends[i];
+        if (t < 0) continue;
+        if (t > t_max) return {};
+        LocalHit h;
+        h.t = t;
+        h.part = part;
+        Vec3 p = add(o, mul(u, t));
+        const double rho = std::hypot(p[0], p[2]);
+        const Vec3 radial = rho > 0 ? Vec3{p[0] / rho, 0, p[2] / rho} : Vec3{1, 0, 0};
+        if (part == k_ring_outer || part == k_ring_inner) {
+            const double r = part == k_ring_outer ? outer : ring.radius;
+            p = {radial[0] * r, std::clamp(p[1], -hh, hh), radial[2] * r};
+            h.normal = part == k_ring_outer ? radial : mul(radial, -1.0);
+        } else {
+            const double r = std::clamp(rho, ring.radius, outer);
+            p = {radial[0] * r, part == k_ring_top ? hh : -hh, radial[2] * r};
+            h.normal = {0, part == k_ring_top ? 1.0 : -1.0, 0};
+        }
+        h.point = p;
+        return h;
+    }
+    return {};
+}
+
+/// Bisects [a, b] (f(a), f(b) of opposite signs, or one zero) down to adjacent doubles; returns
+/// the end with the smaller |f|.
+template <class F>
+double bisect(const F& f, double a, double b) {
+    double fa = f(a), fb = f(b);
+    if (fa == 0) return a;
+    if (fb == 0) return b;
+    for (int i = 0; i < 2200; ++i) {  // ~64 halvings reach adjacent doubles; the bound is a guard
+        const double m = 0.5 * (a + b);
+        if (!(m > a && m < b)) break;
+        const double fm = f(m);
+        if (fm == 0) return m;
+        if ((fm < 0) == (fa < 0))
+            a = m, fa = fm;
+        else
+            b = m, fb = fm;
+    }
+    return std::fabs(fa) <= std::fabs(fb) ? a : b;
+}
+
+/// The torus: its points satisfy the quartic f(x) = (|p|^2 + R^2 - r^2)^2 - 4 R^2 (p_x^2 + p_z^2) = 0
+/// along the ray, and f has the sign of the exact signed distance, (|p|^2 + R^2 - r^2 - 2 R rho)
+/// being (rho - R)^2 + y^2 - r^2 and the other factor positive for r < R. Between consecutive
+/// critical points f is monotone, so each piece holds at most one root, present exactly when the
+/// signed distance differs in sign at its ends: the first such piece is bisected on the signed
+/// distance itself (exact to rounding; the polynomial only places the pieces). The critical points
+/// (roots of the cubic f') come the same way from the roots of the quadratic f''.
+MaybeHit torus_hit(const Torus& tor, const Vec3& o, const Vec3& u, double t_max) {
+    const double R = tor.major_radius, r = tor.minor_radius;
+    double s0, s1;
+    if (!sphere_roots(o, u, R + r, s0, s1) || s1 < 0) return {};  // the bounding sphere
+    const double base = std::max(s0, 0.0);
+    const double length = std::min(s1, t_max) - base;
+    if (!(length >= 0)) return {};
+    const Vec3 p = add(o, mul(u, base));  // shifted origin: coefficients of size (R + r)^4 at most
+    const double uu = dot(u, u), b = dot(p, u), c = dot(p, p) + (R - r) * (R + r);
+    const double e = u[0] * u[0] + u[2] * u[2], g = p[0] * u[0] + p[2] * u[2];
+    const double r4 = 4 * R * R;
+    // f = k4 x^4 + k3 x^3 + k2 x^2 + k1 x + k0; only f' and f'' are evaluated (f's sign is sd's).
+    const double k4 = uu * uu, k3 = 4 * uu * b, k2 = 4 * b * b + 2 * uu * c - r4 * e,
+                 k1 = 4 * b * c - 2 * r4 * g;
+    auto d1 = [&](double x) { return ((4 * k4 * x + 3 * k3) * x + 2 * k2) * x + k1; };
+    auto sd = [&](double x) {
+        const Vec3 q = add(p, mul(u, x));
+        return std::hypot(std::hypot(q[0], q[2]) - R, q[1]) - r;
+    };
+    // Roots of f'' = 12 k4 x^2 + 6 k3 x + 2 k2 in (0, length): the pieces where f' is monotone.
+    std::array<double, 4> cuts{};
+    int nc = 0;
+    cuts[nc++] = 0;
+    {
+        const double qa = 12 * k4, qb = 6 * k3, qc = 2 * k2;
+        const double disc = qb * qb - 4 * qa * qc;
+        if (disc >= 0) {
+            const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+            double x0 = q / qa, x1 = q != 0 ? qc / q : x0;
+            if (x0 > x1) std::swap(x0, x1);
+            for (double x : {x0, x1})
+                if (x > cuts[nc - 1] && x < length) cuts[nc++] = x;
+        }
+    }
+    cuts[nc++] = length;
+    // Roots of f' in (0, length): the pieces where f is monotone.
+    std::array<double, 5> pieces{};
+    int np = 0;
+    pieces[np++] = 0;
+    for (int i = 0; i + 1 < nc; ++i) {
+        const double a = cuts[i], z = cuts[i + 1], fa = d1(a), fz = d1(z);
+        if ((fa < 0 && fz > 0) || (fa > 0 && fz < 0)) {
+            const double x = bisect(d1, a, z);
+            if (x > pieces[np - 1] && x < length) pieces[np++] = x;
+        }
+    }
+    pieces[np++] = length;
+    double prev = sd(0);
+    for (int i = 0; i < np; ++i) {
+        const double x = pieces[i];
+        const double cur = i == 0 ? prev : sd(x);
+        double root = -1;
+        if (cur == 0)
+            root = x;
+        else if (i > 0 && (cur < 0) != (prev < 0))
+            root = bisect(sd, pieces[i - 1], x);
+        if (root >= 0) {
+            LocalHit hit;
+            hit.t = base + root;
+            const SurfacePoint sp = closest(tor, add(p, mul(u, root)));
+            hit.point = sp.point;
+            hit.normal = sp.normal;
+            return hit;
+        }
+        prev = cur;
+    }
+    return {};
+}
+
+}  // namespace
+
+std::optional<RayHit> first_hit(const Shape& shape, const Vec3& origin, const Vec3& dir, double t_max) {
+    const double len = norm(dir);
+    if (!(len > 0) || !std::isfinite(len) || !std::isfinite(norm(origin)))
+        throw Error("first_hit: the ray origin and direction must be finite, the direction non-zero");
+    if (!(t_max >= 0)) return std::nullopt;
+    const Vec3 o = mul(sub(origin, shape.offset), 1.0 / shape.scale);
+    const Vec3 u = mul(dir, 1.0 / len);
+    const double local_max = t_max * len / shape.scale;  // +inf stays +inf
+    MaybeHit h;
+    switch (shape.kind) {
+        case ShapeKind::sphere:
+            h = sphere_hit({0, 0, 0}, shape.sphere.radius, o, u, local_max);
+            break;
+        case ShapeKind::torus:
+            h = torus_hit(shape.torus, o, u, local_max);
+            break;
+        case ShapeKind::cube: {
+            const double e = 0.5 * shape.cube.edge;
+            h = box_hit({e, e, e}, o, u, local_max);
+            break;
+        }
+        case ShapeKind::plane:
+            h = plane_hit(shape.plane, o, u, local_max);
+            break;
+        case ShapeKind::room:
+            h = room_hit(shape.room, o, u, local_max);
+            break;
+        case ShapeKind::ring:
+            h = ring_hit(shape.ring, o, u, local_max);
+            break;
+    }
+    if (!h) return std::nullopt;
+    RayHit r;
+    r.t = std::min(h->t * shape.scale / len, t_max);
+    r.point = add(mul(h->point, shape.scale), shape.offset);
+    r.normal = h->normal;
+    r.part = h->part;
     return r;
 }
 

@@ -21,6 +21,8 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -150,6 +152,30 @@ inline Vec3 closest_point(const Shape& shape, const Vec3& p) {
 inline Vec3 true_normal(const Shape& shape, const Vec3& p) {
     return closest(shape, p).normal;
 }
+
+/// The first point where a ray meets a shape's surface (first_hit).
+struct RayHit {
+    double t = 0;   ///< ray parameter: point = origin + t dir, 0 <= t <= t_max
+    Vec3 point{};   ///< world frame, on the surface (to rounding)
+    Vec3 normal{};  ///< true unit normal there, as closest() orients it (it may face away from the ray)
+    int part = 0;   ///< as SurfacePoint::part: room part, cube face, ring part, or 0
+};
+
+/// The first point of the shape's surface on the ray origin + t dir, 0 <= t <= t_max (world frame;
+/// dir non-zero, not necessarily unit: t is in units of |dir|). The surface is that of closest():
+/// solids' boundaries (a ray starting inside a solid hits its exit), the plane's square from either
+/// side, the room's walls seen from inside or outside and its objects, the ring's whole band
+/// (its unsampled bottom: part k_ring_part_count). Exact in double, in the shape's own frame:
+/// sphere by the closest-approach quadratic (Haines et al., "Precision Improvements for Ray/Sphere
+/// Intersection", Ray Tracing Gems 2019, ch. 7), boxes (cube, room walls, the room's turned cube in
+/// its frame) by slabs (Kay and Kajiya 1986), the plane directly, the ring as the intersection of
+/// two cylinders' and a slab's intervals; the torus by isolating the roots of its quartic between
+/// the critical points of the quartic (found the same way from its cubic derivative), then bisecting
+/// the exact signed distance to machine precision. Grazing rays resolve to rounding: a ray that
+/// touches a surface within ~1e-15 of the size may count as a hit or a miss. Returns nothing on a
+/// miss.
+std::optional<RayHit> first_hit(const Shape& shape, const Vec3& origin, const Vec3& dir,
+                                double t_max = std::numeric_limits<double>::infinity());
 
 /// Area of the sampled surface, world units (the room without the cube's bottom face).
 double surface_area(const Shape& shape);

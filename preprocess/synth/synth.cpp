@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "prt/error.h"
+#include "synth_random.h"
 
 namespace prt::synth {
 namespace {
@@ -26,48 +27,12 @@ Vec3 rotate_y(const Vec3& v, double radians) {
     return {c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]};
 }
 
-// ---- Deterministic randomness: every value is a pure function of (seed, stream, indices) -------
-
-/// SplitMix64's finaliser: a bijective 64-bit mix with full avalanche.
-std::uint64_t mix(std::uint64_t z) {
-    z += 0x9E3779B97F4A7C15ull;
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    return z ^ (z >> 31);
-}
-std::uint64_t hash(std::uint64_t seed, std::uint64_t stream, std::uint64_t a, std::uint64_t b = 0) {
-    return mix(mix(mix(mix(seed) ^ stream) ^ a) ^ b);
-}
-/// [0, 1) from the top 53 bits.
-double unit(std::uint64_t x) {
-    return static_cast<double>(x >> 11) * 0x1.0p-53;
-}
-
-/// A counter-based stream (SplitMix64) for one point.
-struct Stream {
-    std::uint64_t state;
-    std::uint64_t next() { return mix(state += 0x9E3779B97F4A7C15ull); }
-    double uniform() { return unit(next()); }
-};
-
-constexpr std::uint64_t k_stream_shift = 1;   // per-patch R2 shifts
-constexpr std::uint64_t k_stream_random = 2;  // per-point (u, v) for Sampling::random
-constexpr std::uint64_t k_stream_noise = 3;   // per-point noise
+using namespace detail;
 
 // Roberts' R2 sequence: x_n = frac(s + n * (1/g, 1/g^2)), g the plastic number (x^3 = x + 1),
 // in 64-bit fixed point so it is exact for any n (wrap-around is the fractional part).
 constexpr std::uint64_t k_r2_a1 = 0xC13FA9A902A6328Full;  // round(2^64 / 1.324717957244746)
 constexpr std::uint64_t k_r2_a2 = 0x91E10DA5C79E7B1Dull;  // round(2^64 / 1.324717957244746^2)
-
-/// Standard normal, truncated at k_noise_truncation by redrawing (Box-Muller).
-double truncated_gaussian(Stream& s) {
-    for (;;) {
-        const double u1 = 1.0 - s.uniform();  // (0, 1]
-        const double u2 = s.uniform();
-        const double g = std::sqrt(-2.0 * std::log(u1)) * std::cos(2 * k_pi * u2);
-        if (std::fabs(g) <= k_noise_truncation) return g;
-    }
-}
 
 /// Solves theta + k sin(theta) = 2 pi u for theta in [0, 2 pi): the inverse of the torus's
 /// area-weighted marginal CDF (area element r (R + r cos theta) dtheta dphi, k = r / R < 1).
@@ -298,14 +263,14 @@ void evaluate(const Patch& p, double u, double v, Vec3& position, Vec3& normal) 
     }
 }
 
+}  // namespace
+
 pool::Rgba8 normal_color(const Vec3& n) {
     auto c = [](double x) {
         return static_cast<std::uint8_t>(std::lround(std::clamp((x + 1) * 0.5, 0.0, 1.0) * 255));
     };
     return {c(n[0]), c(n[1]), c(n[2]), 255};
 }
-
-}  // namespace
 
 const char* sampling_name(Sampling s) {
     return s == Sampling::r2 ? "r2" : "random";

@@ -30,6 +30,8 @@ enum class ColorMode : std::uint32_t {
     constant,  ///< SynthOptions::color everywhere
 };
 const char* color_mode_name(ColorMode m);
+/// The color ColorMode::normal gives the unit normal n: (n + 1) / 2 * 255 per channel.
+pool::Rgba8 normal_color(const Vec3& n);
 
 struct SynthOptions {
     Shape shape;

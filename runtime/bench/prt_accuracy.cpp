@@ -11,7 +11,7 @@
 // exists, the hit-point error and the hole rate:
 //
 //   prt-synth pools: the analytic shape named in the pool's provenance (prt::synth). The true hit
-//     of each ray is found by sphere tracing its exact distance function in double. Hit error =
+//     of each ray is synth::first_hit's: exact ray casting against the shape in double. Hit error =
 //     distance of the representation's hit point from the true surface; depth error = |t - t_true|
 //     where both hit; both relative to the model's bounding-box diagonal (mean, p99, max).
 //   patch pools: an independent reference: every patch tessellated into a fine grid of triangles
@@ -150,37 +150,6 @@ bool box_interval(const D3& o, const D3& d, const D3& lo, const D3& hi, double& 
         t1 = std::min(t1, tb);
     }
     return t0 <= t1;
-}
-
-/// The first point of the analytic surface along the world ray o + t d (d unit): sphere tracing
-/// over the exact Euclidean distance (a lower bound of the distance along the ray), in double,
-/// inside the shape's bounds widened by 1%. Grazing rays that neither converge nor leave within
-/// the step bound count as misses (they pass the silhouette within the tolerance).
-bool analytic_first_hit(const synth::Shape& shape, const D3& lo, const D3& hi, double size, const D3& o,
-                        const D3& d, double& t_hit) {
-    const D3 pad{0.01 * size, 0.01 * size, 0.01 * size};
-    double t0, t1;
-    if (!box_interval(o, d, sub(lo, pad), add(hi, pad), t0, t1)) return false;
-    const double eps = 1e-12 * (size + norm(o));
-    double t = t0;
-    for (int i = 0; i < 20000 && t <= t1; ++i) {
-        const double sd = synth::signed_distance(shape, add(o, scaled(d, t)));
-        if (std::abs(sd) <= eps) {
-            t_hit = t;
-            return true;
-        }
-        if (sd < 0) {  // stepped through (rounding): bisect back onto the surface
-            double a = std::max(t0, t - 2 * std::abs(sd)), b = t;
-            for (int k = 0; k < 200 && b - a > eps; ++k) {
-                const double m = 0.5 * (a + b);
-                (synth::signed_distance(shape, add(o, scaled(d, m))) > 0 ? a : b) = m;
-            }
-            t_hit = b;
-            return true;
-        }
-        t += sd;
-    }
-    return false;
 }
 
 // ---- Ground truth: patches (independent tessellation + long double Newton) -------------------
@@ -504,8 +473,6 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     if (truth != "none") {
         tool::note(common.quiet, "prt-accuracy: ground truth (%s) for %ux%u rays\n", truth.c_str(), o.width,
                    o.height);
-        const auto sb = truth == "analytic" ? synth::shape_bounds(shape) : std::array<D3, 2>{};
-        const double size = truth == "analytic" ? synth::shape_size(shape) : 0;
         trace_image(view, pre::resolve_threads(o.threads), ref, [&](const core::Ray& r, PixelResult& out) {
             const D3 d{r.dir.x, r.dir.y, r.dir.z};
             const D3 ol{r.origin.x, r.origin.y, r.origin.z};
@@ -515,11 +482,10 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
             }
             // world-frame ray (d is unit: primary_ray normalizes)
             const D3 ow = add(view.origin, ol);
-            double t;
-            if (analytic_first_hit(shape, sb[0], sb[1], size, ow, d, t)) {
+            if (const auto h = synth::first_hit(shape, ow, d)) {
                 out.hit = true;
-                out.t = t;
-                out.position = add(ow, scaled(d, t));
+                out.t = h->t;
+                out.position = add(ow, scaled(d, h->t));
             }
         });
     }
