@@ -258,10 +258,10 @@ void add_camera_options(CLI::App& app, CameraOverrides& c) {
 void apply_camera(const CameraOverrides& o, rt::RenderScene& rs, bool framed, bool quiet, const char* tool) {
     scene::Camera& cam = rs.scene().camera;
     std::optional<rt::DVec3> up;
+    std::string rule;  // printed once the camera is known to be valid (an error stays one line)
     if (o.up == "auto") {
         const rt::UpDetection d = rs.detect_up();
-        tool::note(quiet, "%s: --up auto: %s: %s", tool, rt::direction_name(d.up).c_str(),
-                   d.description.c_str());
+        rule = rt::direction_name(d.up) + ": " + d.description;
         up = d.up;
     } else if (!o.up.empty()) {
         up = parse_vec3(o.up, "--up");
@@ -277,7 +277,14 @@ void apply_camera(const CameraOverrides& o, rt::RenderScene& rs, bool framed, bo
             cam.look_at = target;
             cam.position = {target[0] + back[0], target[1] + back[1], target[2] + back[2]};
         }
-        if (!o.eye.empty()) cam.position = parse_vec3(o.eye, "--eye");
+        if (!o.eye.empty()) {
+            cam.position = parse_vec3(o.eye, "--eye");
+            if (o.look_at.empty()) {  // the centre of the model's robust bounds
+                const rt::Box& b = rs.robust_bounds();
+                cam.look_at = {0.5 * (b.lo[0] + b.hi[0]), 0.5 * (b.lo[1] + b.hi[1]),
+                               0.5 * (b.lo[2] + b.hi[2])};
+            }
+        }
     } else {
         if (!o.eye.empty()) cam.position = parse_vec3(o.eye, "--eye");
         if (!o.look_at.empty()) cam.look_at = parse_vec3(o.look_at, "--look-at");
@@ -297,6 +304,7 @@ void apply_camera(const CameraOverrides& o, rt::RenderScene& rs, bool framed, bo
         if (o.up == "auto") what += " (detected " + rt::direction_name(*up) + ")";
         check_camera(cam, what.empty() ? std::string("--fov") : what);
     }
+    if (!rule.empty()) tool::note(quiet, "%s: --up auto: %s", tool, rule.c_str());
     if (framed) rs.place_default_light();
 }
 
