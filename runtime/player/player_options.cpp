@@ -218,8 +218,8 @@ void add_camera_options(CLI::App& app, CameraOverrides& c) {
         ->check(vec3(false));
     app.add_option("--up", c.up,
                    "The image's up direction, world frame, or auto: detected from the data (the normal of a "
-                   "plane holding >= 20 % of the points, signed toward the sensors or the side most other "
-                   "points lie on; else the normal of the plane the scanners' directions span; else +y; the "
+                   "plane holding >= 20 % of the points, signed toward the sensors, else toward what "
+                   "stands on it; else the normal of the plane the scanners' directions span; else +y; the "
                    "rule that decided is printed). Default: the scene camera's, +y for a pool alone (the "
                    "default view turns to the up given)")
         ->check(vec3(true));

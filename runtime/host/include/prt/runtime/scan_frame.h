@@ -74,7 +74,10 @@ struct UpDetection {
 
 /// The up direction of a scan: (1) a plane holding at least min_plane_fraction of the points (and,
 /// with normals, points whose normals agree with it) gives its normal, pointing toward the sensors
-/// when the pool has any, else toward the side most other points lie on (objects stand on a floor);
+/// when the pool has any; else toward the side of what stands on it (the points off the plane over
+/// its own footprint: a scanner above a table sees the mug on it, never what is under it, while the
+/// floor seen beyond the table's edge lies outside the footprint), when one side has at least twice
+/// the other's (+20); else toward the side most other points lie on; else toward +y;
 /// (2) else, when at least 3 sensor directions (point sensors: the direction from the points'
 /// centre to the sensor), and at least half of them, lie within sensor_degrees of one plane and
 /// spread over it (a turntable), the normal of that plane, pointing toward the side those sensors
