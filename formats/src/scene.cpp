@@ -339,7 +339,8 @@ void parse_lights(const Context& ctx, const Json& j, const std::string& path, Sc
 Material parse_material(const Context& ctx, const Json& j, const std::string& path) {
     ObjectReader r(ctx, j, path,
                    {"name", "ambient", "diffuse", "specular", "specular_exponent", "refractive_index",
-                    "reflectivity", "transmissivity", "diffuse_reflectance", "use_point_colors", "texture"});
+                    "reflectivity", "transmissivity", "diffuse_reflectance", "point_colors",
+                    "use_point_colors", "intensity_range", "texture"});
     Material m;
     r.string("name", m.name);
     r.color("ambient", m.ambient, 1.0);
@@ -371,7 +372,37 @@ Material parse_material(const Context& ctx, const Json& j, const std::string& pa
                                   sum_text +
                                   " exceeds 1 (a material cannot send out more light than arrives)");
     }
-    r.boolean("use_point_colors", m.use_point_colors);
+    // point_colors, or its older boolean form use_point_colors (true: "colors", false: "none").
+    std::string point_colors;
+    if (r.string("point_colors", point_colors) && !parse_point_colors(point_colors, m.point_colors))
+        ctx.fail(r.path("point_colors"),
+                 "unknown value \"" + point_colors + "\" (expected auto, colors, intensity or none)");
+    bool use_point_colors = true;
+    if (r.boolean("use_point_colors", use_point_colors)) {
+        if (r.find("point_colors"))
+            ctx.fail(r.path("use_point_colors"),
+                     "give point_colors or its older form use_point_colors, not both");
+        m.point_colors = use_point_colors ? PointColors::colors : PointColors::none;
+    }
+    if (const Json* j = r.find("intensity_range")) {
+        const std::string p = r.path("intensity_range");
+        if (!j->is_array() || j->size() != 2)
+            ctx.fail(p, "expected [lo, hi] (an array of 2 numbers), got " +
+                            (j->is_array() ? "an array of " + std::to_string(j->size()) : type_name(*j)));
+        std::array<float, 2> range{};
+        for (std::size_t i = 0; i < 2; ++i) {
+            const Json& e = (*j)[i];
+            if (!e.is_number()) ctx.fail(join(p, i), "expected a number, got " + type_name(e));
+            const double v = e.get<double>();
+            if (!std::isfinite(v) || std::fabs(v) > std::numeric_limits<float>::max())
+                ctx.fail(join(p, i), "expected a finite number that fits a 32-bit float");
+            range[i] = static_cast<float>(v);
+        }
+        if (!(range[0] < range[1]))
+            ctx.fail(join(p, 1), "must be greater than lo (" + format_number(range[0]) + "), got " +
+                                     format_number(range[1]));
+        m.intensity_range = range;
+    }
     std::filesystem::path texture;
     if (r.file("texture", texture)) m.texture = texture.string();
     return m;
@@ -678,7 +709,10 @@ std::string to_json(const Scene& scene) {
         j["reflectivity"] = float_json(m.reflectivity);
         j["transmissivity"] = float_json(m.transmissivity);
         j["diffuse_reflectance"] = float_json(m.diffuse_reflectance);
-        j["use_point_colors"] = m.use_point_colors;
+        j["point_colors"] = point_colors_name(m.point_colors);
+        if (m.intensity_range)
+            j["intensity_range"] =
+                OJson::array({float_json((*m.intensity_range)[0]), float_json((*m.intensity_range)[1])});
         if (!m.texture.empty()) j["texture"] = m.texture;
         materials.push_back(std::move(j));
     }
@@ -722,6 +756,58 @@ std::string to_json(const Scene& scene) {
     std::string out;
     write_pretty(root, 0, out);
     return out + "\n";
+}
+
+const char* point_colors_name(PointColors p) {
+    switch (p) {
+        case PointColors::colors:
+            return "colors";
+        case PointColors::intensity:
+            return "intensity";
+        case PointColors::none:
+            return "none";
+        case PointColors::automatic:
+            break;
+    }
+    return "auto";
+}
+
+bool parse_point_colors(const std::string& text, PointColors& out) {
+    for (const PointColors p :
+         {PointColors::automatic, PointColors::colors, PointColors::intensity, PointColors::none}) {
+        if (text == point_colors_name(p)) {
+            out = p;
+            return true;
+        }
+    }
+    return false;
+}
+
+std::array<float, 2> intensity_range(std::span<const float> intensities) {
+    std::vector<float> v;
+    v.reserve(intensities.size());
+    for (const float x : intensities)
+        if (std::isfinite(x)) v.push_back(x);
+    if (v.empty()) return {0.0f, 0.0f};
+    // Nearest rank: the value at index round(q (n - 1)) of the sorted values.
+    auto at = [&](double q) {
+        const auto k = static_cast<std::size_t>(std::llround(q * static_cast<double>(v.size() - 1)));
+        std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+        return v[k];
+    };
+    const float lo = at(0.01);
+    const float hi = at(0.99);
+    return {lo, hi};
+}
+
+std::uint8_t intensity_grey(float intensity, float lo, float hi) {
+    if (!std::isfinite(intensity)) return 0;
+    if (!(hi > lo)) return 255;
+    const double t =
+        std::clamp((static_cast<double>(intensity) - lo) / (static_cast<double>(hi) - lo), 0.0, 1.0);
+    // Linear t to sRGB (IEC 61966-2-1), the encoding point colors are stored in.
+    const double e = t <= 0.0031308 ? 12.92 * t : 1.055 * std::pow(t, 1.0 / 2.4) - 0.055;
+    return static_cast<std::uint8_t>(std::lround(std::clamp(e, 0.0, 1.0) * 255.0));
 }
 
 }  // namespace prt::scene

@@ -1,14 +1,19 @@
 // prt-iso: the Implicit Surface Octree of thesis ch. 4 from a pool's points and normals.
+#include <array>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <vector>
 
 #include "iso_build.h"
 #include "iso_pool.h"
 #include "prt/formats/pool.h"
+#include "prt/formats/scene.h"
 #include "prt/tool.h"
 
 namespace {
@@ -33,12 +38,31 @@ sheet grows past a scan's edges and gaps wider than about 2 x data-reach radii s
 the points on the side of a corner's heaviest point count there, so thin parts keep both sides.
 Storage: one byte per component, 56 bytes per leaf (--storage q8, thesis 4.4), floats (f32, 160
 bytes), or both. Writes OUTPUT with iso_info, iso_nodes and the leaf arrays; the other sections are
-carried over.)";
+carried over.
+Colors: the leaves bake the points' colors, or their scanner intensities as grey levels
+(--point-colors intensity: [lo, hi] to black..white, linear in radiance; SCENE.md point_colors).)";
+
+/// "LO,HI": two finite numbers, LO < HI (CLI11 validator: "" when valid).
+std::string check_range(const std::string& s) {
+    const auto comma = s.find(',');
+    if (comma == std::string::npos || s.find(',', comma + 1) != std::string::npos)
+        return "expected LO,HI (two numbers), got '" + s + "'";
+    const std::string a = s.substr(0, comma), b = s.substr(comma + 1);
+    char* end_a = nullptr;
+    char* end_b = nullptr;
+    const double lo = std::strtod(a.c_str(), &end_a), hi = std::strtod(b.c_str(), &end_b);
+    if (a.empty() || b.empty() || *end_a != '\0' || *end_b != '\0' || !std::isfinite(lo) ||
+        !std::isfinite(hi) || std::fabs(lo) > 3e38 || std::fabs(hi) > 3e38)
+        return "expected LO,HI (two finite numbers), got '" + s + "'";
+    if (!(lo < hi)) return "LO must be below HI, got '" + s + "'";
+    return {};
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string input, output, radius = "auto", storage = "q8", stats_json;
+    std::string input, output, radius = "auto", storage = "q8", stats_json, point_colors = "auto",
+                               intensity_range;
     prt::iso::BuildOptions options;
     bool no_passive = false, no_balance = false, no_closure = false, keep_uncrossed = false,
          both_sides = false;
@@ -92,6 +116,17 @@ int main(int argc, char** argv) {
                 "degrees of its), so the two sides of a thin part do not cancel");
             app.add_flag("--keep-uncrossed", keep_uncrossed,
                          "Keep filled leaves whose corners share one sign (they hold no surface)");
+            app.add_option(
+                   "--point-colors", point_colors,
+                   "What the leaves bake as their color: colors (the points'), intensity (their scanner "
+                   "intensities as grey levels), none (white), or auto (colors, else intensity, else "
+                   "none)")
+                ->check(CLI::IsMember({"auto", "colors", "intensity", "none"}));
+            app.add_option(
+                   "--intensity-range", intensity_range,
+                   "With intensity: LO,HI map to black..white (default: the 1st and 99th percentiles of "
+                   "the pool's intensities)")
+                ->check(CLI::Validator(check_range, "LO,HI"));
             app.add_option("-j,--threads", options.threads, "Worker threads (0 = all hardware threads)");
             app.add_option("--stats-json", stats_json, "Also write the statistics as JSON to this file");
         },
@@ -121,7 +156,45 @@ int main(int argc, char** argv) {
                             ": no normals section: the ISO needs normals (prt-import estimates them)");
             bi.normals = in.array<pool::Float3>(pool::SectionType::normals);
             bi.radii = in.array<float>(pool::SectionType::radii);
-            bi.colors = in.array<pool::Rgba8>(pool::SectionType::colors);
+            // The colors the leaves bake (SCENE.md point_colors; the same grey levels the player uses).
+            const auto colors = in.array<pool::Rgba8>(pool::SectionType::colors);
+            const auto intensities = in.array<float>(pool::SectionType::intensities);
+            std::string bake = point_colors;
+            if (bake == "auto")
+                bake = !colors.empty() ? "colors" : !intensities.empty() ? "intensity" : "none";
+            std::vector<pool::Rgba8> grey;
+            std::array<float, 2> range{0, 0};
+            if (bake == "colors") {
+                bi.colors = colors;
+            } else if (bake == "intensity") {
+                if (intensities.empty())
+                    throw Error(input +
+                                ": no intensities section: --point-colors intensity needs one (prt-import "
+                                "keeps PLY and PCD intensity)");
+                if (!intensity_range.empty()) {
+                    const auto comma = intensity_range.find(',');
+                    range = {std::strtof(intensity_range.substr(0, comma).c_str(), nullptr),
+                             std::strtof(intensity_range.substr(comma + 1).c_str(), nullptr)};
+                } else {
+                    range = scene::intensity_range(intensities);
+                }
+                std::uint64_t non_finite = 0;
+                grey.resize(intensities.size());
+                for (std::size_t i = 0; i < intensities.size(); ++i) {
+                    non_finite += !std::isfinite(intensities[i]);
+                    const std::uint8_t g = scene::intensity_grey(intensities[i], range[0], range[1]);
+                    grey[i] = pool::Rgba8{g, g, g, 255};
+                }
+                bi.colors = grey;
+                tool::note(common.quiet, "prt-iso: baking intensities [%g, %g] to black..white%s",
+                           double(range[0]), double(range[1]),
+                           intensity_range.empty() ? " (the 1st-99th percentile)" : "");
+                if (!(range[1] > range[0]))
+                    tool::note(common.quiet, "prt-iso: warning: the intensities have no spread: baked white");
+                if (non_finite)
+                    tool::note(common.quiet, "prt-iso: warning: %llu intensities are not finite: baked black",
+                               static_cast<unsigned long long>(non_finite));
+            }
             tool::note(common.quiet,
                        "prt-iso: %zu points, levels %u..%u, X = %u, smoothing %g, support %g sigma",
                        bi.positions.size(), options.min_level, options.max_level, options.max_points,
@@ -169,8 +242,11 @@ int main(int argc, char** argv) {
                 {"drop_uncrossed", options.drop_uncrossed},
                 {"data_reach", options.data_reach},
                 {"one_side", options.one_side},
-                {"storage", storage}};
-            writer.add_provenance("prt-iso", PRT_VERSION, parameters.dump());
+                {"storage", storage},
+                {"point_colors", bake}};
+            nlohmann::json provenance = parameters;
+            if (bake == "intensity") provenance["intensity_range"] = {range[0], range[1]};
+            writer.add_provenance("prt-iso", PRT_VERSION, provenance.dump());
             const std::uint64_t bytes = writer.write(output);
             const double total = tool::now_seconds() - start;
 

@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "analytic.h"
 #include "mesh.h"
 #include "mesh_reference.h"
 #include "parallel.h"
@@ -55,7 +56,7 @@ using namespace prt;
 using bench::D3;
 
 struct Options {
-    std::string pool, reference, points, json, images;
+    std::string pool, reference, points, json, images, views_from = "orbit";
     std::vector<std::string> surfaces;
     std::uint32_t views = 6, width = 1024, height = 1024, threads = 0;
     float fov = 30.0f;
@@ -131,12 +132,45 @@ private:
     bench::MeshReference m_mesh;
 };
 
+/// The analytic shape a prt-synth pool was sampled or scanned from (its provenance), ray cast
+/// exactly (synth::first_hit, in double).
+class AnalyticTruth final : public Reference {
+public:
+    explicit AnalyticTruth(const pool::PoolFile& p)
+        : m_shape(synth::shape_from_provenance(p.provenance_json(), p.label())) {
+        const auto b = synth::shape_bounds(m_shape);
+        m_lo = b[0], m_hi = b[1];
+    }
+    bool intersect(const D3& o, const D3& d, bench::MeshHit& hit) const override {
+        const auto h = synth::first_hit(m_shape, o, d);
+        if (!h) return false;
+        hit.t = h->t;
+        hit.point = h->point;
+        hit.normal = h->normal;
+        hit.front = dot(h->normal, d) < 0;  // closest() orients normals to the side the points face
+        return true;
+    }
+    double distance(const D3& p) const override {
+        return std::abs(synth::closest(m_shape, p).signed_distance);
+    }
+    D3 lo() const override { return m_lo; }
+    D3 hi() const override { return m_hi; }
+    nlohmann::json describe() const override {
+        return {{"kind", "analytic"}, {"shape", nlohmann::json::parse(synth::shape_to_json(m_shape))}};
+    }
+
+private:
+    synth::Shape m_shape;
+    D3 m_lo, m_hi;
+};
+
 // ---- views --------------------------------------------------------------------------------------
 
 struct View {
     core::PinholeCamera camera;  ///< the pool's local frame
     D3 origin{};                 ///< world position of the local frame's origin
-    D3 direction{};              ///< from the centre toward the eye
+    D3 direction{};              ///< orbit: from the centre toward the eye; sensors: the face's direction
+    D3 eye{};                    ///< world frame
     std::uint32_t width = 0, height = 0;
 };
 
@@ -166,11 +200,40 @@ View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, c
     View v;
     v.origin = origin;
     v.direction = dir;
+    v.eye = eye;
     v.width = o.width;
     v.height = o.height;
     const core::Vec3 up = std::abs(dir[1]) > 0.95 ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
     v.camera = core::make_pinhole(local(eye), local(centre), up, o.fov, o.width, o.height);
     return v;
+}
+
+/// The six faces of a cube map around each point sensor (fov 90): what the scanner saw, from where
+/// it stood (a room scanned from inside cannot be seen from outside).
+std::vector<View> sensor_views(const Options& o, const pool::PoolFile& p, const D3& origin) {
+    std::vector<View> views;
+    for (const pool::Sensor& s : p.array<pool::Sensor>(pool::SectionType::sensors)) {
+        if (s.kind != pool::k_sensor_point) continue;
+        const D3 eye{s.position[0], s.position[1], s.position[2]};
+        for (const D3& dir :
+             {D3{1, 0, 0}, D3{-1, 0, 0}, D3{0, 1, 0}, D3{0, -1, 0}, D3{0, 0, 1}, D3{0, 0, -1}}) {
+            auto local = [&](const D3& a) {
+                return core::Vec3{float(a[0] - origin[0]), float(a[1] - origin[1]), float(a[2] - origin[2])};
+            };
+            View v;
+            v.origin = origin;
+            v.direction = dir;
+            v.eye = eye;
+            v.width = o.width;
+            v.height = o.height;
+            const core::Vec3 up = std::abs(dir[1]) > 0.5 ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
+            v.camera = core::make_pinhole(local(eye), local(add(eye, dir)), up, 90.0f, o.width, o.height);
+            views.push_back(v);
+        }
+    }
+    if (views.empty())
+        throw Error(o.pool + ": --views-from sensors: the pool has no point sensor (section sensors)");
+    return views;
 }
 
 // ---- per-pixel results --------------------------------------------------------------------------
@@ -322,21 +385,38 @@ void fidelity(Options o, const tool::CommonOptions& common) {
     std::vector<double> sorted_spacing = spacing;
     std::sort(sorted_spacing.begin(), sorted_spacing.end());
 
-    std::unique_ptr<Reference> truth = std::make_unique<MeshTruth>(o.reference);
+    std::unique_ptr<Reference> truth;
+    if (!o.reference.empty()) {
+        truth = std::make_unique<MeshTruth>(o.reference);
+    } else {
+        try {
+            truth = std::make_unique<AnalyticTruth>(p);
+        } catch (const Error&) {
+            throw Error(o.pool +
+                        ": no reference: give --reference MESH, or a pool made by prt-synth (its "
+                        "provenance names the analytic shape)");
+        }
+    }
     tool::note(common.quiet, "prt-fidelity: %zu input points (median spacing %.4g), reference %s, %.2f s",
                pts.size(), sorted_spacing[sorted_spacing.size() / 2], truth->describe().dump().c_str(),
                tool::now_seconds() - t_start);
 
-    const std::vector<D3> dirs = view_directions(o.views);
+    std::vector<View> views;
+    if (o.views_from == "sensors") {
+        views = sensor_views(o, p, origin);
+    } else {
+        for (const D3& d : view_directions(o.views))
+            views.push_back(make_view(o, origin, truth->lo(), truth->hi(), d));
+    }
     std::vector<Tally> totals(probes.size());
     nlohmann::json per_view = nlohmann::json::array();
     std::uint64_t ref_covered = 0, ref_uncovered = 0, ref_back = 0, ref_pixels = 0, ref_edge = 0;
     const std::size_t npx = std::size_t(o.width) * o.height;
     if (!o.images.empty()) std::filesystem::create_directories(o.images);
-    tool::Progress progress("prt-fidelity: views", o.views, common.quiet);
+    tool::Progress progress("prt-fidelity: views", views.size(), common.quiet);
 
-    for (std::uint32_t vi = 0; vi < o.views; ++vi) {
-        const View view = make_view(o, origin, truth->lo(), truth->hi(), dirs[vi]);
+    for (std::uint32_t vi = 0; vi < views.size(); ++vi) {
+        const View& view = views[vi];
         auto world_ray = [&](std::uint32_t x, std::uint32_t y, D3& wo, D3& wd) {
             const core::Ray r = core::primary_ray(view.camera, x, y, view.width, view.height);
             wo = add(origin, D3{r.origin.x, r.origin.y, r.origin.z});
@@ -383,6 +463,7 @@ void fidelity(Options o, const tool::CommonOptions& common) {
         }
         ref_covered += covered;
         nlohmann::json vj = {{"direction", view.direction},
+                             {"eye", view.eye},
                              {"covered_pixels", covered},
                              {"surfaces", nlohmann::json::object()}};
         if (!o.images.empty()) {
@@ -524,7 +605,8 @@ void fidelity(Options o, const tool::CommonOptions& common) {
     j["pool"] = o.pool;
     j["points"] = o.points.empty() ? o.pool : o.points;
     j["reference"] = truth->describe();
-    j["views"] = o.views;
+    j["views"] = views.size();
+    j["views_from"] = o.views_from;
     j["width"] = o.width;
     j["height"] = o.height;
     j["fov_degrees"] = o.fov;
@@ -588,10 +670,15 @@ int main(int argc, char** argv) {
             app.add_option("pool", o.pool, "Pool with the surfaces' sections")
                 ->required()
                 ->check(CLI::ExistingFile);
-            app.add_option("--reference", o.reference,
-                           "Reference mesh (.ply with faces, .obj, .off, .stl), in the pool's world frame")
-                ->required()
+            app.add_option(
+                   "--reference", o.reference,
+                   "Reference mesh (.ply with faces, .obj, .off, .stl), in the pool's world frame (default: "
+                   "the analytic shape of a prt-synth pool's provenance, ray cast exactly)")
                 ->check(CLI::ExistingFile);
+            app.add_option("--views-from", o.views_from,
+                           "orbit: --views views spread over a sphere around the reference, looking at it; "
+                           "sensors: the six faces of a cube map (fov 90) at each point sensor of the pool")
+                ->check(CLI::IsMember({"orbit", "sensors"}));
             app.add_option(
                    "--surface", o.surfaces,
                    "Surfaces to measure, comma separated: splats, iso, mls (default: every one the pool "

@@ -54,9 +54,18 @@ std::vector<CameraKey> read_camera_path(const std::filesystem::path& file) {
 scene::Camera orbit_camera(const scene::Camera& base, std::uint32_t frame, double degrees_per_frame) {
     scene::Camera c = base;
     const double a = frame * degrees_per_frame * 3.14159265358979323846 / 180.0;
-    const double dx = base.position[0] - base.look_at[0], dz = base.position[2] - base.look_at[2];
-    c.position[0] = base.look_at[0] + std::cos(a) * dx + std::sin(a) * dz;
-    c.position[2] = base.look_at[2] - std::sin(a) * dx + std::cos(a) * dz;
+    // Rodrigues' rotation of the eye about the unit up k through the look-at point:
+    // v' = v cos a + (k x v) sin a + k (k . v)(1 - cos a).
+    const scene::Vec3& u = base.up;
+    const double ul = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    const scene::Vec3 k = ul > 0 ? scene::Vec3{u[0] / ul, u[1] / ul, u[2] / ul} : scene::Vec3{0, 1, 0};
+    const scene::Vec3 v{base.position[0] - base.look_at[0], base.position[1] - base.look_at[1],
+                        base.position[2] - base.look_at[2]};
+    const scene::Vec3 kxv{k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2], k[0] * v[1] - k[1] * v[0]};
+    const double kv = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+    const double ca = std::cos(a), sa = std::sin(a);
+    for (int i = 0; i < 3; ++i)
+        c.position[i] = base.look_at[i] + v[i] * ca + kxv[i] * sa + k[i] * kv * (1 - ca);
     return c;
 }
 

@@ -21,8 +21,8 @@ struct CameraKey {
 /// comment, blank lines are skipped. Throws prt::Error "FILE:LINE: what" on bad input or no keys.
 std::vector<CameraKey> read_camera_path(const std::filesystem::path& file);
 
-/// The camera of frame `frame`: `base` rotated about the +y axis through its look-at point by
-/// frame * degrees_per_frame (an orbit; 0 keeps it still).
+/// The camera of frame `frame`: `base` rotated about its up direction (the +y axis for the
+/// default up) through its look-at point by frame * degrees_per_frame (an orbit; 0 keeps it still).
 scene::Camera orbit_camera(const scene::Camera& base, std::uint32_t frame, double degrees_per_frame);
 
 /// The camera of frame `frame` along a path (frames cycle through the keys).

@@ -1,5 +1,11 @@
 #include "player_options.h"
 
+#include <cmath>
+#include <cstdlib>
+#include <sstream>
+
+#include "prt/tool.h"
+
 namespace prt::player {
 
 void add_render_options(CLI::App& app, RenderOverrides& o) {
@@ -31,6 +37,12 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
                    "(seed 002) or auto (what each pool holds); default: each model's scene setting, and auto "
                    "for a pool given alone")
         ->check(CLI::IsMember({"splats", "iso", "mls", "patches", "auto"}));
+    app.add_option("--point-colors", o.point_colors,
+                   "What multiplies the diffuse color per point, for every material (SCENE.md point_colors): "
+                   "colors (the pool's), intensity (its scanner intensities as grey, 1st-99th percentile to "
+                   "black..white), none, or auto (colors, else intensity, else none); default: each "
+                   "material's setting, auto for a pool given alone")
+        ->check(CLI::IsMember({"auto", "colors", "intensity", "none"}));
     app.add_flag("--iso-float", o.iso_float,
                  "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
                  "pool has both");
@@ -68,6 +80,8 @@ rt::LoadOptions load_options(const RenderOverrides& o) {
     rt::LoadOptions l;
     l.surface = o.surface;
     l.iso_float = o.iso_float;
+    scene::PointColors pc{};
+    if (!o.point_colors.empty() && scene::parse_point_colors(o.point_colors, pc)) l.point_colors = pc;
     return l;
 }
 
@@ -122,6 +136,176 @@ rt::BackendOptions backend_options(const BackendChoice& b) {
     o.cuda_min_blocks = b.min_blocks;
     o.cuda_max_l1 = !b.default_carveout;
     return o;
+}
+
+namespace {
+
+double vdot(const rt::DVec3& a, const rt::DVec3& b) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+rt::DVec3 vsub(const rt::DVec3& a, const rt::DVec3& b) {
+    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+rt::DVec3 vcross(const rt::DVec3& a, const rt::DVec3& b) {
+    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double vlen(const rt::DVec3& a) {
+    return std::sqrt(vdot(a, a));
+}
+std::string vtext(const rt::DVec3& v) {
+    std::ostringstream s;
+    s << v[0] << "," << v[1] << "," << v[2];
+    return s.str();
+}
+
+/// The checks SCENE.md makes on a camera (formats/src/scene.cpp): the eye is not the look-at point,
+/// and the up is non-zero and not within ~1e-6 radians of the view direction.
+void check_camera(const scene::Camera& c, const std::string& what) {
+    const rt::DVec3 view = vsub(c.look_at, c.position);
+    if (vlen(view) == 0)
+        throw CameraUsageError(what + ": the eye " + vtext(c.position) + " equals the look-at point");
+    if (!(vlen(c.up) > 0)) throw CameraUsageError(what + ": the up direction is the zero vector");
+    if (vlen(vcross(view, c.up)) <= 1e-6 * vlen(view) * vlen(c.up))
+        throw CameraUsageError(what + ": the up direction " + vtext(c.up) +
+                               " is parallel to the view direction " + vtext(view));
+}
+
+}  // namespace
+
+rt::DVec3 parse_vec3(const std::string& text, const std::string& option_name) {
+    const std::string option = option_name.empty() ? std::string() : option_name + ": ";
+    rt::DVec3 v{};
+    std::size_t start = 0;
+    for (int i = 0; i < 3; ++i) {
+        const std::size_t comma = text.find(',', start);
+        if ((i < 2) != (comma != std::string::npos))
+            throw CameraUsageError(option + "expected X,Y,Z (three numbers, commas between), got '" + text +
+                                   "'");
+        const std::string part = text.substr(start, i < 2 ? comma - start : std::string::npos);
+        char* end = nullptr;
+        v[i] = std::strtod(part.c_str(), &end);
+        if (part.empty() || end == part.c_str() || *end != '\0' || !std::isfinite(v[i]))
+            throw CameraUsageError(option + "'" + part + "' in '" + text + "' is not a finite number");
+        start = comma + 1;
+    }
+    return v;
+}
+
+void add_camera_options(CLI::App& app, CameraOverrides& c) {
+    auto vec3 = [](bool allow_auto) {
+        return CLI::Validator(
+            [allow_auto](std::string& s) -> std::string {
+                if (allow_auto && s == "auto") return {};
+                try {
+                    const rt::DVec3 v = parse_vec3(s, "");
+                    if (allow_auto && vlen(v) == 0) return "the up direction is the zero vector";
+                } catch (const Error& e) {
+                    return e.what();
+                }
+                return {};
+            },
+            allow_auto ? "X,Y,Z|auto" : "X,Y,Z");
+    };
+    app.add_option(
+           "--eye", c.eye,
+           "Camera position, world frame (replaces the scene camera's; a pool alone: the camera looks "
+           "at --look-at, else at the centre of the model)")
+        ->check(vec3(false));
+    app.add_option(
+           "--look-at", c.look_at,
+           "Point at the image centre, world frame (a pool alone without --eye: the default view moved "
+           "to look at it)")
+        ->check(vec3(false));
+    app.add_option("--up", c.up,
+                   "The image's up direction, world frame, or auto: detected from the data (the normal of a "
+                   "plane holding >= 20 % of the points, signed toward the sensors, else toward what "
+                   "stands on it; else the normal of the plane the scanners' directions span; else +y; the "
+                   "rule that decided is printed). Default: the scene camera's, +y for a pool alone (the "
+                   "default view turns to the up given)")
+        ->check(vec3(true));
+    app.add_option("--fov", c.fov,
+                   "Vertical field of view in degrees, 0 < fov < 180 (0: the scene's, default 45)")
+        ->check(CLI::Validator(
+            [](std::string& s) -> std::string {
+                char* end = nullptr;
+                const double v = std::strtod(s.c_str(), &end);
+                if (s.empty() || *end != '\0' || !std::isfinite(v) || v < 0 || v >= 180)
+                    return "expected degrees in (0, 180), got '" + s + "'";
+                return {};
+            },
+            "DEG"));
+    // The checks that need several options together, once all are parsed (usage errors too).
+    app.final_callback([&c]() {
+        try {
+            if (!c.eye.empty() && !c.look_at.empty()) {
+                scene::Camera cam;
+                cam.position = parse_vec3(c.eye, "--eye");
+                cam.look_at = parse_vec3(c.look_at, "--look-at");
+                cam.up = !c.up.empty() && c.up != "auto" ? parse_vec3(c.up, "--up") : rt::DVec3{0, 1, 0};
+                if (c.up.empty() || c.up == "auto") {
+                    if (vlen(vsub(cam.look_at, cam.position)) == 0)
+                        throw CameraUsageError("--eye " + c.eye + " equals --look-at");
+                } else {
+                    check_camera(cam, "--eye, --look-at, --up");
+                }
+            }
+        } catch (const CameraUsageError& e) {
+            throw CLI::ValidationError(e.what());
+        }
+    });
+}
+
+void apply_camera(const CameraOverrides& o, rt::RenderScene& rs, bool framed, bool quiet, const char* tool) {
+    scene::Camera& cam = rs.scene().camera;
+    std::optional<rt::DVec3> up;
+    std::string rule;  // printed once the camera is known to be valid (an error stays one line)
+    if (o.up == "auto") {
+        const rt::UpDetection d = rs.detect_up();
+        rule = rt::direction_name(d.up) + ": " + d.description;
+        up = d.up;
+    } else if (!o.up.empty()) {
+        up = parse_vec3(o.up, "--up");
+    }
+    const double fov = o.fov > 0 ? o.fov : (framed ? 45.0 : cam.fov_y_degrees);
+    if (framed) {
+        // The default view at the final image size, turned to the up and fov asked for.
+        const std::uint32_t w = cam.width, h = cam.height;
+        cam = rs.default_camera(w, h, up.value_or(rt::DVec3{0, 1, 0}), fov);
+        if (!o.look_at.empty()) {
+            const rt::DVec3 target = parse_vec3(o.look_at, "--look-at");
+            const rt::DVec3 back = vsub(cam.position, cam.look_at);
+            cam.look_at = target;
+            cam.position = {target[0] + back[0], target[1] + back[1], target[2] + back[2]};
+        }
+        if (!o.eye.empty()) {
+            cam.position = parse_vec3(o.eye, "--eye");
+            if (o.look_at.empty()) {  // the centre of the model's robust bounds
+                const rt::Box& b = rs.robust_bounds();
+                cam.look_at = {0.5 * (b.lo[0] + b.hi[0]), 0.5 * (b.lo[1] + b.hi[1]),
+                               0.5 * (b.lo[2] + b.hi[2])};
+            }
+        }
+    } else {
+        if (!o.eye.empty()) cam.position = parse_vec3(o.eye, "--eye");
+        if (!o.look_at.empty()) cam.look_at = parse_vec3(o.look_at, "--look-at");
+        if (up) cam.up = *up;
+        cam.fov_y_degrees = fov;
+    }
+    if (o.any()) {
+        std::string what;
+        for (const auto& [given, name] :
+             {std::pair{!o.eye.empty(), "--eye"}, std::pair{!o.look_at.empty(), "--look-at"},
+              std::pair{!o.up.empty(), "--up"}}) {
+            if (given) what += (what.empty() ? "" : ", ") + std::string(name);
+        }
+        if (!o.eye.empty() && o.look_at.empty())
+            what += framed ? " (looking at the model's centre)"
+                           : " (looking at the scene camera's look-at point)";
+        if (o.up == "auto") what += " (detected " + rt::direction_name(*up) + ")";
+        check_camera(cam, what.empty() ? std::string("--fov") : what);
+    }
+    if (!rule.empty()) tool::note(quiet, "%s: --up auto: %s", tool, rule.c_str());
+    if (framed) rs.place_default_light();
 }
 
 }  // namespace prt::player

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "prt/core/scene_view.h"
+#include "prt/error.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
 
@@ -23,6 +24,7 @@ struct RenderOverrides {
     std::uint32_t leaf_culling = 2;  ///< core::LeafCulling
     // Surfaces (issue 9's accuracy knobs); 0 / -1 keep the core's defaults.
     std::string surface;         ///< rt::LoadOptions::surface ("" keeps the scene's)
+    std::string point_colors;    ///< rt::LoadOptions::point_colors ("" keeps the materials')
     bool iso_float = false;      ///< rt::LoadOptions::iso_float
     float iso_samples = 0;       ///< core::IsoParams::samples
     int iso_refine = -1;         ///< core::IsoParams::refine_steps
@@ -33,6 +35,23 @@ struct RenderOverrides {
     bool path_tracing = false;
     std::uint32_t spp = 0;
     std::uint32_t max_depth = 0;
+};
+
+/// A camera given on the command line (world frame); empty / 0 keeps the scene's camera or the
+/// default framing.
+struct CameraOverrides {
+    std::string eye;      ///< "X,Y,Z"
+    std::string look_at;  ///< "X,Y,Z"
+    std::string up;       ///< "X,Y,Z" or "auto" (rt::RenderScene::detect_up)
+    double fov = 0;       ///< vertical field of view in degrees
+    bool any() const { return !eye.empty() || !look_at.empty() || !up.empty() || fov > 0; }
+};
+
+/// Camera options that contradict each other or the scene (the eye at the look-at point, an up
+/// along the view): a usage error, exit status 2.
+class CameraUsageError : public Error {
+public:
+    using Error::Error;
 };
 
 /// Backend choice.
@@ -57,5 +76,20 @@ void add_sampling_options(CLI::App& app, RenderOverrides& o);
 rt::LoadOptions load_options(const RenderOverrides& o);
 /// The backend options of a choice.
 rt::BackendOptions backend_options(const BackendChoice& b);
+
+/// Declares --eye, --look-at, --up and --fov on `app`: values are checked as they are parsed
+/// (three finite numbers, a non-zero up, 0 < fov < 180), and --eye against --look-at and --up once
+/// all are read (usage errors).
+void add_camera_options(CLI::App& app, CameraOverrides& c);
+/// "X,Y,Z" as three finite numbers; throws CameraUsageError naming `option` otherwise.
+rt::DVec3 parse_vec3(const std::string& text, const std::string& option);
+/// Sets rs.scene().camera from the overrides. `framed` (a pool alone): the default view
+/// (RenderScene::default_camera at the camera's width and height) with --up (default +y; auto: the
+/// detected up) and --fov, then --look-at moves it (same direction and distance) and --eye places
+/// it (looking at --look-at, else at the centre of the robust bounds); the default light follows
+/// the camera. Otherwise the given values replace the scene camera's (--up auto: the detected up of
+/// the first model). Throws CameraUsageError when the eye equals the look-at point or the up is
+/// along the view. `tool` prefixes the note saying which rule chose an automatic up.
+void apply_camera(const CameraOverrides& c, rt::RenderScene& rs, bool framed, bool quiet, const char* tool);
 
 }  // namespace prt::player

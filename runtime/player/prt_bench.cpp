@@ -36,6 +36,7 @@ struct Options {
     bool profile = false;
     player::BackendChoice backend;
     player::RenderOverrides render;
+    player::CameraOverrides camera;
 };
 
 /// Work per ray of one ray kind, derived from two scenarios: (work of `with` - work of `base`) /
@@ -55,6 +56,10 @@ nlohmann::json derived_kind(const rt::FrameStats& with, const rt::FrameStats& ba
 void run(Options o, const tool::CommonOptions& common) {
     o.scene.load = player::load_options(o.render);
     rt::RenderScene rs = player::bench_scene(o.scene, common.quiet);
+    // A pool alone is framed at the benchmark's image size; --eye, --look-at, --up, --fov override.
+    const bool framed = !o.scene.pool.empty() && o.scene.scene.empty();
+    if (framed || o.camera.any()) player::apply_camera(o.camera, rs, framed, common.quiet, "prt-bench");
+    for (const std::string& n : rs.notes()) tool::note(common.quiet, "prt-bench: %s", n.c_str());
     core::RenderParams base = rs.params();
     player::apply(o.render, base);
 
@@ -212,7 +217,8 @@ void run(Options o, const tool::CommonOptions& common) {
 
 int main(int argc, char** argv) {
     Options o;
-    return prt::tool::run(
+    bool usage_error = false;  // camera options that contradict the scene: exit 2 like other usage errors
+    const int code = prt::tool::run(
         argc, argv, "prt-bench",
         "PointRT benchmark: rays per second by ray kind and frames per second for three scenarios (primary; "
         "one "
@@ -246,8 +252,17 @@ int main(int argc, char** argv) {
                          "Also trace the shadow and reflect4 frames on the host, recording each ray's work: "
                          "leaves, leaves passed by their bounds and splat tests per ray by bounce depth, and "
                          "the SIMT efficiency of 32-pixel warps (slow: every core of this machine)");
+            prt::player::add_camera_options(app, o.camera);
             prt::player::add_backend_options(app, o.backend);
             prt::player::add_render_options(app, o.render);
         },
-        [&](const prt::tool::CommonOptions& common) { run(o, common); });
+        [&](const prt::tool::CommonOptions& common) {
+            try {
+                run(o, common);
+            } catch (const player::CameraUsageError& e) {
+                std::fprintf(stderr, "prt-bench: error: %s (see --help)\n", e.what());
+                usage_error = true;
+            }
+        });
+    return usage_error ? prt::k_exit_usage_error : code;
 }

@@ -29,6 +29,7 @@ struct Options {
     double orbit = 0;
     std::filesystem::path camera_path;
     prt::player::RenderOverrides render;
+    prt::player::CameraOverrides camera;
     prt::player::BackendChoice backend;
     std::filesystem::path screenshot;
     bool frames_given = false;  ///< --frames on the command line (the window then closes after them)
@@ -86,8 +87,12 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     scene::Camera& cam = rs.scene().camera;
     if (o.width) cam.width = o.width;
     if (o.height) cam.height = o.height;
+    // A pool alone is framed at the final image size; --eye, --look-at, --up, --fov override.
+    if (o.scene.empty() || o.camera.any())
+        player::apply_camera(o.camera, rs, o.scene.empty(), common.quiet, "prt-play");
     player::apply(o.render, rs.params());
     for (const std::string& w : rs.warnings()) tool::note(common.quiet, "warning: %s", w.c_str());
+    for (const std::string& n : rs.notes()) tool::note(common.quiet, "prt-play: %s", n.c_str());
     const double t_open = tool::now_seconds();
     auto backend = rt::make_backend(o.backend.name, player::backend_options(o.backend));
     const rt::UploadStats up = backend->set_scene(rs.view());
@@ -171,7 +176,8 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
 
 int main(int argc, char** argv) {
     Options o;
-    return prt::tool::run(
+    bool usage_error = false;  // camera options that contradict the scene: exit 2 like other usage errors
+    const int code = prt::tool::run(
         argc, argv, "prt-play",
         "PointRT player: ray traces (or path traces) pools on the CPU or a GPU, in a window or headless: "
         "splats (thesis ch. 2-3, 5), Implicit Surface Octrees (ch. 4), the MLS surface (Wald-Seidel 2005) "
@@ -212,16 +218,26 @@ int main(int argc, char** argv) {
                 ->check(CLI::Range(0u, 16384u));
             app.add_option("--height", o.height, "Image height (0: the scene camera's, default 512)")
                 ->check(CLI::Range(0u, 16384u));
-            app.add_option("--orbit", o.orbit,
-                           "Headless: turn the camera about +y through its look-at point by this many "
-                           "degrees per frame");
+            app.add_option(
+                "--orbit", o.orbit,
+                "Headless: turn the camera about its up direction through its look-at point by this "
+                "many degrees per frame");
             app.add_option("--camera-path", o.camera_path,
                            "Headless: camera path file, one frame per line 'px py pz lx ly lz [fov]' (world "
                            "frame; frames cycle)")
                 ->check(CLI::ExistingFile);
+            prt::player::add_camera_options(app, o.camera);
             prt::player::add_backend_options(app, o.backend);
             prt::player::add_render_options(app, o.render);
             prt::player::add_sampling_options(app, o.render);
         },
-        [&](const prt::tool::CommonOptions& common) { run(o, common); });
+        [&](const prt::tool::CommonOptions& common) {
+            try {
+                run(o, common);
+            } catch (const prt::player::CameraUsageError& e) {
+                std::fprintf(stderr, "prt-play: error: %s (see --help)\n", e.what());
+                usage_error = true;
+            }
+        });
+    return usage_error ? prt::k_exit_usage_error : code;
 }

@@ -223,18 +223,41 @@ void write_screenshot(const std::filesystem::path& path, int fw, int fh) {
     rt::write_image(path, shot);
 }
 
+/// The orbit about the look-at point, in a frame of the camera's up k: e1, k, e2 right-handed
+/// (for +y up: x, y, z). Yaw turns about k from e2 toward e1; pitch lifts toward k.
 struct OrbitState {
     scene::Vec3 target{0, 0, 0};
     double distance = 1, yaw = 0, pitch = 0;  // radians
+    scene::Vec3 e1{1, 0, 0}, k{0, 1, 0}, e2{0, 0, 1};
     bool dragging_left = false, dragging_right = false;
     double last_x = 0, last_y = 0;
     bool dirty = true;
+
+    /// The frame of an up direction: e1 = k x z (k x -y when k is near z), e2 = e1 x k.
+    void set_up(const scene::Vec3& up) {
+        const double l = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
+        k = l > 0 ? scene::Vec3{up[0] / l, up[1] / l, up[2] / l} : scene::Vec3{0, 1, 0};
+        const scene::Vec3 ref = std::fabs(k[2]) < 0.9 ? scene::Vec3{0, 0, 1} : scene::Vec3{0, -1, 0};
+        e1 = cross(k, ref);
+        const double el = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+        for (double& c : e1) c /= el;
+        e2 = cross(e1, k);
+    }
+    static scene::Vec3 cross(const scene::Vec3& a, const scene::Vec3& b) {
+        return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    }
+    /// a e1 + b k + c e2
+    scene::Vec3 in_frame(double a, double b, double c) const {
+        return {a * e1[0] + b * k[0] + c * e2[0], a * e1[1] + b * k[1] + c * e2[1],
+                a * e1[2] + b * k[2] + c * e2[2]};
+    }
 };
 
 scene::Vec3 orbit_position(const OrbitState& o) {
-    return {o.target[0] + o.distance * std::cos(o.pitch) * std::sin(o.yaw),
-            o.target[1] + o.distance * std::sin(o.pitch),
-            o.target[2] + o.distance * std::cos(o.pitch) * std::cos(o.yaw)};
+    const scene::Vec3 d = o.in_frame(std::cos(o.pitch) * std::sin(o.yaw), std::sin(o.pitch),
+                                     std::cos(o.pitch) * std::cos(o.yaw));
+    return {o.target[0] + o.distance * d[0], o.target[1] + o.distance * d[1],
+            o.target[2] + o.distance * d[2]};
 }
 
 struct WindowContext {
@@ -305,12 +328,10 @@ void on_cursor(GLFWwindow* w, double x, double y) {
     } else if (o.dragging_right) {
         // Pan in the camera's image plane, scaled by the distance.
         const double s = o.distance * 0.002;
-        const double rx = std::cos(o.yaw), rz = -std::sin(o.yaw);
-        const double ux = -std::sin(o.pitch) * std::sin(o.yaw), uy = std::cos(o.pitch),
-                     uz = -std::sin(o.pitch) * std::cos(o.yaw);
-        o.target[0] += -dx * s * rx + dy * s * ux;
-        o.target[1] += dy * s * uy;
-        o.target[2] += -dx * s * rz + dy * s * uz;
+        const scene::Vec3 right = o.in_frame(std::cos(o.yaw), 0, -std::sin(o.yaw));
+        const scene::Vec3 up = o.in_frame(-std::sin(o.pitch) * std::sin(o.yaw), std::cos(o.pitch),
+                                          -std::sin(o.pitch) * std::cos(o.yaw));
+        for (int i = 0; i < 3; ++i) o.target[i] += -dx * s * right[i] + dy * s * up[i];
         o.dirty = true;
     }
 }
@@ -349,9 +370,11 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
     const scene::Vec3 d{cam.position[0] - cam.look_at[0], cam.position[1] - cam.look_at[1],
                         cam.position[2] - cam.look_at[2]};
     ctx.orbit.target = cam.look_at;
+    ctx.orbit.set_up(cam.up);  // the orbit turns about the camera's up (--up, a scene's camera.up)
     ctx.orbit.distance = std::max(1e-30, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-    ctx.orbit.yaw = std::atan2(d[0], d[2]);
-    ctx.orbit.pitch = std::asin(std::clamp(d[1] / ctx.orbit.distance, -1.0, 1.0));
+    auto along = [&](const scene::Vec3& e) { return d[0] * e[0] + d[1] * e[1] + d[2] * e[2]; };
+    ctx.orbit.yaw = std::atan2(along(ctx.orbit.e1), along(ctx.orbit.e2));
+    ctx.orbit.pitch = std::asin(std::clamp(along(ctx.orbit.k) / ctx.orbit.distance, -1.0, 1.0));
     glfwSetWindowUserPointer(window, &ctx);
     glfwSetKeyCallback(window, on_key);
     glfwSetMouseButtonCallback(window, on_mouse_button);

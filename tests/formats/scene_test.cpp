@@ -6,8 +6,10 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -120,7 +122,9 @@ TEST(Scene, ReadsEveryKey) {
     EXPECT_EQ(s.materials[0].diffuse_reflectance, 1.0f);  // 1 - 0 - 0
     EXPECT_EQ(s.materials[1].refractive_index, 1.5f);
     EXPECT_EQ(s.materials[1].specular_exponent, 200.0f);
-    EXPECT_FALSE(s.materials[1].use_point_colors);
+    EXPECT_EQ(s.materials[1].point_colors, PointColors::none);  // use_point_colors false
+    EXPECT_EQ(s.materials[0].point_colors, PointColors::automatic);
+    EXPECT_FALSE(s.materials[0].intensity_range.has_value());
     EXPECT_EQ(s.materials[1].texture, "/tex/brick.png");
     // diffuse_reflectance not given: what reflectivity and transmissivity leave, 1 - 0.1 - 0.85.
     EXPECT_NEAR(s.materials[1].diffuse_reflectance, 0.05, 1e-6);
@@ -185,7 +189,8 @@ void expect_same(const Scene& a, const Scene& b) {
         EXPECT_EQ(x.reflectivity, y.reflectivity);
         EXPECT_EQ(x.transmissivity, y.transmissivity);
         EXPECT_EQ(x.diffuse_reflectance, y.diffuse_reflectance);
-        EXPECT_EQ(x.use_point_colors, y.use_point_colors);
+        EXPECT_EQ(x.point_colors, y.point_colors);
+        EXPECT_EQ(x.intensity_range, y.intensity_range);
         EXPECT_EQ(x.texture, y.texture);
     }
     ASSERT_EQ(a.models.size(), b.models.size());
@@ -239,7 +244,8 @@ TEST(Scene, RoundTripKeepsEveryValueExactly) {
     glass.reflectivity = 0.1f;
     glass.transmissivity = 0.8f;
     glass.diffuse_reflectance = 0.1f;
-    glass.use_point_colors = false;
+    glass.point_colors = PointColors::intensity;
+    glass.intensity_range = std::array<float, 2>{0.1f, 1.0f / 3.0f};
     glass.texture = "/textures/a b.png";
     Material unnamed;  // no name: must be referenced by index
     unnamed.diffuse_reflectance = 0.25f;
@@ -398,7 +404,84 @@ INSTANTIATE_TEST_SUITE_P(
         ErrorCase{R"({"render": {"shadows": true, "shadows": false}})", "/render/shadows", "duplicate key"},
         ErrorCase{R"({"materials": [{}, {"name": "x", "name": "y"}]})", "/materials/1/name", "duplicate key"},
         ErrorCase{R"({"camera": {"position": [0, 1e999, 0]}})", "/camera/position/1", "number overflow"},
-        ErrorCase{R"({"a/b~c": 1})", "/a~1b~0c", "unknown key"}));
+        ErrorCase{R"({"a/b~c": 1})", "/a~1b~0c", "unknown key"},
+        // point_colors, use_point_colors and intensity_range (SCENE.md, materials)
+        ErrorCase{R"({"materials": [{"point_colors": "rgb"}]})", "/materials/0/point_colors",
+                  "unknown value \"rgb\" (expected auto, colors, intensity or none)"},
+        ErrorCase{R"({"materials": [{"point_colors": true}]})", "/materials/0/point_colors",
+                  "expected a string"},
+        ErrorCase{R"({"materials": [{"point_colors": "none", "use_point_colors": false}]})",
+                  "/materials/0/use_point_colors", "not both"},
+        ErrorCase{R"({"materials": [{"use_point_colors": "colors"}]})", "/materials/0/use_point_colors",
+                  "expected true or false"},
+        ErrorCase{R"({"materials": [{"intensity_range": [0, 1, 2]}]})", "/materials/0/intensity_range",
+                  "array of 2"},
+        ErrorCase{R"({"materials": [{"intensity_range": 5}]})", "/materials/0/intensity_range",
+                  "expected [lo, hi]"},
+        ErrorCase{R"({"materials": [{"intensity_range": [0, "1"]}]})", "/materials/0/intensity_range/1",
+                  "expected a number"},
+        ErrorCase{R"({"materials": [{"intensity_range": [2, 2]}]})", "/materials/0/intensity_range/1",
+                  "greater than lo"},
+        ErrorCase{R"({"materials": [{"intensity_range": [3, -1]}]})", "/materials/0/intensity_range/1",
+                  "greater than lo"},
+        ErrorCase{R"({"materials": [{"intensity_range": [0, 1e39]}]})", "/materials/0/intensity_range/1",
+                  "32-bit float"}));
+
+TEST(Scene, PointColorsAndItsOlderBooleanForm) {
+    const Scene s = parse_scene(R"({"materials": [{}, {"point_colors": "auto"}, {"point_colors": "colors"},
+        {"point_colors": "intensity", "intensity_range": [-2.5, 40]}, {"point_colors": "none"},
+        {"use_point_colors": true}, {"use_point_colors": false}, {"intensity_range": [0, 1]}]})",
+                                "t");
+    ASSERT_EQ(s.materials.size(), 8u);
+    EXPECT_EQ(s.materials[0].point_colors, PointColors::automatic);  // SCENE.md default: auto
+    EXPECT_EQ(s.materials[1].point_colors, PointColors::automatic);
+    EXPECT_EQ(s.materials[2].point_colors, PointColors::colors);
+    EXPECT_EQ(s.materials[3].point_colors, PointColors::intensity);
+    ASSERT_TRUE(s.materials[3].intensity_range.has_value());
+    EXPECT_EQ(*s.materials[3].intensity_range, (std::array<float, 2>{-2.5f, 40.0f}));
+    EXPECT_EQ(s.materials[4].point_colors, PointColors::none);
+    EXPECT_EQ(s.materials[5].point_colors, PointColors::colors);  // true: the pool's colors
+    EXPECT_EQ(s.materials[6].point_colors, PointColors::none);    // false: none
+    EXPECT_EQ(s.materials[7].point_colors, PointColors::automatic);
+    EXPECT_TRUE(s.materials[7].intensity_range.has_value());
+    // Written back as point_colors (never the older key), and read back the same.
+    const std::string text = to_json(s);
+    EXPECT_EQ(text.find("use_point_colors"), std::string::npos) << text;
+    const Scene t = parse_scene(text, "t2");
+    for (std::size_t i = 0; i < s.materials.size(); ++i) {
+        EXPECT_EQ(t.materials[i].point_colors, s.materials[i].point_colors) << i;
+        EXPECT_EQ(t.materials[i].intensity_range, s.materials[i].intensity_range) << i;
+    }
+}
+
+TEST(Scene, IntensityRangeIsTheFirstAndNinetyNinthPercentile) {
+    // 0, 1, ..., 200 shuffled: nearest rank round(0.01 * 200) = 2 and round(0.99 * 200) = 198.
+    std::vector<float> v;
+    for (int i = 0; i <= 200; ++i) v.push_back(static_cast<float>((i * 37) % 201));
+    v.push_back(std::numeric_limits<float>::quiet_NaN());  // non-finite values are left out
+    v.push_back(std::numeric_limits<float>::infinity());
+    const auto r = intensity_range(v);
+    EXPECT_EQ(r[0], 2.0f);
+    EXPECT_EQ(r[1], 198.0f);
+    EXPECT_EQ(intensity_range(std::vector<float>{}), (std::array<float, 2>{0.0f, 0.0f}));
+    EXPECT_EQ(intensity_range(std::vector<float>{7.0f}), (std::array<float, 2>{7.0f, 7.0f}));
+}
+
+TEST(Scene, IntensityGreyIsLinearInTheRangeAndSrgbEncoded) {
+    // sRGB decode of the byte gives back t = (I - lo) / (hi - lo) (IEC 61966-2-1), to 8-bit rounding.
+    auto decode = [](std::uint8_t b) {
+        const double c = b / 255.0;
+        return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+    };
+    for (int i = 0; i <= 10; ++i) {
+        const float intensity = 100.0f + 30.0f * static_cast<float>(i);  // lo 100, hi 400
+        EXPECT_NEAR(decode(intensity_grey(intensity, 100.0f, 400.0f)), i / 10.0, 0.01) << intensity;
+    }
+    EXPECT_EQ(intensity_grey(-1e6f, 100.0f, 400.0f), 0);  // clamped
+    EXPECT_EQ(intensity_grey(1e6f, 100.0f, 400.0f), 255);
+    EXPECT_EQ(intensity_grey(5.0f, 3.0f, 3.0f), 255);  // no range: white
+    EXPECT_EQ(intensity_grey(std::numeric_limits<float>::quiet_NaN(), 0.0f, 1.0f), 0);
+}
 
 TEST(Scene, InvalidJsonNamesTheLine) {
     const std::string message = error_of("{\n  \"camera\": {\n    \"width\": 5,\n  }\n}");

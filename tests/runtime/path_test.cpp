@@ -21,7 +21,7 @@ rt::RenderScene plane_scene(float albedo, scene::Color sky) {
     m.diffuse = {albedo, albedo, albedo};
     m.ambient = {0, 0, 0};
     m.specular = {0, 0, 0};
-    m.use_point_colors = false;
+    m.point_colors = scene::PointColors::none;
     sc.materials = {m};
     sc.environment.color = sky;
     sc.camera.position = {0, 2, 0.5};
@@ -90,7 +90,7 @@ TEST(PathTracing, IndirectLightAddsToDirectLightAndConverges) {
     scene::Material m;
     m.specular = {0, 0, 0};
     m.ambient = {0, 0, 0};
-    m.use_point_colors = false;
+    m.point_colors = scene::PointColors::none;
     sc.materials = {m};
     sc.environment.color = {0, 0, 0};
     sc.camera.position = {0, 2, 3};

@@ -116,6 +116,113 @@ TEST_F(PlayerTest, ErrorsNameTheFileAndTheProblem) {
     EXPECT_NE(none.code, 0);
 }
 
+/// Whether pixel (x, y) of a PPM render is the red ball (red well above green).
+bool red_at(const rt::Image& img, std::uint32_t x, std::uint32_t y) {
+    const std::uint32_t p = img.rgba8[y * img.width + x];
+    return (p & 0xff) > 2 * ((p >> 8) & 0xff) + 10;
+}
+
+TEST_F(PlayerTest, CameraFromTheCommandLine) {
+    const std::string pool =
+        (m_dir / "ball.pool").string() + " --headless -q --backend cpu --width 40 --height 40";
+    auto play = [&](const std::string& args) {
+        const fs::path out = m_dir / "cam.ppm";
+        fs::remove(out);
+        const ToolRun r = run_tool("prt-play", pool + " --out " + out.string() + " " + args, m_dir);
+        EXPECT_EQ(r.code, 0) << args << ": " << r.err;
+        return r.code == 0 ? rt::read_ppm(out) : rt::Image{};
+    };
+    // The ball (radius 1 at (10, 20, 30)) seen from 10 away with a 30-degree fov covers
+    // tan(asin(0.1)) / tan(15 deg) = 0.37 of the half height: the centre is red, x = 5 is not.
+    rt::Image img = play("--eye 10,20,40 --look-at 10,20,30 --up 0,1,0 --fov 30");
+    ASSERT_EQ(img.width, 40u);
+    EXPECT_TRUE(red_at(img, 20, 20));
+    EXPECT_FALSE(red_at(img, 5, 20));
+    EXPECT_FALSE(red_at(img, 20, 5));
+    // With a 5-degree fov the ball fills the image.
+    img = play("--eye 10,20,40 --look-at 10,20,30 --fov 5");
+    EXPECT_TRUE(red_at(img, 0, 0));
+    EXPECT_TRUE(red_at(img, 39, 39));
+    // --eye alone looks at the model's centre.
+    img = play("--eye 16,20,30");
+    EXPECT_TRUE(red_at(img, 20, 20));
+    // --look-at alone moves the default view: 0.5 to the right of the ball puts it left of centre
+    // (the default view frames the radius-1 ball at 1 / 1.05 of the half height).
+    img = play("--look-at 10.5,20,30");
+    EXPECT_TRUE(red_at(img, 11, 20));
+    EXPECT_FALSE(red_at(img, 36, 20));
+    // The same camera given by a scene file renders the same image.
+    const fs::path scene = m_dir / "cam.json";
+    std::ofstream(scene)
+        << R"({"camera": {"position": [10, 20, 40], "look_at": [10, 20, 30], "fov_y_degrees": 30,
+        "width": 40, "height": 40}, "lights": [{"type": "point", "position": [10, 30, 40]}],
+        "models": [{"pool": "ball.pool"}]})";
+    const fs::path a = m_dir / "a.ppm", b = m_dir / "b.ppm";
+    ASSERT_EQ(
+        run_tool("prt-play", "--scene " + scene.string() + " --headless -q --backend cpu --out " + a.string(),
+                 m_dir)
+            .code,
+        0);
+    ASSERT_EQ(run_tool("prt-play",
+                       "--scene " + scene.string() +
+                           " --headless -q --backend cpu --eye 14,20,30 --fov 60 --out " + b.string(),
+                       m_dir)
+                  .code,
+              0);
+    EXPECT_NE(rt::read_ppm(a).rgba8, rt::read_ppm(b).rgba8) << "--eye and --fov replace the scene camera's";
+}
+
+TEST_F(PlayerTest, CameraOptionErrorsAreUsageErrors) {
+    const std::string pool = (m_dir / "ball.pool").string() + " --headless --backend cpu --out " +
+                             (m_dir / "e.ppm").string() + " ";
+    const fs::path scene = m_dir / "look_z.json";
+    std::ofstream(scene) << R"({"camera": {"position": [10, 20, 40], "look_at": [10, 20, 30]},
+        "models": [{"pool": "ball.pool"}]})";
+    const std::pair<std::string, std::string> cases[] = {
+        {pool + "--eye 1,2,3 --look-at 1,2,3", "equals"},
+        {pool + "--eye 0,0,0 --look-at 0,5,0 --up 0,-1,0", "parallel"},
+        {pool + "--eye nan,0,0", "not a finite number"},
+        {pool + "--look-at 1,2", "X,Y,Z"},
+        {pool + "--up 0,0,0", "zero vector"},
+        {pool + "--fov 180", "(0, 180)"},
+        {pool + "--fov nan", "(0, 180)"},
+        // Looking straight down with the default +y up: the up is the view direction.
+        {pool + "--eye 10,25,30 --look-at 10,20,30", "parallel"},
+        {pool + "--look-at 10,20,30 --eye 10,10,30 --up auto", "parallel"},
+        // The scene camera looks along -z: --up 0,0,1 is along the view.
+        {"--scene " + scene.string() + " --headless --backend cpu --out " + (m_dir / "e.ppm").string() +
+             " --up 0,0,1",
+         "parallel"},
+    };
+    for (const auto& [args, what] : cases) {
+        const ToolRun r = run_tool("prt-play", args, m_dir);
+        EXPECT_EQ(r.code, 2) << args << ": " << r.err;
+        EXPECT_EQ(lines(r.err), 1) << args << ": " << r.err;
+        EXPECT_NE(r.err.find(what), std::string::npos) << args << ": " << r.err;
+        EXPECT_FALSE(fs::exists(m_dir / "e.ppm")) << args;
+    }
+    // prt-bench shares the options.
+    const ToolRun bench =
+        run_tool("prt-bench",
+                 (m_dir / "ball.pool").string() +
+                     " --backend cpu --width 8 --height 8 --frames 1 --warmup 0 --scenarios primary "
+                     "--eye 10,25,30 --look-at 10,20,30 -q",
+                 m_dir);
+    EXPECT_EQ(bench.code, 2) << bench.err;
+    EXPECT_EQ(lines(bench.err), 1) << bench.err;
+}
+
+TEST_F(PlayerTest, UpAutoSaysWhichRuleDecided) {
+    const ToolRun r = run_tool("prt-play",
+                               (m_dir / "ball.pool").string() +
+                                   " --headless --backend cpu --width 16 --height 16 --up auto --out " +
+                                   (m_dir / "u.ppm").string(),
+                               m_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    // A ball: no plane and no sensors, so +y.
+    EXPECT_NE(r.err.find("prt-play: --up auto: +y: no dominant plane"), std::string::npos) << r.err;
+}
+
 TEST(GpuBackend, WithoutDeviceTheFactoryThrowsOneClearLine) {
     const rt::BackendAvailability a = rt::backend_availability();
     if (a.cuda_device) GTEST_SKIP() << "a CUDA device exists here";

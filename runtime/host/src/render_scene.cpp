@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <optional>
 
 #include "prt/error.h"
 #include "prt/runtime/gi_pool.h"
@@ -137,6 +139,126 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
                lm.leaf_bounds.size() * sizeof(core::LeafBounds);
 }
 
+/// SCENE.md point_colors: the per-point colors a model shades with (ModelView::colors). The pool's
+/// colors are used in place; intensities become grey levels in a host array built here (so neither
+/// the core nor a backend changes); points whose material asks for what the pool lacks get white.
+/// ISO leaves carry colors baked by prt-iso and patches none: their view gets no per-point colors.
+void shade_points(const pool::PoolFile& pf, LoadedModel& lm, const std::vector<scene::Material>& materials,
+                  std::vector<std::string>& warnings, std::vector<std::string>& notes) {
+    core::ModelView& v = lm.view;
+    v.colors = nullptr;
+    const std::size_t n = v.point_count;
+    auto colors = pf.array<pool::Rgba8>(pool::SectionType::colors);
+    auto intensities = pf.array<float>(pool::SectionType::intensities);
+    if (!colors.empty() && colors.size() != n) {
+        warnings.push_back(pf.label() + ": section colors: count differs from the point count: ignored");
+        colors = {};
+    }
+    if (!intensities.empty() && intensities.size() != n) {
+        warnings.push_back(pf.label() + ": section intensities: count differs from the point count: ignored");
+        intensities = {};
+    }
+    // The materials this model's points use.
+    const std::size_t nm = materials.size();
+    std::vector<char> used(nm, 0);
+    used[v.material] = 1;
+    if (v.material_ids)
+        for (std::size_t i = 0; i < n; ++i) used[std::min<std::size_t>(v.material_ids[i], nm - 1)] = 1;
+    const bool per_point = v.surface == core::SurfaceKind::splats || v.surface == core::SurfaceKind::mls;
+    if (!per_point) {
+        for (std::size_t k = 0; k < nm; ++k) {
+            if (used[k] && materials[k].point_colors == scene::PointColors::intensity &&
+                v.surface == core::SurfaceKind::iso)
+                warnings.push_back("model '" + lm.name +
+                                   "': ISO leaves carry the colors prt-iso baked: build the ISO with prt-iso "
+                                   "--point-colors intensity to shade it by intensity");
+        }
+        return;
+    }
+    // What each used material's points take: nothing (point_colors none: the core ignores them),
+    // the pool's colors, grey levels, or white.
+    enum class Take { skip, pool_colors, grey, white };
+    std::vector<Take> take(nm, Take::skip);
+    bool any_colors = false, any_grey = false, any_white = false;
+    for (std::size_t k = 0; k < nm; ++k) {
+        if (!used[k]) continue;
+        Take t = Take::skip;
+        switch (materials[k].point_colors) {
+            case scene::PointColors::none:
+                t = Take::skip;
+                break;
+            case scene::PointColors::automatic:
+                t = !colors.empty() ? Take::pool_colors : !intensities.empty() ? Take::grey : Take::white;
+                break;
+            case scene::PointColors::colors:
+                t = !colors.empty() ? Take::pool_colors : Take::white;
+                break;
+            case scene::PointColors::intensity:
+                t = !intensities.empty() ? Take::grey : Take::white;
+                if (intensities.empty())
+                    warnings.push_back(
+                        "model '" + lm.name + "': material " +
+                        (materials[k].name.empty() ? std::to_string(k) : "'" + materials[k].name + "'") +
+                        " shades by intensity but " + pf.label() + " has no intensities section");
+                break;
+        }
+        take[k] = t;
+        any_colors = any_colors || t == Take::pool_colors;
+        any_grey = any_grey || t == Take::grey;
+        any_white = any_white || t == Take::white;
+    }
+    if (!any_grey && !any_colors) return;         // white everywhere: no colors at all
+    if (any_colors && !any_grey && !any_white) {  // the pool's own colors, in place
+        v.colors = colors.data();
+        return;
+    }
+    // Grey levels: each material's intensity_range, by default the pool's 1st-99th percentiles.
+    std::optional<std::array<float, 2>> default_range;
+    std::vector<std::array<float, 2>> range(nm, std::array<float, 2>{0, 0});
+    for (std::size_t k = 0; k < nm; ++k) {
+        if (take[k] != Take::grey) continue;
+        if (materials[k].intensity_range) {
+            range[k] = *materials[k].intensity_range;
+        } else {
+            if (!default_range) default_range = scene::intensity_range(intensities);
+            range[k] = *default_range;
+        }
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "model '%s': shading by intensity, [%g, %g] to black..white%s",
+                      lm.name.c_str(), double(range[k][0]), double(range[k][1]),
+                      materials[k].intensity_range ? "" : " (the 1st-99th percentile)");
+        if (std::find(notes.begin(), notes.end(), buf) == notes.end()) notes.push_back(buf);
+        if (!(range[k][1] > range[k][0]))
+            warnings.push_back("model '" + lm.name + "': the intensities have no spread: shaded white");
+    }
+    std::uint64_t non_finite = 0;
+    lm.shading_colors.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t k = v.material_ids ? std::min<std::size_t>(v.material_ids[i], nm - 1) : v.material;
+        pool::Rgba8& out = lm.shading_colors[i];
+        switch (take[k]) {
+            case Take::pool_colors:
+                out = colors[i];
+                break;
+            case Take::grey: {
+                const float x = intensities[i];
+                non_finite += !std::isfinite(x);
+                const std::uint8_t g = scene::intensity_grey(x, range[k][0], range[k][1]);
+                out = pool::Rgba8{g, g, g, 255};
+                break;
+            }
+            case Take::skip:
+            case Take::white:
+                out = pool::Rgba8{255, 255, 255, 255};
+                break;
+        }
+    }
+    if (non_finite)
+        warnings.push_back("model '" + lm.name + "': " + std::to_string(non_finite) +
+                           " intensities are not finite: shaded black");
+    v.colors = lm.shading_colors.data();  // a vector's buffer survives the moves of LoadedModel
+}
+
 }  // namespace
 
 std::array<DVec3, 3> rotation_matrix(const DVec3& degrees) {
@@ -183,6 +305,7 @@ RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::pat
     r.m_scene = sc;
     r.m_surface_override = options.surface;
     r.m_iso_float = options.iso_float;
+    r.m_point_colors_override = options.point_colors;
     std::vector<std::shared_ptr<const pool::PoolFile>> pools;
     if (!pool_override.empty()) {
         scene::Model m;
@@ -213,6 +336,7 @@ RenderScene RenderScene::from_pools(const scene::Scene& sc,
     r.m_scene = sc;
     r.m_surface_override = options.surface;
     r.m_iso_float = options.iso_float;
+    r.m_point_colors_override = options.point_colors;
     while (r.m_scene.models.size() < pools.size()) r.m_scene.models.push_back(scene::Model{});
     r.m_scene.models.resize(pools.size());
     r.build(std::move(pools));
@@ -229,45 +353,253 @@ RenderScene RenderScene::from_pool(const std::filesystem::path& path, LoadOption
     m.pool = path;
     sc.models.push_back(m);
     RenderScene r = load(sc, {}, options);
-    // Default view: frame the model's bounds, one light above and to the right of the camera.
-    const DVec3 lo = r.m_world_min, hi = r.m_world_max;
-    r.m_scene.camera = framing_camera(lo, hi, r.m_scene.camera.width, r.m_scene.camera.height);
-    const DVec3 c = mul(add(lo, hi), 0.5);
-    const double radius = std::max(0.5 * dlength(sub(hi, lo)), 1e-30);
-    scene::PointLight light;
-    light.position = add(c, mul(DVec3{1.5, 3.0, 2.5}, radius));
-    r.m_scene.point_lights = {light};
-    r.update_lights();
+    // Default view: frame the model's robust bounds, one light above and to the right of the camera.
+    r.m_scene.camera = r.default_camera(r.m_scene.camera.width, r.m_scene.camera.height);
+    r.place_default_light();
     return r;
 }
 
+const Box& RenderScene::robust_bounds() const {
+    if (m_robust) return *m_robust;
+    // A strided sample of every model's points in the world frame, at most k_sample in all.
+    constexpr std::size_t k_sample = 200000;
+    std::size_t total = 0;
+    for (const LoadedModel& lm : m_models)
+        total += lm.pool->array<pool::Float3>(pool::SectionType::positions).size();
+    std::vector<DVec3> sample;
+    if (total > 0) {
+        const std::size_t stride = (total + k_sample - 1) / k_sample;
+        sample.reserve(total / stride + m_models.size());
+        for (std::size_t i = 0; i < m_models.size(); ++i) {
+            const pool::PoolFile& pf = *m_models[i].pool;
+            const Placement pl = placement(m_scene.models[i].transform, pf.model_info());
+            const auto pos = pf.array<pool::Float3>(pool::SectionType::positions);
+            for (std::size_t k = 0; k < pos.size(); k += stride) {
+                const DVec3 w = pl.world({pos[k].x, pos[k].y, pos[k].z});
+                if (std::isfinite(w[0]) && std::isfinite(w[1]) && std::isfinite(w[2])) sample.push_back(w);
+            }
+        }
+    }
+    m_robust_points.clear();
+    Box b = rt::robust_bounds(sample, 0.25, &m_robust_points);
+    if (!b.valid) {
+        b.lo = m_world_min;
+        b.hi = m_world_max;
+        b.valid = true;
+        for (int corner = 0; corner < 8; ++corner)
+            m_robust_points.push_back({(corner & 1) ? b.hi[0] : b.lo[0], (corner & 2) ? b.hi[1] : b.lo[1],
+                                       (corner & 4) ? b.hi[2] : b.lo[2]});
+    }
+    m_robust = b;
+    return *m_robust;
+}
+
+UpDetection RenderScene::detect_up(const UpParams& params) const {
+    if (m_models.empty()) return rt::detect_up(UpInput{}, params);
+    const pool::PoolFile& pf = *m_models.front().pool;
+    const pool::ModelInfo& info = pf.model_info();
+    UpInput in;
+    in.positions = pf.array<pool::Float3>(pool::SectionType::positions);
+    in.normals = pf.array<pool::Float3>(pool::SectionType::normals);
+    in.sensors = pf.array<pool::Sensor>(pool::SectionType::sensors);
+    in.origin = {info.origin[0], info.origin[1], info.origin[2]};
+    UpDetection d = rt::detect_up(in, params);
+    // Into the world frame: the model's rotation (its scale is positive and uniform).
+    const Placement pl = placement(m_scene.models.front().transform, info);
+    const DVec3 w = mat_apply(pl.rotation, d.up);
+    const double len = dlength(w);
+    if (len > 0) d.up = mul(w, 1.0 / len);
+    return d;
+}
+
+std::optional<DVec3> RenderScene::front_hint() const {
+    for (std::size_t i = 0; i < m_models.size(); ++i) {
+        const pool::PoolFile& pf = *m_models[i].pool;
+        const auto sensors = pf.array<pool::Sensor>(pool::SectionType::sensors);
+        if (sensors.empty()) continue;
+        const pool::Sensor& s = sensors.front();
+        const Placement pl = placement(m_scene.models[i].transform, pf.model_info());
+        const DVec3 sp{s.position[0], s.position[1], s.position[2]};
+        DVec3 d;
+        if (s.kind == pool::k_sensor_direction) {
+            d = mat_apply(pl.rotation, sp);
+        } else {
+            const Box& b = robust_bounds();
+            d = sub(pl.world(sub(sp, pl.origin)), mul(add(b.lo, b.hi), 0.5));
+        }
+        const double len = dlength(d);
+        if (len > 0 && std::isfinite(len)) return mul(d, 1.0 / len);
+    }
+    // No sensor: the mean normal (world frame) over a strided sample of at most 200k normals.
+    constexpr std::size_t k_sample = 200000;
+    std::size_t total = 0;
+    for (const LoadedModel& lm : m_models)
+        total += lm.pool->array<pool::Float3>(pool::SectionType::normals).size();
+    if (total == 0) return std::nullopt;
+    const std::size_t stride = (total + k_sample - 1) / k_sample;
+    DVec3 sum{0, 0, 0};
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < m_models.size(); ++i) {
+        const pool::PoolFile& pf = *m_models[i].pool;
+        const auto normals = pf.array<pool::Float3>(pool::SectionType::normals);
+        const Placement pl = placement(m_scene.models[i].transform, pf.model_info());
+        for (std::size_t k = 0; k < normals.size(); k += stride) {
+            const DVec3 nl{normals[k].x, normals[k].y, normals[k].z};
+            const double len = dlength(nl);
+            if (!(len > 0) || !std::isfinite(len)) continue;
+            sum = add(sum, mat_apply(pl.rotation, mul(nl, 1.0 / len)));
+            ++count;
+        }
+    }
+    if (count == 0) return std::nullopt;
+    const DVec3 mean = mul(sum, 1.0 / static_cast<double>(count));
+    const double len = dlength(mean);
+    if (len >= 0.25) return mul(mean, 1.0 / len);
+    return std::nullopt;
+}
+
+scene::Camera RenderScene::default_camera(std::uint32_t width, std::uint32_t height, const DVec3& up,
+                                          double fov_y_degrees) const {
+    robust_bounds();
+    return frame_points(m_robust_points, width, height, default_direction(up, front_hint()), up,
+                        fov_y_degrees);
+}
+
+void RenderScene::place_default_light() {
+    const scene::Camera& cam = m_scene.camera;
+    const Box& b = robust_bounds();
+    const double radius = std::max(0.5 * dlength(sub(b.hi, b.lo)), 1e-30);
+    DVec3 u = cam.up;
+    const double ul = dlength(u);
+    u = ul > 0 ? mul(u, 1.0 / ul) : DVec3{0, 1, 0};
+    DVec3 back = sub(cam.position, cam.look_at);
+    DVec3 right{u[1] * back[2] - u[2] * back[1], u[2] * back[0] - u[0] * back[2],
+                u[0] * back[1] - u[1] * back[0]};
+    const double rl = dlength(right);
+    scene::PointLight light;
+    if (rl > 0 && std::isfinite(rl)) {
+        right = mul(right, 1.0 / rl);
+        back = {right[1] * u[2] - right[2] * u[1], right[2] * u[0] - right[0] * u[2],
+                right[0] * u[1] - right[1] * u[0]};  // right x up: toward the camera, perpendicular to up
+        light.position =
+            add(cam.look_at, mul(add(add(mul(right, 1.5), mul(u, 3.0)), mul(back, 2.5)), radius));
+    } else {
+        light.position = add(cam.look_at, mul(DVec3{1.5, 3.0, 2.5}, radius));
+    }
+    m_scene.point_lights = {light};
+    m_scene.area_lights.clear();
+    update_lights();
+}
+
+DVec3 RenderScene::default_direction(const DVec3& up_in, const std::optional<DVec3>& front_hint) {
+    const double ul = dlength(up_in);
+    const DVec3 up = ul > 0 && std::isfinite(ul) ? mul(up_in, 1.0 / ul) : DVec3{0, 1, 0};
+    auto perpendicular = [&](const DVec3& v) {  // v without its component along up
+        return sub(v, mul(up, v[0] * up[0] + v[1] * up[1] + v[2] * up[2]));
+    };
+    DVec3 front{0, 0, 0};
+    if (front_hint) front = perpendicular(*front_hint);
+    if (dlength(front) < 0.1) {
+        if (std::fabs(up[2]) < 0.9)
+            front = perpendicular({0, 0, 1});
+        else
+            front = perpendicular({0, up[2] > 0 ? -1.0 : 1.0, 0});
+    }
+    front = mul(front, 1.0 / dlength(front));
+    return add(front, mul(up, 0.35));
+}
+
 scene::Camera RenderScene::framing_camera(const DVec3& lo, const DVec3& hi, std::uint32_t width,
-                                          std::uint32_t height, DVec3 direction) {
+                                          std::uint32_t height, DVec3 direction, DVec3 up,
+                                          double fov_y_degrees) {
+    std::vector<DVec3> corners;
+    for (int corner = 0; corner < 8; ++corner)
+        corners.push_back(
+            {(corner & 1) ? hi[0] : lo[0], (corner & 2) ? hi[1] : lo[1], (corner & 4) ? hi[2] : lo[2]});
+    return frame_points(corners, width, height, direction, up, fov_y_degrees);
+}
+
+scene::Camera RenderScene::frame_points(const std::vector<DVec3>& points, std::uint32_t width,
+                                        std::uint32_t height, DVec3 direction, DVec3 up,
+                                        double fov_y_degrees) {
     scene::Camera cam;
     cam.width = width;
     cam.height = height;
-    cam.fov_y_degrees = 45.0;
-    const DVec3 c = mul(add(lo, hi), 0.5);
+    cam.fov_y_degrees = fov_y_degrees > 0 && fov_y_degrees < 180 ? fov_y_degrees : 45.0;
+    constexpr double k_inf = std::numeric_limits<double>::infinity();
+    DVec3 lo{k_inf, k_inf, k_inf}, hi{-k_inf, -k_inf, -k_inf};
+    for (const DVec3& p : points)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    if (points.empty()) lo = hi = {0, 0, 0};
+    DVec3 c = mul(add(lo, hi), 0.5);
     double radius = 0.5 * dlength(sub(hi, lo));
     if (!(radius > 0) || !std::isfinite(radius)) radius = 1.0;
-    const double len = dlength(direction);
-    direction = len > 0 ? mul(direction, 1.0 / len) : DVec3{0, 0, 1};
+    double len = dlength(direction);
+    direction = len > 0 && std::isfinite(len) ? mul(direction, 1.0 / len) : DVec3{0, 0, 1};
+    len = dlength(up);
+    up = len > 0 && std::isfinite(len) ? mul(up, 1.0 / len) : DVec3{0, 1, 0};
+    // The camera frame: w toward the camera, r its right, u its (projected) up.
+    auto cross = [](const DVec3& a, const DVec3& b) {
+        return DVec3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+    };
+    auto dot = [](const DVec3& a, const DVec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
+    const DVec3& w = direction;
+    DVec3 r = cross(up, w);
+    if (dlength(r) < 1e-6) {  // up along the view: any up perpendicular to it
+        up = std::fabs(w[1]) < 0.9 ? DVec3{0, 1, 0} : DVec3{0, 0, 1};
+        r = cross(up, w);
+    }
+    r = mul(r, 1.0 / dlength(r));
+    const DVec3 u = cross(w, r);
     const double half = 0.5 * cam.fov_y_degrees * 3.14159265358979323846 / 180.0;
     const double aspect = height > 0 ? static_cast<double>(width) / height : 1.0;
-    const double half_min = std::min(half, std::atan(std::tan(half) * aspect));  // narrower of the two fovs
-    const double dist = radius / std::sin(half_min) * 1.05;
-    cam.position = add(c, mul(direction, dist));
+    // With a 5 % border: a point p is inside the view from the eye E when, along the camera's
+    // forward f = -w, |(p - E).r| <= tx (p - E).f and |(p - E).u| <= ty (p - E).f. In E's
+    // coordinates (e_r, e_u, e_f) these are linear: e_r - tx e_f >= max(p.r - tx p.f) = A_r and
+    // e_r + tx e_f <= min(p.r + tx p.f) = B_r (the same with u, ty). The nearest eye (largest e_f)
+    // takes e_r = (A_r + B_r) / 2, e_u = (A_u + B_u) / 2 and e_f = min((B_r - A_r) / 2 tx,
+    // (B_u - A_u) / 2 ty): exact, and the points' image is centred along the tighter axis.
+    const double ty = std::tan(half) / 1.05, tx = std::tan(half) * aspect / 1.05;
+    const DVec3 f = mul(w, -1.0);
+    double ar = -k_inf, br = k_inf, au = -k_inf, bu = k_inf, nearest = k_inf;
+    for (const DVec3& p : points) {
+        const double pr = dot(p, r), pu = dot(p, u), pf = dot(p, f);
+        ar = std::max(ar, pr - tx * pf);
+        br = std::min(br, pr + tx * pf);
+        au = std::max(au, pu - ty * pf);
+        bu = std::min(bu, pu + ty * pf);
+        nearest = std::min(nearest, pf);
+    }
+    if (!points.empty() && std::isfinite(ar + br + au + bu)) {
+        const double er = 0.5 * (ar + br), eu = 0.5 * (au + bu);
+        const double ef = std::min({(br - ar) / (2 * tx), (bu - au) / (2 * ty), nearest - 0.05 * radius});
+        const DVec3 eye = add(add(mul(r, er), mul(u, eu)), mul(f, ef));
+        cam.position = eye;
+        cam.look_at = add(eye, mul(f, std::max(dot(sub(c, eye), f), 1e-9 * radius)));
+        cam.up = up;
+        return cam;
+    }
+    const double dist = radius / std::sin(half) * 1.05;
+    cam.position = add(c, mul(w, dist));
     cam.look_at = c;
-    cam.up = {0, 1, 0};
+    cam.up = up;
     return cam;
 }
 
 void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools) {
     m_warnings.clear();
+    m_notes.clear();
+    m_robust.reset();
+    m_robust_points.clear();
     if (m_scene.materials.empty()) {
         m_scene.materials.push_back(scene::Material{});
         m_scene.materials.back().name = "default";
     }
+    if (m_point_colors_override)
+        for (scene::Material& m : m_scene.materials) m.point_colors = *m_point_colors_override;
     m_params = to_params(m_scene.render, &m_warnings);
     m_models.clear();
     constexpr double k_inf = std::numeric_limits<double>::infinity();
@@ -278,7 +610,6 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         const pool::PoolFile& pf = *pools[i];
         const scene::Model& sm = m_scene.models[i];
         const pool::ModelInfo& info = pf.model_info();
-        const auto colors = pf.array<pool::Rgba8>(pool::SectionType::colors);
         const auto material_ids = pf.array<std::uint32_t>(pool::SectionType::material_ids);
         if (info.point_count > 0xffffffffull)
             pf.fail(nullptr, "more than 2^32 - 1 points: not supported by the renderer");
@@ -313,13 +644,6 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             break;
         }
         v.point_count = static_cast<std::uint32_t>(info.point_count);
-        if (!colors.empty()) {
-            if (colors.size() == info.point_count)
-                v.colors = colors.data();
-            else
-                m_warnings.push_back(pf.label() +
-                                     ": section colors: count differs from the point count: ignored");
-        }
         if (!material_ids.empty()) {
             if (material_ids.size() == info.point_count)
                 v.material_ids = material_ids.data();
@@ -329,10 +653,9 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         }
         v.material =
             std::min<std::uint32_t>(sm.material, static_cast<std::uint32_t>(m_scene.materials.size() - 1));
-        // ISO leaves carry their own colors; patches have none.
-        const bool per_point = v.surface == core::SurfaceKind::splats || v.surface == core::SurfaceKind::mls;
-        if (!per_point) v.colors = nullptr;
-        lm.bytes += (v.colors ? colors.size_bytes() : 0) + (v.material_ids ? material_ids.size_bytes() : 0);
+        shade_points(pf, lm, m_scene.materials, m_warnings, m_notes);
+        lm.bytes += (v.colors ? std::size_t{v.point_count} * sizeof(pool::Rgba8) : 0) +
+                    (v.material_ids ? material_ids.size_bytes() : 0);
         // thesis 5.3-5.4: precomputed global illumination, when the scene asks for it.
         if (m_scene.render.caustics) {
             if (has_caustics(pf)) {
@@ -403,7 +726,7 @@ void RenderScene::convert_materials() {
         m.reflectivity = sm.reflectivity;
         m.transmissivity = sm.transmissivity;
         m.diffuse_reflectance = sm.diffuse_reflectance;
-        m.use_point_colors = sm.use_point_colors ? 1u : 0u;
+        m.use_point_colors = sm.point_colors != scene::PointColors::none ? 1u : 0u;
         m_materials.push_back(m);
     }
 }

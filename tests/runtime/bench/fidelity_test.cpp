@@ -175,7 +175,8 @@ void write_off(const fs::path& path, double r) {
     for (const auto& x : t) f << "3 " << x[0] << " " << x[1] << " " << x[2] << "\n";
 }
 
-/// The sphere pool's points minus those with y > cap_y, plus `floaters` points at radius 1.4.
+/// The sphere pool's points minus those with y > cap_y, plus `floaters` points at radius 1.4 below
+/// the equator.
 void edit_pool(const fs::path& in, const fs::path& out, double cap_y, int floaters) {
     const prt::pool::PoolFile p = prt::pool::PoolFile::open(in);
     prt::pre::PointCloud c = prt::pre::read_point_sections(p), kept;
@@ -188,6 +189,7 @@ void edit_pool(const fs::path& in, const fs::path& out, double cap_y, int floate
     std::normal_distribution<double> g;
     for (int k = 0; k < floaters; ++k) {
         D3 q{g(rng), g(rng), g(rng)};
+        q[1] = -std::abs(q[1]) - 0.5;  // below the equator: away from the cap, so they hide no hole
         const double l = len(q);
         for (double& x : q) x *= 1.4 / l;
         kept.positions.push_back(q);

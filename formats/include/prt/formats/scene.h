@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,14 @@ struct AreaLight {
     bool casts_shadows = true;
 };
 
+/// What multiplies a material's diffuse color point by point (SCENE.md, materials[].point_colors).
+enum class PointColors {
+    automatic,  ///< "auto": the pool's colors, else its intensities, else nothing
+    colors,     ///< the pool's per-point colors (nothing when it has none)
+    intensity,  ///< the pool's scanner intensities as a grey level (nothing when it has none)
+    none,       ///< nothing: the diffuse color alone
+};
+
 /// The thesis's material model (5.1): eight properties.
 struct Material {
     std::string name;
@@ -56,7 +65,10 @@ struct Material {
     float reflectivity = 0.0f;       ///< fraction perfectly reflected
     float transmissivity = 0.0f;     ///< fraction transmitted (refracted)
     float diffuse_reflectance = 1.0f;///< fraction contributing to local shading
-    bool use_point_colors = true;    ///< modulate diffuse by the pool's per-point colors if present
+    PointColors point_colors = PointColors::automatic;  ///< what modulates diffuse per point
+    /// point_colors intensity: this range maps to grey 0..1 (lo < hi); unset: the 1st and 99th
+    /// percentiles of each pool's intensities (intensity_range() below).
+    std::optional<std::array<float, 2>> intensity_range;
     std::string texture;             ///< optional tri-planar texture image (prt-texture)
 };
 
@@ -116,5 +128,19 @@ Scene parse_scene(const std::string& json_text, const std::string& label,
                   const std::filesystem::path& base_dir = {});
 /// Serializes a scene back to JSON text (round trip with parse_scene).
 std::string to_json(const Scene& scene);
+
+/// The JSON name of a PointColors value ("auto", "colors", "intensity", "none").
+const char* point_colors_name(PointColors p);
+/// Parses "auto", "colors", "intensity" or "none"; false for anything else.
+bool parse_point_colors(const std::string& text, PointColors& out);
+
+/// SCENE.md's default intensity range: the 1st and 99th percentiles (nearest rank over the sorted
+/// finite values) of a pool's intensities; {0, 0} when none is finite. lo == hi is possible.
+std::array<float, 2> intensity_range(std::span<const float> intensities);
+/// The grey level an intensity shades with, as an sRGB-encoded byte (point colors are stored
+/// display-encoded): t = (intensity - lo) / (hi - lo) clamped to [0, 1] is the linear reflectance
+/// factor, so radiance is proportional to t. hi <= lo gives 255 (white: nothing to tell apart);
+/// a non-finite intensity gives 0.
+std::uint8_t intensity_grey(float intensity, float lo, float hi);
 
 }  // namespace prt::scene

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "prt/formats/pool.h"
 #include "prt/formats/scene.h"
 #include "prt/runtime/image.h"
+#include "prt/runtime/scan_frame.h"
 
 namespace prt::rt {
 
@@ -31,6 +33,9 @@ struct LoadedModel {
     core::ModelView view;  ///< pointers into the mapped pool (and leaf_bounds below)
     /// Per filled leaf: bounds that let rays pass it unread (derived at load, not in the pool).
     std::vector<core::LeafBounds> leaf_bounds;
+    /// Per point: the colors the view shades with when they are not the pool's own (SCENE.md
+    /// point_colors: intensities as grey levels, or a mix by material); empty otherwise.
+    std::vector<pool::Rgba8> shading_colors;
     DVec3 world_min, world_max;  ///< bounds after the model's transform (world frame)
     std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads, leaf bounds included
 };
@@ -42,6 +47,8 @@ struct LoadOptions {
     std::string surface;
     /// ISO: trace the float leaves (160 B) instead of the quantized ones (56 B) when a pool has both.
     bool iso_float = false;
+    /// Replaces every material's point_colors (SCENE.md; prt-play --point-colors) when set.
+    std::optional<scene::PointColors> point_colors;
 };
 
 /// Options that override the scene file.
@@ -59,9 +66,8 @@ public:
     /// sections (splats: prt-octree; iso: prt-iso; mls: prt-mls; patches: prt-patches).
     static RenderScene load(const scene::Scene& scene, const std::filesystem::path& pool_override = {},
                             const LoadOptions& options = {});
-    /// A pool on its own: the default scene (default material, one light, a camera framing the
-    /// model's bounds from the front and a little above); the surface is what the pool holds
-    /// unless `options` names one.
+    /// A pool on its own: the default scene (default material, one light, default_camera() at
+    /// 512 x 512 with +y up); the surface is what the pool holds unless `options` names one.
     static RenderScene from_pool(const std::filesystem::path& pool, LoadOptions options = {});
     /// A scene whose models are given as already-open pools (tests, benchmarks).
     static RenderScene from_pools(const scene::Scene& scene,
@@ -94,10 +100,48 @@ public:
     void update_lights();
     /// Warnings collected while loading (clamped settings, unsupported surfaces, ...), one line each.
     const std::vector<std::string>& warnings() const { return m_warnings; }
+    /// Notes collected while loading (how intensities are shaded), one line each.
+    const std::vector<std::string>& notes() const { return m_notes; }
 
-    /// A camera framing world bounds [lo, hi], looking along `-direction` (default: from +z, a little above).
+    /// Robust world bounds of the models' points (scan_frame.h: 1st-99th percentile box grown to
+    /// the points near it, over a sample of at most 200k points), the box a default view frames.
+    /// Computed once; the models' bounds when they hold no points.
+    const Box& robust_bounds() const;
+    /// The up direction of the first model's points (scan_frame.h detect_up), in the world frame
+    /// (turned by the model's transform); +y without models.
+    UpDetection detect_up(const UpParams& params = {}) const;
+    /// The side the data was seen from, a world direction: from the centre of robust_bounds()
+    /// toward the first sensor of the first model whose pool has a sensors section; else, when the
+    /// mean of the normals (a sample over all models) is at least 0.25 long, its direction (a
+    /// single-view scan: its splats face the scanner; closed models' normals average near 0);
+    /// else none.
+    std::optional<DVec3> front_hint() const;
+    /// The default view of the models: a camera framing the sample of points inside
+    /// robust_bounds() (frame_points) with this up and vertical field of view, looking from
+    /// default_direction(up, front_hint()).
+    scene::Camera default_camera(std::uint32_t width, std::uint32_t height, const DVec3& up = {0, 1, 0},
+                                 double fov_y_degrees = 45.0) const;
+    /// Replaces the scene's lights by the default one: right of, above and behind the camera (from
+    /// its look-at point: 1.5, 3 and 2.5 x the radius of robust_bounds(), along the camera's right,
+    /// its up and the way back to it), and updates the render-frame lights.
+    void place_default_light();
+
+    /// The default viewing direction (from the model toward the camera) for an up direction: the
+    /// front, a little above (front + 0.35 up). The front is `front_hint` made perpendicular to up
+    /// (the side a scanner saw) when given and not along up, else +z turned perpendicular to up
+    /// (+y up: +z, so the default view of a y-up model looks down -z), else -y for +z up and +y for -z up.
+    static DVec3 default_direction(const DVec3& up, const std::optional<DVec3>& front_hint = std::nullopt);
+    /// A camera framing the box [lo, hi]: frame_points() of its 8 corners.
     static scene::Camera framing_camera(const DVec3& lo, const DVec3& hi, std::uint32_t width,
-                                        std::uint32_t height, DVec3 direction = {0.0, 0.35, 1.0});
+                                        std::uint32_t height, DVec3 direction = {0.0, 0.35, 1.0},
+                                        DVec3 up = {0.0, 1.0, 0.0}, double fov_y_degrees = 45.0);
+    /// A camera looking along `-direction` with this up and vertical fov that frames `points`: the
+    /// look-at point is their bounds' centre moved across the view to centre their extent (as seen
+    /// along the view), and the camera stands at the nearest distance at which every point lies
+    /// inside the image with a 5 % border (both fields of view, from width / height).
+    static scene::Camera frame_points(const std::vector<DVec3>& points, std::uint32_t width,
+                                      std::uint32_t height, DVec3 direction = {0.0, 0.35, 1.0},
+                                      DVec3 up = {0.0, 1.0, 0.0}, double fov_y_degrees = 45.0);
 
 private:
     void build(std::vector<std::shared_ptr<const pool::PoolFile>> pools);
@@ -118,6 +162,10 @@ private:
     std::vector<core::AreaLight> m_area_lights;
     FloatImage m_environment;
     std::vector<std::string> m_warnings;
+    std::vector<std::string> m_notes;
+    std::optional<scene::PointColors> m_point_colors_override;  ///< LoadOptions::point_colors
+    mutable std::optional<Box> m_robust;                        ///< robust_bounds(), once computed
+    mutable std::vector<DVec3> m_robust_points;                 ///< the sample inside it (world)
 };
 
 /// Converts a scene file's render settings to core parameters (clamping max_bounces to
