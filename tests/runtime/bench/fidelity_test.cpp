@@ -271,3 +271,44 @@ TEST(PrtFidelity, SphereWithAPlantedHoleAndFloatingPoints) {
     EXPECT_LE(c["surfaces"]["mls"]["hole_rate"].get<double>(), 0.25 * expected);
     fs::remove_all(dir);
 }
+
+TEST(PrtFidelity, AnalyticTruthOfAScanAndTheScannersViews) {
+    if (!have_tools()) GTEST_SKIP() << "prt-fidelity or the pipeline tools are not built (FLANN, OpenMesh)";
+    const fs::path dir = temp_dir("scan");
+    const fs::path scan = dir / "scan.pool";
+    // a sphere seen by two scanners, true normals (the reference is the analytic sphere)
+    ASSERT_EQ(
+        prt::test::run_tool(
+            "prt-synth",
+            "sphere --scan --scanners 2 --sample-step 0.1 --scan-normals -o " + scan.string() + " -q", dir)
+            .code,
+        0);
+    for (const char* step : {"prt-radii", "prt-octree", "prt-mls"})
+        ASSERT_EQ(prt::test::run_tool(step, scan.string() + " -o " + scan.string() + " -q", dir).code, 0)
+            << step;
+    const nlohmann::json a = run_fidelity(dir, scan.string() + " --width 96 --height 96 --views 6");
+    EXPECT_EQ(a["reference"]["kind"], "analytic");
+    // two scanners see part of the sphere: some reference pixels have no data
+    EXPECT_GT(a["reference_pixels"]["uncovered"].get<int>(), 0);
+    EXPECT_GT(a["reference_pixels"]["covered"].get<int>(), 0);
+    for (const char* s : {"splats", "mls"}) {
+        EXPECT_LE(a["surfaces"][s]["hole_rate"].get<double>(), 0.005) << s;
+        EXPECT_LE(a["surfaces"][s]["false_hit_rate"].get<double>(), 0.005) << s;
+    }
+    // from the scanners: 6 cube faces each
+    const nlohmann::json b =
+        run_fidelity(dir, scan.string() + " --width 64 --height 64 --views-from sensors");
+    EXPECT_EQ(b["views"], 12);
+    EXPECT_GT(b["reference_pixels"]["covered"].get<int>(), 0);
+    // a pool with no shape and no --reference is one line, exit 1
+    const fs::path plain = dir / "plain.pool";
+    edit_pool(scan, plain, 10.0, 0);  // the same points without provenance
+    for (const char* step : {"prt-radii", "prt-mls"})
+        ASSERT_EQ(prt::test::run_tool(step, plain.string() + " -o " + plain.string() + " -q", dir).code, 0)
+            << step;
+    const auto r = prt::test::run_tool("prt-fidelity", plain.string() + " --width 16 --height 16", dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("no reference"), std::string::npos) << r.err;
+    EXPECT_EQ(prt::test::lines(r.err), 1) << r.err;
+    fs::remove_all(dir);
+}
