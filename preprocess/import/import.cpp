@@ -371,7 +371,8 @@ void normals_for(PointCloud& cloud, KnnGraph& graph, const std::vector<std::uint
                 unsure += !fixed[i];
             }
             const OrientStats p =
-                orient_by_propagation(cloud.positions, normals, graph, options.quiet, &fixed);
+                unsure > 0 ? orient_by_propagation(cloud.positions, normals, graph, options.quiet, &fixed)
+                           : OrientStats{};
             report.grazing_flipped = p.flipped;
             how += "; the " + std::to_string(unsure) + " more than " +
                    fmt("%.1f", std::acos(options.grazing_cos) * 180 / 3.14159265358979323846) +

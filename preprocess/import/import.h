@@ -71,10 +71,11 @@ struct Options {
     /// this is not oriented by its own sensor but takes its sign from the confidently oriented
     /// normals around it, over the k-NN graph (orient_by_propagation with those fixed); 0 orients
     /// every normal by its sensor alone. 0.3 (72.5 degrees) measured best over the ten bunny scans
-    /// and the PCL mug scene together (preprocess/import/README.md, "Orientation").
+    /// and the PCL mug scene together (preprocess/import/README.md, "Sensors and orientation").
     double grazing_cos = 0.3;
     /// With a sensor: orient by propagation (as without one), then turn each propagation component
     /// to face the sensors on the whole (the sum over its points of n . line of sight, unit).
+    /// Measured and not chosen (README "Sensors and orientation"); library only, for prt-bench-scans.
     bool propagate_then_vote = false;
     OutlierParams outliers;        ///< statistical + radius outlier removal per scan (neighbours.h)
     bool keep_duplicates = false;  ///< keep exactly coincident points

@@ -15,7 +15,9 @@ namespace prt::pre::import {
 /// extent of each cell, buckets of at most k_bucket points. Points are stored as float offsets from
 /// the bounding-box centre (a scan far from the origin keeps float precision relative to its size),
 /// reordered leaf after leaf so a bucket is contiguous in memory. The shape of the tree follows from
-/// the point count alone (each node halves its range), so nodes need no pointers.
+/// the point count alone (each node halves its range), so nodes need no pointers. Searches carry the
+/// squared distance to the current cell incrementally (Arya & Mount 1993, "Algorithms for fast
+/// vector quantization"), nearer child first.
 class KdTree {
 public:
     static constexpr std::uint32_t k_bucket = 12;

@@ -42,12 +42,14 @@ int main(int argc, char** argv) {
             "--outlier-k nearest neighbours above mean + --outlier-std x std over the scan, as PCL's\n"
             "StatisticalOutlierRemoval) or radius (fewer than --outlier-min-neighbours others within\n"
             "--outlier-radius x the scan's median spacing, the median of that mean distance).\n"
-            "Normals: estimated by PCA over k neighbours when missing, oriented toward each point's sensor\n"
-            "(PCD VIEWPOINT, PLY camera, pose list, pool, --sensor / --sensor-direction) or, without one,\n"
-            "by propagation over the k-NN graph (Hoppe 1992) from each component's highest point (+z\n"
-            "outward); grazing (ambiguous) counts are reported. Dropped points (NaN/Inf, zero normals,\n"
-            "duplicates, outliers, malformed lines) are counted on stderr. On any error nothing is written\n"
-            "and the exit code is 1 (2 for bad usage).");
+            "Normals: estimated by PCA over k neighbours when missing (ours, every build), facing each\n"
+            "point's sensor (PCD VIEWPOINT, PLY camera, pose list, pool, --sensor / --sensor-direction),\n"
+            "those more than acos(--grazing-cos) from their line of sight taking their sign from their\n"
+            "neighbours; without a sensor, by propagation over the k-NN graph (Hoppe 1992) from each\n"
+            "component's highest point (+z outward). Grazing (ambiguous) counts are reported. The\n"
+            "measurements behind the defaults: preprocess/import/README.md. Dropped points (NaN/Inf,\n"
+            "zero normals, duplicates, outliers, malformed lines) are counted on stderr. On any error\n"
+            "nothing is written and the exit code is 1 (2 for bad usage).");
         app.add_option(
             "inputs", inputs,
             "Scan, mesh or pool to import (.ply .pcd .xyz .txt .obj .off .stl .pool); with --poses: "

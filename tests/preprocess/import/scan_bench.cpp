@@ -207,6 +207,62 @@ void outlier_tables(const std::vector<Model>& ms, bool grid) {
             }
 }
 
+/// Clumps of outliers (a point moved along its line of sight by 5-25 % of the model size and
+/// c - 1 companions within a small fraction of the spacing of it), 1 % of the points in all: the
+/// radius test needs `min_neighbours` companions to miss them, the statistical test does not.
+void clump_table(const std::vector<Model>& ms) {
+    std::printf(
+        "# clumps of c outliers, 1 %% of the points: %% removed by the default / radius test alone\n");
+    for (const Model& m : ms) {
+        if (m.name != "bun000" && m.name.rfind("mug", 0) != 0) continue;
+        const std::vector<Vec3>& base = m.scans[0];
+        const double diag = prt_scan_ref::diagonal(base);
+        std::printf("%-20s", m.name.c_str());
+        for (const int clump : {1, 2, 3, 4, 6}) {
+            std::mt19937_64 rng(4);
+            std::uniform_real_distribution<double> u(0, 1);
+            prt::pre::PointCloud c;
+            c.positions = base;
+            c.intensities.assign(c.size(), 0.f);
+            std::size_t bad = 0;
+            for (std::size_t i = 0; i < base.size(); ++i) {
+                if (u(rng) >= 0.01 / clump) continue;
+                Vec3 p = c.positions[i];
+                const prt::pool::Sensor& s = m.sensors[0];
+                Vec3 d;
+                for (int a = 0; a < 3; ++a)
+                    d[a] = s.kind == prt::pool::k_sensor_direction ? s.position[a] : p[a] - s.position[a];
+                const double l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                const double shift = (0.05 + 0.2 * u(rng)) * diag * (u(rng) < 0.5 ? -1 : 1);
+                for (int a = 0; a < 3; ++a) p[a] += d[a] / l * shift;
+                c.positions[i] = p;
+                c.intensities[i] = 1;
+                ++bad;
+                for (int k = 1; k < clump; ++k) {
+                    Vec3 q = p;
+                    for (int a = 0; a < 3; ++a) q[a] += (u(rng) - 0.5) * 5e-4 * diag;
+                    c.positions.push_back(q);
+                    c.intensities.push_back(1.f);
+                    ++bad;
+                }
+            }
+            double rate[2];
+            for (int mode = 0; mode < 2; ++mode) {
+                prt::pre::PointCloud cc = c;
+                imp::OutlierParams p;
+                if (mode == 1) p.std_ratio = 0;
+                imp::OutlierReport r;
+                imp::outliers_and_graph(cc, p, 0, nullptr, r, true);
+                std::size_t left = 0;
+                for (const float f : cc.intensities) left += f > 0;
+                rate[mode] = 100.0 * double(bad - left) / double(bad);
+            }
+            std::printf("  c=%d %6.2f / %6.2f", clump, rate[0], rate[1]);
+        }
+        std::printf("\n");
+    }
+}
+
 /// The orientation settings compared.
 std::vector<std::pair<std::string, imp::Options>> settings() {
     std::vector<std::pair<std::string, imp::Options>> out;
@@ -405,7 +461,11 @@ int main(int argc, char** argv) {
         },
         [&](const prt::tool::CommonOptions&) {
             std::printf("# machine: %u hardware threads\n", std::thread::hardware_concurrency());
-            if (outliers) outlier_tables(models(data), grid);
+            if (outliers) {
+                const auto ms = models(data);
+                outlier_tables(ms, grid);
+                clump_table(ms);
+            }
             if (normals) normals_table(data);
             if (time_points) timing(time_points);
         });
