@@ -579,7 +579,7 @@ std::vector<std::string> Report::summary_lines() const {
     auto scan_lines = [&lines](const Report& r, const std::string& prefix) {
         lines.push_back(prefix + "read " + r.reader + ": " + std::to_string(r.records) + " points in " +
                         fmt("%.3f s", r.read_seconds));
-        for (const std::string& n : r.notes) lines.push_back(prefix + n);
+        for (const std::string& n : r.notes) lines.push_back(n);  // notes name their file
         if (r.nan_entries)
             lines.push_back(prefix + "dropped " + std::to_string(r.nan_entries) +
                             " entries with NaN coordinates (holes of an organized cloud)");
