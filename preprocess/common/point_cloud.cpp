@@ -19,7 +19,7 @@ std::string CleanReport::summary() const {
     return buf;
 }
 
-CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
+CleanReport clean(PointCloud& cloud, bool drop_duplicates, std::vector<std::size_t>* kept) {
     CleanReport report;
     const std::size_t n = cloud.size();
     report.input = n;
@@ -72,7 +72,8 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
             for (std::size_t a = run; a < end; ++a) {
                 if (!keep[keys[a].index]) continue;
                 for (std::size_t b = a + 1; b < end; ++b)
-                    if (keep[keys[b].index] && cloud.positions[keys[b].index] == cloud.positions[keys[a].index]) {
+                    if (keep[keys[b].index] &&
+                        cloud.positions[keys[b].index] == cloud.positions[keys[a].index]) {
                         keep[keys[b].index] = 0;
                         ++report.duplicates;
                     }
@@ -81,8 +82,10 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates) {
         }
     }
     std::size_t out = 0;
+    if (kept) kept->clear();
     for (std::size_t i = 0; i < n; ++i) {
         if (!keep[i]) continue;
+        if (kept) kept->push_back(i);
         cloud.positions[out] = cloud.positions[i];
         if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
         if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
@@ -113,7 +116,8 @@ std::array<std::array<double, 3>, 2> bounds(const PointCloud& cloud) {
 }
 
 void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
-    if (cloud.size() == 0) throw Error("no points to write (every input point was dropped or the input is empty)");
+    if (cloud.size() == 0)
+        throw Error("no points to write (every input point was dropped or the input is empty)");
     const auto b = bounds(cloud);
     pool::ModelInfo info{};
     for (int a = 0; a < 3; ++a) info.origin[a] = 0.5 * (b[0][a] + b[1][a]);
@@ -139,18 +143,30 @@ void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
     info.flags = cloud.flags;
     writer.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
     writer.add_array(pool::SectionType::positions, std::move(local));
-    if (cloud.has_normals()) writer.add_array(pool::SectionType::normals, cloud.normals);
-    else writer.remove(pool::SectionType::normals);
-    if (cloud.has_colors()) writer.add_array(pool::SectionType::colors, cloud.colors);
-    else writer.remove(pool::SectionType::colors);
-    if (cloud.has_radii()) writer.add_array(pool::SectionType::radii, cloud.radii);
-    else writer.remove(pool::SectionType::radii);
-    if (cloud.has_intensities()) writer.add_array(pool::SectionType::intensities, cloud.intensities);
-    else writer.remove(pool::SectionType::intensities);
-    if (!cloud.sensors.empty()) writer.add_array(pool::SectionType::sensors, cloud.sensors);
-    else writer.remove(pool::SectionType::sensors);
-    if (cloud.has_scan_ids()) writer.add_array(pool::SectionType::scan_ids, cloud.scan_ids);
-    else writer.remove(pool::SectionType::scan_ids);
+    if (cloud.has_normals())
+        writer.add_array(pool::SectionType::normals, cloud.normals);
+    else
+        writer.remove(pool::SectionType::normals);
+    if (cloud.has_colors())
+        writer.add_array(pool::SectionType::colors, cloud.colors);
+    else
+        writer.remove(pool::SectionType::colors);
+    if (cloud.has_radii())
+        writer.add_array(pool::SectionType::radii, cloud.radii);
+    else
+        writer.remove(pool::SectionType::radii);
+    if (cloud.has_intensities())
+        writer.add_array(pool::SectionType::intensities, cloud.intensities);
+    else
+        writer.remove(pool::SectionType::intensities);
+    if (!cloud.sensors.empty())
+        writer.add_array(pool::SectionType::sensors, cloud.sensors);
+    else
+        writer.remove(pool::SectionType::sensors);
+    if (cloud.has_scan_ids())
+        writer.add_array(pool::SectionType::scan_ids, cloud.scan_ids);
+    else
+        writer.remove(pool::SectionType::scan_ids);
 }
 
 PointCloud read_point_sections(const pool::PoolFile& pool) {
@@ -159,7 +175,8 @@ PointCloud read_point_sections(const pool::PoolFile& pool) {
     const auto pos = pool.require<pool::Float3>(pool::SectionType::positions, "reading points");
     cloud.positions.resize(pos.size());
     for (std::size_t i = 0; i < pos.size(); ++i)
-        cloud.positions[i] = {info.origin[0] + pos[i].x, info.origin[1] + pos[i].y, info.origin[2] + pos[i].z};
+        cloud.positions[i] = {info.origin[0] + pos[i].x, info.origin[1] + pos[i].y,
+                              info.origin[2] + pos[i].z};
     const auto nrm = pool.array<pool::Float3>(pool::SectionType::normals);
     cloud.normals.assign(nrm.begin(), nrm.end());
     const auto col = pool.array<pool::Rgba8>(pool::SectionType::colors);

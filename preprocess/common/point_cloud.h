@@ -33,23 +33,25 @@ struct PointCloud {
 
 /// Counts of points dropped or repaired while cleaning input: never silent (issue: bad input).
 struct CleanReport {
-    std::uint64_t input = 0;              ///< points read
-    std::uint64_t non_finite = 0;         ///< dropped: NaN/Inf coordinates
-    std::uint64_t zero_normal = 0;        ///< dropped: zero-length or non-finite normal
-    std::uint64_t duplicates = 0;         ///< dropped: exactly coincident with an earlier point
+    std::uint64_t input = 0;        ///< points read
+    std::uint64_t non_finite = 0;   ///< dropped: NaN/Inf coordinates
+    std::uint64_t zero_normal = 0;  ///< dropped: zero-length or non-finite normal
+    std::uint64_t duplicates = 0;   ///< dropped: exactly coincident with an earlier point
     std::uint64_t kept = 0;
-    std::string summary() const;          ///< one line for stderr
+    std::string summary() const;  ///< one line for stderr
 };
 
 /// Drops non-finite points, points whose normal is zero or non-finite (when normals are present;
 /// other normals are renormalised) and exact duplicates (keeping the first). Keeps attributes aligned.
-CleanReport clean(PointCloud& cloud, bool drop_duplicates = true);
+/// `kept`, when not null, receives the original index of every point kept, in order.
+CleanReport clean(PointCloud& cloud, bool drop_duplicates = true, std::vector<std::size_t>* kept = nullptr);
 
 /// Axis-aligned bounds of the positions (world frame); {+inf, -inf} when empty.
 std::array<std::array<double, 3>, 2> bounds(const PointCloud& cloud);
 
 /// Adds model_info, positions and whichever of normals/colors/radii/intensities/scan_ids/sensors the
-/// cloud has to `writer` (replacing any present, removing the absent ones). The local origin is the bounding-box centre. Throws on an empty cloud.
+/// cloud has to `writer` (replacing any present, removing the absent ones). The local origin is the
+/// bounding-box centre. Throws on an empty cloud.
 void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer);
 
 /// Reads the point sections of a pool back to world-frame doubles.

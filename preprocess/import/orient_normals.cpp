@@ -89,7 +89,9 @@ private:
 }  // namespace
 
 OrientStats orient_by_propagation(const std::vector<std::array<double, 3>>& positions,
-                                  std::vector<pool::Float3>& normals, const KnnGraph& graph, bool quiet) {
+                                  std::vector<pool::Float3>& normals, const KnnGraph& graph, bool quiet,
+                                  const std::vector<std::uint8_t>* fixed,
+                                  std::vector<std::uint32_t>* component) {
     OrientStats stats;
     const std::size_t n = normals.size();
     const std::uint32_t k = graph.k;
@@ -126,68 +128,107 @@ OrientStats orient_by_propagation(const std::vector<std::array<double, 3>>& posi
         });
     }
 
+    std::vector<std::uint8_t> visited(n, 0);
+    if (component) component->assign(n, 0);
+    std::vector<std::uint32_t> parent(n, k_no_neighbour);
+    IndexedMaxHeap heap(n);
+    LazyProgress progress("orienting normals", n, quiet);
+    std::uint64_t done = 0;
+    auto push_neighbours = [&](std::uint32_t v) {
+        for (std::uint64_t e = begin[v]; e < begin[v + 1]; ++e) {
+            const std::uint32_t m = adjacent[e];
+            if (visited[m]) continue;
+            const float d = std::fabs(dot(normals[v], normals[m]));
+            if (!heap.contains(m) || d > heap.key(m)) {
+                heap.push_or_raise(m, d);
+                parent[m] = v;
+            }
+        }
+    };
+    // Prim: pops the unvisited point with the best edge to the visited set, orients it like the
+    // end of that edge.
+    auto drain = [&](std::uint32_t seed) {
+        while (!heap.empty()) {
+            const std::uint32_t v = heap.pop();
+            const float w = heap.key(v);  // the best |n_p . n_v| over v's visited neighbours
+            visited[v] = 1;
+            if (component) (*component)[v] = static_cast<std::uint32_t>(stats.components);
+            if (v != seed) {
+                if (dot(normals[parent[v]], normals[v]) < 0.f) {
+                    flip(normals[v]);
+                    if (fixed) ++stats.flipped;
+                }
+                if (w < k_ambiguous_dot) ++stats.ambiguous;
+            }
+            push_neighbours(v);
+            if ((++done & 0xFFFF) == 0) progress.update(done);
+        }
+    };
+
+    if (fixed) {
+        for (std::size_t i = 0; i < n; ++i)
+            if (ok[i] && (*fixed)[i]) {
+                visited[i] = 1;
+                ++done;
+            }
+        for (std::size_t i = 0; i < n; ++i)
+            if (ok[i] && (*fixed)[i]) push_neighbours(static_cast<std::uint32_t>(i));
+        drain(k_no_neighbour);
+    }
+
     // Seeds: the unvisited point with the largest z is the top of its (wholly unvisited) component.
     std::vector<std::uint32_t> by_height;
     by_height.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
-        if (ok[i]) by_height.push_back(static_cast<std::uint32_t>(i));
+        if (ok[i] && !visited[i]) by_height.push_back(static_cast<std::uint32_t>(i));
     std::sort(by_height.begin(), by_height.end(), [&](std::uint32_t a, std::uint32_t b) {
         return positions[a][2] > positions[b][2] || (positions[a][2] == positions[b][2] && a < b);
     });
-
-    std::vector<std::uint8_t> visited(n, 0);
-    std::vector<std::uint32_t> parent(n, k_no_neighbour);
-    IndexedMaxHeap heap(n);
-    LazyProgress progress("orienting normals", by_height.size(), quiet);
-    std::uint64_t done = 0;
     for (const std::uint32_t seed : by_height) {
         if (visited[seed]) continue;
         ++stats.components;
         if (normals[seed].z < 0.f) flip(normals[seed]);
         if (std::fabs(normals[seed].z) < k_ambiguous_dot) ++stats.ambiguous;
         heap.push_or_raise(seed, 2.f);  // above any |dot|: popped first
-        while (!heap.empty()) {
-            const std::uint32_t v = heap.pop();
-            const float w = heap.key(v);  // the best |n_p . n_v| over v's visited neighbours
-            visited[v] = 1;
-            if (v != seed) {
-                if (dot(normals[parent[v]], normals[v]) < 0.f) flip(normals[v]);
-                if (w < k_ambiguous_dot) ++stats.ambiguous;
-            }
-            for (std::uint64_t e = begin[v]; e < begin[v + 1]; ++e) {
-                const std::uint32_t m = adjacent[e];
-                if (visited[m]) continue;
-                const float d = std::fabs(dot(normals[v], normals[m]));
-                if (!heap.contains(m) || d > heap.key(m)) {
-                    heap.push_or_raise(m, d);
-                    parent[m] = v;
-                }
-            }
-            if ((++done & 0xFFFF) == 0) progress.update(done);
-        }
+        drain(seed);
     }
     progress.finish();
     return stats;
 }
 
 OrientStats orient_toward(const std::vector<std::array<double, 3>>& positions,
-                          std::vector<pool::Float3>& normals, const std::array<double, 3>& sensor) {
+                          std::vector<pool::Float3>& normals, const std::vector<pool::Sensor>& sensors,
+                          const std::vector<std::uint16_t>& scan_ids, std::vector<std::uint8_t>* ambiguous,
+                          const std::vector<std::uint8_t>* only) {
     OrientStats stats;
-    stats.components = 0;
+    if (ambiguous) ambiguous->assign(normals.size(), 0);
     for (std::size_t i = 0; i < normals.size(); ++i) {
+        if (only && !(*only)[i]) continue;
         pool::Float3& nn = normals[i];
         if (!valid(nn)) {
             ++stats.skipped;
             continue;
         }
-        const double d[3] = {sensor[0] - positions[i][0], sensor[1] - positions[i][1],
-                             sensor[2] - positions[i][2]};
+        const pool::Sensor& s = sensors[scan_ids.empty() ? 0 : scan_ids[i]];
+        double d[3];
+        for (int a = 0; a < 3; ++a)
+            d[a] = s.kind == pool::k_sensor_direction ? s.position[a] : s.position[a] - positions[i][a];
         const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         const double c = nn.x * d[0] + nn.y * d[1] + nn.z * d[2];
         if (c < 0.0) flip(nn);
-        if (!(len > 0.0) || std::fabs(c) < k_ambiguous_dot * len) ++stats.ambiguous;
+        if (!(len > 0.0) || std::fabs(c) < k_ambiguous_dot * len) {
+            ++stats.ambiguous;
+            if (ambiguous) (*ambiguous)[i] = 1;
+        }
     }
     return stats;
+}
+
+OrientStats orient_toward(const std::vector<std::array<double, 3>>& positions,
+                          std::vector<pool::Float3>& normals, const std::array<double, 3>& sensor) {
+    const std::vector<pool::Sensor> sensors{
+        pool::Sensor{{sensor[0], sensor[1], sensor[2]}, pool::k_sensor_point, 0}};
+    return orient_toward(positions, normals, sensors, {});
 }
 
 }  // namespace prt::pre::import

@@ -2,10 +2,13 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <set>
 
 #include "mapped_file.h"
+#include "poses.h"
 #include "prt/error.h"
 #include "quote.h"
 
@@ -95,6 +98,28 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
         } else if (key == "POINTS") {
             single(h.points, have_points);
         } else if (key == "VIEWPOINT") {
+            if (w.size() != 8)
+                fail("VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz), got " + std::to_string(w.size() - 1));
+            std::array<double, 7> v{};
+            for (int i = 0; i < 7; ++i) {
+                const std::string_view word = w[1 + i];
+                const char* b = word.data();
+                const char* e = b + word.size();
+                if (b < e && *b == '+') ++b;
+                const auto [p, ec] = std::from_chars(b, e, v[i]);
+                if (ec != std::errc() || p != e || !std::isfinite(v[i]))
+                    fail("VIEWPOINT value " + quoted(word, 20) + " is not a finite number");
+            }
+            const double norm = std::sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+            if (std::fabs(norm - 1.0) > k_quaternion_tolerance) {
+                char buf[128];
+                std::snprintf(buf, sizeof buf,
+                              "VIEWPOINT quaternion (qw qx qy qz) has norm %.6g, not 1 (within %g)", norm,
+                              k_quaternion_tolerance);
+                fail(buf);
+            }
+            for (int i = 3; i < 7; ++i) v[i] /= norm;
+            h.viewpoint = v;
         } else if (key == "DATA") {
             if (w.size() != 2 || (w[1] != "ascii" && w[1] != "binary" && w[1] != "binary_compressed"))
                 fail("DATA must be ascii, binary or binary_compressed");
@@ -141,6 +166,14 @@ PcdHeader check_pcd(const MappedFile& file, Report& report) {
             throw Error(label + ": not a valid PCD file (float field " + h.fields[i] + " has SIZE " +
                         std::to_string(s) + ")");
         h.point_step += static_cast<std::uint64_t>(s) * h.count[i];
+        // Colours are PCL's packed 0x00RRGGBB / 0xAARRGGBB in one 4-byte float or integer.
+        if ((h.fields[i] == "rgb" || h.fields[i] == "rgba") && (s != 4 || h.count[i] != 1))
+            throw Error(label + ": PCD field " + h.fields[i] + " has SIZE " + std::to_string(s) +
+                        " and COUNT " + std::to_string(h.count[i]) +
+                        "; a packed colour is one 4-byte value per point (SIZE 4, COUNT 1)");
+        if (h.fields[i] == "intensity" && h.count[i] != 1)
+            throw Error(label + ": PCD field intensity has COUNT " + std::to_string(h.count[i]) +
+                        "; intensity is one value per point (COUNT 1)");
     }
     if (!have_width) throw Error(label + ": not a valid PCD file (no WIDTH line)");
     if (!have_height) h.height = 1;

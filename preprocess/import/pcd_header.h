@@ -3,7 +3,9 @@
 // the header is complete and consistent and the data is as long as the header says.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -22,11 +24,16 @@ struct PcdHeader {
     std::string data;              ///< "ascii", "binary" or "binary_compressed"
     std::size_t data_offset = 0;   ///< first byte after the DATA line
     std::uint64_t point_step = 0;  ///< bytes per point in the binary layouts
+    /// VIEWPOINT tx ty tz qw qx qy qz: the sensor's pose in the cloud's frame (PCL's
+    /// sensor_origin_ and sensor_orientation_); the quaternion normalised. Empty without the line.
+    std::optional<std::array<double, 7>> viewpoint;
 };
 
 /// Parses and validates the header; checks the data holds the declared points (binary: the byte
-/// count; binary_compressed: its size words; ascii: the line count). Throws prt::Error "LABEL: ...";
-/// data after the declared points is a warning in report.notes.
+/// count; binary_compressed: its size words; ascii: the line count). A VIEWPOINT line must hold 7
+/// finite numbers with a unit quaternion (within k_quaternion_tolerance, poses.h); colour fields
+/// (rgb, rgba) must be one 4-byte value and intensity one value per point. Throws prt::Error
+/// "LABEL: ..."; data after the declared points is a warning in report.notes.
 PcdHeader check_pcd(const MappedFile& file, Report& report);
 
 }  // namespace prt::pre::import

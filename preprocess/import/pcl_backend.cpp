@@ -3,10 +3,8 @@
 
 #include <pcl/PCLPointCloud2.h>
 #include <pcl/console/print.h>
-#include <pcl/features/normal_3d_omp.h>
 #include <pcl/io/pcd_io.h>
 #include <pcl/point_types.h>
-#include <pcl/search/kdtree.h>
 
 #include <cmath>
 #include <cstring>
@@ -156,6 +154,7 @@ PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quie
     const pcl::PCLPointField* fz = nullptr;
     const pcl::PCLPointField* fn[3] = {nullptr, nullptr, nullptr};
     const pcl::PCLPointField* frgb = nullptr;
+    const pcl::PCLPointField* fintensity = nullptr;
     bool rgba = false;
     std::string skipped;
     for (const pcl::PCLPointField& f : blob.fields) {
@@ -179,6 +178,8 @@ PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quie
         else if ((f.name == "rgb" || f.name == "rgba") && fs == 4 && !frgb) {
             frgb = &f;
             rgba = f.name == "rgba";
+        } else if (f.name == "intensity" && !fintensity) {
+            fintensity = &f;
         } else if (f.name != "_") {  // "_" is PCL's padding
             skipped += (skipped.empty() ? "" : ", ") + f.name;
         }
@@ -194,6 +195,7 @@ PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quie
     cloud.positions.reserve(n);
     if (normals) cloud.normals.reserve(n);
     if (frgb) cloud.colors.reserve(n);
+    if (fintensity) cloud.intensities.reserve(n);
     for (std::uint64_t i = 0; i < n; ++i) {
         const std::uint8_t* row = blob.data.data() + i * blob.point_step;
         const double x = load_field(row + fx->offset, fx->datatype);
@@ -217,6 +219,15 @@ PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quie
                                     static_cast<std::uint8_t>(packed & 0xFF),
                                     rgba ? static_cast<std::uint8_t>(packed >> 24) : std::uint8_t{255}});
         }
+        if (fintensity)
+            cloud.intensities.push_back(
+                static_cast<float>(load_field(row + fintensity->offset, fintensity->datatype)));
+    }
+    if (checked.viewpoint) {
+        // PCL: sensor_origin_ = (tx, ty, tz), the sensor's position in the cloud's frame.
+        const auto& v = *checked.viewpoint;
+        cloud.sensors.push_back(pool::Sensor{{v[0], v[1], v[2]}, pool::k_sensor_point, 0});
+        report.sensor_source = "the PCD VIEWPOINT";
     }
     const char* encodings[] = {"ascii", "binary", "binary_compressed"};
     report.reader =
@@ -226,74 +237,6 @@ PointCloud read_pcd(const std::filesystem::path& path, Report& report, bool quie
         ")";
     report.records = n;
     return cloud;
-}
-
-void estimate_normals(const PointCloud& cloud, int k, std::vector<pool::Float3>& normals, KnnGraph* graph,
-                      bool quiet) {
-    silence_pcl();
-    const std::size_t n = cloud.size();
-    if (k < 3) throw Error("--k must be at least 3 for PCA normals");
-    if (n < 3) throw Error("too few points (" + std::to_string(n) + ") to estimate normals");
-    const auto b = bounds(cloud);
-    const double centre[3] = {0.5 * (b[0][0] + b[1][0]), 0.5 * (b[0][1] + b[1][1]),
-                              0.5 * (b[0][2] + b[1][2])};
-    auto points = std::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-    points->resize(n);
-    for (std::size_t i = 0; i < n; ++i)
-        (*points)[i] = pcl::PointXYZ(static_cast<float>(cloud.positions[i][0] - centre[0]),
-                                     static_cast<float>(cloud.positions[i][1] - centre[1]),
-                                     static_cast<float>(cloud.positions[i][2] - centre[2]));
-    auto tree = std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>();
-    tree->setInputCloud(points);  // built once: NormalEstimation reuses a tree already on its cloud
-
-    const int kk = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(k), n));
-    pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> estimator(0);  // 0: all cores
-    estimator.setInputCloud(points);
-    estimator.setSearchMethod(tree);
-    estimator.setKSearch(kk);
-    normals.assign(n, {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
-    constexpr std::size_t k_chunk = 1u << 16;  // progress granularity
-    LazyProgress progress("estimating normals (PCA, k=" + std::to_string(kk) + ")", n, quiet);
-    pcl::PointCloud<pcl::Normal> out;
-    for (std::size_t start = 0; start < n; start += k_chunk) {
-        const std::size_t end = std::min(n, start + k_chunk);
-        auto indices = std::make_shared<pcl::Indices>(end - start);
-        for (std::size_t i = start; i < end; ++i) (*indices)[i - start] = static_cast<pcl::index_t>(i);
-        estimator.setIndices(indices);
-        estimator.compute(out);
-        if (out.size() != end - start) throw Error("PCL normal estimation returned an unexpected count");
-        for (std::size_t i = start; i < end; ++i) {
-            const pcl::Normal& nn = out[i - start];
-            if (std::isfinite(nn.normal_x) && std::isfinite(nn.normal_y) && std::isfinite(nn.normal_z))
-                normals[i] = {nn.normal_x, nn.normal_y, nn.normal_z};
-        }
-        progress.update(end);
-    }
-    progress.finish();
-
-    if (!graph) return;
-    graph->k = static_cast<std::uint32_t>(k);
-    graph->neighbours.assign(n * graph->k, k_no_neighbour);
-    const int query = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(k) + 1, n));
-    LazyProgress graph_progress("k-NN graph (k=" + std::to_string(k) + ")", n, quiet);
-    for (std::size_t start = 0; start < n; start += k_chunk) {
-        const std::size_t end = std::min(n, start + k_chunk);
-#pragma omp parallel
-        {
-            pcl::Indices found;
-            std::vector<float> distances;
-#pragma omp for schedule(dynamic, 1024)
-            for (std::int64_t i = static_cast<std::int64_t>(start); i < static_cast<std::int64_t>(end); ++i) {
-                tree->nearestKSearch(static_cast<pcl::index_t>(i), query, found, distances);
-                std::uint32_t* row = graph->neighbours.data() + static_cast<std::size_t>(i) * graph->k;
-                std::uint32_t m = 0;
-                for (const pcl::index_t j : found)
-                    if (j != i && m < graph->k) row[m++] = static_cast<std::uint32_t>(j);
-            }
-        }
-        graph_progress.update(end);
-    }
-    graph_progress.finish();
 }
 
 }  // namespace prt::pre::import

@@ -14,10 +14,4 @@ PointCloud read_pcd(const std::filesystem::path& path, Report&, bool) {
                 "(rebuild with PRT_WITH_PCL=ON)");
 }
 
-void estimate_normals(const PointCloud&, int, std::vector<pool::Float3>&, KnnGraph*, bool) {
-    throw Error(
-        "normal estimation needs PCL, and this build of prt-import has no PCL (rebuild with "
-        "PRT_WITH_PCL=ON, or import a file with normals, or use --normals keep)");
-}
-
 }  // namespace prt::pre::import

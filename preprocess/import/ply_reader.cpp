@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <bit>
+#include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 
@@ -104,15 +106,49 @@ inline double load_value(const unsigned char* p, PlyType t) {
 
 // ---- what we take from the vertex element ----------------------------------------------------
 
-enum Slot : int { s_x, s_y, s_z, s_nx, s_ny, s_nz, s_red, s_green, s_blue, s_alpha, s_radius, s_count };
+enum Slot : int {
+    s_x,
+    s_y,
+    s_z,
+    s_nx,
+    s_ny,
+    s_nz,
+    s_red,
+    s_green,
+    s_blue,
+    s_alpha,
+    s_radius,
+    s_intensity,
+    s_count
+};
 
 struct VertexLayout {
     int property[s_count];  // property index per slot, -1 when absent
     PlyType type[s_count];
     std::size_t offset[s_count];  // byte offset in a fixed-stride binary row
     std::vector<int> slot_of;     // per property index: slot, or -1 (skipped)
-    bool normals = false, colors = false, alpha = false, radius = false;
+    bool normals = false, colors = false, alpha = false, radius = false, intensity = false;
 };
+
+bool equal_nocase(std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+               return std::tolower(static_cast<unsigned char>(x)) ==
+                      std::tolower(static_cast<unsigned char>(y));
+           });
+}
+
+/// Scanner return intensity: "intensity" (PCL, PDAL, the Stanford meshes), "scalar_Intensity"
+/// (CloudCompare's scalar fields), "reflectance" (mobile mapping exports); any case.
+bool is_intensity_name(std::string_view name) {
+    return equal_nocase(name, "intensity") || equal_nocase(name, "scalar_intensity") ||
+           equal_nocase(name, "reflectance");
+}
+
+bool is_color_name(std::string_view name) {
+    for (const char* c : {"red", "green", "blue", "alpha", "diffuse_red", "diffuse_green", "diffuse_blue"})
+        if (name == c) return true;
+    return false;
+}
 
 VertexLayout make_layout(const PlyElement& vertex, const std::string& label, Report& report) {
     VertexLayout layout;
@@ -142,6 +178,16 @@ VertexLayout make_layout(const PlyElement& vertex, const std::string& label, Rep
     std::size_t offset = 0;
     for (std::size_t i = 0; i < vertex.properties.size(); ++i) {
         const PlyProperty& p = vertex.properties[i];
+        if (p.is_list && is_color_name(p.name))
+            throw Error(label + ": vertex property " + quoted(std::string_view(p.name)) +
+                        " is a list; a colour channel must be one number per vertex (uchar 0..255, or "
+                        "float 0..1)");
+        if (!p.is_list && layout.property[s_intensity] < 0 && is_intensity_name(p.name)) {
+            layout.property[s_intensity] = static_cast<int>(i);
+            layout.type[s_intensity] = p.type;
+            layout.offset[s_intensity] = offset;
+            layout.slot_of[i] = s_intensity;
+        }
         for (const Alias& a : k_aliases) {
             if (p.name != a.name || p.is_list || layout.property[a.slot] >= 0) continue;
             layout.property[a.slot] = static_cast<int>(i);
@@ -179,6 +225,7 @@ VertexLayout make_layout(const PlyElement& vertex, const std::string& label, Rep
     }
     layout.alpha = layout.colors && layout.property[s_alpha] >= 0;
     layout.radius = layout.property[s_radius] >= 0;
+    layout.intensity = layout.property[s_intensity] >= 0;
 
     std::string skipped;
     for (std::size_t i = 0; i < vertex.properties.size(); ++i)
@@ -187,27 +234,50 @@ VertexLayout make_layout(const PlyElement& vertex, const std::string& label, Rep
     return layout;
 }
 
-/// Color channel from a PLY value: 8-bit integers as they are, 16-bit scaled, floats as 0..1.
-inline std::uint8_t to_channel(double v, PlyType t) {
+/// Color channel from a PLY value: floats 0..1, 16-bit integers 0..65535 (scaled), other integers
+/// 0..255. A value outside its range (or NaN) is not a colour: returns -1.
+inline int to_channel(double v, PlyType t) {
     double c = v;
-    if (t == PlyType::float32 || t == PlyType::float64)
+    if (t == PlyType::float32 || t == PlyType::float64) {
+        if (!(v >= 0.0 && v <= 1.0)) return -1;
         c = v * 255.0;
-    else if (t == PlyType::int16 || t == PlyType::uint16)
+    } else if (t == PlyType::int16 || t == PlyType::uint16) {
+        if (!(v >= 0.0)) return -1;
         c = v / 257.0;
-    if (!(c > 0.0)) return 0;  // also NaN
-    if (c >= 255.0) return 255;
-    return static_cast<std::uint8_t>(std::lround(c));
+    } else if (!(v >= 0.0 && v <= 255.0)) {
+        return -1;
+    }
+    return static_cast<int>(std::lround(c));
 }
 
 /// The output arrays, sized as rows arrive.
 struct Sink {
     PointCloud& cloud;
     const VertexLayout& layout;
+    const PlyElement& vertex;
+    const std::string& label;
     void resize(std::size_t n) {
         cloud.positions.resize(n);
         if (layout.normals) cloud.normals.resize(n);
         if (layout.colors) cloud.colors.resize(n);
         if (layout.radius) cloud.radii.resize(n);
+        if (layout.intensity) cloud.intensities.resize(n);
+    }
+    [[noreturn]] void bad_color(std::size_t i, int slot, double value) const {
+        const PlyType t = layout.type[slot];
+        const char* range = t == PlyType::float32 || t == PlyType::float64 ? "0..1 (a float colour)"
+                            : t == PlyType::int16 || t == PlyType::uint16  ? "0..65535 (a 16-bit colour)"
+                                                                           : "0..255";
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.9g", value);
+        throw Error(label + ": vertex " + std::to_string(i) + ": " +
+                    vertex.properties[static_cast<std::size_t>(layout.property[slot])].name + " = " + buf +
+                    " is outside " + range);
+    }
+    inline std::uint8_t channel(std::size_t i, int slot, double value) const {
+        const int c = to_channel(value, layout.type[slot]);
+        if (c < 0) bad_color(i, slot, value);
+        return static_cast<std::uint8_t>(c);
     }
     /// Stores one row from per-slot values.
     inline void store(std::size_t i, const double* v) {
@@ -216,13 +286,37 @@ struct Sink {
             cloud.normals[i] = {static_cast<float>(v[s_nx]), static_cast<float>(v[s_ny]),
                                 static_cast<float>(v[s_nz])};
         if (layout.colors)
-            cloud.colors[i] = {
-                to_channel(v[s_red], layout.type[s_red]), to_channel(v[s_green], layout.type[s_green]),
-                to_channel(v[s_blue], layout.type[s_blue]),
-                layout.alpha ? to_channel(v[s_alpha], layout.type[s_alpha]) : std::uint8_t{255}};
+            cloud.colors[i] = {channel(i, s_red, v[s_red]), channel(i, s_green, v[s_green]),
+                               channel(i, s_blue, v[s_blue]),
+                               layout.alpha ? channel(i, s_alpha, v[s_alpha]) : std::uint8_t{255}};
         if (layout.radius) cloud.radii[i] = static_cast<float>(v[s_radius]);
+        if (layout.intensity) cloud.intensities[i] = static_cast<float>(v[s_intensity]);
     }
 };
+
+/// The scanner position of a PLY "camera" element (the VCG / MeshLab and PCL PLYWriter
+/// convention: view_px view_py view_pz, the viewpoint in the vertices' frame).
+struct CameraLayout {
+    std::vector<int> slot_of;  // per property: 0, 1, 2 for view_px/py/pz, -1 otherwise
+    bool complete = false;
+};
+
+CameraLayout camera_layout(const PlyElement& camera) {
+    CameraLayout c;
+    c.slot_of.assign(camera.properties.size(), -1);
+    int found = 0;
+    for (std::size_t i = 0; i < camera.properties.size(); ++i) {
+        const PlyProperty& p = camera.properties[i];
+        if (p.is_list) continue;
+        const int slot = p.name == "view_px" ? 0 : p.name == "view_py" ? 1 : p.name == "view_pz" ? 2 : -1;
+        if (slot >= 0 && !(found & (1 << slot))) {
+            c.slot_of[i] = slot;
+            found |= 1 << slot;
+        }
+    }
+    c.complete = found == 7;
+    return c;
+}
 
 constexpr std::uint64_t k_progress_every = 1u << 16;
 
@@ -275,6 +369,15 @@ public:
         }
         for (std::uint64_t i = 0; i < el.count; ++i)
             if (!walk_row(el, nullptr, nullptr)) truncated(el, i);
+    }
+
+    /// Reads the first row's wanted values, skips the rest of the element.
+    void read_first_row(const PlyElement& el, const std::vector<int>& slot_of, double* values) {
+        if (el.count == 0) return;
+        if (!walk_row(el, &slot_of, values)) truncated(el, 0);
+        PlyElement rest = el;
+        rest.count = el.count - 1;
+        skip_element(rest);
     }
 
     void read_vertices(const PlyElement& el, const VertexLayout& layout, Sink& sink, LazyProgress& progress) {
@@ -395,6 +498,15 @@ public:
             if (!row(el, i, nullptr, nullptr)) truncated(el, i);
     }
 
+    /// Reads the first row's wanted values, skips the rest of the element.
+    void read_first_row(const PlyElement& el, const std::vector<int>& slot_of, double* values) {
+        if (el.count == 0) return;
+        if (!row(el, 0, &slot_of, values)) truncated(el, 0);
+        PlyElement rest = el;
+        rest.count = el.count - 1;
+        skip_element(rest);
+    }
+
     void read_vertices(const PlyElement& el, const VertexLayout& layout, Sink& sink, LazyProgress& progress) {
         // Grow as rows arrive (doubling): a header declaring far more rows than the text holds
         // fails at the end of the data without having allocated for its count.
@@ -442,7 +554,8 @@ private:
 
 template <bool Swap>
 void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
-                 Report& report, LazyProgress& progress) {
+                 const PlyElement* camera, const CameraLayout& camera_slots, double* view, Report& report,
+                 LazyProgress& progress) {
     const auto* base = reinterpret_cast<const unsigned char*>(file.data());
     BinaryReader<Swap> reader(base + header.data_offset, base + file.size(), file.label());
     bool seen_vertex = false;
@@ -450,6 +563,8 @@ void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLa
         if (el.name == "vertex" && !seen_vertex) {
             seen_vertex = true;
             reader.read_vertices(el, layout, sink, progress);
+        } else if (&el == camera) {
+            reader.read_first_row(el, camera_slots.slot_of, view);
         } else {
             reader.skip_element(el);
         }
@@ -606,14 +721,30 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
     if (!vertex) throw Error(label + ": PLY file has no vertex element");
     const VertexLayout layout = make_layout(*vertex, label, report);
 
+    // The scanner: one "camera" element row with view_px, view_py, view_pz.
+    const PlyElement* camera = header.find("camera");
+    CameraLayout camera_slots;
+    if (camera) {
+        camera_slots = camera_layout(*camera);
+        if (!camera_slots.complete || camera->count != 1) {
+            report.notes.push_back(label + ": camera element " +
+                                   (camera_slots.complete
+                                        ? "has " + std::to_string(camera->count) + " rows"
+                                        : std::string("lacks view_px, view_py or view_pz")) +
+                                   ": no sensor taken from it");
+            camera = nullptr;
+        }
+    }
+    double view[3] = {0, 0, 0};
+
     std::string skipped;
     for (const PlyElement& el : header.elements)
-        if (&el != vertex)
+        if (&el != vertex && &el != camera)
             skipped += (skipped.empty() ? "" : ", ") + el.name + " (" + std::to_string(el.count) + " rows)";
     if (!skipped.empty()) report.notes.push_back(label + ": skipped elements: " + skipped);
 
     PointCloud cloud;
-    Sink sink{cloud, layout};
+    Sink sink{cloud, layout, *vertex, label};
     LazyProgress progress("reading " + label, vertex->count, quiet);
     switch (header.encoding) {
         case PlyEncoding::ascii: {
@@ -624,6 +755,8 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
                 if (&el == vertex && !seen_vertex) {
                     seen_vertex = true;
                     reader.read_vertices(el, layout, sink, progress);
+                } else if (&el == camera) {
+                    reader.read_first_row(el, camera_slots.slot_of, view);
                 } else {
                     reader.skip_element(el);
                 }
@@ -637,18 +770,25 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
         }
         case PlyEncoding::binary_little_endian:
             if constexpr (std::endian::native == std::endian::little)
-                read_binary<false>(file, header, layout, sink, report, progress);
+                read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             else
-                read_binary<true>(file, header, layout, sink, report, progress);
+                read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             break;
         case PlyEncoding::binary_big_endian:
             if constexpr (std::endian::native == std::endian::little)
-                read_binary<true>(file, header, layout, sink, report, progress);
+                read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             else
-                read_binary<false>(file, header, layout, sink, report, progress);
+                read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             break;
     }
     progress.finish();
+    if (camera) {
+        for (int a = 0; a < 3; ++a)
+            if (!std::isfinite(view[a]))
+                throw Error(label + ": camera element: view_p" + "xyz"[a] + " is not finite");
+        cloud.sensors.push_back(pool::Sensor{{view[0], view[1], view[2]}, pool::k_sensor_point, 0});
+        report.sensor_source = "the PLY camera element (view_px view_py view_pz)";
+    }
     report.reader = std::string("ply (") + ply_encoding_name(header.encoding) + ")";
     report.records = cloud.size();
     return cloud;

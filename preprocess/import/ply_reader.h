@@ -70,7 +70,11 @@ const char* ply_encoding_name(PlyEncoding e);
 PlyHeader parse_ply_header(std::string_view bytes, const std::string& label);
 
 /// Reads the vertex element of a PLY file as a point set: x/y/z (any numeric type) -> positions;
-/// nx/ny/nz -> normals; red/green/blue[/alpha] (uchar, or float 0..1) -> colors; radius -> radii.
+/// nx/ny/nz -> normals; red/green/blue[/alpha] -> colors (8-bit integers 0..255, 16-bit 0..65535
+/// scaled, floats 0..1; a value outside its range, or a colour property that is a list, is an error
+/// naming the vertex); radius -> radii; intensity, scalar_Intensity or reflectance (any case, any
+/// numeric type) -> intensities, as the file holds them. A "camera" element of one row with
+/// view_px view_py view_pz (VCG / MeshLab, PCL's PLYWriter) gives a point sensor (cloud.sensors).
 /// Other properties and elements are skipped and listed once in report.notes. A header declaring
 /// more rows than the data holds is an error naming the counts; data after the last declared
 /// element is a warning (the header may declare fewer rows than the file holds).

@@ -1,7 +1,8 @@
 // prt-bench-import: times PLY import of a generated binary point set with normals (default 1M
-// points): our reader, our whole import (read + clean + pool write), PCL's PLYReader and OpenMesh's
-// reader (when the build has them). Median and minimum of --repeat runs after one warm-up run (the
-// file is in the page cache: this measures parsing, not the disk). Output: one table row per reader.
+// points): our reader, our whole import (read + clean, without and with the default outlier
+// removal, + pool write), PCL's PLYReader and OpenMesh's reader (when the build has them). Median
+// and minimum of --repeat runs after one warm-up run (the file is in the page cache: this measures
+// parsing, not the disk). Output: one table row per reader.
 #include "bench_import.h"
 
 #include <algorithm>
@@ -113,7 +114,13 @@ int main(int argc, char** argv) {
                 imp::Report report;
                 return static_cast<std::uint64_t>(imp::read_ply(path, report, true).size());
             }));
-            results.push_back(time_it("prt import_file (read+clean)", repeat, [&] {
+            results.push_back(time_it("prt import_file (--keep-outliers)", repeat, [&] {
+                imp::Report report;
+                imp::Options options;
+                options.outliers.enabled = false;
+                return static_cast<std::uint64_t>(imp::import_file(path, options, report).size());
+            }));
+            results.push_back(time_it("prt import_file (+outliers)", repeat, [&] {
                 imp::Report report;
                 imp::Options options;
                 return static_cast<std::uint64_t>(imp::import_file(path, options, report).size());

@@ -21,11 +21,12 @@ protected:
 };
 
 std::string pcd_header(const std::string& fields, const std::string& size, const std::string& type,
-                       const std::string& count, int width, int height, const std::string& data) {
+                       const std::string& count, int width, int height, const std::string& data,
+                       const std::string& viewpoint = "0 0 0 1 0 0 0") {
     return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " + fields + "\nSIZE " + size +
            "\nTYPE " + type + "\nCOUNT " + count + "\nWIDTH " + std::to_string(width) + "\nHEIGHT " +
-           std::to_string(height) + "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(width * height) +
-           "\nDATA " + data + "\n";
+           std::to_string(height) + "\nVIEWPOINT " + viewpoint + "\nPOINTS " +
+           std::to_string(width * height) + "\nDATA " + data + "\n";
 }
 
 TEST_F(PcdTest, AsciiOrganizedWithNansAndPackedColor) {
@@ -115,6 +116,118 @@ TEST_F(PcdTest, BinaryCompressedWrittenByPcl) {
     Report report2;
     const std::string msg = error_of([&] { import(cut, report2, keep); });
     EXPECT_NE(msg.find("cut.pcd: binary_compressed data is truncated"), std::string::npos) << msg;
+}
+
+// VIEWPOINT tx ty tz qw qx qy qz: PCL's sensor origin, the point estimated normals face.
+TEST_F(PcdTest, ViewpointIsTheSensorNormalsFaceIt) {
+    std::string text;
+    for (int i = 0; i < 30; ++i)
+        for (int j = 0; j < 30; ++j) {
+            // a gently curved sheet at z ~ 10, above the sensor
+            const double x = i * 0.1, y = j * 0.1;
+            char buf[96];
+            std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g\n", x, y, 10 + 0.05 * std::sin(x) * std::cos(y));
+            text += buf;
+        }
+    // The quaternion written with 6 digits (norm 1 within 1e-6): accepted and normalised.
+    const auto file = write("view.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 900, 1, "ascii",
+                                                   "1.5 1.5 3 0.707107 0 0.707107 0") +
+                                            text);
+    Report report;
+    const auto cloud = import(file, report);
+    ASSERT_EQ(cloud.sensors.size(), 1u);
+    EXPECT_EQ(cloud.sensors[0].kind, prt::pool::k_sensor_point);
+    EXPECT_EQ(cloud.sensors[0].position[0], 1.5);
+    EXPECT_EQ(cloud.sensors[0].position[2], 3.0);
+    EXPECT_TRUE(report.oriented_to_sensor);
+    ASSERT_EQ(cloud.size(), 900u);
+    for (const auto& n : cloud.normals) EXPECT_LT(n.z, -0.9f);  // toward the sensor below
+    EXPECT_NE(report.sensors_detail.find("PCD VIEWPOINT"), std::string::npos) << report.sensors_detail;
+
+    // --no-sensor: propagation, seeded +z: the opposite orientation, no sensors recorded.
+    prt::pre::import::Options none;
+    none.no_sensor = true;
+    Report r2;
+    const auto up = import(file, r2, none);
+    EXPECT_TRUE(up.sensors.empty());
+    for (const auto& n : up.normals) EXPECT_GT(n.z, 0.9f);
+}
+
+TEST_F(PcdTest, IntensityOfAnyTypeAndRgba) {
+    struct Case {
+        const char* size;
+        const char* type;
+        const char* v0;
+        float f0;
+    };
+    const Case cases[] = {{"1", "U", "250", 250.f},
+                          {"2", "I", "-300", -300.f},
+                          {"4", "F", "0.125", 0.125f},
+                          {"8", "F", "1e10", 1e10f},
+                          {"4", "U", "4000000000", 4e9f}};
+    for (const Case& c : cases) {
+        const std::string text =
+            pcd_header("x y z intensity rgba", std::string("4 4 4 ") + c.size + " 4",
+                       std::string("F F F ") + c.type + " U", "1 1 1 1 1", 2, 1, "ascii") +
+            "1 2 3 " + c.v0 + " " + std::to_string(0x11223344u) + "\n4 5 6 0 0\n";
+        const auto file = write("intensity.pcd", text);
+        Report report;
+        prt::pre::import::Options keep;
+        keep.normals = prt::pre::import::NormalsMode::keep;
+        const auto cloud = import(file, report, keep);
+        ASSERT_EQ(cloud.size(), 2u);
+        ASSERT_TRUE(cloud.has_intensities()) << c.type << c.size;
+        EXPECT_EQ(cloud.intensities[0], c.f0) << c.type << c.size;
+        EXPECT_EQ(cloud.intensities[1], 0.f);
+        ASSERT_TRUE(cloud.has_colors());
+        EXPECT_EQ(cloud.colors[0].a, 0x11);
+        EXPECT_EQ(cloud.colors[0].r, 0x22);
+        EXPECT_EQ(cloud.colors[0].g, 0x33);
+        EXPECT_EQ(cloud.colors[0].b, 0x44);
+    }
+}
+
+TEST_F(PcdTest, MalformedViewpointAndColourFieldsFailWithOneLine) {
+    const std::string body = "1 2 3\n";
+    struct Case {
+        const char* name;
+        std::string bytes;
+        const char* expect;
+    };
+    const Case cases[] = {
+        {"six.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 1 0 0") + body,
+         "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz), got 6"},
+        {"eight.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 1 0 0 0 0") + body,
+         "VIEWPOINT needs 7 numbers"},
+        {"nan.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 nan 0 1 0 0 0") + body,
+         "VIEWPOINT value 'nan' is not a finite number"},
+        {"inf.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 inf 0 0 0") + body,
+         "VIEWPOINT value 'inf' is not a finite number"},
+        {"word.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 one 0 0 0") + body,
+         "VIEWPOINT value 'one' is not a finite number"},
+        {"scaled.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 2 0 0 0") + body,
+         "VIEWPOINT quaternion (qw qx qy qz) has norm 2, not 1"},
+        {"zero.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 0 0 0 0") + body,
+         "has norm 0, not 1"},
+        {"rgb2.pcd", pcd_header("x y z rgb", "4 4 4 2", "F F F U", "1 1 1 1", 1, 1, "ascii") + "1 2 3 7\n",
+         "PCD field rgb has SIZE 2 and COUNT 1; a packed colour is one 4-byte value"},
+        {"rgba8.pcd", pcd_header("x y z rgba", "4 4 4 8", "F F F F", "1 1 1 1", 1, 1, "ascii") + "1 2 3 7\n",
+         "PCD field rgba has SIZE 8"},
+        {"rgb3.pcd",
+         pcd_header("x y z rgb", "4 4 4 4", "F F F U", "1 1 1 3", 1, 1, "ascii") + "1 2 3 7 8 9\n",
+         "PCD field rgb has SIZE 4 and COUNT 3"},
+        {"int3.pcd",
+         pcd_header("x y z intensity", "4 4 4 4", "F F F F", "1 1 1 3", 1, 1, "ascii") + "1 2 3 7 8 9\n",
+         "PCD field intensity has COUNT 3"},
+    };
+    for (const Case& c : cases) {
+        const auto file = write(c.name, c.bytes);
+        Report report;
+        const std::string msg = error_of([&] { import(file, report); });
+        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
 }
 
 TEST_F(PcdTest, BadFilesFailWithOneLine) {

@@ -86,6 +86,86 @@ std::string make_ply(Enc enc, const std::string& header_body, const std::vector<
 
 class PlyTest : public TempDirTest, public ::testing::WithParamInterface<Enc> {};
 
+// Intensity under each name real exporters use, in any numeric type, kept as the file holds it;
+// the camera element (before or after the vertices) is the scanner.
+TEST_P(PlyTest, IntensityNamesAndTypesAndCameraSensor) {
+    struct Case {
+        const char* name;
+        const char* type;
+        double value;
+    };
+    const Case cases[] = {
+        {"intensity", "uchar", 200},      {"intensity", "ushort", 40000}, {"scalar_Intensity", "float", 0.25},
+        {"reflectance", "double", -12.5}, {"Intensity", "int", -3},       {"scalar_intensity", "char", -7}};
+    for (const Case& c : cases) {
+        const std::string header =
+            "element camera 1\nproperty float view_px\nproperty float view_py\n"
+            "property list uchar int junk\nproperty double view_pz\nproperty int viewportx\n"
+            "element vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+            "property " +
+            std::string(c.type) + " " + c.name + "\n";
+        const std::vector<std::vector<Item>> rows = {
+            {scalar("float", 1.5), scalar("float", -2), list("uchar", "int", {4, 5}),
+             scalar("double", 1e6 + 0.25), scalar("int", 640)},
+            {scalar("float", 1), scalar("float", 2), scalar("float", 3), scalar(c.type, c.value)},
+            {scalar("float", 4), scalar("float", 5), scalar("float", 6), scalar(c.type, 0)}};
+        const auto file = write("intensity.ply", make_ply(GetParam(), header, rows));
+        Report report;
+        const auto cloud = prt::pre::import::read_ply(file, report, true);
+        ASSERT_EQ(cloud.size(), 2u) << c.name;
+        ASSERT_TRUE(cloud.has_intensities()) << c.name << " " << c.type;
+        EXPECT_EQ(cloud.intensities[0], static_cast<float>(c.value)) << c.name << " " << c.type;
+        EXPECT_EQ(cloud.intensities[1], 0.f);
+        ASSERT_EQ(cloud.sensors.size(), 1u);
+        EXPECT_EQ(cloud.sensors[0].kind, prt::pool::k_sensor_point);
+        EXPECT_EQ(cloud.sensors[0].position[0], 1.5);
+        EXPECT_EQ(cloud.sensors[0].position[1], -2.0);
+        EXPECT_EQ(cloud.sensors[0].position[2], 1e6 + 0.25);
+        EXPECT_FALSE(has_note(report, "skipped elements: camera"));
+    }
+}
+
+// Colour values outside their type's range, and colours as lists, are errors naming the vertex.
+TEST_P(PlyTest, ColoursOfTheWrongTypeFail) {
+    struct Case {
+        const char* type;
+        double value;
+        const char* expect;
+    };
+    const Case cases[] = {{"float", 1.5, "vertex 1: green = 1.5 is outside 0..1"},
+                          {"float", -0.25, "vertex 1: green = -0.25 is outside 0..1"},
+                          {"double", std::nan(""), "vertex 1: green = nan is outside 0..1"},
+                          {"int", 300, "vertex 1: green = 300 is outside 0..255"},
+                          {"char", -5, "vertex 1: green = -5 is outside 0..255"}};
+    for (const Case& c : cases) {
+        const std::string header =
+            std::string("element vertex 2\nproperty float x\nproperty float y\nproperty float z\n") +
+            "property " + c.type + " red\nproperty " + c.type + " green\nproperty " + c.type + " blue\n";
+        const std::vector<std::vector<Item>> rows = {
+            {scalar("float", 1), scalar("float", 2), scalar("float", 3), scalar(c.type, 0), scalar(c.type, 0),
+             scalar(c.type, 0)},
+            {scalar("float", 4), scalar("float", 5), scalar("float", 6), scalar(c.type, 0),
+             scalar(c.type, c.value), scalar(c.type, 0)}};
+        const auto file = write("badcolour.ply", make_ply(GetParam(), header, rows));
+        Report report;
+        const std::string msg = error_of([&] { prt::pre::import::read_ply(file, report, true); });
+        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos);
+    }
+    const auto list_file = write(
+        "listcolour.ply",
+        make_ply(
+            GetParam(),
+            "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty list uchar "
+            "uchar red\nproperty uchar green\nproperty uchar blue\n",
+            {{scalar("float", 1), scalar("float", 2), scalar("float", 3), list("uchar", "uchar", {1, 2}),
+              scalar("uchar", 3), scalar("uchar", 4)}}));
+    Report report;
+    const std::string msg = error_of([&] { prt::pre::import::read_ply(list_file, report, true); });
+    EXPECT_EQ(msg.rfind(list_file.string() + ": vertex property 'red' is a list", 0), 0u) << msg;
+}
+
 // Known values: doubles chosen so float rounding would show (1e6 + 0.125, 0.1, 0.2).
 TEST_P(PlyTest, RoundTripKnownValues) {
     const std::string header =
@@ -157,7 +237,7 @@ TEST_P(PlyTest, FloatColorsAndListInVertex) {
         {scalar("float", 1.5), list("uchar", "float", {}), scalar("short", 300), scalar("float", 3),
          scalar("float", 1), scalar("float", 1), scalar("float", 1)},
         {scalar("float", -4), list("uchar", "float", {9}), scalar("short", 0), scalar("float", 1),
-         scalar("float", 0.2), scalar("float", 2.0), scalar("float", -1)}};
+         scalar("float", 0.2), scalar("float", 1.0), scalar("float", 0.0)}};
     const auto file = write("colors.ply", make_ply(GetParam(), header, rows));
     Report report;
     prt::pre::PointCloud cloud = prt::pre::import::read_ply(file, report, true);
@@ -169,9 +249,9 @@ TEST_P(PlyTest, FloatColorsAndListInVertex) {
     EXPECT_EQ(cloud.colors[0].r, 0);
     EXPECT_EQ(cloud.colors[0].g, 128);  // 0.5 * 255 = 127.5 rounds to 128
     EXPECT_EQ(cloud.colors[0].b, 255);
-    EXPECT_EQ(cloud.colors[2].r, 51);   // 0.2 * 255
-    EXPECT_EQ(cloud.colors[2].g, 255);  // clamped
-    EXPECT_EQ(cloud.colors[2].b, 0);    // clamped
+    EXPECT_EQ(cloud.colors[2].r, 51);  // 0.2 * 255
+    EXPECT_EQ(cloud.colors[2].g, 255);
+    EXPECT_EQ(cloud.colors[2].b, 0);
     EXPECT_FALSE(cloud.has_normals());
     EXPECT_TRUE(has_note(report, "skipped vertex properties: texcoords"));
 }

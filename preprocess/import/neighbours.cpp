@@ -1,0 +1,276 @@
+#include "neighbours.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+#include "knn.h"
+#include "parallel.h"
+#include "progress.h"
+#include "prt/error.h"
+#include "prt/tool.h"
+
+namespace prt::pre::import {
+
+namespace {
+
+/// Keeps the points whose `keep` is set, every per-point attribute aligned.
+void keep_points(PointCloud& cloud, const std::vector<std::uint8_t>& keep) {
+    std::size_t out = 0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (!keep[i]) continue;
+        cloud.positions[out] = cloud.positions[i];
+        if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
+        if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
+        if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
+        if (cloud.has_intensities()) cloud.intensities[out] = cloud.intensities[i];
+        if (cloud.has_scan_ids()) cloud.scan_ids[out] = cloud.scan_ids[i];
+        ++out;
+    }
+    cloud.positions.resize(out);
+    if (cloud.has_normals()) cloud.normals.resize(out);
+    if (cloud.has_colors()) cloud.colors.resize(out);
+    if (cloud.has_radii()) cloud.radii.resize(out);
+    if (cloud.has_intensities()) cloud.intensities.resize(out);
+    if (cloud.has_scan_ids()) cloud.scan_ids.resize(out);
+}
+
+double median_of(std::vector<float> v) {
+    if (v.empty()) return 0;
+    const std::size_t mid = (v.size() - 1) / 2;
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
+    return v[mid];
+}
+
+/// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations (Golub & Van Loan,
+/// "Matrix Computations", 8.5): eigenvalues in w (ascending) and the eigenvector of w[0] in `v0`.
+void symmetric_eigen(double a[3][3], double w[3], double v0[3]) {
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if (off <= 1e-30 * diag || off == 0.0) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (a[p][q] == 0.0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                const double t =
+                    (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+                for (int r = 0; r < 3; ++r) {  // A <- A J (columns p, q)
+                    const double arp = a[r][p], arq = a[r][q];
+                    a[r][p] = c * arp - s * arq;
+                    a[r][q] = s * arp + c * arq;
+                }
+                for (int r = 0; r < 3; ++r) {  // A <- J^T A (rows p, q)
+                    const double apr = a[p][r], aqr = a[q][r];
+                    a[p][r] = c * apr - s * aqr;
+                    a[q][r] = s * apr + c * aqr;
+                }
+                for (int r = 0; r < 3; ++r) {  // V <- V J
+                    const double vrp = v[r][p], vrq = v[r][q];
+                    v[r][p] = c * vrp - s * vrq;
+                    v[r][q] = s * vrp + c * vrq;
+                }
+            }
+    }
+    int order[3] = {0, 1, 2};
+    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] < a[y][y]; });
+    for (int i = 0; i < 3; ++i) w[i] = a[order[i]][order[i]];
+    for (int r = 0; r < 3; ++r) v0[r] = v[r][order[0]];
+}
+
+}  // namespace
+
+std::string OutlierReport::summary() const {
+    if (!ran) return skipped.empty() ? std::string("not run") : skipped;
+    char buf[512];
+    std::snprintf(buf, sizeof buf,
+                  "removed %llu of %llu points (%.3f %%): %llu statistical (mean k-NN distance above %.4g "
+                  "= mean %.4g + std %.4g x ratio), %llu radius (fewer neighbours within %.4g = median "
+                  "spacing %.4g x factor), in %.3f s",
+                  static_cast<unsigned long long>(removed), static_cast<unsigned long long>(input),
+                  input ? 100.0 * double(removed) / double(input) : 0.0,
+                  static_cast<unsigned long long>(statistical), threshold, mean, stddev,
+                  static_cast<unsigned long long>(radius), radius_used, median_spacing, seconds);
+    return buf;
+}
+
+void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uint32_t graph_k,
+                        KnnGraph* graph, OutlierReport& report, bool quiet) {
+    const double t0 = tool::now_seconds();
+    const std::size_t n = cloud.size();
+    report = OutlierReport{};
+    report.input = n;
+    bool run = params.enabled && (params.std_ratio > 0 || params.radius_factor > 0);
+    if (!params.enabled)
+        report.skipped = "not run (--keep-outliers)";
+    else if (!run)
+        report.skipped = "not run (both tests disabled)";
+    if (run && n <= params.k) {
+        report.skipped = "not run: " + std::to_string(n) + " points, need more than --outlier-k " +
+                         std::to_string(params.k);
+        run = false;
+    }
+    if (run && params.min_neighbours > params.k)
+        throw Error("--outlier-min-neighbours (" + std::to_string(params.min_neighbours) +
+                    ") must not exceed --outlier-k (" + std::to_string(params.k) + ")");
+    if (!graph) graph_k = 0;
+    if (!run && graph_k == 0) return;
+    if (n > 0xFFFFFFFEull) throw Error("more than 2^32 - 2 points: the k-NN graph cannot index them");
+
+    const KdTree tree(cloud.positions);
+    const std::uint32_t kq = std::max(run ? params.k : 0u, graph_k);
+    std::vector<float> mean_distance(run ? n : 0), mth_distance(run ? n : 0);
+    if (graph_k > 0) {
+        graph->k = graph_k;
+        graph->neighbours.assign(n * graph_k, k_no_neighbour);
+    }
+    {
+        LazyProgress progress("k nearest neighbours (k=" + std::to_string(kq) + ")", n, quiet);
+        tree.for_each(
+            kq, 0,
+            [&](std::uint32_t i, const std::uint32_t* index, const float* d2, std::uint32_t found) {
+                if (run) {
+                    double sum = 0;
+                    const std::uint32_t m = std::min(found, params.k);
+                    for (std::uint32_t j = 0; j < m; ++j) sum += std::sqrt(double(d2[j]));
+                    mean_distance[i] =
+                        m ? static_cast<float>(sum / m) : std::numeric_limits<float>::infinity();
+                    const std::uint32_t r = std::max<std::uint32_t>(params.min_neighbours, 1) - 1;
+                    mth_distance[i] = r < found ? std::sqrt(d2[r]) : std::numeric_limits<float>::infinity();
+                }
+                if (graph_k > 0) {
+                    std::uint32_t* row = graph->neighbours.data() + std::size_t{i} * graph_k;
+                    for (std::uint32_t j = 0; j < std::min(found, graph_k); ++j) row[j] = index[j];
+                }
+            },
+            [&](std::uint64_t done) { progress.update(done); });
+        progress.finish();
+    }
+    if (!run) return;
+
+    // Statistical (PCL StatisticalOutlierRemoval): mean and sample standard deviation of the
+    // per-point mean distances over the whole scan; outlier above mean + ratio x std.
+    double sum = 0, sum2 = 0;
+    for (const float d : mean_distance) {
+        sum += d;
+        sum2 += double(d) * d;
+    }
+    report.mean = sum / double(n);
+    const double variance = std::max(0.0, (sum2 - sum * sum / double(n)) / double(n - 1));
+    report.stddev = std::sqrt(variance);
+    report.threshold = report.mean + params.std_ratio * report.stddev;
+    report.median_spacing = median_of(mean_distance);
+    report.radius_used = params.radius_factor * report.median_spacing;
+    report.ran = true;
+    std::vector<std::uint8_t> keep(n, 1);
+    for (std::size_t i = 0; i < n; ++i) {
+        const bool stat = params.std_ratio > 0 && mean_distance[i] > report.threshold;
+        const bool rad =
+            params.radius_factor > 0 && params.min_neighbours > 0 && mth_distance[i] > report.radius_used;
+        report.statistical += stat;
+        report.radius += rad;
+        if (stat || rad) {
+            keep[i] = 0;
+            ++report.removed;
+        }
+    }
+    if (report.removed == 0) {
+        report.seconds = tool::now_seconds() - t0;
+        return;
+    }
+
+    if (graph_k > 0) {
+        // Points that listed a removed point among their neighbours search again without them.
+        std::vector<std::uint8_t> removed(n);
+        for (std::size_t i = 0; i < n; ++i) removed[i] = !keep[i];
+        parallel_chunks(n, 4096, resolve_threads(0), [&](std::size_t b, std::size_t e, unsigned) {
+            std::vector<float> d2(graph_k);
+            for (std::size_t i = b; i < e; ++i) {
+                if (!keep[i]) continue;
+                std::uint32_t* row = graph->neighbours.data() + i * graph_k;
+                bool stale = false;
+                for (std::uint32_t j = 0; j < graph_k && !stale; ++j)
+                    stale = row[j] != k_no_neighbour && removed[row[j]];
+                if (!stale) continue;
+                const std::uint32_t found =
+                    tree.nearest(static_cast<std::uint32_t>(i), graph_k, removed.data(), row, d2.data());
+                for (std::uint32_t j = found; j < graph_k; ++j) row[j] = k_no_neighbour;
+            }
+        });
+        // Renumber to the compacted point order.
+        std::vector<std::uint32_t> renumber(n, k_no_neighbour);
+        std::uint32_t next = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            if (keep[i]) renumber[i] = next++;
+        std::size_t out = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (!keep[i]) continue;
+            for (std::uint32_t j = 0; j < graph_k; ++j) {
+                const std::uint32_t m = graph->neighbours[i * graph_k + j];
+                graph->neighbours[out * graph_k + j] = m == k_no_neighbour ? k_no_neighbour : renumber[m];
+            }
+            ++out;
+        }
+        graph->neighbours.resize(out * graph_k);
+    }
+    keep_points(cloud, keep);
+    report.seconds = tool::now_seconds() - t0;
+}
+
+std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& positions,
+                                      const KnnGraph& graph, std::uint32_t k, bool quiet) {
+    const std::size_t n = positions.size();
+    const std::uint32_t gk = graph.k;
+    if (k < 3) throw Error("--k must be at least 3 for PCA normals");
+    const std::uint32_t others = std::min(k - 1, gk);
+    std::vector<pool::Float3> normals(n, {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
+    LazyProgress progress("estimating normals (PCA, k=" + std::to_string(k) + ")", n, quiet);
+    parallel_chunks(n, 4096, resolve_threads(0), [&](std::size_t b, std::size_t e, unsigned worker) {
+        for (std::size_t i = b; i < e; ++i) {
+            const std::uint32_t* row = graph.neighbours.data() + i * gk;
+            // Coordinates relative to the point itself: double sums of small numbers.
+            double d[257][3];
+            std::uint32_t m = 0;
+            d[m][0] = d[m][1] = d[m][2] = 0.0;
+            ++m;
+            for (std::uint32_t j = 0; j < others; ++j) {
+                if (row[j] == k_no_neighbour) break;
+                for (int a = 0; a < 3; ++a) d[m][a] = positions[row[j]][a] - positions[i][a];
+                ++m;
+            }
+            if (m < 3) continue;
+            double mean[3] = {0, 0, 0};
+            for (std::uint32_t j = 0; j < m; ++j)
+                for (int a = 0; a < 3; ++a) mean[a] += d[j][a];
+            for (int a = 0; a < 3; ++a) mean[a] /= m;
+            double c[3][3] = {};
+            for (std::uint32_t j = 0; j < m; ++j) {
+                const double x = d[j][0] - mean[0], y = d[j][1] - mean[1], z = d[j][2] - mean[2];
+                c[0][0] += x * x;
+                c[0][1] += x * y;
+                c[0][2] += x * z;
+                c[1][1] += y * y;
+                c[1][2] += y * z;
+                c[2][2] += z * z;
+            }
+            c[1][0] = c[0][1];
+            c[2][0] = c[0][2];
+            c[2][1] = c[1][2];
+            double w[3], v[3];
+            symmetric_eigen(c, w, v);
+            if (!(w[2] > 0.0) || w[1] <= 1e-10 * w[2]) continue;  // coincident or collinear
+            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+            if (!(len > 0.0) || !std::isfinite(len)) continue;
+            normals[i] = {static_cast<float>(v[0] / len), static_cast<float>(v[1] / len),
+                          static_cast<float>(v[2] / len)};
+        }
+        if (worker == 0) progress.update(e);
+    });
+    progress.finish();
+    return normals;
+}
+
+}  // namespace prt::pre::import
