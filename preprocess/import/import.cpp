@@ -236,6 +236,37 @@ std::vector<Scan> split_by_scan(Scan&& whole) {
     return out;
 }
 
+/// Keeps the points whose hash of (seed, index) falls below `fraction` (a counter-based hash:
+/// the same points for the same file and seed); returns how many were dropped.
+std::uint64_t decimate(PointCloud& c, double fraction, std::uint64_t seed) {
+    auto keep = [&](std::size_t i) {
+        std::uint64_t h = seed * 0x9E3779B97F4A7C15ull + i;
+        h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;  // splitmix64's finalizer
+        h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+        h ^= h >> 31;
+        return double(h >> 11) * 0x1.0p-53 < fraction;
+    };
+    std::size_t out = 0;
+    const std::size_t n = c.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!keep(i)) continue;
+        c.positions[out] = c.positions[i];
+        if (c.has_normals()) c.normals[out] = c.normals[i];
+        if (c.has_colors()) c.colors[out] = c.colors[i];
+        if (c.has_radii()) c.radii[out] = c.radii[i];
+        if (c.has_intensities()) c.intensities[out] = c.intensities[i];
+        if (c.has_scan_ids()) c.scan_ids[out] = c.scan_ids[i];
+        ++out;
+    }
+    c.positions.resize(out);
+    if (c.has_normals()) c.normals.resize(out);
+    if (c.has_colors()) c.colors.resize(out);
+    if (c.has_radii()) c.radii.resize(out);
+    if (c.has_intensities()) c.intensities.resize(out);
+    if (c.has_scan_ids()) c.scan_ids.resize(out);
+    return n - out;
+}
+
 std::string sensor_text(const pool::Sensor& s) {
     return (s.kind == pool::k_sensor_direction ? "direction " : "point ") + vec(s.position);
 }
@@ -245,10 +276,14 @@ std::string sensor_text(const pool::Sensor& s) {
 void prepare_scan(Scan& scan, const Options& options, Report& report, std::uint32_t graph_k,
                   KnnGraph* graph) {
     PointCloud& cloud = scan.cloud;
+    if (options.keep_fraction < 1.0) report.decimated = decimate(cloud, options.keep_fraction, options.seed);
     report.clean = clean(cloud, !options.keep_duplicates);
     if (cloud.size() == 0) throw Error(report.label + ": no points left: " + report.clean.summary());
     OutlierParams params = options.outliers;
     if (scan.mesh) params.enabled = false;
+    if (cloud.sensors.size() == 1 && cloud.sensors[0].kind == pool::k_sensor_point)
+        params.sensor = std::array<double, 3>{cloud.sensors[0].position[0], cloud.sensors[0].position[1],
+                                              cloud.sensors[0].position[2]};
     try {
         outliers_and_graph(cloud, params, graph_k, graph, report.outliers, options.quiet);
     } catch (const Error& e) {
@@ -596,6 +631,9 @@ std::vector<std::string> Report::summary_lines() const {
                 (r.fallback_normals ? ", " + std::to_string(r.fallback_normals) +
                                           " vertices took the normal from the other source"
                                     : ""));
+        if (r.decimated)
+            lines.push_back(prefix + "decimated: dropped " + std::to_string(r.decimated) + " of " +
+                            std::to_string(r.records) + " points (--keep-fraction)");
         lines.push_back(prefix + "clean: " + r.clean.summary());
         lines.push_back(prefix + "outliers: " + r.outliers.summary());
     };
@@ -644,6 +682,7 @@ std::string options_json(const std::vector<fs::path>& inputs, const fs::path& po
                      {"radius", options.outliers.radius_factor},
                      {"min_neighbours", options.outliers.min_neighbours}};
     j["keep_duplicates"] = options.keep_duplicates;
+    j["keep_fraction"] = options.keep_fraction;
     return j.dump();
 }
 

@@ -79,6 +79,9 @@ struct Options {
     bool propagate_then_vote = false;
     OutlierParams outliers;        ///< statistical + radius outlier removal per scan (neighbours.h)
     bool keep_duplicates = false;  ///< keep exactly coincident points
+    /// --keep-fraction: keep this fraction of each scan's points, chosen by a hash of (--seed, index)
+    /// before anything else (decimation: the "10 %" models of issue 15's fidelity cases); 1 keeps all.
+    double keep_fraction = 1.0;
     bool quiet = true;             ///< no progress on stderr
 };
 
@@ -112,6 +115,7 @@ struct Report {
     bool oriented_to_sensor = false;
     std::string normals_detail;  ///< where the normals came from, one line
     std::uint64_t written = 0;   ///< points in the result
+    std::uint64_t decimated = 0;  ///< points dropped by --keep-fraction
     double read_seconds = 0;
     double normals_seconds = 0;
     /// The lines printed on stderr after an import (notes, counts), without the trailing newline.

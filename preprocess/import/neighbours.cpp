@@ -94,7 +94,7 @@ std::string OutlierReport::summary() const {
                   input ? 100.0 * double(removed) / double(input) : 0.0,
                   static_cast<unsigned long long>(statistical), threshold, mean, stddev,
                   static_cast<unsigned long long>(radius), radius_used, median_spacing, seconds);
-    return buf;
+    return std::string(buf) + (range_scaled ? "; distances relative to the range from the scanner" : "");
 }
 
 void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uint32_t graph_k,
@@ -150,6 +150,25 @@ void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uin
         progress.finish();
     }
     if (!run) return;
+    if (params.sensor) {
+        // Relative to the range from the scanner, at the median range (the units stay lengths).
+        const auto& s = *params.sensor;
+        std::vector<float> range(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const auto& p = cloud.positions[i];
+            range[i] = float(std::sqrt((p[0] - s[0]) * (p[0] - s[0]) + (p[1] - s[1]) * (p[1] - s[1]) +
+                                       (p[2] - s[2]) * (p[2] - s[2])));
+        }
+        const double median_range = median_of(range);
+        if (median_range > 0 && std::isfinite(median_range)) {
+            for (std::size_t i = 0; i < n; ++i) {
+                const double scale = median_range / std::max<double>(range[i], 1e-3 * median_range);
+                mean_distance[i] = float(mean_distance[i] * scale);
+                mth_distance[i] = float(mth_distance[i] * scale);
+            }
+            report.range_scaled = true;
+        }
+    }
 
     // Statistical (PCL StatisticalOutlierRemoval): mean and sample standard deviation of the
     // per-point mean distances over the whole scan; outlier above mean + ratio x std.

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,12 @@ struct OutlierParams {
     /// Radius: outlier when fewer than this many other points lie within the radius (PCL
     /// setMinNeighborsInRadius; at most k, so the k-NN pass answers it).
     std::uint32_t min_neighbours = 2;
+    /// The scan's scanner position when it is a point (set per scan by the import): a scanner's
+    /// point spacing grows with range, so both tests then measure distances relative to the range,
+    /// scaled to the scan's median range (issue 15: a room scanned from inside is dense near the
+    /// scanner and sparse far away; without this the far walls set the statistics and floating
+    /// points near the scanner pass).
+    std::optional<std::array<double, 3>> sensor;
 };
 
 /// What outlier removal did on one scan.
@@ -43,6 +50,7 @@ struct OutlierReport {
     double threshold = 0;           ///< statistical: mean + std_ratio x stddev
     double median_spacing = 0;      ///< median of the per-point mean k-NN distance
     double radius_used = 0;         ///< radius_factor x median_spacing
+    bool range_scaled = false;      ///< distances were taken relative to the range (OutlierParams::sensor)
     double seconds = 0;
     std::string summary() const;  ///< one line
 };

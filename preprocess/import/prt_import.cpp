@@ -76,7 +76,8 @@ int main(int argc, char** argv) {
         app.add_option("--sample", options.sample,
                        "Meshes: sample this many points uniformly over the surface by area instead of "
                        "taking the vertices (0 = vertices)");
-        app.add_option("--seed", options.seed, "Random seed for --sample (same seed, same points)");
+        app.add_option("--seed", options.seed,
+                       "Random seed for --sample and --keep-fraction (same seed, same points)");
         app.add_option("--sample-normals", sample_normals,
                        "Normals of sampled points: face (the normal of the triangle sampled) or "
                        "interpolated (area-weighted vertex normals blended barycentrically)")
@@ -123,6 +124,10 @@ int main(int argc, char** argv) {
                        "Radius outliers: fewer than this many other points within the radius (at most "
                        "--outlier-k)")
             ->check(CLI::Range(0, 256));
+        app.add_option("--keep-fraction", options.keep_fraction,
+                       "Keep this fraction of each scan's points, chosen by --seed before anything else "
+                       "(decimation; mesh vertices keep their normals from the whole mesh)")
+            ->check(CLI::Range(1e-6, 1.0));
         app.add_flag("--keep-duplicates", options.keep_duplicates,
                      "Keep exactly coincident points (default: keep the first, drop and count the rest)");
         app.callback([&] {

@@ -963,12 +963,16 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
     std::uint32_t heaviest = ids.empty() ? 0 : ids[0];
     for (std::uint32_t id : ids)
         if (log_weight(id) > lmax) lmax = log_weight(id), heaviest = id;
-    if (one_side) {  // as in CornerEvaluator::evaluate: the heaviest point's side only
+    if (one_side) {  // as in CornerEvaluator::evaluate: the heavier side only
         const double* nb = &ps.nrm[3 * heaviest];
-        std::erase_if(ids, [&](std::uint32_t id) {
+        auto same = [&](std::uint32_t id) {
             const double* n = &ps.nrm[3 * id];
-            return n[0] * nb[0] + n[1] * nb[1] + n[2] * nb[2] < 0;
-        });
+            return n[0] * nb[0] + n[1] * nb[1] + n[2] * nb[2] >= 0;
+        };
+        double with = 0, against = 0;
+        for (std::uint32_t id : ids) (same(id) ? with : against) += std::exp(log_weight(id) - lmax);
+        const bool keep_same = with >= against;
+        std::erase_if(ids, [&](std::uint32_t id) { return same(id) != keep_same; });
     }
     Sums sums;
     for (std::uint32_t id : ids) {
@@ -1033,24 +1037,34 @@ struct CornerEvaluator {
                 arg[inside] = -d2[j] * cand.inv2s2[j];
                 inside += d2[j] <= cand.sup2[j];
             }
+            // arg >= -support^2 / 2 >= -50: inside exp_nonpositive's domain
+            for (std::size_t i = 0; i < inside; ++i) w[i] = detail::exp_nonpositive(arg[i]);
             if (one_side && inside > 1) {
-                // The side of the surface Q belongs to: the normal of its heaviest point; points
-                // of the other side (normals more than 90 degrees away) do not count.
+                // The side of the surface Q belongs to: split the points by their normal against
+                // the heaviest point's (more or less than 90 degrees away) and keep the side of
+                // larger total weight; a lone point with a flipped normal does not win its corner.
                 std::size_t best = 0;
                 for (std::size_t i = 1; i < inside; ++i)
                     if (arg[i] > arg[best]) best = i;
                 const std::uint32_t b = idx[best];
-                std::size_t same = 0;
+                double with = 0, against = 0;
                 for (std::size_t i = 0; i < inside; ++i) {
                     const std::uint32_t j = idx[i];
-                    if (cand.nx[j] * cand.nx[b] + cand.ny[j] * cand.ny[b] + cand.nz[j] * cand.nz[b] < 0)
-                        continue;
-                    idx[same] = j, arg[same] = arg[i], ++same;
+                    const bool same =
+                        cand.nx[j] * cand.nx[b] + cand.ny[j] * cand.ny[b] + cand.nz[j] * cand.nz[b] >= 0;
+                    (same ? with : against) += cand.wn[j] * w[i];
                 }
-                inside = same;
+                const bool keep_same = with >= against;
+                std::size_t kept = 0;
+                for (std::size_t i = 0; i < inside; ++i) {
+                    const std::uint32_t j = idx[i];
+                    const bool same =
+                        cand.nx[j] * cand.nx[b] + cand.ny[j] * cand.ny[b] + cand.nz[j] * cand.nz[b] >= 0;
+                    if (same != keep_same) continue;
+                    idx[kept] = j, w[kept] = w[i], ++kept;
+                }
+                inside = kept;
             }
-            // arg >= -support^2 / 2 >= -50: inside exp_nonpositive's domain
-            for (std::size_t i = 0; i < inside; ++i) w[i] = detail::exp_nonpositive(arg[i]);
             Sums sums;
             for (std::size_t i = 0; i < inside; ++i) {
                 const std::uint32_t j = idx[i];

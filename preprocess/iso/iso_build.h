@@ -37,12 +37,11 @@
 // any point in that leaf" (4.3). Here every point counts whose own support reaches the corner
 // (|Q - p_i| <= support x sigma_i), so a corner has one value whichever of its leaves asks, and
 // leaves sharing a corner agree there (the continuity thesis 4.5 relies on); with one_side (the
-// default, issue 15) only those whose normal is within 90 degrees of the corner's heaviest point's,
-// so the two sides of a thin part do not cancel. A corner no point's support reaches (coarse
-// levels of detail, thesis 4.6) is evaluated from the points within d_min + support x sigma_max of
-// it (d_min: the nearest point's distance), where the untruncated Gaussians of eq. 4.1 put all but
-// a negligible part of their weight, with the weights scaled in log space so that they cannot
-// underflow.
+// default, issue 15) only those on the heavier side, split by their normal against the corner's
+// heaviest point's, so the two sides of a thin part do not cancel. A corner no point's support reaches
+// (coarse levels of detail, thesis 4.6) is evaluated from the points within d_min + support x sigma_max of it
+// (d_min: the nearest point's distance), where the untruncated Gaussians of eq. 4.1 put all but a negligible
+// part of their weight, with the weights scaled in log space so that they cannot underflow.
 #pragma once
 
 #include <cstdint>
@@ -98,10 +97,10 @@ struct BuildOptions {
     /// 2 data_reach r (r: the points' radius, the k-th neighbour distance) are not bridged and no
     /// sheet grows past a scan's edge. 0 turns it off (the thesis's behaviour).
     float data_reach = 1.0f;
-    /// Issue 15, thin parts (ears, fingers, a table top's edge): at a corner only the points on the
-    /// side of its heaviest point count (normals within 90 degrees of that point's), so the two
-    /// sides of a part thinner than the Gaussian's reach do not cancel into nothing. false: every
-    /// point within its support counts (thesis eq. 4.1-4.3 as written).
+    /// Issue 15, thin parts (ears, fingers, a table top's edge): at a corner the points are split by
+    /// their normal against the heaviest point's (within 90 degrees or not) and only the side of
+    /// larger total weight counts, so the two sides of a part thinner than the Gaussian's reach do not cancel
+    /// into nothing. false: every point within its support counts (thesis eq. 4.1-4.3 as written).
     bool one_side = true;
     Storage storage = Storage::q8;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread

@@ -112,8 +112,8 @@ int main(int argc, char** argv) {
             app.add_flag(
                 "--both-sides", both_sides,
                 "Let every point within its support count at a corner (thesis eq. 4.1-4.3 as written); "
-                "by default only those on the side of the corner's heaviest point (normals within 90 "
-                "degrees of its), so the two sides of a thin part do not cancel");
+                "by default the points are split by their normal against the corner's heaviest point's and "
+                "only the heavier side counts, so the two sides of a thin part do not cancel");
             app.add_flag("--keep-uncrossed", keep_uncrossed,
                          "Keep filled leaves whose corners share one sign (they hold no surface)");
             app.add_option(

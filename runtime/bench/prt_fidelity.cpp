@@ -614,6 +614,19 @@ void fidelity(Options o, const tool::CommonOptions& common) {
     j["tolerance_spacings"] = o.tolerance;
     j["threads"] = threads;
     j["input_points"] = pts.size();
+    {
+        // The data itself against the reference: how far the input points lie from it, in their
+        // own spacings (noise, misregistration, outliers the import kept).
+        std::vector<float> off(pts.size());
+        pre::parallel_chunks(pts.size(), 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i)
+                off[i] = float(truth->distance(pts[i]) / std::max(spacing[i], 1e-300));
+        });
+        std::uint64_t far = 0;
+        for (float d : off) far += d > o.tolerance;
+        j["input_offset_spacings"] = summary(off);
+        j["input_points_beyond_tolerance"] = far;
+    }
     j["spacing"] = {{"median", sorted_spacing[sorted_spacing.size() / 2]},
                     {"p10", sorted_spacing[sorted_spacing.size() / 10]},
                     {"p90", sorted_spacing[sorted_spacing.size() * 9 / 10]}};

@@ -191,6 +191,70 @@ TEST(Outliers, StatisticalAndRadiusFollowPclsRules) {
     }
 }
 
+TEST(Outliers, RangeFromTheScannerScalesBothTests) {
+    // A scanner at the origin 1 above a floor, sampling it at a fixed angular step: the spacing
+    // grows with range. Six points float 0.3 from the scanner, 0.06 apart: sparse for their range
+    // (the floor below is sampled at about 0.05 there) yet denser than the far floor.
+    std::vector<Vec3> p;
+    const double step = 0.05;  // radians
+    for (double az = 0; az < 2 * M_PI; az += step)
+        for (double el = -M_PI / 2 + 0.05; el < -0.12; el += step)
+            p.push_back({std::cos(el) * std::cos(az) / -std::tan(el), -1.0,
+                         std::cos(el) * std::sin(az) / -std::tan(el)});
+    const std::size_t floor = p.size();
+    for (int i = 0; i < 6; ++i) p.push_back({0.3, -0.06 * i, 0.0});
+    OutlierParams params;  // the defaults
+    auto run = [&](bool with_sensor, std::vector<std::uint8_t>& removed) {
+        PointCloud cloud;
+        cloud.positions = p;
+        cloud.intensities.resize(p.size());
+        for (std::size_t i = 0; i < p.size(); ++i) cloud.intensities[i] = static_cast<float>(i);
+        OutlierParams q = params;
+        if (with_sensor) q.sensor = Vec3{0, 0, 0};
+        OutlierReport report;
+        prt::pre::import::outliers_and_graph(cloud, q, 0, nullptr, report, true);
+        removed.assign(p.size(), 1);
+        for (const float f : cloud.intensities) removed[static_cast<std::size_t>(f)] = 0;
+        EXPECT_EQ(report.range_scaled, with_sensor);
+        return report;
+    };
+    std::vector<std::uint8_t> plain, scaled;
+    run(false, plain);
+    run(true, scaled);
+    int floaters_plain = 0, floaters_scaled = 0, floor_scaled = 0;
+    for (std::size_t i = floor; i < p.size(); ++i) floaters_plain += plain[i], floaters_scaled += scaled[i];
+    for (std::size_t i = 0; i < floor; ++i) floor_scaled += scaled[i];
+    EXPECT_LT(floaters_plain, 3) << "without the range, most floaters look denser than the far floor";
+    EXPECT_EQ(floaters_scaled, 6) << "relative to their range they are isolated";
+    EXPECT_LE(floor_scaled, int(floor / 1000)) << "the floor stays";
+    // The brute-force rule with distances divided by the range (times the median range).
+    std::vector<double> range(p.size()), mean(p.size()), mth(p.size());
+    for (std::size_t i = 0; i < p.size(); ++i) range[i] = std::sqrt(dist2(p[i], {0, 0, 0}));
+    std::vector<double> sr(range);
+    std::nth_element(sr.begin(), sr.begin() + static_cast<std::ptrdiff_t>((sr.size() - 1) / 2), sr.end());
+    const double median_range = sr[(sr.size() - 1) / 2];
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto b = brute(p, i, params.k);
+        double sum = 0;
+        for (const auto& [d, j] : b) sum += std::sqrt(d);
+        mean[i] = sum / double(b.size()) * median_range / range[i];
+        mth[i] = std::sqrt(b[params.min_neighbours - 1].first) * median_range / range[i];
+    }
+    double sum = 0, sum2 = 0;
+    for (double m : mean) sum += m, sum2 += m * m;
+    const double mu = sum / double(p.size()),
+                 sd = std::sqrt((sum2 - sum * sum / double(p.size())) / double(p.size() - 1));
+    std::vector<double> sm(mean);
+    std::nth_element(sm.begin(), sm.begin() + static_cast<std::ptrdiff_t>((sm.size() - 1) / 2), sm.end());
+    const double radius = params.radius_factor * sm[(sm.size() - 1) / 2];
+    std::size_t disagreements = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const bool want = mean[i] > mu + params.std_ratio * sd || mth[i] > radius;
+        disagreements += want != (scaled[i] != 0);
+    }
+    EXPECT_LE(disagreements, 2u) << "float rounding of the per-point distances at the thresholds only";
+}
+
 TEST(Outliers, GraphAfterRemovalIsTheSurvivorsKnn) {
     auto p = random_points(1200, 11);
     for (int i = 0; i < 20; ++i) p.push_back({-1 + 0.1 * i, 0.5, 3.0 + 0.37 * i});  // far off the patch

@@ -296,3 +296,29 @@ TEST_F(ToolTest, PoolInputKeepsProvenanceAndSensors) {
 }
 
 }  // namespace
+
+namespace {
+using ToolTestKeep = ToolTest;
+}
+
+TEST_F(ToolTestKeep, KeepFractionDecimatesTheSamePointsForTheSameSeed) {
+    std::ostringstream xyz;
+    for (int i = 0; i < 100; ++i)
+        for (int j = 0; j < 100; ++j) xyz << 0.01 * i << " " << 0.01 * j << " 0 0 0 1\n";
+    write("grid.xyz", xyz.str());
+    auto points = [&](const std::string& name) {
+        const prt::pool::PoolFile p = prt::pool::PoolFile::open(path(name));
+        return prt::pre::read_point_sections(p).positions;
+    };
+    ASSERT_EQ(run(path("grid.xyz").string() + " --keep-fraction 0.25 -o " + path("a.pool").string()), 0)
+        << m_stderr;
+    EXPECT_NE(m_stderr.find("decimated: dropped"), std::string::npos) << m_stderr;
+    ASSERT_EQ(run(path("grid.xyz").string() + " --keep-fraction 0.25 -o " + path("b.pool").string()), 0);
+    ASSERT_EQ(run(path("grid.xyz").string() + " --keep-fraction 0.25 --seed 7 -o " + path("c.pool").string()),
+              0);
+    const auto a = points("a.pool"), b = points("b.pool"), c = points("c.pool");
+    EXPECT_NEAR(double(a.size()), 2500.0, 150.0);  // binomial: sd 43
+    EXPECT_EQ(a, b);
+    EXPECT_NE(a, c);
+    EXPECT_EQ(run(path("grid.xyz").string() + " --keep-fraction 0 -o " + path("d.pool").string()), 2);
+}
