@@ -134,7 +134,10 @@ nlohmann::json SurfaceProbe::work() const {
 }
 
 void add_surface_options(CLI::App& app, SurfaceSettings& s) {
-    app.add_flag("--deep-blending", s.deep, "splats: blend across leaf borders, thesis 3.5 (default: off)");
+    app.add_flag(
+        "--deep-blending,!--no-deep-blending", s.deep,
+        "splats: blend across leaf borders, thesis 3.5 (the renderer's default); --no-deep-blending: "
+        "within one leaf");
     app.add_option("--leaf-culling", s.leaf_culling, "splats: 0 none, 1 cones, 2 cones + slabs")
         ->check(CLI::Range(0u, 2u));
     app.add_option("--blend-window", s.blend_window, "splats: blending window in radii")

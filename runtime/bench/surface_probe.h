@@ -32,7 +32,7 @@ namespace prt::bench {
 /// The settings of each surface (the accuracy knobs of issue 9; defaults are the renderer's).
 struct SurfaceSettings {
     // splats
-    bool deep = false;
+    bool deep = true;  ///< thesis 3.5, the renderer's default (RenderParams::deep_blending)
     std::uint32_t leaf_culling = 2;
     float blend_window = 1.0f;
     // iso

@@ -21,7 +21,8 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
     app.add_flag("--no-shadows", o.no_shadows, "Trace no shadow rays");
     app.add_flag("--no-reflections", o.no_reflections, "Trace no reflected rays");
     app.add_flag("--no-refractions", o.no_refractions, "Trace no refracted rays");
-    app.add_flag("--deep-blending", o.deep_blending, "Blend splats across leaf borders (thesis 3.5)");
+    app.add_flag("--deep-blending,!--no-deep-blending", o.deep_blending,
+                 "Blend splats across leaf borders (thesis 3.5); --no-deep-blending blends within one leaf");
     app.add_option("--blend-window", o.blend_window,
                    "Blend hits up to this many radii of the nearest splat behind it (thesis 3.3)")
         ->check(CLI::PositiveNumber);
@@ -32,10 +33,11 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
                    "Pass octree leaves unread when their bounds rule out a hit: 0 off, 1 normal cones (rays "
                    "leaving a surface skip it), 2 cones and slabs. The image is the same; for comparisons")
         ->check(CLI::Range(0u, 2u));
-    app.add_option("--surface", o.surface,
-                   "Trace every model as this surface: splats (thesis 3), iso (thesis 4), mls (WS05), patches "
-                   "(seed 002) or auto (what each pool holds); default: each model's scene setting, and auto "
-                   "for a pool given alone")
+    app.add_option(
+           "--surface", o.surface,
+           "Trace every model as this surface: splats (thesis 3), iso (thesis 4), mls (WS05), patches "
+           "(seed 002) or auto (what each pool holds); default: each model's scene setting, and auto "
+           "for a pool given alone")
         ->check(CLI::IsMember({"splats", "iso", "mls", "patches", "auto"}));
     app.add_option("--point-colors", o.point_colors,
                    "What multiplies the diffuse color per point, for every material (SCENE.md point_colors): "
@@ -43,9 +45,10 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
                    "black..white), none, or auto (colors, else intensity, else none); default: each "
                    "material's setting, auto for a pool given alone")
         ->check(CLI::IsMember({"auto", "colors", "intensity", "none"}));
-    app.add_flag("--iso-float", o.iso_float,
-                 "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
-                 "pool has both");
+    app.add_flag(
+        "--iso-float", o.iso_float,
+        "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
+        "pool has both");
     app.add_option("--iso-samples", o.iso_samples,
                    "ISO: sample intervals per leaf edge of ray length (thesis 4.5; 0: the default, 4)")
         ->check(CLI::Range(0.0f, 64.0f));
@@ -56,8 +59,9 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
     app.add_option("--mls-samples", o.mls_samples,
                    "MLS: samples per kd-tree cell interval, k (WS05 3.2; 0: the default, 4)")
         ->check(CLI::Range(0u, 64u));
-    app.add_option("--mls-refine", o.mls_refine,
-                   "MLS: regula falsi steps after the sign change (-1: the default, 1; 0: WS05's interpolation)")
+    app.add_option(
+           "--mls-refine", o.mls_refine,
+           "MLS: regula falsi steps after the sign change (-1: the default, 1; 0: WS05's interpolation)")
         ->check(CLI::Range(-1, 16));
     app.add_option("--patch-iterations", o.patch_iterations,
                    "Patches: Newton iteration cap (seed 002, 3; 0: the default, 16)")
@@ -65,14 +69,17 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
 }
 
 void add_sampling_options(CLI::App& app, RenderOverrides& o) {
-    app.add_flag("--path-tracing", o.path_tracing,
-                 "Path trace (seed 002, 7: diffuse bounces, perfect mirrors and glass, direct light from every "
-                 "light) instead of Whitted ray tracing; default: the scene's render.path_tracing (false)");
-    app.add_option("--spp", o.spp,
-                   "Samples per pixel per frame, stratified and jittered (0: the scene's render.spp, default 1)")
+    app.add_flag(
+        "--path-tracing", o.path_tracing,
+        "Path trace (seed 002, 7: diffuse bounces, perfect mirrors and glass, direct light from every "
+        "light) instead of Whitted ray tracing; default: the scene's render.path_tracing (false)");
+    app.add_option(
+           "--spp", o.spp,
+           "Samples per pixel per frame, stratified and jittered (0: the scene's render.spp, default 1)")
         ->check(CLI::Range(0u, 65536u));
-    app.add_option("--max-depth", o.max_depth,
-                   "Path tracing: the depth at which a path gathers direct light and ends (0: the default, 10)")
+    app.add_option(
+           "--max-depth", o.max_depth,
+           "Path tracing: the depth at which a path gathers direct light and ends (0: the default, 10)")
         ->check(CLI::Range(0u, 64u));
 }
 

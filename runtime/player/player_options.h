@@ -18,7 +18,7 @@ struct RenderOverrides {
     float exposure = 0;    ///< 0: keep
     int max_bounces = -1;  ///< -1: keep
     bool no_shadows = false, no_reflections = false, no_refractions = false;
-    bool deep_blending = false;
+    bool deep_blending = true;
     float blend_window = 1.0f;
     std::uint32_t max_steps = 1u << 16;
     std::uint32_t leaf_culling = 2;  ///< core::LeafCulling

@@ -221,7 +221,7 @@ class Suite:
                 for lc in s["leaf_culling"]:
                     label = "X%s%s%s_lc%d" % (x, "_culled" if key.startswith("cull_") else "",
                                               "_deep" if deep else "", lc)
-                    extra = ["--leaf-culling", str(lc)] + (["--deep-blending"] if deep else [])
+                    extra = ["--leaf-culling", str(lc), "--deep-blending" if deep else "--no-deep-blending"]
                     self.accuracy(model, points, "splats", pool, steps, label, extra)
         # ISO: levels, q8/f32, refinement.
         for key, pool in pools.items():

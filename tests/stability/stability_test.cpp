@@ -349,7 +349,7 @@ std::vector<std::pair<std::string, json>> build_and_trace(const std::vector<Poin
         return runs;
     if (may("prt-octree", radii.string() + " -o " + octree.string() + " --quiet" + (deep ? " -X 1" : ""), dir,
             radii.string())) {
-        runs.push_back({"splats", accuracy(octree, "splats", "", dir)});
+        runs.push_back({"splats", accuracy(octree, "splats", "--no-deep-blending", dir)});
         runs.push_back({"splats_deep", accuracy(octree, "splats", "--deep-blending --leaf-culling 0", dir)});
     }
     if (may("prt-mls", radii.string() + " -o " + mls.string() + " --quiet", dir, radii.string())) {

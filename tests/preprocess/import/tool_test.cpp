@@ -69,7 +69,7 @@ TEST_F(ToolTest, ImportsAPlyIntoAValidPool) {
     EXPECT_FLOAT_EQ(cloud.normals[1].y, 1.f);
     const std::string provenance = pool.provenance_json();
     EXPECT_NE(provenance.find("prt-import"), std::string::npos) << provenance;
-    EXPECT_NE(provenance.find("\"k\":16"), std::string::npos) << provenance;
+    EXPECT_NE(provenance.find("\"k\":24"), std::string::npos) << provenance;
     EXPECT_NE(m_stderr.find("skipped vertex properties: extra"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("3 points read, 3 kept"), std::string::npos) << m_stderr;
 
@@ -123,19 +123,30 @@ TEST_F(ToolTest, BadUsageExitsTwo) {
 
 TEST_F(ToolTest, HelpDocumentsEveryOption) {
     ASSERT_EQ(run("--help"), 0);
-    for (const char* opt : {"--output",          "--format",
-                            "--normals",         "--mesh-mode",
-                            "--sample",          "--seed",
-                            "--sample-normals",  "--k",
-                            "--sensor",          "--sensor-direction",
-                            "--no-sensor",       "--grazing-cos",
-                            "--poses",           "--keep-outliers",
-                            "--outlier-k",       "--outlier-std",
-                            "--outlier-radius",  "--outlier-min-neighbours",
-                            "--keep-duplicates", "--quiet"})
+    for (const char* opt : {"--output",
+                            "--format",
+                            "--normals",
+                            "--mesh-mode",
+                            "--sample",
+                            "--seed",
+                            "--sample-normals",
+                            "--k",
+                            "--sensor",
+                            "--sensor-direction",
+                            "--no-sensor",
+                            "--grazing-cos",
+                            "--poses",
+                            "--keep-outliers",
+                            "--outlier-k",
+                            "--outlier-std",
+                            "--outlier-radius",
+                            "--outlier-min-neighbours",
+                            "--keep-duplicates",
+                            "--keep-fraction",
+                            "--quiet"})
         EXPECT_NE(m_stdout.find(opt), std::string::npos) << opt << " missing from --help";
     // defaults shown
-    EXPECT_NE(m_stdout.find("16"), std::string::npos);
+    EXPECT_NE(m_stdout.find("=24"), std::string::npos);
 }
 
 TEST_F(ToolTest, EstimatesNormalsEndToEnd) {

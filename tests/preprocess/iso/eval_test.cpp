@@ -77,6 +77,8 @@ TEST(IsoEval, CornersMatchEquations41To43WithKnnRadii) {
     o.max_level = 6;
     o.storage = iso::Storage::both;
     o.drop_uncrossed = false;
+    o.smoothing = 1.0f;  // the thesis's sigma = r: every corner of this level within a support
+    o.one_side = false;  // eq. 4.1-4.3 as written
     o.threads = 2;
     const iso::IsoModel model = iso::build_iso(s.input(), o);
     const std::vector<double> radii = brute_knn_radii(s, o.knn, o.knn_clamp);
@@ -133,6 +135,8 @@ TEST(IsoEval, FarCornersMatchTheUntruncatedGaussian) {
     o.max_level = 2;
     o.storage = iso::Storage::f32;
     o.drop_uncrossed = false;
+    o.one_side = false;  // the untruncated eq. 4.1-4.3 over every point
+    o.smoothing = 1.0f;  // the reference's sigma = r
     o.threads = 2;
     const iso::IsoModel model = iso::build_iso(s.input(), o);
     EXPECT_GT(model.stats.far_corners, 10u);

@@ -153,6 +153,7 @@ TEST(IsoTrace, SphereErrorShrinksWithLevel) {
         iso::BuildOptions o;
         o.min_level = o.max_level = level;
         o.storage = iso::Storage::f32;
+        o.smoothing = 1.0f;  // the reference's sigma = r
         o.threads = 2;
         const iso::IsoModel m = iso::build_iso(s.input(true), o);
         const core::IsoView v = iso::make_view(m);

@@ -32,10 +32,13 @@ TEST(MlsEval, SignAndValueAgreeWithDoublePrecisionBruteForce) {
     // Without shrinking every leaf holds every splat reaching it, so F through the tree is F
     // everywhere (shrinking empties cells proven free of zeros: there mls_eval returns 0).
     mls::BuildOptions opt;
+    opt.support_factor = 1.0f;  // supports of one radius: the sample counts below assume them
     opt.shrink = false;
     const mls::MlsModel m = build(s, opt);
     const core::MlsView view = mls::make_view(m);
-    const mls::MlsModel shrunk = build(s);
+    mls::BuildOptions shrinking;
+    shrinking.support_factor = 1.0f;
+    const mls::MlsModel shrunk = build(s, shrinking);
     const core::MlsView shrunk_view = mls::make_view(shrunk);
     const double h = s.radii[0];
     std::size_t checked = 0, decided = 0, in_filled = 0;
