@@ -10,7 +10,8 @@ Runs are matched by (model, surface, setting). Flagged (exit status 1):
     the same results file (the first splat run unless --anchor names one), so a machine that is
     busier or slower as a whole does not read as a regression; --absolute compares raw rays/s;
   - any increase of an error figure (hit error mean/p99/max, hole rate, false-hit rate, image
-    RMSE, normal error), beyond --error-tolerance (default 1e-9 relative: output rounding);
+    RMSE, normal error; the fidelity runs' depth error too), beyond --error-tolerance (default
+    1e-9 relative: output rounding);
   - a run present in the baseline and missing (or failed) in the new results;
   - a non-finite figure.
 Prints one line per flag and a summary; exit 0 when nothing is flagged, 2 on unreadable input.
@@ -21,7 +22,7 @@ import math
 import sys
 
 ERRORS = ["hit_error_mean", "hit_error_p99", "hit_error_max", "hole_rate", "false_hit_rate", "image_rmse",
-          "normal_error_deg"]
+          "normal_error_deg", "depth_error_spacings"]
 
 
 def key(r):
@@ -32,7 +33,10 @@ def load(path):
     try:
         with open(path) as f:
             j = json.load(f)
-        return {key(r): r for r in j["runs"]}
+        runs = {key(r): r for r in j["runs"]}
+        # issue 15's fidelity runs: the same checks (speed over the anchor, every error figure)
+        runs.update({"fidelity:" + key(r): r for r in j.get("fidelity", [])})
+        return runs
     except (OSError, ValueError, KeyError, TypeError) as e:
         print("compare.py: %s: not a suite results.json (%s)" % (path, e), file=sys.stderr)
         sys.exit(2)
@@ -49,7 +53,7 @@ def anchor_speed(runs, name):
         r = runs.get(name)
         return speed(r) if r else None
     for k in sorted(runs):
-        if runs[k]["surface"] == "splats" and speed(runs[k]):
+        if not k.startswith("fidelity:") and runs[k]["surface"] == "splats" and speed(runs[k]):
             return speed(runs[k])
     return None
 

@@ -112,27 +112,28 @@ class Canvas:
         os.replace(tmp, path)
 
 
-def plot_pareto(rows, path):
+def plot_pareto(rows, path, ykey="hit_error_mean",
+                title="cpu time per ray (ns, log) against mean hit error / diagonal (log)"):
     models = []
     for r in rows:
-        if r.get("hit_error_mean") and r.get("ns_per_ray") and r["model"] not in models:
+        if r.get(ykey) and r.get("ns_per_ray") and r["model"] not in models:
             models.append(r["model"])
     pw, ph, margin = 360, 300, 60
     cols = min(3, max(1, len(models)))
     nrows = max(1, (len(models) + cols - 1) // cols)
     cv = Canvas(cols * (pw + margin) + margin, nrows * (ph + margin) + margin + 30)
-    cv.text(margin, 8, "cpu time per ray (ns, log) against mean hit error / diagonal (log)", scale=2)
+    cv.text(margin, 8, title, scale=2)
     lx = margin
     for s, c in SURFACE_COLORS.items():
         cv.rect(lx, 26, lx + 8, 34, c)
         cv.text(lx + 12, 26, s, scale=2)
         lx += 40 + 8 * len(s)
     for m_i, model in enumerate(models):
-        pts = [r for r in rows if r["model"] == model and r.get("hit_error_mean") and r.get("ns_per_ray")]
+        pts = [r for r in rows if r["model"] == model and r.get(ykey) and r.get("ns_per_ray")]
         x0 = margin + (m_i % cols) * (pw + margin)
         y0 = margin + 20 + (m_i // cols) * (ph + margin)
         xs = [math.log10(r["ns_per_ray"]) for r in pts]
-        ys = [math.log10(r["hit_error_mean"]) for r in pts]
+        ys = [math.log10(r[ykey]) for r in pts]
         xa, xb = math.floor(min(xs)), math.ceil(max(xs))
         ya, yb = math.floor(min(ys)), math.ceil(max(ys))
         xb, yb = max(xb, xa + 1), max(yb, ya + 1)
@@ -196,6 +197,26 @@ def markdown(result):
                 fmt(b.get("primary_grays_per_s")), fmt(b.get("shadow_grays_per_s")),
                 fmt(b.get("shadow_only_grays_per_s")), fmt(b.get("reflect4_grays_per_s")),
                 fmt(b.get("secondary_only_grays_per_s")), b.get("error", "")))
+    if result.get("fidelity"):
+        out += ["", "## Fidelity against ground truth (issue 15)", "",
+                "`prt-fidelity` from several views at the stated resolution: the reference mesh (Stanford "
+                "reconstructions, the meshes the armadillo and dragon points come from) or the analytic shape "
+                "of a laser-scan simulation (`prt-synth --scan`, range noise 5e-4 of the size, 1 % outliers, "
+                "then `prt-import` like a real scan; the room seen from its scanner). Holes and false hits are "
+                "percentages of the pixels where the scan has data; depth error and normal error are medians, "
+                "depth in local point spacings. Every surface at its defaults (`no_deep`: splats without deep "
+                "blending; `k8`: MLS with 8 samples per cell). Target: issue 15's (met / missed).", "",
+                "| case | points | surface | setting | prep s | peak MB | Mrays/s (CPU) | holes % | holes % with edges "
+                "| false hits % | depth (spacings) | normal deg | target |",
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+        for r in result["fidelity"]:
+            out.append("| %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |" % (
+                r["model"], r["points"], r["surface"], r["setting"], fmt(r["prep_seconds"]), fmt(r["prep_peak_mb"]),
+                fmt(r["rays_per_s"] / 1e6 if r.get("rays_per_s") else None), fmt(100 * r["hole_rate"]),
+                fmt(100 * r["hole_rate_with_edges"]), fmt(100 * r["false_hit_rate"]),
+                fmt(r.get("depth_error_spacings")), fmt(r.get("normal_error_deg")), r.get("target", "")))
+        out += ["", "![Pareto plot of the fidelity cases: CPU time per ray against the median depth error in "
+                "spacings](pareto_fidelity.png)"]
     if result["failures"]:
         out += ["", "## Failures", ""] + ["- " + f for f in result["failures"]]
     out += ["", "![Pareto plot: CPU time per ray against mean hit error](pareto.png)", ""]
@@ -218,3 +239,6 @@ def write_all(out_dir, result):
     atomic(os.path.join(out_dir, "RESULTS.md"), markdown(result))
     if any(r.get("hit_error_mean") for r in result["runs"]):
         plot_pareto(result["runs"], os.path.join(out_dir, "pareto.png"))
+    if any(r.get("depth_error_spacings") for r in result.get("fidelity", [])):
+        plot_pareto(result["fidelity"], os.path.join(out_dir, "pareto_fidelity.png"), "depth_error_spacings",
+                    "cpu time per ray (ns, log) against median depth error (local spacings, log)")

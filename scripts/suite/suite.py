@@ -35,6 +35,40 @@ import report  # noqa: E402  (same folder)
 REPO = os.path.abspath(os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", ".."))
 SHARED = os.environ.get("PRT_SHARED_DATA_DIR", os.path.join(REPO, "..", "shared", "data"))
 
+# Fidelity against ground truth (issue 15): label, how the points are made, the reference, the
+# views. "import": prt-import arguments (paths under SHARED); "scan": prt-synth --scan arguments
+# (the pool then goes through prt-import like a real scan, and the reference is its analytic shape).
+BUNNY = "points/stanford_bunny/"
+FIDELITY_CASES = [
+    ("bunny_10_scans", "import", ["--poses", BUNNY + "data/bun.conf"], BUNNY + "reconstruction/bun_zipper.ply",
+     "orbit"),
+    ("bunny_bun000", "import", ["--poses", BUNNY + "data/bun.conf", BUNNY + "data/bun000.ply"],
+     BUNNY + "reconstruction/bun_zipper.ply", "orbit"),
+    ("armadillo_vertices", "import", ["points/stanford_armadillo/armadillo.off"],
+     "points/stanford_armadillo/armadillo.off", "orbit"),
+    ("armadillo_10pct", "import", ["points/stanford_armadillo/armadillo.off", "--keep-fraction", "0.1"],
+     "points/stanford_armadillo/armadillo.off", "orbit"),
+    ("dragon_vertices", "import", ["points/stanford_dragon/dragon_small.obj"],
+     "points/stanford_dragon/dragon_small.obj", "orbit"),
+    ("dragon_10pct", "import", ["points/stanford_dragon/dragon_small.obj", "--keep-fraction", "0.1"],
+     "points/stanford_dragon/dragon_small.obj", "orbit"),
+    ("sphere_laser", "scan", ["sphere", "--scanners", "3", "--range-noise", "0.0005", "--outliers", "0.01"], None,
+     "orbit"),
+    ("torus_laser", "scan", ["torus", "--scanners", "4", "--range-noise", "0.0005", "--outliers", "0.01"], None,
+     "orbit"),
+    ("room_laser", "scan", ["room", "--range-noise", "0.0005", "--outliers", "0.01"], None, "sensors"),
+]
+# Issue 15's targets: (holes, false hits) as fractions of the data-covered pixels, per case group.
+FIDELITY_TARGETS = {
+    "bunny_10_scans": {"holes": 0.003, "false_hits": 0.003, "depth": 0.25, "normal_deg": 5.0},
+    "bunny_bun000": {"holes": 0.005, "false_hits": 0.005},
+    "armadillo_10pct": {"holes": 0.01, "false_hits": 0.005, "surfaces": ["splats", "mls"]},
+    "dragon_10pct": {"holes": 0.01, "false_hits": 0.005, "surfaces": ["splats", "mls"]},
+    "sphere_laser": {"holes": 0.003, "false_hits": 0.003, "depth": 0.25, "normal_deg": 5.0},
+    "torus_laser": {"holes": 0.003, "false_hits": 0.003, "depth": 0.25, "normal_deg": 5.0},
+    "room_laser": {"holes": 0.003, "false_hits": 0.003, "depth": 0.25, "normal_deg": 5.0},
+}
+
 # The real scans (../shared/data/README.md): label, path under SHARED, prt-import arguments.
 SCANS = [
     ("kitten", "points/cgal_kitten/kitten.xyz", []),
@@ -53,6 +87,7 @@ class Suite:
         self.rows = []    # prt-accuracy runs
         self.prep = {}    # model -> step -> {seconds, peak_mb}
         self.bench = []   # prt-bench runs
+        self.fidelity = []  # prt-fidelity runs (issue 15)
         self.failures = []
         os.makedirs(os.path.join(self.out, "models"), exist_ok=True)
         os.makedirs(os.path.join(self.out, "runs"), exist_ok=True)
@@ -298,6 +333,83 @@ class Suite:
         self.bench.append(entry)
 
 
+    # ---- fidelity against ground truth (issue 15) -------------------------------------------------
+
+    def fidelity_case(self, label, kind, args, reference, views):
+        """Builds every surface at its defaults and measures each with prt-fidelity."""
+        d = os.path.join(self.out, "models", label)
+        os.makedirs(d, exist_ok=True)
+        imp = os.path.join(d, "import.pool")
+        if kind == "scan":
+            raw = os.path.join(d, "scan.pool")
+            self.timed(label, "scan", [self.tool("prt-synth")] + args[:1] + ["--scan"] + args[1:] + ["-o", raw])
+            self.timed(label, "import", [self.tool("prt-import"), raw, "-o", imp])
+        else:
+            paths = [os.path.join(SHARED, a) if a.startswith("points/") else a for a in args]
+            self.timed(label, "import", [self.tool("prt-import")] + paths + ["-o", imp])
+        steps = [("radii", "prt-radii", []), ("octree", "prt-octree", []), ("cull", "prt-cull", []),
+                 ("iso", "prt-iso", []), ("mls", "prt-mls", [])]
+        pool = os.path.join(d, "surfaces.pool")
+        src = imp
+        for step, tool, extra in steps:
+            self.timed(label, step, [self.tool(tool), src, "-o", pool] + extra)
+            src = pool
+        res = self.settings["fidelity_res"]
+        runs = [("splats", "default", []), ("splats", "no_deep", ["--no-deep-blending"]), ("iso", "default", []),
+                ("mls", "default", []), ("mls", "k8", ["--mls-k", "8"])]
+        prep = self.prep.get(label, {})
+        prep_of = {"splats": ["import", "radii", "octree", "cull"], "iso": ["import", "radii", "iso"],
+                   "mls": ["import", "radii", "mls"]}
+        for surface, setting, extra in runs:
+            tag = "fidelity_%s__%s__%s" % (label, surface, setting)
+            js = os.path.join(self.out, "runs", tag + ".json")
+            cmd = [self.tool("prt-fidelity"), pool, "--surface", surface, "--width", str(res), "--height", str(res),
+                   "--views-from", views, "--json", js, "--quiet"] + extra
+            if reference:
+                cmd += ["--reference", os.path.join(SHARED, reference)]
+            if self.args.fidelity_images:
+                cmd += ["--images", os.path.join(self.out, "images", tag)]
+            try:
+                self.run(cmd)
+            except RuntimeError as e:
+                self.failures.append("%s: %s" % (tag, e))
+                self.say("  FAILED %s: %s" % (tag, e))
+                continue
+            j = json.load(open(js))
+            sj = j["surfaces"][surface]
+            med = lambda k: (sj.get(k) or {}).get("median")  # noqa: E731
+            steps_used = prep_of[surface] + (["scan"] if kind == "scan" else [])
+            row = {
+                "model": label, "surface": surface, "setting": setting, "points": j["input_points"],
+                "views": j["views"], "resolution": res, "reference": j["reference"]["kind"],
+                "prep_seconds": sum(prep[s]["seconds"] for s in steps_used if s in prep),
+                "prep_peak_mb": max([prep[s]["peak_mb"] for s in steps_used if s in prep] or [0]),
+                "surface_bytes": sj.get("surface_bytes"), "rays_per_s": sj.get("rays_per_s"),
+                "ns_per_ray": 1e9 / sj["rays_per_s"] if sj.get("rays_per_s") else None,
+                "covered_pixels": sj["covered_pixels"], "hole_rate": sj["hole_rate"],
+                "hole_rate_with_edges": sj["hole_rate_with_edges"], "false_hit_rate": sj["false_hit_rate"],
+                "depth_error_spacings": med("depth_error_spacings"),
+                "surface_distance_spacings": med("surface_distance_spacings"),
+                "normal_error_deg": med("normal_error_degrees"), "threads": j["threads"], "json": js,
+            }
+            t = FIDELITY_TARGETS.get(label)
+            if t and setting == "default" and surface in t.get("surfaces", ["splats", "iso", "mls"]):
+                misses = []
+                if row["hole_rate"] > t["holes"]:
+                    misses.append("holes")
+                if row["false_hit_rate"] > t["false_hits"]:
+                    misses.append("false hits")
+                if "depth" in t and (row["depth_error_spacings"] or 0) > t["depth"]:
+                    misses.append("depth")
+                if "normal_deg" in t and (row["normal_error_deg"] or 0) > t["normal_deg"]:
+                    misses.append("normals")
+                row["target"] = "missed: " + ", ".join(misses) if misses else "met"
+            self.fidelity.append(row)
+            self.say("  %-20s %-7s %-8s holes %s%%  false %s%%  depth %s  normal %s deg  %s" % (
+                label, surface, setting, report.fmt(100 * row["hole_rate"]), report.fmt(100 * row["false_hit_rate"]),
+                report.fmt(row["depth_error_spacings"]), report.fmt(row["normal_error_deg"]), row.get("target", "")))
+
+
 class Interrupted(Exception):
     """SIGTERM during a run."""
 
@@ -327,6 +439,7 @@ def settings_for(args):
         "patch_tolerances": [1e-12] if quick else [1e-6, 1e-12],
         "patch_precisions": ["double", "float"],
         "res": 128 if quick else 256,
+        "fidelity_res": 256 if quick else 1024,
         "repeat": 15 if quick else 3,
         "bench": {"backend": "cuda" if args.gpu else "cpu", "res": 1024 if args.gpu else (128 if quick else 256),
                   "frames": 20 if args.gpu else 3, "warmup": 3 if args.gpu else 1},
@@ -365,6 +478,11 @@ def main():
                     help="folder of pre-imported scans (LABEL.pool) used instead of prt-import (default: import)")
     ap.add_argument("--import-scans", default="", metavar="DIR",
                     help="only import the scans into DIR/LABEL.pool (for --scan-pools elsewhere) and exit")
+    ap.add_argument("--fidelity", default="",
+                    help="comma-separated fidelity cases (issue 15), of: %s; 'none' for none (default: every one "
+                         "whose data is present)" % ",".join(x[0] for x in FIDELITY_CASES))
+    ap.add_argument("--fidelity-images", action="store_true",
+                    help="also write prt-fidelity's per-view images under OUT_DIR/images (default: off)")
     ap.add_argument("--quiet", action="store_true", help="no progress on stderr (default: off)")
     args = ap.parse_args()
     wanted = [x for x in SCANS if not args.scans or x[0] in args.scans.split(",")]
@@ -423,6 +541,20 @@ def main():
             except RuntimeError as e:
                 s.failures.append("%s: %s" % (label, e))
                 s.say("  FAILED: %s" % e)
+        for label, kind, fargs, ref, views in ([] if args.fidelity == "none" else FIDELITY_CASES):
+            if args.fidelity and label not in args.fidelity.split(","):
+                continue
+            needs = [a for a in fargs if a.startswith("points/")] + ([ref] if ref else [])
+            missing = [n for n in needs if not os.path.exists(os.path.join(SHARED, n))]
+            if missing:
+                s.say("fidelity %s: %s absent, skipped" % (label, os.path.join(SHARED, missing[0])))
+                continue
+            s.say("fidelity %s" % label)
+            try:
+                s.fidelity_case(label, kind, fargs, ref, views)
+            except RuntimeError as e:
+                s.failures.append("fidelity %s: %s" % (label, e))
+                s.say("  FAILED: %s" % e)
         tp = s.teapot()
         if tp:
             s.say("measure teapot")
@@ -451,10 +583,13 @@ def main():
             "host": os.uname().nodename, "cpus": os.cpu_count(), "settings": s.settings,
             "git": subprocess.run(["git", "-C", REPO, "rev-parse", "--short", "HEAD"], capture_output=True,
                                   text=True).stdout.strip()}
-    result = {"meta": meta, "runs": s.rows, "prep": s.prep, "bench": s.bench, "failures": s.failures}
+    result = {"meta": meta, "runs": s.rows, "prep": s.prep, "bench": s.bench, "fidelity": s.fidelity,
+              "failures": s.failures}
     report.write_all(s.out, result)
     if args.publish:
-        for f in ("RESULTS.md", "pareto.png"):
+        for f in ("RESULTS.md", "pareto.png", "pareto_fidelity.png"):
+            if not os.path.exists(os.path.join(s.out, f)):
+                continue
             shutil.copy(os.path.join(s.out, f), os.path.join(REPO, "scripts", "suite", f))
     s.say("done: %d runs, %d bench runs, %d failures; %s" % (len(s.rows), len(s.bench), len(s.failures),
                                                             os.path.join(s.out, "RESULTS.md")))
