@@ -444,6 +444,8 @@ def settings_for(args):
         "bench": {"backend": "cuda" if args.gpu else "cpu", "res": 1024 if args.gpu else (128 if quick else 256),
                   "frames": 20 if args.gpu else 3, "warmup": 3 if args.gpu else 1},
     }
+    if args.fidelity_res:
+        s["fidelity_res"] = args.fidelity_res
     if args.shapes:
         s["shapes"] = [] if args.shapes == "none" else args.shapes.split(",")
     if args.sizes:
@@ -481,6 +483,8 @@ def main():
     ap.add_argument("--fidelity", default="",
                     help="comma-separated fidelity cases (issue 15), of: %s; 'none' for none (default: every one "
                          "whose data is present)" % ",".join(x[0] for x in FIDELITY_CASES))
+    ap.add_argument("--fidelity-res", type=int, default=0,
+                    help="prt-fidelity's image size (default: 1024, 256 with --quick)")
     ap.add_argument("--fidelity-images", action="store_true",
                     help="also write prt-fidelity's per-view images under OUT_DIR/images (default: off)")
     ap.add_argument("--quiet", action="store_true", help="no progress on stderr (default: off)")

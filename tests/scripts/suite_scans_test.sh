@@ -28,19 +28,19 @@ check "--import-scans exits 0" test $? = 0
 check "--import-scans writes kitten.pool" "$bin/prt-info" "$work/pools/kitten.pool"
 check "--import-scans imports only what --scans names" test ! -e "$work/pools/bunny.pool"
 
-python3 "$suite" "$work/run" --quick --shapes none --scans kitten --scan-pools "$work/pools" --no-bench \
+python3 "$suite" "$work/run" --quick --shapes none --fidelity none --scans kitten --scan-pools "$work/pools" --no-bench \
     --bin "$bin" --quiet
 check "a scans-only run exits 0" test $? = 0
 check "RESULTS.md has the kitten's MLS rows" contains "$work/run/RESULTS.md" "| kitten | mls | k4 |"
 check "RESULTS.md has the kitten's ISO rows" contains "$work/run/RESULTS.md" "| kitten | iso | L8_q8_r0 |"
 check "results.json lists no failure" python3 -c "import json,sys; sys.exit(len(json.load(open('$work/run/results.json'))['failures']))"
 
-timeout -s TERM 1 python3 "$suite" "$work/cut" --quick --shapes none --scans kitten \
+timeout -s TERM 1 python3 "$suite" "$work/cut" --quick --shapes none --fidelity none --scans kitten \
     --scan-pools "$work/pools" --no-bench --bin "$bin" --quiet
 check "a run cut by SIGTERM still writes RESULTS.md" test -s "$work/cut/RESULTS.md"
 check "and names the interruption" contains "$work/cut/RESULTS.md" "interrupted (signal 15)"
 
-missing=$(python3 "$suite" "$work/none" --quick --shapes none --scans kitten --scan-pools "$work/empty" \
+missing=$(python3 "$suite" "$work/none" --quick --shapes none --fidelity none --scans kitten --scan-pools "$work/empty" \
     --no-bench --bin "$bin" 2>&1)
 check "a scan missing from --scan-pools is skipped with a message" \
     grep -q "kitten: not in $work/empty, skipped" <<<"$missing"

@@ -65,11 +65,35 @@ class CompareTest(unittest.TestCase):
 
     def test_any_error_increase_is_flagged(self):
         for field in compare.ERRORS:
+            if field not in BASE["runs"][2]:
+                continue  # a fidelity figure: test_fidelity_runs_are_guarded
             new = copy.deepcopy(BASE)
             new["runs"][2][field] = new["runs"][2][field] * 1.001 + 1e-12
             f = self.flags(new)
             self.assertEqual(len(f), 1, field)
             self.assertIn(field, f[0])
+
+    def test_fidelity_runs_are_guarded(self):
+        # issue 15's prt-fidelity rows, read from results.json's "fidelity" list like the runs
+        fid = {"model": "bunny_10_scans", "surface": "splats", "setting": "default", "rays_per_s": 3e6,
+               "hole_rate": 1e-4, "false_hit_rate": 4e-3, "depth_error_spacings": 0.18, "normal_error_deg": 2.6}
+        with tempfile.TemporaryDirectory() as d:
+            def load(runs, fidelity):
+                path = os.path.join(d, "r.json")
+                with open(path, "w") as f:
+                    json.dump({"runs": runs, "fidelity": fidelity}, f)
+                return compare.load(path)
+            base = load(BASE["runs"], [fid])
+            self.assertEqual(compare.compare(base, load(BASE["runs"], [fid])), [])
+            worse = dict(fid, depth_error_spacings=0.2)
+            f = compare.compare(base, load(BASE["runs"], [worse]))
+            self.assertEqual(len(f), 1)
+            self.assertIn("fidelity:bunny_10_scans/splats/default", f[0])
+            self.assertIn("depth_error_spacings", f[0])
+            # the anchor stays the first splat run of the runs: a faster fidelity run moves nothing
+            faster = dict(fid, rays_per_s=9e6)
+            self.assertEqual(compare.compare(base, load(BASE["runs"], [faster])), [])
+            self.assertTrue(any("missing" in x for x in compare.compare(base, load(BASE["runs"], []))))
 
     def test_missing_run_and_nan_are_flagged(self):
         new = copy.deepcopy(BASE)
