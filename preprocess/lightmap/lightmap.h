@@ -10,11 +10,15 @@
 #include <vector>
 
 #include "gi_build.h"
-#include "lightmap_trace.h"
+#include "prt/core/lightmap.h"
 #include "prt/core/scene_view.h"
 #include "prt/formats/pool.h"
 
 namespace prt::lightmap {
+
+// The device-callable gathering lives in the core (prt/core/lightmap.h).
+using core::indirect_irradiance;
+using TraceParams = core::LightMapTraceParams;
 
 /// One surface sample: where (local frame of its model, and render frame), which side, and the
 /// indirect irradiance traced there.

@@ -9,10 +9,22 @@
 #include <vector>
 
 #include "gi_build.h"
-#include "photon_trace.h"
+#include "prt/core/photon.h"
 #include "prt/core/scene_view.h"
 
 namespace prt::photons {
+
+// The device-callable photon tracing lives in the core (prt/core/photon.h), for the CPU path here
+// and the CUDA backend alike; these names keep prt-photons' code readable.
+using core::emit_photon;
+using core::hash64;
+using core::PhotonDeposit;
+using core::photons_per_light;
+using core::PhotonTally;
+using core::PhotonTallyF;
+using core::trace_photon;
+using core::unit_float;
+using ShootParams = core::PhotonShootParams;
 
 using gi::CellBins;
 using gi::GiOctree;

@@ -1,5 +1,5 @@
 // PointRT CUDA: prt-cull's kernels (thesis 3.4). One thread culls one filled leaf with
-// pre::cull_leaf(), the function the CPU path runs: probes are generated from the same host-made
+// core::cull_leaf(), the function the CPU path runs: probes are generated from the same host-made
 // direction table and integer hashes, walked with the renderer's core::walk_next() and tested
 // with core::intersect_splat(). This file is compiled without FMA contraction and without fast
 // math (runtime/CMakeLists.txt), so the probes and their hits are bit-identical to the CPU's and
@@ -28,12 +28,12 @@ constexpr std::uint32_t k_leaves_per_launch = 1u << 19;
 
 enum CullCounter : std::uint32_t { k_c_probes, k_c_hit, k_c_unserved, k_c_tests, k_c_count };
 
-__global__ void cull_kernel(const pre::CullView view, std::uint32_t first, std::uint32_t count,
+__global__ void cull_kernel(const core::CullView view, std::uint32_t first, std::uint32_t count,
                             std::uint8_t* keep, std::uint32_t* votes, unsigned long long* counters) {
     const std::uint32_t i = blockIdx.x * blockDim.x + threadIdx.x;
     if (i >= count) return;
-    pre::CullCounters c;
-    pre::cull_leaf(view, first + i, keep, votes, c);
+    core::CullCounters c;
+    core::cull_leaf(view, first + i, keep, votes, c);
     if (c.probes) atomicAdd(&counters[k_c_probes], static_cast<unsigned long long>(c.probes));
     if (c.probes_hit) atomicAdd(&counters[k_c_hit], static_cast<unsigned long long>(c.probes_hit));
     if (c.probes_unserved)
@@ -42,13 +42,13 @@ __global__ void cull_kernel(const pre::CullView view, std::uint32_t first, std::
 }
 
 __global__ void hole_kernel(const core::OctreeView full, const core::OctreeView culled,
-                            const pre::HoleRay* rays, std::uint64_t count, const core::BlendOptions blend,
-                            std::uint32_t max_steps, pre::HoleSample* out) {
+                            const core::HoleRay* rays, std::uint64_t count, const core::BlendOptions blend,
+                            std::uint32_t max_steps, core::HoleSample* out) {
     const std::uint64_t i = static_cast<std::uint64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
     if (i >= count) return;
-    const pre::HoleRay r = rays[i];
-    pre::HoleSample s;
-    pre::trace_hole_ray(full, culled, r.o, r.d, r.inside != 0, blend, max_steps, s);
+    const core::HoleRay r = rays[i];
+    core::HoleSample s;
+    core::trace_hole_ray(full, culled, r.o, r.d, r.inside != 0, blend, max_steps, s);
     out[i] = s;
 }
 
@@ -98,25 +98,25 @@ std::string cull_device_name() {
     return p.name;
 }
 
-pre::CullCounters cull_leaves_cuda(const pre::CullView& host, std::span<std::uint8_t> keep,
-                                   const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+core::CullCounters cull_leaves_cuda(const core::CullView& host, std::span<std::uint8_t> keep,
+                                    const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
     PRT_CUDA_CHECK(cudaSetDevice(0));
     if (keep.size() != host.octree.splat_count)
         throw Error("cull_leaves_cuda: one keep flag per splat expected");
     const std::uint32_t leaves = host.octree.filled_leaves;
     DeviceOctree octree(host.octree);
-    DeviceBuffer<pre::CullLeaf> d_leaves = upload(host.leaves, leaves);
-    DeviceBuffer<pre::ProbeDirection> d_dirs =
+    DeviceBuffer<core::CullLeaf> d_leaves = upload(host.leaves, leaves);
+    DeviceBuffer<core::ProbeDirection> d_dirs =
         upload(host.directions, std::size_t(host.direction_sets) * host.directions_per_set);
     DeviceBuffer<std::uint8_t> d_keep = upload(keep.data(), keep.size());
     DeviceBuffer<std::uint32_t> d_votes;
-    if (host.policy == pre::CullPolicy::votes && !keep.empty()) {
+    if (host.policy == core::CullPolicy::votes && !keep.empty()) {
         d_votes.resize(keep.size());
         PRT_CUDA_CHECK(cudaMemset(d_votes.data(), 0, d_votes.bytes()));
     }
     DeviceBuffer<unsigned long long> d_counters(k_c_count);
     PRT_CUDA_CHECK(cudaMemset(d_counters.data(), 0, d_counters.bytes()));
-    pre::CullView view = host;
+    core::CullView view = host;
     view.octree = octree.view;
     view.leaves = d_leaves.data();
     view.directions = d_dirs.data();
@@ -132,7 +132,7 @@ pre::CullCounters cull_leaves_cuda(const pre::CullView& host, std::span<std::uin
     unsigned long long c[k_c_count];
     d_counters.download(c, k_c_count);
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
-    pre::CullCounters out;
+    core::CullCounters out;
     out.probes = c[k_c_probes];
     out.probes_hit = c[k_c_hit];
     out.probes_unserved = c[k_c_unserved];
@@ -141,14 +141,14 @@ pre::CullCounters cull_leaves_cuda(const pre::CullView& host, std::span<std::uin
 }
 
 void trace_hole_rays_cuda(const core::OctreeView& full, const core::OctreeView& culled,
-                          std::span<const pre::HoleRay> rays, const core::BlendOptions& blend,
-                          std::uint32_t max_steps, std::span<pre::HoleSample> out) {
+                          std::span<const core::HoleRay> rays, const core::BlendOptions& blend,
+                          std::uint32_t max_steps, std::span<core::HoleSample> out) {
     PRT_CUDA_CHECK(cudaSetDevice(0));
     if (out.size() != rays.size()) throw Error("trace_hole_rays_cuda: one sample per ray expected");
     if (rays.empty()) return;
     DeviceOctree f(full), c(culled);
-    DeviceBuffer<pre::HoleRay> d_rays = upload(rays.data(), rays.size());
-    DeviceBuffer<pre::HoleSample> d_out(rays.size());
+    DeviceBuffer<core::HoleRay> d_rays = upload(rays.data(), rays.size());
+    DeviceBuffer<core::HoleSample> d_out(rays.size());
     constexpr std::uint32_t block = 256;
     const std::uint64_t blocks = (rays.size() + block - 1) / block;
     hole_kernel<<<static_cast<unsigned>(blocks), block>>>(f.view, c.view, d_rays.data(), rays.size(), blend,

@@ -1,5 +1,5 @@
 // PointRT CUDA: prt-photons' kernel (thesis 5.4.1). One thread traces one photon with
-// photons::trace_photon(), the function the CPU path runs, over the device copy of the scene
+// core::trace_photon(), the function the CPU path runs, over the device copy of the scene
 // (DeviceScene, shared with the renderer). Consecutive threads take consecutive photons: the
 // per_pixel photons of one pixel, then the next pixel of the row, so a warp's rays leave the light
 // in nearly the same direction and walk the same octree nodes (the coherence the thesis's Z-order
@@ -38,19 +38,18 @@ __device__ __forceinline__ float warp_sum(float v) {
 }
 
 __global__ void __launch_bounds__(k_block)
-    shoot_kernel(const core::SceneView scene, const photons::ShootParams params, std::uint64_t first,
-                 std::uint64_t count, std::uint64_t per_light, photons::PhotonDeposit* deposits,
+    shoot_kernel(const core::SceneView scene, const core::PhotonShootParams params, std::uint64_t first,
+                 std::uint64_t count, std::uint64_t per_light, core::PhotonDeposit* deposits,
                  std::uint64_t capacity, unsigned long long* deposit_count, double* tally) {
     const std::uint64_t i = static_cast<std::uint64_t>(blockIdx.x) * blockDim.x + threadIdx.x;
-    photons::PhotonTallyF t;
+    core::PhotonTallyF t;
     if (i < count) {
         const std::uint64_t g = first + i;
         const std::uint32_t light = static_cast<std::uint32_t>(g / per_light);
-        photons::trace_photon(scene, params, light, g - light * per_light, t,
-                              [&](const photons::PhotonDeposit& d) {
-                                  const unsigned long long slot = atomicAdd(deposit_count, 1ull);
-                                  if (slot < capacity) deposits[slot] = d;
-                              });
+        core::trace_photon(scene, params, light, g - light * per_light, t, [&](const core::PhotonDeposit& d) {
+            const unsigned long long slot = atomicAdd(deposit_count, 1ull);
+            if (slot < capacity) deposits[slot] = d;
+        });
     }
     const float v[k_tally_slots] = {t.emitted.x,   t.emitted.y,   t.emitted.z,       t.direct.x,
                                     t.direct.y,    t.direct.z,    t.deposited.x,     t.deposited.y,
@@ -72,7 +71,7 @@ bool photons_device_available(std::string* why) {
     return device_available(why);
 }
 
-PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const photons::ShootParams& params,
+PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::PhotonShootParams& params,
                                      const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
     PRT_CUDA_CHECK(cudaSetDevice(0));
     PhotonsCudaResult result;
@@ -82,9 +81,9 @@ PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const photons:
     DeviceScene scene;
     scene.upload(host, nullptr);
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
-    const std::uint64_t per_light = photons::photons_per_light(params);
+    const std::uint64_t per_light = core::photons_per_light(params);
     const std::uint64_t total = per_light * host.light_count;
-    DeviceBuffer<photons::PhotonDeposit> d_deposits;
+    DeviceBuffer<core::PhotonDeposit> d_deposits;
     std::uint64_t capacity =
         std::min<std::uint64_t>(k_photons_per_launch / 4, std::max<std::uint64_t>(total, 1));
     d_deposits.resize(capacity);

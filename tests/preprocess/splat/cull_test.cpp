@@ -253,9 +253,9 @@ TEST_P(CullModels, EveryProbeStillSeesTheSameSurface) {
     const pre::CullParams params = cpu_params();
     const std::vector<pre::CullLeaf> leaves = pre::collect_leaves(m.sections());
     const std::vector<RefLeaf> ref = reference_leaves(m.octree);
-    const std::vector<pre::ProbeDirection> dirs =
+    const std::vector<core::ProbeDirection> dirs =
         pre::make_probe_directions(params.directions, 64, params.seed);
-    pre::CullView view;
+    core::CullView view;
     view.octree = pre::octree_view(m.sections());
     view.leaves = leaves.data();
     view.directions = dirs.data();
@@ -264,20 +264,20 @@ TEST_P(CullModels, EveryProbeStillSeesTheSameSurface) {
     view.grid = params.grid;
     view.window = params.window;
     view.seed = params.seed;
-    const std::uint32_t lines = pre::probes_per_leaf(view), per_dir = params.grid * params.grid;
+    const std::uint32_t lines = core::probes_per_leaf(view), per_dir = params.grid * params.grid;
     std::uint64_t probes = 0, hit = 0, failures = 0;
     for (std::uint32_t a = 0; a < leaves.size(); ++a) {
-        pre::ProbeRegion region;
-        if (!pre::probe_region(view, a, region)) continue;
+        core::ProbeRegion region;
+        if (!core::probe_region(view, a, region)) continue;
         const double edge = ref[a].hi[0] - ref[a].lo[0];
         const double delta = 1e-4 * edge;  // leaf-face tolerance
-        pre::ProbeFrame frame{};
+        core::ProbeFrame frame{};
         for (std::uint32_t k = 0; k < lines; ++k) {
-            if (k % per_dir == 0) pre::probe_frame(view, a, region, k / per_dir, frame);
+            if (k % per_dir == 0) core::probe_frame(view, a, region, k / per_dir, frame);
             core::Vec3 of, df;
             float t_max, t0, t1;
-            if (!pre::make_probe(view, a, region, frame, k, of, df, t_max)) continue;
-            if (!pre::probe_leaf_range(view, a, of, df, t_max, t0, t1)) continue;
+            if (!core::make_probe(view, a, region, frame, k, of, df, t_max)) continue;
+            if (!core::probe_leaf_range(view, a, of, df, t_max, t0, t1)) continue;
             ++probes;
             const double o[3] = {of.x, of.y, of.z}, d[3] = {df.x, df.y, df.z};
             double b0, b1;

@@ -9,7 +9,7 @@
 #include <span>
 #include <string>
 
-#include "cull.h"
+#include "prt/core/cull.h"
 
 namespace prt::cuda {
 
@@ -24,13 +24,13 @@ std::string cull_device_name();
 /// memory: its arrays are uploaded, `keep` (one flag per stored splat, initialised as cull_leaf()
 /// expects) is uploaded and the result downloaded into it. `progress(done, leaves)` is called
 /// from the calling thread between launches. Throws prt::Error on any CUDA error.
-pre::CullCounters cull_leaves_cuda(const pre::CullView& view, std::span<std::uint8_t> keep,
+core::CullCounters cull_leaves_cuda(const core::CullView& view, std::span<std::uint8_t> keep,
                                    const std::function<void(std::uint64_t, std::uint64_t)>& progress);
 
 /// Traces every ray through both octrees (pre::trace_hole_ray()) on device 0; `full` and `culled`
 /// point at host memory. `out` has one sample per ray.
 void trace_hole_rays_cuda(const core::OctreeView& full, const core::OctreeView& culled,
-                          std::span<const pre::HoleRay> rays, const core::BlendOptions& blend,
-                          std::uint32_t max_steps, std::span<pre::HoleSample> out);
+                          std::span<const core::HoleRay> rays, const core::BlendOptions& blend,
+                          std::uint32_t max_steps, std::span<core::HoleSample> out);
 
 }  // namespace prt::cuda

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "photon_trace.h"
+#include "prt/core/photon.h"
 #include "prt/core/scene_view.h"
 
 namespace prt::cuda {
@@ -19,8 +19,8 @@ namespace prt::cuda {
 bool photons_device_available(std::string* why = nullptr);
 
 struct PhotonsCudaResult {
-    std::vector<photons::PhotonDeposit> deposits;
-    photons::PhotonTally tally;
+    std::vector<core::PhotonDeposit> deposits;
+    core::PhotonTally tally;
     std::string device;         ///< the GPU's name
     double kernel_seconds = 0;  ///< sum of the shooting kernels' times (CUDA events)
 };
@@ -29,7 +29,7 @@ struct PhotonsCudaResult {
 /// is uploaded, then freed) on device 0; deposits come back in no particular order.
 /// `progress(done, total)` is called from the calling thread between launches. Throws prt::Error
 /// on any CUDA error.
-PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const photons::ShootParams& params,
+PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::PhotonShootParams& params,
                                      const std::function<void(std::uint64_t, std::uint64_t)>& progress);
 
 }  // namespace prt::cuda

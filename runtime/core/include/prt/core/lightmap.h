@@ -1,4 +1,4 @@
-// PointRT prt-lightmap: the indirect irradiance at a surface sample (thesis 5.3: "the output of a
+// PointRT core, for prt-lightmap: the indirect irradiance at a surface sample (thesis 5.3: "the output of a
 // precomputation phase where a path tracer ... is used to compute the indirect illumination"),
 // host + device (PRT_HD) over the renderer's core (prt/core/render.h).
 //
@@ -15,16 +15,15 @@
 
 #include <cstdint>
 
-#include "photon_trace.h"
 #include "prt/core/math.h"
-#include "prt/core/path.h"
-#include "prt/core/render.h"
+#include "prt/core/photon.h"
+#include "prt/core/render.h"  // and path.h, which it includes at its end
 #include "prt/core/scene_view.h"
 #include "prt/core/shading.h"
 
-namespace prt::lightmap {
+namespace prt::core {
 
-struct TraceParams {
+struct LightMapTraceParams {
     std::uint32_t rays = 64;    ///< paths per sample
     std::uint32_t bounces = 3;  ///< vertices per path
     std::uint64_t seed = 1;
@@ -32,62 +31,59 @@ struct TraceParams {
 
 /// thesis 5.3: indirect irradiance at render-frame point `p` on the side of unit normal `n`,
 /// sample number `sample` (seeds its random numbers, so every backend draws the same paths).
-PRT_HD inline core::Vec3 indirect_irradiance(const core::SceneView& s, const TraceParams& tp, core::Vec3 p,
-                                             core::Vec3 n, std::uint64_t sample, core::RayCounters& c) {
-    core::Vec3 sum{0, 0, 0};
+PRT_HD inline Vec3 indirect_irradiance(const SceneView& s, const LightMapTraceParams& tp, Vec3 p, Vec3 n,
+                                       std::uint64_t sample, RayCounters& c) {
+    Vec3 sum{0, 0, 0};
     for (std::uint32_t k = 0; k < tp.rays; ++k) {
-        std::uint64_t h = photons::hash64(tp.seed ^ photons::hash64(sample * 0x9e3779b97f4a7c15ull + k));
-        const float u1 = photons::unit_float(h);
-        h = photons::hash64(h);
-        core::Ray ray{p, core::cosine_direction(n, u1, photons::unit_float(h)), core::k_inf, 0u};
-        core::Vec3 weight{1, 1, 1};
+        std::uint64_t h = hash64(tp.seed ^ hash64(sample * 0x9e3779b97f4a7c15ull + k));
+        const float u1 = unit_float(h);
+        h = hash64(h);
+        Ray ray{p, cosine_direction(n, u1, unit_float(h)), k_inf, 0u};
+        Vec3 weight{1, 1, 1};
         // Bounded: at most `bounces` closest-hit queries per path.
         for (std::uint32_t b = 0; b < tp.bounces; ++b) {
-            core::SurfaceHit hit;
+            SurfaceHit hit;
             ++c.secondary;
-            if (!core::closest_hit_scene(s, ray, hit, c)) {
-                sum += weight * core::background(s.environment, ray.dir);
+            if (!closest_hit_scene(s, ray, hit, c)) {
+                sum += weight * background(s.environment, ray.dir);
                 break;
             }
-            const core::Material& m = s.materials[hit.material];
+            const Material& m = s.materials[hit.material];
             const float d = fmaxf(m.diffuse_reflectance, 0.0f), kr = fmaxf(m.reflectivity, 0.0f),
                         kt = fmaxf(m.transmissivity, 0.0f);
-            const core::Vec3 nf = core::facing_normal(hit, ray);
-            const core::Vec3 albedo = m.diffuse * hit.base_color;
+            const Vec3 nf = facing_normal(hit, ray);
+            const Vec3 albedo = m.diffuse * hit.base_color;
             if (d > 0.0f) {
                 // The renderer's direct light (path.h: point lights, area lights sampled by area).
-                core::PathRng rng{static_cast<std::uint32_t>(h >> 32)};
-                sum += weight * core::direct_light(s, ray, hit, nf, albedo, rng, c) * d;
+                PathRng rng{static_cast<std::uint32_t>(h >> 32)};
+                sum += weight * direct_light(s, ray, hit, nf, albedo, rng, c) * d;
             }
             const float total = d + kr + kt;
             if (!(total > 0.0f) || b + 1 == tp.bounces) break;
-            h = photons::hash64(h);
-            const float u = photons::unit_float(h) * total;
+            h = hash64(h);
+            const float u = unit_float(h) * total;
             weight = weight * total;
             if (u < d) {
-                h = photons::hash64(h);
-                const float a1 = photons::unit_float(h);
-                h = photons::hash64(h);
+                h = hash64(h);
+                const float a1 = unit_float(h);
+                h = hash64(h);
                 weight = weight * albedo;
-                ray = core::leave_surface(hit, core::cosine_direction(nf, a1, photons::unit_float(h)),
-                                          core::k_inf, ray.flags);
+                ray = leave_surface(hit, cosine_direction(nf, a1, unit_float(h)), k_inf, ray.flags);
                 continue;
             }
             bool refracted = false;
             if (u >= d + kr) {
                 const float ior = m.refractive_index > 0.0f ? m.refractive_index : 1.0f;
-                core::Vec3 t;
-                if (core::refract(ray.dir, nf, core::ray_inside(ray) ? ior : 1.0f / ior, t)) {
-                    ray = core::leave_surface(hit, t, core::k_inf, ray.flags ^ core::k_ray_inside);
+                Vec3 t;
+                if (refract(ray.dir, nf, ray_inside(ray) ? ior : 1.0f / ior, t)) {
+                    ray = leave_surface(hit, t, k_inf, ray.flags ^ k_ray_inside);
                     refracted = true;
                 }
             }
-            if (!refracted)
-                ray = core::leave_surface(hit, core::normalize(core::reflect(ray.dir, nf)), core::k_inf,
-                                          ray.flags);
+            if (!refracted) ray = leave_surface(hit, normalize(reflect(ray.dir, nf)), k_inf, ray.flags);
         }
     }
     return tp.rays > 0 ? sum * (1.0f / static_cast<float>(tp.rays)) : sum;
 }
 
-}  // namespace prt::lightmap
+}  // namespace prt::core

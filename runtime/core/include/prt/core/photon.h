@@ -1,5 +1,6 @@
-// PointRT prt-photons: photon shooting (thesis 5.4.1), host + device (PRT_HD). The CPU path
-// (photons.cpp) and the CUDA kernel (runtime/cuda/src/photons.cu) call the same functions, over
+// PointRT core: photon shooting (thesis 5.4.1), host + device (PRT_HD), for prt-photons. Its CPU
+// path (preprocess/photons/photons.cpp) and the CUDA kernel (runtime/cuda/src/photons.cu) call the
+// same functions, over
 // the renderer's own closest-hit (prt/core/render.h), so both deposit the same photons up to
 // floating-point rounding.
 //
@@ -33,7 +34,7 @@
 #include "prt/core/scene_view.h"
 #include "prt/core/shading.h"
 
-namespace prt::photons {
+namespace prt::core {
 
 /// One photon arriving at a diffuse surface after at least one specular hit, in the hit model's
 /// local frame (40 bytes).
@@ -60,7 +61,7 @@ struct PhotonTally {
 };
 
 /// What a kernel needs besides the scene.
-struct ShootParams {
+struct PhotonShootParams {
     std::uint32_t face_res = 512;
     std::uint32_t per_pixel = 4;
     std::uint32_t max_bounces = 10;
@@ -69,7 +70,7 @@ struct ShootParams {
     float solid_angle_norm = 1.0f;
 };
 
-PRT_HD PRT_INLINE std::uint64_t photons_per_light(const ShootParams& p) {
+PRT_HD PRT_INLINE std::uint64_t photons_per_light(const PhotonShootParams& p) {
     return 6ull * p.face_res * p.face_res * p.per_pixel;
 }
 
@@ -87,8 +88,8 @@ PRT_HD PRT_INLINE float unit_float(std::uint64_t h) {
 
 /// thesis 5.4.1: photon `index` of a light: its direction (unit) and the fraction of the light's
 /// color it carries (its solid angle, normalised).
-PRT_HD inline void emit_photon(const ShootParams& p, std::uint32_t light, std::uint64_t index,
-                               core::Vec3& dir, float& solid_angle) {
+PRT_HD inline void emit_photon(const PhotonShootParams& p, std::uint32_t light, std::uint64_t index,
+                               Vec3& dir, float& solid_angle) {
     const std::uint64_t per_face = static_cast<std::uint64_t>(p.face_res) * p.face_res * p.per_pixel;
     const std::uint32_t face = static_cast<std::uint32_t>(index / per_face);
     const std::uint64_t rest = index - face * per_face;
@@ -106,24 +107,24 @@ PRT_HD inline void emit_photon(const ShootParams& p, std::uint32_t light, std::u
         4.0f * inv_res * inv_res / (q * sqrtf(q)) * p.solid_angle_norm / static_cast<float>(p.per_pixel);
     // Faces +x, -x, +y, -y, +z, -z; (s, t) span the other two axes.
     const float sign = (face & 1u) ? -1.0f : 1.0f;
-    core::Vec3 d;
+    Vec3 d;
     switch (face >> 1) {
         case 0:
-            d = core::Vec3{sign, s, t};
+            d = Vec3{sign, s, t};
             break;
         case 1:
-            d = core::Vec3{t, sign, s};
+            d = Vec3{t, sign, s};
             break;
         default:
-            d = core::Vec3{s, t, sign};
+            d = Vec3{s, t, sign};
             break;
     }
-    dir = core::normalize(d);
+    dir = normalize(d);
 }
 
 /// Per-thread tally in floats for kernels; the host one above sums in double.
 struct PhotonTallyF {
-    core::Vec3 emitted{0, 0, 0}, direct{0, 0, 0}, deposited{0, 0, 0}, absorbed{0, 0, 0}, escaped{0, 0, 0},
+    Vec3 emitted{0, 0, 0}, direct{0, 0, 0}, deposited{0, 0, 0}, absorbed{0, 0, 0}, escaped{0, 0, 0},
         truncated{0, 0, 0};
     std::uint32_t deposits = 0, specular_hits = 0, rays = 0;
 };
@@ -131,27 +132,27 @@ struct PhotonTallyF {
 /// thesis 5.4.1: traces photon `index` of light `light` through the scene, calling
 /// `deposit(const PhotonDeposit&)` at each L S+ D diffuse hit, and adds its fate to `tally`.
 template <class DepositFn>
-PRT_HD inline void trace_photon(const core::SceneView& s, const ShootParams& p, std::uint32_t light,
+PRT_HD inline void trace_photon(const SceneView& s, const PhotonShootParams& p, std::uint32_t light,
                                 std::uint64_t index, PhotonTallyF& tally, DepositFn&& deposit) {
-    core::Vec3 dir;
+    Vec3 dir;
     float omega = 0.0f;
     emit_photon(p, light, index, dir, omega);
-    core::Vec3 flux = s.lights[light].color * omega;
+    Vec3 flux = s.lights[light].color * omega;
     tally.emitted += flux;
-    core::Ray ray{s.lights[light].position, dir, core::k_inf, 0u};
-    core::RayCounters counters;
+    Ray ray{s.lights[light].position, dir, k_inf, 0u};
+    RayCounters counters;
     bool specular_seen = false;
     std::uint64_t h =
         hash64(p.seed * 0x632be59bd9b4e019ull ^ hash64(index ^ (static_cast<std::uint64_t>(light) << 50)));
     // Bounded: one closest-hit query per iteration, at most max_bounces + 1 iterations.
     for (std::uint32_t bounce = 0;; ++bounce) {
-        core::SurfaceHit hit;
+        SurfaceHit hit;
         ++tally.rays;
-        if (!core::closest_hit_scene(s, ray, hit, counters)) {
+        if (!closest_hit_scene(s, ray, hit, counters)) {
             tally.escaped += flux;
             return;
         }
-        const core::Material& m = s.materials[hit.material];
+        const Material& m = s.materials[hit.material];
         float d = fmaxf(m.diffuse_reflectance, 0.0f), kr = fmaxf(m.reflectivity, 0.0f),
               kt = fmaxf(m.transmissivity, 0.0f);
         const float sum = d + kr + kt;
@@ -160,13 +161,12 @@ PRT_HD inline void trace_photon(const core::SceneView& s, const ShootParams& p, 
             kr /= sum;
             kt /= sum;
         }
-        const core::Vec3 n = core::facing_normal(hit, ray);
+        const Vec3 n = facing_normal(hit, ray);
         if (d > 0.0f) {
             if (specular_seen) {
-                const core::ModelView& mv = s.models[hit.model];
-                const core::Vec3 lp =
-                    core::mul_transpose(mv.rotation, hit.position - mv.offset) * mv.inv_scale;
-                const core::Vec3 ln = core::normalize(core::mul_transpose(mv.rotation, n));
+                const ModelView& mv = s.models[hit.model];
+                const Vec3 lp = mul_transpose(mv.rotation, hit.position - mv.offset) * mv.inv_scale;
+                const Vec3 ln = normalize(mul_transpose(mv.rotation, n));
                 PhotonDeposit dep;
                 dep.position[0] = lp.x;
                 dep.position[1] = lp.y;
@@ -175,7 +175,7 @@ PRT_HD inline void trace_photon(const core::SceneView& s, const ShootParams& p, 
                 // The renderer's point lights have no distance falloff (direct light I cos theta,
                 // not I cos theta / d^2), so the deposit is stated in those units: times the squared
                 // distance d from the light, caustic and direct light keep their physical ratio.
-                const float d2 = core::length2(hit.position - s.lights[light].position);
+                const float d2 = length2(hit.position - s.lights[light].position);
                 dep.flux[0] = flux.x * d2;
                 dep.flux[1] = flux.y * d2;
                 dep.flux[2] = flux.z * d2;
@@ -203,17 +203,15 @@ PRT_HD inline void trace_photon(const core::SceneView& s, const ShootParams& p, 
         bool refracted = false;
         if (kt > 0.0f && unit_float(h) * ks < kt) {
             const float ior = m.refractive_index > 0.0f ? m.refractive_index : 1.0f;
-            const float eta = core::ray_inside(ray) ? ior : 1.0f / ior;
-            core::Vec3 t;
-            if (core::refract(ray.dir, n, eta, t)) {
-                ray = core::leave_surface(hit, t, core::k_inf, ray.flags ^ core::k_ray_inside);
+            const float eta = ray_inside(ray) ? ior : 1.0f / ior;
+            Vec3 t;
+            if (refract(ray.dir, n, eta, t)) {
+                ray = leave_surface(hit, t, k_inf, ray.flags ^ k_ray_inside);
                 refracted = true;
             }
         }
-        if (!refracted)
-            ray =
-                core::leave_surface(hit, core::normalize(core::reflect(ray.dir, n)), core::k_inf, ray.flags);
+        if (!refracted) ray = leave_surface(hit, normalize(reflect(ray.dir, n)), k_inf, ray.flags);
     }
 }
 
-}  // namespace prt::photons
+}  // namespace prt::core
