@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # CPU peer benchmark: PointRT's CPU backend against Embree 3 on the same splats and the same view,
-# in one run (runtime/bench/prt_bench_embree.cpp). The scene is prt-bench's: the synthetic room of
+# in one run (preprocess/bench/prt_bench_embree.cpp). The scene is prt-bench's: the synthetic room of
 # POINTS points seen from inside, one light; scenarios primary, shadow (one shadow light) and
 # reflect4 (4 mirror bounces). Ours traces the replicated octree with splat blending (thesis 2-3);
 # Embree traces one oriented disc per point (rtcIntersect1, with the seamless front/back rule of

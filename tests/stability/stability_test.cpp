@@ -18,6 +18,7 @@
 // GPU-labelled tests (StabilityGpu.*) render the same cases through the CUDA backend and compare
 // with the CPU backend; they skip with a message where no CUDA device is present.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdio>
@@ -49,7 +50,9 @@ fs::path test_dir() {
     std::string name = std::string(info->test_suite_name()) + "_" + info->name();
     for (char& c : name)
         if (c == '/') c = '_';
-    const fs::path d = fs::temp_directory_path() / ("prt_stability_" + name);
+    // the pid: two test runs at once (two checkouts) must not share a folder
+    const fs::path d =
+        fs::temp_directory_path() / ("prt_stability_" + name + "_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     return d;

@@ -2,6 +2,8 @@
 // test_scene.h) as in-memory pools or pool files, loaded as a RenderScene.
 #pragma once
 
+#include <unistd.h>
+
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -37,7 +39,8 @@ inline void write_model_pool(const TestModel& m, const std::filesystem::path& pa
 
 /// A fresh empty folder under the system temp dir.
 inline std::filesystem::path fresh_dir(const std::string& name) {
-    const std::filesystem::path d = std::filesystem::temp_directory_path() / ("prt_gi_" + name);
+    const std::filesystem::path d =
+        std::filesystem::temp_directory_path() / ("prt_gi_" + name + "_" + std::to_string(::getpid()));
     std::filesystem::remove_all(d);
     std::filesystem::create_directories(d);
     return d;

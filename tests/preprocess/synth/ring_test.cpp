@@ -4,6 +4,7 @@
 // provenance round trip and the command line.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -108,7 +109,8 @@ TEST(Ring, ProvenanceRebuildsTheShape) {
 }
 
 TEST(Ring, ToolWritesARing) {
-    const std::filesystem::path dir = std::filesystem::temp_directory_path() / "prt_synth_ring";
+    const std::filesystem::path dir =
+        std::filesystem::temp_directory_path() / ("prt_synth_ring_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const std::string pool = (dir / "ring.pool").string();
     const std::string cmd = std::string(PRT_BIN_DIR) +

@@ -20,7 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "../tool_run.h"
+#include "../../runtime/tool_run.h"
 
 namespace fs = std::filesystem;
 

@@ -2,7 +2,7 @@
 # One batched GPU session (the device tool allows few calls): build, GPU tests, prt-bench runs over
 # the settings that matter for secondary rays, an Nsight Compute profile of reflect4, prt-play, and
 # prt-cull's culled pool. Usage, from the repository root on the GPU machine:
-#   runtime/bench/gpu_session.sh OUTDIR [step...]
+#   preprocess/bench/gpu_session.sh OUTDIR [step...]
 # Steps: matrix (the first session's settings sweep), tests, final (defaults, before/after, the
 # kernel variants and a second build with PRT_BATCHED_WALK=1), ncu, play, cull. Results:
 # OUTDIR/log.txt, OUTDIR/summary.txt (one line per prt-bench run, written as it goes),
@@ -107,7 +107,7 @@ for step in $steps; do
     play)
         stamp "prt-play: the room pool, 1024x1024, 50 frames (frame download included)"
         $bench --backend cuda --quiet --frames 1 --warmup 0 --scenarios primary --save-pool /tmp/room.pool >/dev/null
-        build-dev/bin/prt-play /tmp/room.pool --scene runtime/bench/bench_room.json --backend cuda \
+        build-dev/bin/prt-play /tmp/room.pool --scene preprocess/bench/bench_room.json --backend cuda \
             --frames 50 --out /tmp/f.ppm 2>&1 | grep -E "load|frame"
         ;;
     cull)
@@ -119,9 +119,9 @@ for step in $steps; do
         timeout 120 build-dev/bin/prt-cull /tmp/room.pool -o /tmp/culled.pool --backend cuda 2>&1 | tail -4 \
             || echo "prt-cull failed or timed out"
         if [ -f /tmp/culled.pool ]; then
-            run_bench room_scene $bench /tmp/room.pool --scene runtime/bench/bench_room.json --backend cuda
-            run_bench culled $bench /tmp/culled.pool --scene runtime/bench/bench_room.json --backend cuda
-            run_bench culled_cull0 $bench /tmp/culled.pool --scene runtime/bench/bench_room.json --backend cuda \
+            run_bench room_scene $bench /tmp/room.pool --scene preprocess/bench/bench_room.json --backend cuda
+            run_bench culled $bench /tmp/culled.pool --scene preprocess/bench/bench_room.json --backend cuda
+            run_bench culled_cull0 $bench /tmp/culled.pool --scene preprocess/bench/bench_room.json --backend cuda \
                 --leaf-culling 0
         fi
         ;;

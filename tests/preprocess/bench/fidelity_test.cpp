@@ -10,7 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 
-#include "../tool_run.h"
+#include "../../runtime/tool_run.h"
 #include "mesh_reference.h"
 #include "point_cloud.h"
 #include "point_spacing.h"

@@ -1,5 +1,5 @@
 // prt-bench-embree: the CPU peer benchmark. The same splats, the same view and the same three
-// scenarios as prt-bench (runtime/player/bench_scene.h: the 1M-point synthetic room seen from
+// scenarios as prt-bench (bench_scene.h: the 1M-point synthetic room seen from
 // inside; primary, one shadow light, 4-bounce mirrors), rendered on the CPU twice in one run:
 //   ours:   the CPU backend (the core's octree walk, thesis 2.2, and splat blending, 3.3), over the
 //           replicated octree (every disk stored in every leaf it overlaps, thesis 3.4);

@@ -1,5 +1,5 @@
 // PointRT benchmarks: the scene and scenarios prt-bench times, shared with the Embree peer
-// benchmark (runtime/bench) so that both render the same splats from the same view.
+// benchmark (preprocess/bench) so that both render the same splats from the same view.
 #pragma once
 
 #include <cstdint>
