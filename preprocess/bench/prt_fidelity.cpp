@@ -351,90 +351,125 @@ double shade(const D3& n, const D3& d) {
 
 // ---- the measurement ----------------------------------------------------------------------------
 
-void fidelity(Options o, const tool::CommonOptions& common) {
-    auto shared = std::make_shared<const pool::PoolFile>(pool::PoolFile::open(o.pool));
-    const pool::PoolFile& p = *shared;
-    const pool::ModelInfo& mi = p.model_info();
-    const D3 origin{mi.origin[0], mi.origin[1], mi.origin[2]};
-    const unsigned threads = pre::resolve_threads(o.threads);
-
-    // Surfaces: the ones asked for, or every one the pool holds.
-    if (o.surfaces.empty()) {
-        if (p.has(pool::SectionType::splats)) o.surfaces.push_back("splats");
-        if (p.has(pool::SectionType::iso_info)) o.surfaces.push_back("iso");
-        if (p.has(pool::SectionType::mls_info)) o.surfaces.push_back("mls");
-        if (o.surfaces.empty())
-            throw Error(o.pool + ": holds no surface (run prt-octree, prt-iso or prt-mls)");
+/// One measurement: the reference and input points, then per view a reference pass, and per
+/// surface a timed trace pass and a classification pass; figures summed over views.
+class Fidelity {
+public:
+    Fidelity(Options o, const tool::CommonOptions& common)
+        : m_o(std::move(o)),
+          m_common(common),
+          m_pool(std::make_shared<const pool::PoolFile>(pool::PoolFile::open(m_o.pool))) {
+        const pool::ModelInfo& mi = m_pool->model_info();
+        m_origin = {mi.origin[0], mi.origin[1], mi.origin[2]};
+        m_threads = pre::resolve_threads(m_o.threads);
+        m_npx = std::size_t(m_o.width) * m_o.height;
+        open_surfaces();
+        load_points();
+        m_truth = make_reference();
+        tool::note(m_common.quiet,
+                   "prt-fidelity: %zu input points (median spacing %.4g), reference %s, %.2f s", m_pts.size(),
+                   m_sorted_spacing[m_sorted_spacing.size() / 2], m_truth->describe().dump().c_str(),
+                   tool::now_seconds() - m_start);
+        if (m_o.views_from == "sensors") {
+            m_views = sensor_views(m_o, *m_pool, m_origin);
+        } else {
+            for (const D3& d : view_directions(m_o.views))
+                m_views.push_back(make_view(m_o, m_origin, m_truth->lo(), m_truth->hi(), d));
+        }
+        m_totals.resize(m_probes.size());
     }
-    std::vector<std::unique_ptr<bench::SurfaceProbe>> probes;
-    for (const std::string& s : o.surfaces)
-        probes.push_back(std::make_unique<bench::SurfaceProbe>(shared, s, o.s));
 
-    // The input points: where the scan has data, and its local spacing.
-    const double t_start = tool::now_seconds();
-    std::vector<D3> pts;
-    {
+    void run() {
+        if (!m_o.images.empty()) std::filesystem::create_directories(m_o.images);
+        tool::Progress progress("prt-fidelity: views", m_views.size(), m_common.quiet);
+        for (std::uint32_t vi = 0; vi < m_views.size(); ++vi) {
+            const std::vector<RefPixel> ref = reference_pass(m_views[vi]);
+            std::uint64_t covered = 0;
+            for (const RefPixel& r : ref) covered += r.cls == RefClass::covered;
+            nlohmann::json vj = {{"direction", m_views[vi].direction},
+                                 {"eye", m_views[vi].eye},
+                                 {"covered_pixels", covered},
+                                 {"surfaces", nlohmann::json::object()}};
+            if (!m_o.images.empty()) write_reference_image(m_views[vi], vi, ref);
+            for (std::size_t si = 0; si < m_probes.size(); ++si) {
+                const double t0 = tool::now_seconds();
+                const std::vector<SurfPixel> surf = surface_pass(m_views[vi], *m_probes[si]);
+                const double secs = tool::now_seconds() - t0;
+                std::vector<PixClass> cls(m_npx, PixClass::none);
+                Tally t = classify(m_views[vi], ref, surf, cls);
+                t.seconds = secs;
+                t.rays = m_npx;
+                vj["surfaces"][m_probes[si]->surface()] = t.json(false);
+                m_totals[si].merge(t);
+                if (!m_o.images.empty())
+                    write_surface_images(m_views[vi], vi, m_probes[si]->surface(), ref, surf, cls);
+            }
+            m_per_view.push_back(vj);
+            progress.update(vi + 1);
+        }
+        progress.finish();
+        report();
+    }
+
+private:
+    /// The surfaces asked for, or every one the pool holds.
+    void open_surfaces() {
+        if (m_o.surfaces.empty()) {
+            if (m_pool->has(pool::SectionType::splats)) m_o.surfaces.push_back("splats");
+            if (m_pool->has(pool::SectionType::iso_info)) m_o.surfaces.push_back("iso");
+            if (m_pool->has(pool::SectionType::mls_info)) m_o.surfaces.push_back("mls");
+            if (m_o.surfaces.empty())
+                throw Error(m_o.pool + ": holds no surface (run prt-octree, prt-iso or prt-mls)");
+        }
+        for (const std::string& s : m_o.surfaces)
+            m_probes.push_back(std::make_unique<bench::SurfaceProbe>(m_pool, s, m_o.s));
+    }
+
+    /// The input points: where the scan has data, and its local spacing.
+    void load_points() {
+        m_start = tool::now_seconds();
         std::unique_ptr<pool::PoolFile> other;
-        if (!o.points.empty()) other = std::make_unique<pool::PoolFile>(pool::PoolFile::open(o.points));
-        const pre::PointCloud cloud = pre::read_point_sections(other ? *other : p);
-        pts = cloud.positions;
+        if (!m_o.points.empty()) other = std::make_unique<pool::PoolFile>(pool::PoolFile::open(m_o.points));
+        m_pts = pre::read_point_sections(other ? *other : *m_pool).positions;
+        if (m_pts.size() < 16)
+            throw Error((m_o.points.empty() ? m_o.pool : m_o.points) + ": fewer than 16 points");
+        m_index = std::make_unique<bench::PointIndex>(m_pts);
+        m_spacing = m_index->local_spacing(m_threads);
+        m_sorted_spacing = m_spacing;
+        std::sort(m_sorted_spacing.begin(), m_sorted_spacing.end());
     }
-    if (pts.size() < 16) throw Error((o.points.empty() ? o.pool : o.points) + ": fewer than 16 points");
-    const bench::PointIndex index(pts);
-    const std::vector<double> spacing = index.local_spacing(threads);
-    std::vector<double> sorted_spacing = spacing;
-    std::sort(sorted_spacing.begin(), sorted_spacing.end());
 
-    std::unique_ptr<Reference> truth;
-    if (!o.reference.empty()) {
-        truth = std::make_unique<MeshTruth>(o.reference);
-    } else {
+    std::unique_ptr<Reference> make_reference() const {
+        if (!m_o.reference.empty()) return std::make_unique<MeshTruth>(m_o.reference);
         try {
-            truth = std::make_unique<AnalyticTruth>(p);
+            return std::make_unique<AnalyticTruth>(*m_pool);
         } catch (const Error&) {
-            throw Error(o.pool +
+            throw Error(m_o.pool +
                         ": no reference: give --reference MESH, or a pool made by prt-synth (its "
                         "provenance names the analytic shape)");
         }
     }
-    tool::note(common.quiet, "prt-fidelity: %zu input points (median spacing %.4g), reference %s, %.2f s",
-               pts.size(), sorted_spacing[sorted_spacing.size() / 2], truth->describe().dump().c_str(),
-               tool::now_seconds() - t_start);
 
-    std::vector<View> views;
-    if (o.views_from == "sensors") {
-        views = sensor_views(o, p, origin);
-    } else {
-        for (const D3& d : view_directions(o.views))
-            views.push_back(make_view(o, origin, truth->lo(), truth->hi(), d));
+    core::Ray world_ray(const View& view, std::uint32_t x, std::uint32_t y, D3& wo, D3& wd) const {
+        const core::Ray r = core::primary_ray(view.camera, x, y, view.width, view.height);
+        wo = add(m_origin, D3{r.origin.x, r.origin.y, r.origin.z});
+        wd = D3{r.dir.x, r.dir.y, r.dir.z};
+        return r;
     }
-    std::vector<Tally> totals(probes.size());
-    nlohmann::json per_view = nlohmann::json::array();
-    std::uint64_t ref_covered = 0, ref_uncovered = 0, ref_back = 0, ref_pixels = 0, ref_edge = 0;
-    const std::size_t npx = std::size_t(o.width) * o.height;
-    if (!o.images.empty()) std::filesystem::create_directories(o.images);
-    tool::Progress progress("prt-fidelity: views", views.size(), common.quiet);
 
-    for (std::uint32_t vi = 0; vi < views.size(); ++vi) {
-        const View& view = views[vi];
-        auto world_ray = [&](std::uint32_t x, std::uint32_t y, D3& wo, D3& wd) {
-            const core::Ray r = core::primary_ray(view.camera, x, y, view.width, view.height);
-            wo = add(origin, D3{r.origin.x, r.origin.y, r.origin.z});
-            wd = D3{r.dir.x, r.dir.y, r.dir.z};
-            return r;
-        };
-        // Reference pass.
-        std::vector<RefPixel> ref(npx);
-        pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+    /// The reference's first hit per pixel and where the scan has data (see the header).
+    std::vector<RefPixel> reference_pass(const View& view) {
+        std::vector<RefPixel> ref(m_npx);
+        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
             std::vector<std::uint32_t> idx;
             std::vector<double> angles;
             for (std::size_t y = y0; y < y1; ++y)
-                for (std::uint32_t x = 0; x < o.width; ++x) {
+                for (std::uint32_t x = 0; x < m_o.width; ++x) {
                     D3 wo, wd;
-                    world_ray(x, std::uint32_t(y), wo, wd);
-                    RefPixel& r = ref[y * o.width + x];
+                    world_ray(view, x, std::uint32_t(y), wo, wd);
+                    RefPixel& r = ref[y * m_o.width + x];
                     bench::MeshHit h;
-                    if (!truth->intersect(wo, wd, h)) continue;
+                    if (!m_truth->intersect(wo, wd, h)) continue;
                     r.t = h.t;
                     r.point = h.point;
                     r.normal = dot(h.normal, wd) < 0 ? h.normal : mul(h.normal, -1.0);
@@ -443,228 +478,239 @@ void fidelity(Options o, const tool::CommonOptions& common) {
                         continue;
                     }
                     double d;
-                    const std::uint32_t ni = index.nearest(h.point, d);
-                    r.spacing = spacing[ni];
-                    if (d > o.coverage * r.spacing)
+                    r.spacing = m_spacing[m_index->nearest(h.point, d)];
+                    if (d > m_o.coverage * r.spacing)
                         r.cls = RefClass::uncovered;
-                    else if (surrounded(index, h.point, r.normal, o.coverage * r.spacing, idx, angles))
+                    else if (surrounded(*m_index, h.point, r.normal, m_o.coverage * r.spacing, idx, angles))
                         r.cls = RefClass::covered;
                     else
                         r.cls = RefClass::edge;
                 }
         });
-        std::uint64_t covered = 0;
         for (const RefPixel& r : ref) {
-            ref_pixels += r.cls != RefClass::background;
-            covered += r.cls == RefClass::covered;
-            ref_edge += r.cls == RefClass::edge;
-            ref_uncovered += r.cls == RefClass::uncovered;
-            ref_back += r.cls == RefClass::back_face;
+            m_ref_pixels += r.cls != RefClass::background;
+            m_ref_covered += r.cls == RefClass::covered;
+            m_ref_edge += r.cls == RefClass::edge;
+            m_ref_uncovered += r.cls == RefClass::uncovered;
+            m_ref_back += r.cls == RefClass::back_face;
         }
-        ref_covered += covered;
-        nlohmann::json vj = {{"direction", view.direction},
-                             {"eye", view.eye},
-                             {"covered_pixels", covered},
-                             {"surfaces", nlohmann::json::object()}};
-        if (!o.images.empty()) {
-            std::vector<std::uint32_t> img(npx, pack(0, 0, 0));
-            for (std::uint32_t y = 0; y < o.height; ++y)
-                for (std::uint32_t x = 0; x < o.width; ++x) {
-                    const RefPixel& r = ref[std::size_t(y) * o.width + x];
-                    D3 wo, wd;
-                    world_ray(x, y, wo, wd);
-                    const double g = shade(r.normal, wd);
-                    if (r.cls == RefClass::covered) img[std::size_t(y) * o.width + x] = pack(g, g, g);
-                    if (r.cls == RefClass::uncovered)
-                        img[std::size_t(y) * o.width + x] = pack(0.2 * g, 0.45 * g, 0.2 * g);
-                    if (r.cls == RefClass::back_face)
-                        img[std::size_t(y) * o.width + x] = pack(0.4 * g, 0.3 * g, 0.1 * g);
-                    if (r.cls == RefClass::edge)
-                        img[std::size_t(y) * o.width + x] = pack(0.9 * g, 0.6 * g, 0.2 * g);
-                }
-            write_rgba(std::filesystem::path(o.images) / ("reference_view" + std::to_string(vi) + ".png"),
-                       o.width, o.height, img);
-        }
-
-        for (std::size_t si = 0; si < probes.size(); ++si) {
-            const bench::SurfaceProbe& probe = *probes[si];
-            std::vector<SurfPixel> surf(npx);
-            const double t0 = tool::now_seconds();
-            pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
-                for (std::size_t y = y0; y < y1; ++y)
-                    for (std::uint32_t x = 0; x < o.width; ++x) {
-                        const core::Ray r =
-                            core::primary_ray(view.camera, x, std::uint32_t(y), view.width, view.height);
-                        bench::ProbeHit h;
-                        SurfPixel& s = surf[y * o.width + x];
-                        if (probe.trace(r, h)) s.hit = true, s.t = float(h.t), s.normal = h.normal;
-                    }
-            });
-            const double secs = tool::now_seconds() - t0;
-            // Classification (per row, then merged).
-            std::vector<Tally> rows(o.height);
-            std::vector<PixClass> cls(npx, PixClass::none);
-            pre::parallel_chunks(o.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
-                for (std::size_t y = y0; y < y1; ++y) {
-                    Tally& t = rows[y];
-                    for (std::uint32_t x = 0; x < o.width; ++x) {
-                        const std::size_t i = y * o.width + x;
-                        const RefPixel& r = ref[i];
-                        const SurfPixel& s = surf[i];
-                        D3 wo, wd;
-                        world_ray(x, std::uint32_t(y), wo, wd);
-                        const bool is_covered = r.cls == RefClass::covered;
-                        t.covered += is_covered;
-                        t.edge += r.cls == RefClass::edge;
-                        if (!s.hit) {
-                            if (is_covered) ++t.holes, cls[i] = PixClass::hole;
-                            if (r.cls == RefClass::edge) ++t.edge_holes, cls[i] = PixClass::edge_hole;
-                            continue;
-                        }
-                        ++t.hits;
-                        const D3 xw = add(wo, mul(wd, double(s.t)));
-                        double dn;
-                        const double sx = spacing[index.nearest(xw, dn)];
-                        // False hit: farther than F spacings from the reference surface. Near the
-                        // reference hit, that distance is bounded by |x - h| without a query.
-                        const bool near_ref =
-                            r.cls != RefClass::background && norm(sub(xw, r.point)) <= o.tolerance * sx;
-                        if (!near_ref && truth->distance(xw) > o.tolerance * sx) {
-                            ++t.false_hits, cls[i] = PixClass::false_hit;
-                            continue;
-                        }
-                        if (!is_covered) {
-                            if (r.cls == RefClass::edge &&
-                                (double(s.t) - r.t) * std::abs(dot(r.normal, wd)) > o.tolerance * r.spacing)
-                                ++t.edge_holes, cls[i] = PixClass::edge_hole;
-                            continue;
-                        }
-                        const double cosr = std::abs(dot(r.normal, wd));
-                        const double behind = (double(s.t) - r.t) * cosr;
-                        if (behind > o.tolerance * r.spacing) {
-                            ++t.holes, cls[i] = PixClass::hole;
-                            continue;
-                        }
-                        ++t.good, cls[i] = PixClass::good;
-                        t.depth.push_back(float(std::abs(double(s.t) - r.t) / r.spacing));
-                        t.distance.push_back(float(std::abs(double(s.t) - r.t) * cosr / r.spacing));
-                        const D3 n{s.normal.x, s.normal.y, s.normal.z};
-                        const double c = std::clamp(dot(n, r.normal) / std::max(1e-30, norm(n)), -1.0, 1.0);
-                        t.normal_deg.push_back(float(std::acos(c) * 180.0 / M_PI));
-                    }
-                }
-            });
-            Tally view_tally;
-            for (const Tally& t : rows) view_tally.merge(t);
-            view_tally.seconds = secs;
-            view_tally.rays = npx;
-            vj["surfaces"][probe.surface()] = view_tally.json(false);
-            totals[si].merge(view_tally);
-            if (!o.images.empty()) {
-                std::vector<std::uint32_t> shaded(npx, pack(0, 0, 0)), map(npx, pack(0, 0, 0));
-                for (std::uint32_t y = 0; y < o.height; ++y)
-                    for (std::uint32_t x = 0; x < o.width; ++x) {
-                        const std::size_t i = std::size_t(y) * o.width + x;
-                        D3 wo, wd;
-                        world_ray(x, y, wo, wd);
-                        const SurfPixel& s = surf[i];
-                        const double g = s.hit ? shade(D3{s.normal.x, s.normal.y, s.normal.z}, wd) : 0.0;
-                        if (s.hit) shaded[i] = pack(g, g, g);
-                        switch (cls[i]) {
-                            case PixClass::good:
-                                map[i] = pack(g, g, g);
-                                break;
-                            case PixClass::hole:
-                                map[i] = pack(1, 0.1, 0.1);
-                                break;
-                            case PixClass::false_hit:
-                                map[i] = pack(0.15, 0.35, 1);
-                                break;
-                            case PixClass::edge_hole:
-                                map[i] = pack(1, 0.6, 0.1);
-                                break;
-                            case PixClass::none:
-                                if (ref[i].cls == RefClass::uncovered || ref[i].cls == RefClass::back_face)
-                                    map[i] = pack(0.05, 0.25, 0.05);
-                                else if (s.hit)
-                                    map[i] = pack(0.5 * g, 0.5 * g, 0.5 * g);
-                                break;
-                        }
-                    }
-                const std::string stem = probe.surface() + "_view" + std::to_string(vi);
-                write_rgba(std::filesystem::path(o.images) / (stem + ".png"), o.width, o.height, shaded);
-                write_rgba(std::filesystem::path(o.images) / (stem + "_class.png"), o.width, o.height, map);
-            }
-        }
-        per_view.push_back(vj);
-        progress.update(vi + 1);
+        return ref;
     }
-    progress.finish();
 
-    nlohmann::json j;
-    j["pool"] = o.pool;
-    j["points"] = o.points.empty() ? o.pool : o.points;
-    j["reference"] = truth->describe();
-    j["views"] = views.size();
-    j["views_from"] = o.views_from;
-    j["width"] = o.width;
-    j["height"] = o.height;
-    j["fov_degrees"] = o.fov;
-    j["coverage_spacings"] = o.coverage;
-    j["tolerance_spacings"] = o.tolerance;
-    j["threads"] = threads;
-    j["input_points"] = pts.size();
-    {
-        // The data itself against the reference: how far the input points lie from it, in their
-        // own spacings (noise, misregistration, outliers the import kept).
-        std::vector<float> off(pts.size());
-        pre::parallel_chunks(pts.size(), 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
+    /// The surface's hit per pixel, through the core (the timed part).
+    std::vector<SurfPixel> surface_pass(const View& view, const bench::SurfaceProbe& probe) const {
+        std::vector<SurfPixel> surf(m_npx);
+        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+            for (std::size_t y = y0; y < y1; ++y)
+                for (std::uint32_t x = 0; x < m_o.width; ++x) {
+                    const core::Ray r =
+                        core::primary_ray(view.camera, x, std::uint32_t(y), view.width, view.height);
+                    bench::ProbeHit h;
+                    SurfPixel& s = surf[y * m_o.width + x];
+                    if (probe.trace(r, h)) s.hit = true, s.t = float(h.t), s.normal = h.normal;
+                }
+        });
+        return surf;
+    }
+
+    /// One pixel's class (the header's definitions), its errors into `t`.
+    PixClass classify_pixel(const RefPixel& r, const SurfPixel& s, const D3& wo, const D3& wd,
+                            Tally& t) const {
+        const bool is_covered = r.cls == RefClass::covered;
+        t.covered += is_covered;
+        t.edge += r.cls == RefClass::edge;
+        if (!s.hit) {
+            if (is_covered) return ++t.holes, PixClass::hole;
+            if (r.cls == RefClass::edge) return ++t.edge_holes, PixClass::edge_hole;
+            return PixClass::none;
+        }
+        ++t.hits;
+        const D3 xw = add(wo, mul(wd, double(s.t)));
+        double dn;
+        const double sx = m_spacing[m_index->nearest(xw, dn)];
+        // False hit: farther than F spacings from the reference surface. Near the reference hit,
+        // that distance is bounded by |x - h| without a query.
+        const bool near_ref = r.cls != RefClass::background && norm(sub(xw, r.point)) <= m_o.tolerance * sx;
+        if (!near_ref && m_truth->distance(xw) > m_o.tolerance * sx)
+            return ++t.false_hits, PixClass::false_hit;
+        const double cosr = std::abs(dot(r.normal, wd));
+        const double behind = (double(s.t) - r.t) * cosr;
+        if (!is_covered) {
+            if (r.cls == RefClass::edge && behind > m_o.tolerance * r.spacing)
+                return ++t.edge_holes, PixClass::edge_hole;
+            return PixClass::none;
+        }
+        if (behind > m_o.tolerance * r.spacing) return ++t.holes, PixClass::hole;
+        ++t.good;
+        t.depth.push_back(float(std::abs(double(s.t) - r.t) / r.spacing));
+        t.distance.push_back(float(std::abs(double(s.t) - r.t) * cosr / r.spacing));
+        const D3 n{s.normal.x, s.normal.y, s.normal.z};
+        const double c = std::clamp(dot(n, r.normal) / std::max(1e-30, norm(n)), -1.0, 1.0);
+        t.normal_deg.push_back(float(std::acos(c) * 180.0 / M_PI));
+        return PixClass::good;
+    }
+
+    /// Every pixel's class, per row, then merged.
+    Tally classify(const View& view, const std::vector<RefPixel>& ref, const std::vector<SurfPixel>& surf,
+                   std::vector<PixClass>& cls) const {
+        std::vector<Tally> rows(m_o.height);
+        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+            for (std::size_t y = y0; y < y1; ++y)
+                for (std::uint32_t x = 0; x < m_o.width; ++x) {
+                    const std::size_t i = y * m_o.width + x;
+                    D3 wo, wd;
+                    world_ray(view, x, std::uint32_t(y), wo, wd);
+                    cls[i] = classify_pixel(ref[i], surf[i], wo, wd, rows[y]);
+                }
+        });
+        Tally all;
+        for (const Tally& t : rows) all.merge(t);
+        return all;
+    }
+
+    void write_reference_image(const View& view, std::uint32_t vi, const std::vector<RefPixel>& ref) const {
+        std::vector<std::uint32_t> img(m_npx, pack(0, 0, 0));
+        for (std::uint32_t y = 0; y < m_o.height; ++y)
+            for (std::uint32_t x = 0; x < m_o.width; ++x) {
+                const RefPixel& r = ref[std::size_t(y) * m_o.width + x];
+                D3 wo, wd;
+                world_ray(view, x, y, wo, wd);
+                const double g = shade(r.normal, wd);
+                std::uint32_t& px = img[std::size_t(y) * m_o.width + x];
+                if (r.cls == RefClass::covered) px = pack(g, g, g);
+                if (r.cls == RefClass::uncovered) px = pack(0.2 * g, 0.45 * g, 0.2 * g);
+                if (r.cls == RefClass::back_face) px = pack(0.4 * g, 0.3 * g, 0.1 * g);
+                if (r.cls == RefClass::edge) px = pack(0.9 * g, 0.6 * g, 0.2 * g);
+            }
+        write_rgba(std::filesystem::path(m_o.images) / ("reference_view" + std::to_string(vi) + ".png"),
+                   m_o.width, m_o.height, img);
+    }
+
+    void write_surface_images(const View& view, std::uint32_t vi, const std::string& surface,
+                              const std::vector<RefPixel>& ref, const std::vector<SurfPixel>& surf,
+                              const std::vector<PixClass>& cls) const {
+        std::vector<std::uint32_t> shaded(m_npx, pack(0, 0, 0)), map(m_npx, pack(0, 0, 0));
+        for (std::uint32_t y = 0; y < m_o.height; ++y)
+            for (std::uint32_t x = 0; x < m_o.width; ++x) {
+                const std::size_t i = std::size_t(y) * m_o.width + x;
+                D3 wo, wd;
+                world_ray(view, x, y, wo, wd);
+                const SurfPixel& s = surf[i];
+                const double g = s.hit ? shade(D3{s.normal.x, s.normal.y, s.normal.z}, wd) : 0.0;
+                if (s.hit) shaded[i] = pack(g, g, g);
+                switch (cls[i]) {
+                    case PixClass::good:
+                        map[i] = pack(g, g, g);
+                        break;
+                    case PixClass::hole:
+                        map[i] = pack(1, 0.1, 0.1);
+                        break;
+                    case PixClass::false_hit:
+                        map[i] = pack(0.15, 0.35, 1);
+                        break;
+                    case PixClass::edge_hole:
+                        map[i] = pack(1, 0.6, 0.1);
+                        break;
+                    case PixClass::none:
+                        if (ref[i].cls == RefClass::uncovered || ref[i].cls == RefClass::back_face)
+                            map[i] = pack(0.05, 0.25, 0.05);
+                        else if (s.hit)
+                            map[i] = pack(0.5 * g, 0.5 * g, 0.5 * g);
+                        break;
+                }
+            }
+        const std::string stem = surface + "_view" + std::to_string(vi);
+        write_rgba(std::filesystem::path(m_o.images) / (stem + ".png"), m_o.width, m_o.height, shaded);
+        write_rgba(std::filesystem::path(m_o.images) / (stem + "_class.png"), m_o.width, m_o.height, map);
+    }
+
+    /// The data itself against the reference: how far the input points lie from it, in their own
+    /// spacings (noise, misregistration, outliers the import kept).
+    void input_offsets(nlohmann::json& j) const {
+        std::vector<float> off(m_pts.size());
+        pre::parallel_chunks(m_pts.size(), 4096, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
             for (std::size_t i = b; i < e; ++i)
-                off[i] = float(truth->distance(pts[i]) / std::max(spacing[i], 1e-300));
+                off[i] = float(m_truth->distance(m_pts[i]) / std::max(m_spacing[i], 1e-300));
         });
         std::uint64_t far = 0;
-        for (float d : off) far += d > o.tolerance;
+        for (float d : off) far += d > m_o.tolerance;
         j["input_offset_spacings"] = summary(off);
         j["input_points_beyond_tolerance"] = far;
     }
-    j["spacing"] = {{"median", sorted_spacing[sorted_spacing.size() / 2]},
-                    {"p10", sorted_spacing[sorted_spacing.size() / 10]},
-                    {"p90", sorted_spacing[sorted_spacing.size() * 9 / 10]}};
-    j["reference_pixels"] = {{"covered", ref_covered},
-                             {"edge", ref_edge},
-                             {"uncovered", ref_uncovered},
-                             {"back_face", ref_back},
-                             {"total", ref_pixels}};
-    for (std::size_t si = 0; si < probes.size(); ++si) {
-        nlohmann::json sj = totals[si].json(true);
-        sj["settings"] = probes[si]->settings();
-        sj["surface_bytes"] = probes[si]->bytes();
-        sj["work"] = probes[si]->work();
-        j["surfaces"][probes[si]->surface()] = sj;
-        auto med = [&](const char* k) {
-            return sj[k].is_null() ? std::nan("") : sj[k]["median"].get<double>();
-        };
-        std::printf(
-            "%s %s: holes %.3f%% (%.3f%% with the data's edges), false hits %.3f%% of %llu covered pixels; "
-            "depth error median %.3f, surface distance median %.3f spacings; normal error median %.2f deg; "
-            "%.2f Mrays/s\n",
-            o.pool.c_str(), probes[si]->surface().c_str(), 100.0 * sj["hole_rate"].get<double>(),
-            100.0 * sj["hole_rate_with_edges"].get<double>(), 100.0 * sj["false_hit_rate"].get<double>(),
-            static_cast<unsigned long long>(totals[si].covered), med("depth_error_spacings"),
-            med("surface_distance_spacings"), med("normal_error_degrees"),
-            sj["rays_per_s"].get<double>() * 1e-6);
-    }
-    j["per_view"] = per_view;
-    if (!o.json.empty()) {
-        const std::string tmp = o.json + ".tmp";
-        {
-            std::ofstream f(tmp);
-            f << j.dump(2) << "\n";
-            if (!f) throw Error(o.json + ": cannot write");
+
+    void report() const {
+        nlohmann::json j;
+        j["pool"] = m_o.pool;
+        j["points"] = m_o.points.empty() ? m_o.pool : m_o.points;
+        j["reference"] = m_truth->describe();
+        j["views"] = m_views.size();
+        j["views_from"] = m_o.views_from;
+        j["width"] = m_o.width;
+        j["height"] = m_o.height;
+        j["fov_degrees"] = m_o.fov;
+        j["coverage_spacings"] = m_o.coverage;
+        j["tolerance_spacings"] = m_o.tolerance;
+        j["threads"] = m_threads;
+        j["input_points"] = m_pts.size();
+        input_offsets(j);
+        const auto& ss = m_sorted_spacing;
+        j["spacing"] = {
+            {"median", ss[ss.size() / 2]}, {"p10", ss[ss.size() / 10]}, {"p90", ss[ss.size() * 9 / 10]}};
+        j["reference_pixels"] = {{"covered", m_ref_covered},
+                                 {"edge", m_ref_edge},
+                                 {"uncovered", m_ref_uncovered},
+                                 {"back_face", m_ref_back},
+                                 {"total", m_ref_pixels}};
+        for (std::size_t si = 0; si < m_probes.size(); ++si) {
+            nlohmann::json sj = m_totals[si].json(true);
+            sj["settings"] = m_probes[si]->settings();
+            sj["surface_bytes"] = m_probes[si]->bytes();
+            sj["work"] = m_probes[si]->work();
+            j["surfaces"][m_probes[si]->surface()] = sj;
+            auto med = [&](const char* k) {
+                return sj[k].is_null() ? std::nan("") : sj[k]["median"].get<double>();
+            };
+            std::printf(
+                "%s %s: holes %.3f%% (%.3f%% with the data's edges), false hits %.3f%% of %llu covered "
+                "pixels; "
+                "depth error median %.3f, surface distance median %.3f spacings; normal error median %.2f "
+                "deg; "
+                "%.2f Mrays/s\n",
+                m_o.pool.c_str(), m_probes[si]->surface().c_str(), 100.0 * sj["hole_rate"].get<double>(),
+                100.0 * sj["hole_rate_with_edges"].get<double>(), 100.0 * sj["false_hit_rate"].get<double>(),
+                static_cast<unsigned long long>(m_totals[si].covered), med("depth_error_spacings"),
+                med("surface_distance_spacings"), med("normal_error_degrees"),
+                sj["rays_per_s"].get<double>() * 1e-6);
         }
-        std::filesystem::rename(tmp, o.json);
+        j["per_view"] = m_per_view;
+        if (!m_o.json.empty()) {
+            const std::string tmp = m_o.json + ".tmp";
+            {
+                std::ofstream f(tmp);
+                f << j.dump(2) << "\n";
+                if (!f) throw Error(m_o.json + ": cannot write");
+            }
+            std::filesystem::rename(tmp, m_o.json);
+        }
     }
-}
+
+    Options m_o;
+    const tool::CommonOptions& m_common;
+    std::shared_ptr<const pool::PoolFile> m_pool;
+    D3 m_origin{};
+    unsigned m_threads = 1;
+    std::size_t m_npx = 0;
+    double m_start = 0;
+    std::vector<std::unique_ptr<bench::SurfaceProbe>> m_probes;
+    std::vector<D3> m_pts;
+    std::unique_ptr<bench::PointIndex> m_index;
+    std::vector<double> m_spacing, m_sorted_spacing;
+    std::unique_ptr<Reference> m_truth;
+    std::vector<View> m_views;
+    std::vector<Tally> m_totals;
+    nlohmann::json m_per_view = nlohmann::json::array();
+    std::uint64_t m_ref_covered = 0, m_ref_uncovered = 0, m_ref_back = 0, m_ref_pixels = 0, m_ref_edge = 0;
+};
 
 }  // namespace
 
@@ -724,5 +770,5 @@ int main(int argc, char** argv) {
                            "(default: none)");
             prt::bench::add_surface_options(app, o.s);
         },
-        [&](const prt::tool::CommonOptions& common) { fidelity(o, common); });
+        [&](const prt::tool::CommonOptions& common) { Fidelity(o, common).run(); });
 }
