@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "prt/formats/pool.h"
+#include "section_checks.h"
 #include "xxhash_inline.h"
 
 namespace prt::pool {
@@ -21,37 +22,8 @@ std::uint64_t checksum(std::span<const std::byte> bytes) { return XXH3_64bits(by
 namespace {
 
 std::string entry_label(const SectionEntry& e) {
-    const char* name = section_name(static_cast<SectionType>(e.type));
-    if (std::strcmp(name, "unknown") == 0) return "type " + std::to_string(e.type);
-    return name;
-}
-
-/// Element size each known section type must have (0 = variable / unknown type).
-std::uint32_t expected_element_size(SectionType t) {
-    switch (t) {
-        case SectionType::provenance: return 1;
-        case SectionType::model_info: return sizeof(ModelInfo);
-        case SectionType::positions: return sizeof(Float3);
-        case SectionType::normals: return sizeof(Float3);
-        case SectionType::colors: return sizeof(Rgba8);
-        case SectionType::radii: return sizeof(float);
-        case SectionType::material_ids: return sizeof(std::uint32_t);
-        case SectionType::intensities: return sizeof(float);
-        case SectionType::sensors: return sizeof(Sensor);
-        case SectionType::scan_ids: return sizeof(std::uint16_t);
-        case SectionType::octree_info: return sizeof(OctreeInfo);
-        case SectionType::octree_nodes: return sizeof(std::uint32_t);
-        case SectionType::leaf_info: return sizeof(std::uint32_t);
-        case SectionType::splats: return sizeof(Splat);
-        default: return 0;  // checked by the layout header that owns the type
-    }
-    return 0;
-}
-
-bool is_per_point(SectionType t) {
-    return t == SectionType::positions || t == SectionType::normals || t == SectionType::colors ||
-           t == SectionType::radii || t == SectionType::material_ids || t == SectionType::intensities ||
-           t == SectionType::scan_ids;
+    const SectionTypeInfo* row = section_type_info(static_cast<SectionType>(e.type));
+    return row ? std::string(row->name) : "type " + std::to_string(e.type);
 }
 
 }  // namespace
@@ -157,8 +129,13 @@ void PoolFile::throw_missing(SectionType type, const char* needed_by) const {
     throw Error(m_label + ": section " + section_name(type) + ": missing (needed by " + needed_by + ")");
 }
 
-void PoolFile::validate() {
-    // -- header ------------------------------------------------------------------------------
+void PoolFile::validate() const {
+    const std::uint64_t table_bytes = validate_header();
+    validate_sections(table_bytes);
+    validate_references(validate_counts());
+}
+
+std::uint64_t PoolFile::validate_header() const {
     const PoolHeader& h = header();
     if (std::memcmp(h.magic, k_magic, sizeof k_magic) != 0)
         fail(nullptr, "header: wrong magic (not a PointRT pool file)");
@@ -182,13 +159,14 @@ void PoolFile::validate() {
         fail(nullptr, "header: section table out of bounds");
     if (checksum({m_data + h.table_offset, static_cast<std::size_t>(table_bytes)}) != h.table_checksum)
         fail(nullptr, "section table: bad checksum (file corrupted)");
+    return table_bytes;
+}
 
-    // -- each section: bounds, alignment, sizes, version, checksum ----------------------------
+void PoolFile::validate_sections(std::uint64_t table_bytes) const {
     std::vector<std::pair<std::uint64_t, std::uint64_t>> ranges;
     const auto table = sections();
     for (std::size_t i = 0; i < table.size(); ++i) {
         const SectionEntry& e = table[i];
-        const auto type = static_cast<SectionType>(e.type);
         for (std::size_t j = 0; j < i; ++j)
             if (table[j].type == e.type) fail(&e, "appears twice");
         if (e.offset % k_alignment != 0) fail(&e, "payload not 256-byte aligned");
@@ -199,45 +177,42 @@ void PoolFile::validate() {
         if (e.count > e.size / e.element_size || e.count * e.element_size != e.size)
             fail(&e, "count " + std::to_string(e.count) + " x element size " + std::to_string(e.element_size) +
                          " disagrees with size " + std::to_string(e.size));
-        const std::uint32_t known = section_version(type);
-        if (known != 0) {
-            if (e.version > known)
+        if (const SectionTypeInfo* known = section_type_info(static_cast<SectionType>(e.type))) {
+            if (e.version > known->version)
                 fail(&e, "version " + std::to_string(e.version) + " is newer than this build reads (" +
-                             std::to_string(known) + "): update PointRT");
+                             std::to_string(known->version) + "): update PointRT");
             if (e.version == 0) fail(&e, "version 0 is invalid");
-            const std::uint32_t size = expected_element_size(type);
-            if (size && e.element_size != size)
-                fail(&e, "element size " + std::to_string(e.element_size) + ", expected " + std::to_string(size));
+            check_element_size(e, known->element_size);
         }
         if (checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
         ranges.emplace_back(e.offset, e.size);
     }
     std::sort(ranges.begin(), ranges.end());
-    const std::uint64_t table_end = h.table_offset + table_bytes;
+    const std::uint64_t table_end = header().table_offset + table_bytes;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
         if (ranges[i].second && ranges[i].first < table_end) fail(nullptr, "a section overlaps the header or table");
         if (i + 1 < ranges.size() && ranges[i].second && ranges[i].first + ranges[i].second > ranges[i + 1].first)
             fail(nullptr, "two sections overlap");
     }
+}
 
-    // -- counts that must agree ---------------------------------------------------------------
+const ModelInfo& PoolFile::validate_counts() const {
     const SectionEntry* info_entry = find(SectionType::model_info);
     if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
-    if (info_entry->count != 1) fail(info_entry, "must hold exactly one element");
-    const ModelInfo& info = model_info();
+    const ModelInfo& info = detail::single<ModelInfo>(*this, SectionType::model_info);
     if (info.point_count > 0 && !find(SectionType::positions))
         fail(nullptr, "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
-    for (int a = 0; a < 3; ++a) {
-        if (!std::isfinite(info.origin[a]) || !std::isfinite(info.bounds_min[a]) ||
-            !std::isfinite(info.bounds_max[a]) || info.bounds_min[a] > info.bounds_max[a])
-            fail(info_entry, "origin or bounds not finite or inverted");
-    }
-    for (const SectionEntry& e : table)
-        if (is_per_point(static_cast<SectionType>(e.type)) && e.count != info.point_count)
+    if (!detail::finite_box(info.bounds_min, info.bounds_max) || !std::isfinite(info.origin[0]) ||
+        !std::isfinite(info.origin[1]) || !std::isfinite(info.origin[2]))
+        fail(info_entry, "origin or bounds not finite or inverted");
+    for (const SectionEntry& e : sections())
+        if (section_per_point(static_cast<SectionType>(e.type)) && e.count != info.point_count)
             fail(&e, std::to_string(e.count) + " elements but model_info says " +
                          std::to_string(info.point_count) + " points");
+    return info;
+}
 
-    // -- cross-references ---------------------------------------------------------------------
+void PoolFile::validate_references(const ModelInfo& info) const {
     if (const SectionEntry* se = find(SectionType::sensors)) {
         if (se->count == 0 || se->count > k_max_sensors)
             fail(se, std::to_string(se->count) + " sensors, expected 1 to " + std::to_string(k_max_sensors));
@@ -263,51 +238,7 @@ void PoolFile::validate() {
                 fail(ids, "point " + std::to_string(i) + ": scan " + std::to_string(v[i]) + " but " +
                               std::to_string(se->count) + " sensors");
     }
-    const SectionEntry* oi = find(SectionType::octree_info);
-    const SectionEntry* on = find(SectionType::octree_nodes);
-    const SectionEntry* li = find(SectionType::leaf_info);
-    const SectionEntry* sp = find(SectionType::splats);
-    const int octree_parts = (oi != nullptr) + (on != nullptr) + (li != nullptr) + (sp != nullptr);
-    if (octree_parts != 0 && octree_parts != 4)
-        fail(oi ? oi : on ? on : li ? li : sp, "the octree needs all of octree_info, octree_nodes, leaf_info, splats");
-    if (octree_parts == 4) {
-        if (oi->count != 1) fail(oi, "must hold exactly one element");
-        const OctreeInfo& o = array<OctreeInfo>(SectionType::octree_info)[0];
-        if (o.node_count != on->count) fail(on, std::to_string(on->count) + " nodes but octree_info says " + std::to_string(o.node_count));
-        if (std::uint64_t(o.filled_leaves) + 1 != li->count)
-            fail(li, std::to_string(li->count) + " entries but octree_info says " + std::to_string(o.filled_leaves) + " filled leaves (+1)");
-        if (o.splat_count != sp->count) fail(sp, std::to_string(sp->count) + " splats but octree_info says " + std::to_string(o.splat_count));
-        if (!(o.root_size > 0) || !std::isfinite(o.root_size)) fail(oi, "root size not positive and finite");
-        if (o.node_count == 0) fail(on, "empty node pool (no root)");
-        const auto nodes = array<std::uint32_t>(SectionType::octree_nodes);
-        const auto leaves = array<std::uint32_t>(SectionType::leaf_info);
-        for (std::size_t i = 0; i < nodes.size(); ++i) {
-            const std::uint32_t n = nodes[i];
-            const std::uint32_t a = node_address(n);
-            switch (node_type(n)) {
-                case NodeType::internal:
-                    // children come after their parent (breadth first) and all 8 are in range
-                    if (a <= i || std::uint64_t(a) + 8 > nodes.size())
-                        fail(on, "node " + std::to_string(i) + ": child address " + std::to_string(a) + " out of range");
-                    break;
-                case NodeType::filled_leaf:
-                    if (a >= o.filled_leaves)
-                        fail(on, "node " + std::to_string(i) + ": leaf address " + std::to_string(a) + " out of range");
-                    break;
-                case NodeType::empty_leaf: break;
-                default: fail(on, "node " + std::to_string(i) + ": invalid node type 3");
-            }
-        }
-        for (std::size_t i = 0; i + 1 < leaves.size(); ++i)
-            if (leaves[i] > leaves[i + 1]) fail(li, "leaf " + std::to_string(i) + ": begin after end");
-        if (!leaves.empty() && (leaves.front() != 0 || leaves.back() != sp->count))
-            fail(li, "leaf ranges do not cover the splats exactly");
-        const auto splats = array<Splat>(SectionType::splats);
-        const bool has_points = info.point_count > 0;
-        for (std::size_t i = 0; i < splats.size(); ++i)
-            if (has_points && splats[i].point >= info.point_count)
-                fail(sp, "splat " + std::to_string(i) + ": point index " + std::to_string(splats[i].point) + " out of range");
-    }
+    detail::check_splat_octree(*this, info);
     const SectionEntry* prov = find(SectionType::provenance);
     if (prov && prov->size > 0) {
         const auto b = bytes(*prov);

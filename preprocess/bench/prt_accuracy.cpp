@@ -41,10 +41,7 @@
 #include <vector>
 
 #include "analytic.h"
-#include "iso_pool.h"
-#include "mls_pool.h"
 #include "parallel.h"
-#include "patch_pool.h"
 #include "prt/core/camera.h"
 #include "prt/core/iso.h"
 #include "prt/core/mls.h"
@@ -53,6 +50,7 @@
 #include "prt/formats/pool.h"
 #include "prt/runtime/image.h"
 #include "prt/runtime/render_scene.h"
+#include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 #include "surface_probe.h"
 
@@ -442,7 +440,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
         hi{mi.bounds_max[0], mi.bounds_max[1], mi.bounds_max[2]};
     std::unique_ptr<core::PatchView> patch_view;
     if (o.surface == "patches") {
-        patch_view = std::make_unique<core::PatchView>(patches::load_patch_view(p));
+        patch_view = std::make_unique<core::PatchView>(rt::load_patch_view(p));
         Box3 b;
         for (std::uint32_t i = 0; i < patch_view->patch_count; ++i)
             for (const pool::PatchPoint& q : patch_view->nets[i].p) b.grow(D3{q.x, q.y, q.z});

@@ -1,8 +1,6 @@
-// PointRT: writing and validating the ISO sections (formats/POOL.md, "Implicit Surface Octree").
+// PointRT: writing the ISO sections (formats/POOL.md, "Implicit Surface Octree").
 #include "iso_pool.h"
 
-#include <cmath>
-#include <string>
 #include <vector>
 
 namespace prt::iso {
@@ -23,8 +21,9 @@ void write_iso_sections(IsoModel&& model, pool::PoolWriter& writer) {
 }
 
 core::IsoView make_view(const IsoModel& model, bool prefer_q8) {
-    return rt::make_iso_view(model.info, model.nodes.data(), model.leaves_q8.empty() ? nullptr : model.leaves_q8.data(),
-                   model.leaves_f32.empty() ? nullptr : model.leaves_f32.data(), prefer_q8);
+    return core::make_iso_view(model.info, model.nodes.data(),
+                               model.leaves_q8.empty() ? nullptr : model.leaves_q8.data(),
+                               model.leaves_f32.empty() ? nullptr : model.leaves_f32.data(), prefer_q8);
 }
 
 }  // namespace prt::iso

@@ -1,9 +1,6 @@
-// PointRT: writing and validating the MLS sections (formats/POOL.md, "MLS surface").
+// PointRT: writing the MLS sections (formats/POOL.md, "MLS surface").
 #include "mls_pool.h"
 
-#include <bit>
-#include <cmath>
-#include <string>
 #include <vector>
 
 namespace prt::mls {
@@ -22,7 +19,7 @@ core::MlsView make_view(const MlsModel& model) {
     info.node_count = static_cast<std::uint32_t>(model.nodes.size());
     info.ref_count = static_cast<std::uint32_t>(model.refs.size());
     info.splat_count = static_cast<std::uint32_t>(model.splats.size());
-    return rt::make_mls_view(info, model.nodes.data(), model.refs.data(), model.splats.data());
+    return core::make_mls_view(info, model.nodes.data(), model.refs.data(), model.splats.data());
 }
 
 }  // namespace prt::mls

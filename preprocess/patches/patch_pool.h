@@ -1,13 +1,14 @@
-// PointRT: the patch sections of a pool read back validated as the core's PatchView. The
-// validation lives with the renderer that depends on it (runtime/host, prt/runtime/surface_pools.h);
-// prt-patches and its tests use the same functions under these names.
+// PointRT: the patch sections of a pool (types 112-115, formats/POOL.md "Bezier patches") read back
+// validated: formats' validate_patches (prt/formats/patch_sections.h), named here for prt-patches and
+// its tests. Writing them is write_patch_sections (patch_build.h); the core view of a pool's patches
+// is the runtime's load_patch_view (prt/runtime/surface_pools.h).
 #pragma once
 
-#include "prt/runtime/surface_pools.h"
+#include "prt/formats/patch_sections.h"
 
 namespace prt::patches {
 
-using rt::has_patches;
-using rt::load_patch_view;
+using pool::has_patches;
+using pool::validate_patches;
 
 }  // namespace prt::patches

@@ -124,18 +124,7 @@ void check_sections(const OctreeSections& s) {
 }  // namespace
 
 core::OctreeView octree_view(const OctreeSections& s) {
-    core::OctreeView v;
-    v.nodes = s.nodes.data();
-    v.node_count = static_cast<std::uint32_t>(s.nodes.size());
-    v.leaf_info = s.leaf_info.data();
-    v.filled_leaves = s.info.filled_leaves;
-    v.splats = s.splats.data();
-    v.splat_count = static_cast<std::uint32_t>(s.splats.size());
-    v.root_min = {s.info.root_min[0], s.info.root_min[1], s.info.root_min[2]};
-    v.root_size = s.info.root_size;
-    v.inv_root_size = 1.0f / s.info.root_size;
-    v.flags = s.info.flags;
-    return v;
+    return core::make_octree_view(s.info, s.nodes.data(), s.leaf_info.data(), s.splats.data());
 }
 
 std::vector<CullLeaf> collect_leaves(const OctreeSections& s) {

@@ -43,6 +43,7 @@
 #include "prt/core/cull.h"
 #include "prt/core/octree.h"
 #include "prt/core/splat.h"
+#include "prt/formats/octree_sections.h"
 #include "prt/formats/pool_layout.h"
 
 namespace prt::pre {
@@ -66,13 +67,9 @@ using core::trace_hole_ray;
 
 // ==== Host part ===================================================================================
 
-/// The four octree sections of a pool (views; pool::PoolFile or a built SplatOctree owns them).
-struct OctreeSections {
-    pool::OctreeInfo info{};
-    std::span<const std::uint32_t> nodes;
-    std::span<const std::uint32_t> leaf_info;
-    std::span<const pool::Splat> splats;
-};
+/// The four octree sections of a pool (views; pool::PoolFile or a built SplatOctree owns them):
+/// formats' typed view (prt/formats/octree_sections.h).
+using OctreeSections = pool::SplatOctreeSections;
 
 /// The core's view of octree sections (the renderer's OctreeView).
 core::OctreeView octree_view(const OctreeSections& s);

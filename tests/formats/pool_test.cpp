@@ -11,6 +11,7 @@
 
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "prt/formats/section_table.h"
 
 namespace fs = std::filesystem;
 using namespace prt::pool;
@@ -218,6 +219,51 @@ TEST(PoolValidation, ElementSizeMismatch) {
     e.count = 200;
     reseal(b);
     expect_error(b, "section colors: element size 2, expected 4");
+}
+
+TEST(PoolValidation, SurfaceSectionElementSizeIsCheckedAtOpen) {
+    // Every type of the section table has its element size checked by open(), not only the point
+    // and octree types: an iso_info of 4-byte elements (IsoInfo is 64 bytes, POOL.md) is refused.
+    PoolWriter w;
+    prt::pre::write_point_sections(make_cloud(10), w);
+    w.add_array(SectionType::iso_info, std::vector<std::uint32_t>(16, 0u));
+    expect_error(w.serialize(), "section iso_info: element size 4, expected 64");
+}
+
+TEST(SectionTable, RowsAgreeWithPoolMd) {
+    // Names and element sizes of formats/POOL.md's "Section types" table (types 1-19) and of the
+    // ISO, MLS, light-map and patch info structs (their sections of POOL.md).
+    struct Row {
+        std::uint32_t type;
+        const char* name;
+        std::uint32_t element_size;
+    };
+    const Row rows[] = {{1, "provenance", 1},   {2, "model_info", 64},   {3, "positions", 12},
+                        {4, "normals", 12},     {5, "colors", 4},        {6, "radii", 4},
+                        {7, "material_ids", 4}, {8, "intensities", 4},   {9, "sensors", 32},
+                        {10, "scan_ids", 2},    {16, "octree_info", 64}, {17, "octree_nodes", 4},
+                        {18, "leaf_info", 4},   {19, "splats", 32},      {32, "iso_info", 64},
+                        {33, "iso_nodes", 4},   {50, "mls_refs", 4},     {81, "light_map_nodes", 4},
+                        {112, "patch_info", 64}};
+    for (const Row& r : rows) {
+        const auto type = static_cast<SectionType>(r.type);
+        EXPECT_STREQ(section_name(type), r.name) << r.type;
+        EXPECT_EQ(section_element_size(type), r.element_size) << r.name;
+        EXPECT_EQ(section_version(type), 1u) << r.name;
+    }
+    // One element per point: exactly the seven sections POOL.md's validation step 3 names.
+    std::vector<std::string> per_point;
+    for (const SectionTypeInfo& row : k_section_types)
+        if (row.per_point) per_point.push_back(row.name);
+    EXPECT_EQ(per_point, (std::vector<std::string>{"positions", "normals", "colors", "radii", "material_ids",
+                                                   "intensities", "scan_ids"}));
+    // Every name once; types the build does not know have none.
+    for (const SectionTypeInfo& a : k_section_types)
+        for (const SectionTypeInfo& b : k_section_types)
+            if (&a != &b) EXPECT_STRNE(a.name, b.name);
+    EXPECT_STREQ(section_name(static_cast<SectionType>(20)), "unknown");
+    EXPECT_EQ(section_element_size(static_cast<SectionType>(96)), 0u);
+    EXPECT_EQ(section_type_info(static_cast<SectionType>(999)), nullptr);
 }
 
 namespace {

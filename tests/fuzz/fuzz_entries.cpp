@@ -16,6 +16,10 @@
 #include "patch_file.h"
 #include "point_cloud.h"
 #include "prt/error.h"
+#include "prt/formats/gi_sections.h"
+#include "prt/formats/iso_sections.h"
+#include "prt/formats/mls_sections.h"
+#include "prt/formats/patch_sections.h"
 #include "prt/formats/pool.h"
 #include "prt/formats/scene.h"
 
@@ -165,6 +169,25 @@ Result scene_entry(Bytes input) {
     return r;
 }
 
+/// Runs formats' on-demand validators over the sections an accepted pool holds (prt/formats/
+/// *_sections.h); a rejection keeps the pool accepted and becomes the result's message.
+void validate_on_demand(const pool::PoolFile& file, Result& r, const std::string& label) {
+    const auto attempt = [&](auto validate) {
+        try {
+            validate();
+        } catch (const Error& e) {
+            if (!r.message.empty()) return;
+            r.message = e.what();
+            check_message(r, label);
+        }
+    };
+    if (pool::has_iso(file)) attempt([&] { (void)pool::validate_iso(file); });
+    if (pool::has_mls(file)) attempt([&] { (void)pool::validate_mls(file); });
+    if (pool::has_patches(file)) attempt([&] { (void)pool::validate_patches(file); });
+    attempt([&] { (void)pool::validate_caustics(file); });
+    attempt([&] { (void)pool::validate_light_map(file); });
+}
+
 /// Validates one pool image and, when it is accepted, reads it through every accessor the tools use.
 Result pool_image(std::vector<std::byte> bytes, const std::string& label) {
     Result r;
@@ -191,6 +214,9 @@ Result pool_image(std::vector<std::byte> bytes, const std::string& label) {
                 if (a + 1 >= leaves.size() || leaves[a] > leaves[a + 1] || leaves[a + 1] > splats.size())
                     r.violation = "a filled leaf addresses splats outside the splat section";
             }
+        // The sections validated on demand (a renderer asking for that surface or map): their
+        // rejections are clean one-line errors too; the first one is the entry's message.
+        validate_on_demand(file, r, label);
     } catch (const Error& e) {
         r.message = e.what();
         check_message(r, label);

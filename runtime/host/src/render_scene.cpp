@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "prt/error.h"
+#include "prt/formats/octree_sections.h"
 #include "prt/runtime/gi_pool.h"
 #include "prt/runtime/leaf_bounds.h"
 #include "prt/runtime/surface_pools.h"
@@ -107,35 +108,17 @@ core::SurfaceKind choose_surface(const pool::PoolFile& pf, const std::string& as
 }
 
 /// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds.
+/// PoolFile::open checked the octree (formats/POOL.md, "Validation"); what is left is the renderer's
+/// own limit of 32-bit counts.
 void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
-    const char* who = "prt-play (build the octree with prt-octree)";
-    const auto oinfo = pf.require<pool::OctreeInfo>(pool::SectionType::octree_info, who);
-    const auto nodes = pf.require<std::uint32_t>(pool::SectionType::octree_nodes, who);
-    const auto leaf_info = pf.require<std::uint32_t>(pool::SectionType::leaf_info, who);
-    const auto splats = pf.require<pool::Splat>(pool::SectionType::splats, who);
-    if (oinfo.size() != 1) pf.fail(pf.find(pool::SectionType::octree_info), "expected exactly one element");
-    const pool::OctreeInfo& oi = oinfo[0];
-    if (nodes.empty()) pf.fail(pf.find(pool::SectionType::octree_nodes), "empty node pool");
-    if (leaf_info.empty())
-        pf.fail(pf.find(pool::SectionType::leaf_info), "empty (needs filled leaves + 1 entries)");
-    if (nodes.size() > 0xffffffffull || splats.size() > 0xffffffffull)
+    const pool::SplatOctreeSections s = pool::splat_octree(pf, "prt-play (build the octree with prt-octree)");
+    if (s.nodes.size() > 0xffffffffull || s.splats.size() > 0xffffffffull)
         pf.fail(nullptr, "more than 2^32 - 1 nodes or splats: not supported by the renderer");
-    if (!(oi.root_size > 0.0f) || !std::isfinite(oi.root_size))
-        pf.fail(pf.find(pool::SectionType::octree_info), "root_size must be finite and positive");
     core::OctreeView& o = lm.view.octree;
-    o.nodes = nodes.data();
-    o.node_count = static_cast<std::uint32_t>(nodes.size());
-    o.leaf_info = leaf_info.data();
-    o.filled_leaves = static_cast<std::uint32_t>(leaf_info.size() - 1);
-    o.splats = splats.data();
-    o.splat_count = static_cast<std::uint32_t>(splats.size());
-    o.root_min = {oi.root_min[0], oi.root_min[1], oi.root_min[2]};
-    o.root_size = oi.root_size;
-    o.inv_root_size = 1.0f / oi.root_size;
-    o.flags = oi.flags;
+    o = core::make_octree_view(s.info, s.nodes.data(), s.leaf_info.data(), s.splats.data());
     lm.leaf_bounds = build_leaf_bounds(o);
     o.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves of LoadedModel
-    lm.bytes = nodes.size_bytes() + leaf_info.size_bytes() + splats.size_bytes() +
+    lm.bytes = s.nodes.size_bytes() + s.leaf_info.size_bytes() + s.splats.size_bytes() +
                lm.leaf_bounds.size() * sizeof(core::LeafBounds);
 }
 

@@ -21,6 +21,7 @@
 #include "analytic.h"
 #include "iso_pool.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 
 namespace {
@@ -144,7 +145,7 @@ int main(int argc, char** argv) {
                     (!q8 && !(info.flags & pool::k_iso_has_f32)))
                     continue;
                 if ((storage == "q8" && !q8) || (storage == "f32" && q8)) continue;
-                const core::IsoView v = iso::load_iso_view(p, q8);
+                const core::IsoView v = rt::load_iso_view(p, q8);
                 render(v, params, eye, centre, 40.0f, width, height, threads);  // warm-up
                 std::vector<Frame> frames;
                 for (unsigned r = 0; r < repeat; ++r)

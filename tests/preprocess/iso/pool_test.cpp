@@ -1,5 +1,6 @@
-// The ISO sections in a pool: round trip through PoolWriter / PoolFile, and load_iso_view's
-// validation of corrupted sections (one-line errors naming the file and the section, never a crash).
+// The ISO sections in a pool: round trip through PoolWriter / PoolFile (rt::load_iso_view), and
+// validate_iso's validation of corrupted sections (one-line errors naming the file and the section, never a
+// crash).
 #include "prt/formats/pool.h"
 
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 
 #include "iso_test_util.h"
 #include "point_cloud.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace {
 
@@ -38,7 +40,7 @@ pool::PoolFile to_pool(const iso::IsoModel& model, const char* label = "test.poo
 std::string load_error(const iso::IsoModel& model) {
     try {
         const pool::PoolFile p = to_pool(model);
-        iso::load_iso_view(p);
+        iso::validate_iso(p);
     } catch (const Error& e) {
         return e.what();
     }
@@ -49,14 +51,14 @@ TEST(IsoPool, RoundTripKeepsEveryByte) {
     const iso::IsoModel m = small_model();
     const pool::PoolFile p = to_pool(m);
     EXPECT_TRUE(iso::has_iso(p));
-    const core::IsoView v = iso::load_iso_view(p);
+    const core::IsoView v = rt::load_iso_view(p);
     EXPECT_EQ(v.leaf_count, m.info.leaf_count);
     EXPECT_EQ(v.tree.node_count, m.nodes.size());
     EXPECT_EQ(v.use_q8, 1u);
     EXPECT_EQ(0, std::memcmp(v.leaves_q8, m.leaves_q8.data(), m.leaves_q8.size() * sizeof(pool::IsoLeafQ8)));
     EXPECT_EQ(0,
               std::memcmp(v.leaves_f32, m.leaves_f32.data(), m.leaves_f32.size() * sizeof(pool::IsoLeafF32)));
-    EXPECT_EQ(iso::load_iso_view(p, false).use_q8, 0u);
+    EXPECT_EQ(rt::load_iso_view(p, false).use_q8, 0u);
     // Both views trace the same as the in-memory model.
     const core::IsoView mv = iso::make_view(m);
     core::IsoHit a, b;
@@ -70,7 +72,7 @@ TEST(IsoPool, RoundTripKeepsEveryByte) {
     q.leaves_f32.clear();
     const pool::PoolFile pq = to_pool(q);
     EXPECT_FALSE(pq.has(pool::SectionType::iso_leaves_f32));
-    EXPECT_EQ(iso::load_iso_view(pq, false).use_q8, 1u);  // falls back to the array present
+    EXPECT_EQ(rt::load_iso_view(pq, false).use_q8, 1u);  // falls back to the array present
 }
 
 TEST(IsoPool, CorruptSectionsAreRefusedWithOneLine) {
@@ -158,7 +160,7 @@ TEST(IsoPool, CorruptSectionsAreRefusedWithOneLine) {
         w.add_array(pool::SectionType::iso_leaves_q8, m.leaves_q8);
         const pool::PoolFile p = pool::PoolFile::from_bytes(w.serialize(), "test.pool");
         try {
-            iso::load_iso_view(p);
+            iso::validate_iso(p);
             ADD_FAILURE() << "accepted";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find("iso_leaves_f32 missing"), std::string::npos) << e.what();
@@ -172,7 +174,7 @@ TEST(IsoPool, CorruptSectionsAreRefusedWithOneLine) {
         const pool::PoolFile p = pool::PoolFile::from_bytes(w.serialize(), "test.pool");
         EXPECT_FALSE(iso::has_iso(p));
         try {
-            iso::load_iso_view(p);
+            iso::validate_iso(p);
             ADD_FAILURE() << "accepted";
         } catch (const Error& e) {
             EXPECT_NE(std::string(e.what()).find("run prt-iso"), std::string::npos) << e.what();

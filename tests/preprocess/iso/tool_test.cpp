@@ -14,6 +14,7 @@
 #include "iso_test_util.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "runtime/tool_run.h"
 
 namespace {
@@ -70,7 +71,7 @@ TEST_F(IsoTool, WritesAValidPoolWithStatistics) {
     ASSERT_EQ(run(in + " -o " + path("out.pool") + " --storage both --stats-json " + path("stats.json")), 0)
         << m_stderr;
     const pool::PoolFile p = pool::PoolFile::open(path("out.pool"));
-    const core::IsoView v = iso::load_iso_view(p);
+    const core::IsoView v = rt::load_iso_view(p);
     EXPECT_GT(v.leaf_count, 1000u);
     EXPECT_NE(v.leaves_q8, nullptr);
     EXPECT_NE(v.leaves_f32, nullptr);
@@ -102,7 +103,7 @@ TEST_F(IsoTool, KnnRadiiLevelsAndQuiet) {
         << m_stderr;
     EXPECT_EQ(m_stderr, "");
     const pool::PoolFile p = pool::PoolFile::open(path("out.pool"));
-    const core::IsoView v = iso::load_iso_view(p);
+    const core::IsoView v = rt::load_iso_view(p);
     EXPECT_TRUE(v.flags & pool::k_iso_radii_knn);
     EXPECT_EQ(v.leaves_q8, nullptr);
     EXPECT_EQ(p.array<pool::IsoInfo>(pool::SectionType::iso_info)[0].depth, 4u);

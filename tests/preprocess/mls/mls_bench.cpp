@@ -19,6 +19,7 @@
 #include "mls_pool.h"
 #include "mls_trace.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 
 namespace {
@@ -93,7 +94,7 @@ int main(int argc, char** argv) {
         [&](const prt::tool::CommonOptions& common) {
             using namespace prt;
             const pool::PoolFile pool = pool::PoolFile::open(input);
-            const core::MlsView view = mls::load_mls_view(pool);
+            const core::MlsView view = rt::load_mls_view(pool);
             const pool::ModelInfo& mi = pool.model_info();
             Vec3 lo{mi.bounds_min[0], mi.bounds_min[1], mi.bounds_min[2]};
             Vec3 hi{mi.bounds_max[0], mi.bounds_max[1], mi.bounds_max[2]};

@@ -1,5 +1,5 @@
 // The MLS sections in a pool: round trip through PoolWriter / PoolFile, and validation of every
-// cross-reference the traversal relies on (load_mls_view): a bad pool is a one-line error naming
+// cross-reference the traversal relies on (validate_mls): a bad pool is a one-line error naming
 // the file and the section, never a crash or an endless loop.
 #include "prt/formats/pool.h"
 
@@ -12,6 +12,7 @@
 #include "mls_test_util.h"
 #include "point_cloud.h"
 #include "prt/error.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace {
 
@@ -49,7 +50,7 @@ void expect_error(const Built& b, const std::function<void(mls::MlsModel&)>& edi
                   const std::string& what) {
     const pool::PoolFile p = make_pool(b, edit);
     try {
-        mls::load_mls_view(p);
+        mls::validate_mls(p);
         FAIL() << "expected an error about " << what;
     } catch (const Error& e) {
         const std::string msg = e.what();
@@ -64,7 +65,7 @@ TEST(MlsPool, RoundTripGivesTheSameSurface) {
     const Built b = built();
     const pool::PoolFile p = make_pool(b);
     EXPECT_TRUE(mls::has_mls(p));
-    const core::MlsView v = mls::load_mls_view(p);
+    const core::MlsView v = rt::load_mls_view(p);
     EXPECT_EQ(v.node_count, b.model.nodes.size());
     EXPECT_EQ(v.ref_count, b.model.refs.size());
     EXPECT_EQ(v.splat_count, b.model.splats.size());
@@ -86,7 +87,7 @@ TEST(MlsPool, RoundTripGivesTheSameSurface) {
     const pool::PoolFile plain = pool::PoolFile::from_bytes(w.serialize(), "plain.pool");
     EXPECT_FALSE(mls::has_mls(plain));
     try {
-        mls::load_mls_view(plain);
+        mls::validate_mls(plain);
         FAIL();
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("run prt-mls"), std::string::npos) << e.what();
@@ -184,7 +185,7 @@ TEST(MlsPool, RejectsEveryBrokenCrossReference) {
         mls::write_mls_sections(std::move(m), w);
         w.remove(pool::SectionType::mls_refs);
         const pool::PoolFile p = pool::PoolFile::from_bytes(w.serialize(), "test.pool");
-        EXPECT_THROW(mls::load_mls_view(p), Error);
+        EXPECT_THROW(mls::validate_mls(p), Error);
     }
 }
 
@@ -219,14 +220,14 @@ TEST(MlsPool, DepthLimitIsEnforced) {
         };
     };
     const pool::PoolFile ok = make_pool(b, chain(pool::k_max_mls_depth));
-    const core::MlsView v = mls::load_mls_view(ok);
+    const core::MlsView v = rt::load_mls_view(ok);
     EXPECT_EQ(v.depth, pool::k_max_mls_depth);
     core::MlsHit h;
     core::MlsStats st;
     core::trace_mls(v, {-3, 0, 0}, {1, 0, 0}, core::k_inf, false, {}, h, st);
     EXPECT_EQ(st.truncated, 0u);
     const pool::PoolFile deep = make_pool(b, chain(pool::k_max_mls_depth + 1));
-    EXPECT_THROW(mls::load_mls_view(deep), Error);
+    EXPECT_THROW(mls::validate_mls(deep), Error);
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include "mls_test_util.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "runtime/tool_run.h"
 
 namespace {
@@ -66,7 +67,7 @@ TEST_F(MlsTool, WritesAValidPoolWithStatistics) {
     const std::string in = sphere_pool("in.pool");
     ASSERT_EQ(run(in + " -o " + path("out.pool") + " --stats-json " + path("stats.json")), 0) << m_stderr;
     const pool::PoolFile p = pool::PoolFile::open(path("out.pool"));
-    const core::MlsView v = mls::load_mls_view(p);
+    const core::MlsView v = rt::load_mls_view(p);
     EXPECT_EQ(v.splat_count, 1500u);
     EXPECT_TRUE(p.has(pool::SectionType::radii));  // carried over
     EXPECT_NE(p.provenance_json().find("\"test\""), std::string::npos);

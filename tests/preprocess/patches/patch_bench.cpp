@@ -19,6 +19,7 @@
 #include "patch_pool.h"
 #include "prt/core/patch.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 
 namespace {
@@ -164,7 +165,7 @@ int main(int argc, char** argv) {
                 bytes = w.serialize();
             }
             const auto pool = prt::pool::PoolFile::from_bytes(std::move(bytes), input);
-            const prt::core::PatchView view = prt::patches::load_patch_view(pool);
+            const prt::core::PatchView view = prt::rt::load_patch_view(pool);
             const auto& info = pool.array<prt::pool::PatchInfo>(prt::pool::SectionType::patch_info)[0];
             const Camera cam = make_camera(info, azimuth, elevation, fill);
             prt::core::PatchTraceParams params;

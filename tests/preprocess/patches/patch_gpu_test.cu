@@ -18,6 +18,7 @@
 #include "patch_file.h"
 #include "patch_pool.h"
 #include "prt/core/patch.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace {
 
@@ -68,7 +69,7 @@ std::vector<PatchRay> camera_rays(const prt::pool::PatchInfo& info, int size, do
 }
 
 void compare_on_device(const prt::pool::PoolFile& pool, const std::string& name) {
-    const PatchView host = prt::patches::load_patch_view(pool);
+    const PatchView host = prt::rt::load_patch_view(pool);
     const auto& info = pool.array<prt::pool::PatchInfo>(prt::pool::SectionType::patch_info)[0];
     DeviceView d;
     d.view = host;

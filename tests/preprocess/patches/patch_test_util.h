@@ -12,6 +12,7 @@
 #include "patch_pool.h"
 #include "prt/core/patch.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace prt::patch_test {
 
@@ -121,7 +122,7 @@ inline BuiltPool build_pool(std::vector<Net> nets, std::uint32_t depth = 6, bool
     patches::write_patch_sections(m, w);
     w.add_provenance("patch_test", "0", "{}");
     pool::PoolFile f = pool::PoolFile::from_bytes(w.serialize(), "test.pool");
-    const core::PatchView view = patches::load_patch_view(f);
+    const core::PatchView view = rt::load_patch_view(f);
     return {std::move(f), view, {m.model_info.origin[0], m.model_info.origin[1], m.model_info.origin[2]}};
 }
 

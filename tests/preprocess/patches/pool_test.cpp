@@ -1,5 +1,5 @@
 // The patch sections: pool round trip, the BVH's structure and boxes, its depth guard, orientation
-// of a closed model, and load_patch_view's one-line errors on pools broken in each way it checks.
+// of a closed model, and validate_patches' one-line errors on pools broken in each way it checks.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -12,6 +12,7 @@
 #include "patch_build.h"
 #include "patch_pool.h"
 #include "patch_test_util.h"
+#include "prt/runtime/surface_pools.h"
 
 namespace {
 
@@ -44,7 +45,7 @@ TEST(PatchPool, RoundTripThroughAFile) {
     w.write(path);
     {
         const auto pool = prt::pool::PoolFile::open(path);
-        const auto view = prt::patches::load_patch_view(pool);
+        const auto view = prt::rt::load_patch_view(pool);
         EXPECT_EQ(view.patch_count, 40u);
         EXPECT_EQ(view.subpatch_depth, 5u);
         EXPECT_EQ(view.subpatch_nodes, 63u);
@@ -164,7 +165,7 @@ TEST(PatchPool, OrientationOfAClosedCubePointsOutwards) {
     }
 }
 
-// ---- load_patch_view errors: pools with valid checksums but broken contents --------------------
+// ---- validate_patches errors: pools with valid checksums but broken contents --------------------
 
 struct Parts {
     prt::pool::ModelInfo model;
@@ -190,7 +191,7 @@ std::string load_error(const Parts& p, bool skip_bvh = false) {
     w.add_array(SectionType::patch_subpatch_boxes, p.nodes);
     try {
         const auto pool = prt::pool::PoolFile::from_bytes(w.serialize(), "bad.pool");
-        prt::patches::load_patch_view(pool);
+        prt::patches::validate_patches(pool);
     } catch (const prt::Error& e) {
         return e.what();
     }
@@ -203,7 +204,7 @@ TEST(PatchPool, PoolWithoutPatches) {
     const auto pool = prt::pool::PoolFile::from_bytes(w.serialize(), "points.pool");
     EXPECT_FALSE(prt::patches::has_patches(pool));
     try {
-        prt::patches::load_patch_view(pool);
+        prt::patches::validate_patches(pool);
         FAIL();
     } catch (const prt::Error& e) {
         EXPECT_STREQ(e.what(), "points.pool: no patch sections (run prt-patches)");

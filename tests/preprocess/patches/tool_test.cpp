@@ -12,6 +12,7 @@
 
 #include "patch_pool.h"
 #include "prt/formats/pool.h"
+#include "prt/runtime/surface_pools.h"
 #include "runtime/tool_run.h"
 
 namespace {
@@ -62,7 +63,7 @@ TEST_F(PatchTool, WritesAValidPool) {
     const std::string in = write("flat.bpt", flat_bpt());
     ASSERT_EQ(run(in + " -o " + path("flat.pool") + " --depth 3"), 0) << m_stderr;
     const auto pool = prt::pool::PoolFile::open(path("flat.pool"));
-    const auto view = prt::patches::load_patch_view(pool);
+    const auto view = prt::rt::load_patch_view(pool);
     EXPECT_EQ(view.patch_count, 1u);
     EXPECT_EQ(view.subpatch_depth, 3u);
     EXPECT_NE(pool.provenance_json().find("\"prt-patches\""), std::string::npos);
@@ -117,13 +118,13 @@ TEST_F(PatchTool, SharedTeapotBuildsOriented) {
     if (!fs::exists(teapot)) GTEST_SKIP() << "shared data not found: " << teapot;
     ASSERT_EQ(run(teapot + " -o " + path("teapot.pool")), 0) << m_stderr;
     const auto pool = prt::pool::PoolFile::open(path("teapot.pool"));
-    const auto view = prt::patches::load_patch_view(pool);
+    const auto view = prt::rt::load_patch_view(pool);
     EXPECT_EQ(view.patch_count, 32u);
     EXPECT_EQ(view.subpatch_nodes, 127u);
     EXPECT_TRUE(view.flags & prt::pool::k_patch_oriented);
     EXPECT_NE(m_stderr.find("0 conflicts"), std::string::npos) << m_stderr;
     ASSERT_EQ(run(teapot + " -o " + path("raw.pool") + " --orient none"), 0);
-    EXPECT_FALSE(prt::patches::load_patch_view(prt::pool::PoolFile::open(path("raw.pool"))).flags &
+    EXPECT_FALSE(prt::rt::load_patch_view(prt::pool::PoolFile::open(path("raw.pool"))).flags &
                  prt::pool::k_patch_oriented);
 }
 

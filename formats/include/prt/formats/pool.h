@@ -12,13 +12,16 @@
 
 #include "prt/error.h"
 #include "prt/formats/pool_layout.h"
+#include "prt/formats/section_table.h"
 
 namespace prt::pool {
 
 /// A validated, read-only, memory-mapped pool file. Opening checks everything POOL.md lists
-/// (magic, versions, sizes, bounds, overlaps, checksums, counts, cross-references) and throws
-/// prt::Error with one line "FILE: section NAME: what is wrong" on the first problem found.
-/// Move-only; views stay valid while the PoolFile lives.
+/// (magic, versions, sizes, bounds, overlaps, checksums, counts, cross-references, the splat
+/// octree) and throws prt::Error with one line "FILE: section NAME: what is wrong" on the first
+/// problem found. The surface and global-illumination sections are checked when a reader asks for
+/// them (validate_iso, validate_mls, validate_patches, validate_caustics, validate_light_map in
+/// prt/formats/*_sections.h). Move-only; views stay valid while the PoolFile lives.
 class PoolFile {
 public:
     static PoolFile open(const std::filesystem::path& path);
@@ -64,7 +67,13 @@ public:
 
 private:
     PoolFile() = default;
-    void validate();
+    // POOL.md "Validation", in its order: 1. header and table, 2. each section, 3. counts that must
+    // agree, 4. cross-references.
+    void validate() const;
+    std::uint64_t validate_header() const;  // returns the table's size in bytes
+    void validate_sections(std::uint64_t table_bytes) const;
+    const ModelInfo& validate_counts() const;
+    void validate_references(const ModelInfo& info) const;
     void check_element_size(const SectionEntry& e, std::size_t expected) const;
     [[noreturn]] void throw_missing(SectionType type, const char* needed_by) const;
 

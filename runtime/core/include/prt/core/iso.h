@@ -80,6 +80,26 @@ struct IsoView {
     std::uint32_t use_q8 = 1;
 };
 
+/// The view over ISO arrays (a pool's sections, validated by pool::validate_iso, or a model in
+/// memory): `q8` and `f32` null where absent; the tracer reads the quantized leaves when
+/// `prefer_q8` and they are present, or when there are no float leaves. Host only.
+inline IsoView make_iso_view(const pool::IsoInfo& info, const std::uint32_t* nodes, const pool::IsoLeafQ8* q8,
+                             const pool::IsoLeafF32* f32, bool prefer_q8) {
+    IsoView v;
+    v.tree.nodes = nodes;
+    v.tree.node_count = info.node_count;
+    v.tree.filled_leaves = info.leaf_count;
+    v.tree.root_min = Vec3{info.root_min[0], info.root_min[1], info.root_min[2]};
+    v.tree.root_size = info.root_size;
+    v.tree.inv_root_size = 1.0f / info.root_size;
+    v.leaves_q8 = q8;
+    v.leaves_f32 = f32;
+    v.leaf_count = info.leaf_count;
+    v.flags = info.flags;
+    v.use_q8 = (prefer_q8 && q8 != nullptr) || f32 == nullptr ? 1u : 0u;
+    return v;
+}
+
 /// Which sign changes of f count as hits.
 enum IsoFaces : std::uint32_t {
     /// thesis 4.5.2 / 3.6: outside rays accept + to - (front faces), inside rays - to + (back).

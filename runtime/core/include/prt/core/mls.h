@@ -46,6 +46,23 @@ struct MlsView {
     Vec3 root_hi{0, 0, 0};
 };
 
+/// The view over MLS arrays (a pool's sections, validated by pool::validate_mls, or a model in
+/// memory), counts and root cell from `info`. Host only.
+inline MlsView make_mls_view(const pool::MlsInfo& info, const pool::MlsNode* nodes, const std::uint32_t* refs,
+                             const pool::MlsSplat* splats) {
+    MlsView view;
+    view.nodes = nodes;
+    view.refs = refs;
+    view.splats = splats;
+    view.node_count = info.node_count;
+    view.ref_count = info.ref_count;
+    view.splat_count = info.splat_count;
+    view.depth = info.depth;
+    view.root_lo = Vec3{info.root_lo[0], info.root_lo[1], info.root_lo[2]};
+    view.root_hi = Vec3{info.root_hi[0], info.root_hi[1], info.root_hi[2]};
+    return view;
+}
+
 /// Which sign changes of F count as hits.
 enum MlsFaces : std::uint32_t {
     /// Any sign change (the first root along the ray): the reference surface, primary rays.

@@ -74,6 +74,25 @@ struct OctreeView {
     const LeafBounds* leaf_bounds = nullptr;
 };
 
+/// The view over splat-octree arrays (a pool's sections, checked when the pool was opened and read
+/// by pool::splat_octree, or an octree in memory), counts and root cube from `info`; no leaf bounds.
+/// Host only.
+inline OctreeView make_octree_view(const pool::OctreeInfo& info, const std::uint32_t* nodes,
+                                   const std::uint32_t* leaf_info, const pool::Splat* splats) {
+    OctreeView v;
+    v.nodes = nodes;
+    v.node_count = info.node_count;
+    v.leaf_info = leaf_info;
+    v.filled_leaves = info.filled_leaves;
+    v.splats = splats;
+    v.splat_count = static_cast<std::uint32_t>(info.splat_count);
+    v.root_min = Vec3{info.root_min[0], info.root_min[1], info.root_min[2]};
+    v.root_size = info.root_size;
+    v.inv_root_size = 1.0f / info.root_size;
+    v.flags = info.flags;
+    return v;
+}
+
 /// Node word decoding (pool_layout.h encoding), callable from device code.
 PRT_HD PRT_INLINE bool node_is_internal(std::uint32_t node) {
     return (node >> pool::k_node_address_bits) == static_cast<std::uint32_t>(pool::NodeType::internal);

@@ -1,20 +1,22 @@
 // PointRT runtime (host): the caustic octree (prt-photons, thesis 5.4) and light map
-// (prt-lightmap, thesis 5.3) sections of a pool, validated and turned into the core's views
-// (prt/core/gi.h). Layout: prt/formats/gi_layout.h; rules: formats/POOL.md.
+// (prt-lightmap, thesis 5.3) sections of a pool, validated by formats (prt/formats/gi_sections.h)
+// and turned into the core's views (prt/core/gi.h). Layout: prt/formats/gi_layout.h; rules:
+// formats/POOL.md.
 #pragma once
 
 #include "prt/core/gi.h"
+#include "prt/formats/gi_sections.h"
 #include "prt/formats/pool.h"
 
 namespace prt::rt {
 
 /// Whether the pool holds any caustic / light-map section.
-bool has_caustics(const pool::PoolFile& pool);
-bool has_light_map(const pool::PoolFile& pool);
+using pool::has_caustics;
+using pool::has_light_map;
 
-/// Validates the caustic sections (64-66) and returns a view into the mapped pool (valid while
-/// the PoolFile lives); an empty view (null nodes) when the pool has none. Throws prt::Error
-/// "FILE: section NAME: what is wrong" on any inconsistency.
+/// The caustic sections (64-66) validated (pool::validate_caustics) as a view into the mapped pool
+/// (valid while the PoolFile lives); an empty view (null nodes) when the pool has none. Throws
+/// prt::Error "FILE: section NAME: what is wrong" on any inconsistency.
 core::CausticView load_caustic_view(const pool::PoolFile& pool);
 /// The same for the light-map sections (80-82).
 core::LightMapView load_light_map_view(const pool::PoolFile& pool);
