@@ -417,17 +417,6 @@ Transform parse_transform(const Context& ctx, const Json& j, const std::string& 
     return t;
 }
 
-constexpr std::pair<SurfaceKind, const char*> k_surface_names[] = {{SurfaceKind::splats, "splats"},
-                                                                   {SurfaceKind::iso, "iso"},
-                                                                   {SurfaceKind::mls, "mls"},
-                                                                   {SurfaceKind::patches, "patches"}};
-
-const char* surface_name(SurfaceKind kind) {
-    for (const auto& [k, name] : k_surface_names)
-        if (k == kind) return name;
-    return "splats";
-}
-
 Model parse_model(const Context& ctx, const Json& j, const std::string& path,
                   const std::vector<Material>& materials) {
     ObjectReader r(ctx, j, path, {"name", "pool", "source", "transform", "material", "surface"});
@@ -465,17 +454,9 @@ Model parse_model(const Context& ctx, const Json& j, const std::string& path,
         }
     }
     std::string surface;
-    if (r.string("surface", surface)) {
-        bool found = false;
-        for (const auto& [k, name] : k_surface_names)
-            if (surface == name) {
-                m.surface = k;
-                found = true;
-            }
-        if (!found)
-            ctx.fail(r.path("surface"),
-                     "unknown surface \"" + surface + "\" (expected splats, iso, mls or patches)");
-    }
+    if (r.string("surface", surface) && !parse_surface(surface, m.surface))
+        ctx.fail(r.path("surface"),
+                 "unknown surface \"" + surface + "\" (expected " + std::string(k_surface_name_list) + ")");
     return m;
 }
 
@@ -732,7 +713,7 @@ std::string to_json(const Scene& scene) {
             j["material"] = scene.materials[m.material].name;
         else
             j["material"] = m.material;
-        j["surface"] = surface_name(m.surface);
+        j["surface"] = std::string(surface_name(m.surface));
         j["transform"] = {{"translate", vec_json(m.transform.translate)},
                           {"rotate_degrees", vec_json(m.transform.rotate_degrees)},
                           {"scale", m.transform.scale}};

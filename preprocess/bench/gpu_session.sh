@@ -4,7 +4,8 @@
 # prt-cull's culled pool. Usage, from the repository root on the GPU machine:
 #   preprocess/bench/gpu_session.sh OUTDIR [step...]
 # Steps: matrix (the first session's settings sweep), tests, final (defaults, before/after, the
-# kernel variants and a second build with PRT_BATCHED_WALK=1), ncu, play, cull. Results:
+# kernel variants and a second build with PRT_BATCHED_WALK=ON), ncu, play, cull. build-dev has the
+# --min-blocks tuning kernels (PRT_CUDA_TUNING_KERNELS=ON) for the matrix and final steps. Results:
 # OUTDIR/log.txt, OUTDIR/summary.txt (one line per prt-bench run, written as it goes),
 # OUTDIR/bench.jsonl (each run's JSON on one line), OUTDIR/ncu.txt.
 set -uo pipefail
@@ -20,10 +21,11 @@ deps="-DCMAKE_PREFIX_PATH=$PWD/.device-deps/usr -DPRT_WITH_PCL=OFF -DPRT_WITH_OP
 bench=build-dev/bin/prt-bench
 
 nvidia-smi --query-gpu=name,driver_version,clocks.sm,clocks.max.sm,temperature.gpu --format=csv
-stamp "configure + build (build-dev; build-batched: PRT_BATCHED_WALK=1 when the final step runs)"
-cmake -S . -B build-dev $deps >"$out/configure.txt" 2>&1 || { tail -40 "$out/configure.txt"; exit 1; }
+stamp "configure + build (build-dev; build-batched: PRT_BATCHED_WALK=ON when the final step runs)"
+cmake -S . -B build-dev $deps -DPRT_CUDA_TUNING_KERNELS=ON >"$out/configure.txt" 2>&1 \
+    || { tail -40 "$out/configure.txt"; exit 1; }
 case " $steps " in *" final "*)
-    cmake -S . -B build-batched $deps -DCMAKE_CXX_FLAGS=-DPRT_BATCHED_WALK=1 -DCMAKE_CUDA_FLAGS=-DPRT_BATCHED_WALK=1 \
+    cmake -S . -B build-batched $deps -DPRT_BATCHED_WALK=ON \
         >>"$out/configure.txt" 2>&1 || { tail -40 "$out/configure.txt"; exit 1; }
     cmake --build build-batched -j6 --target prt-bench >"$out/build_batched.txt" 2>&1 &
     alt=$!

@@ -156,6 +156,8 @@ class EmbreeTracer {
 public:
     EmbreeTracer(const EmbreeScene& es, const core::SceneView& view) : m_es(es), m_view(view) {}
 
+    const core::SceneView& view() const { return m_view; }
+
     /// Nearest disc along the ray in [0, t_max): the core's SurfaceHit (no blending).
     bool closest(const core::Ray& r, core::SurfaceHit& hit) const {
         RTCIntersectContext ctx;
@@ -171,13 +173,12 @@ public:
         const std::uint32_t point = rh.hit.primID;
         const float* n = dm.normals.data() + 3 * static_cast<std::size_t>(point);
         // Material and color as core::closest_hit_scene picks them, from the nearest disc.
-        std::uint32_t mat = mv.material;
-        if (mv.material_ids != nullptr && point < mv.point_count) mat = mv.material_ids[point];
-        if (mat >= m_view.material_count) mat = m_view.material_count > 0 ? m_view.material_count - 1 : 0;
+        const std::uint32_t mat = core::hit_material(m_view, mv, point);
         hit.t = rh.ray.tfar;
         hit.position = core::ray_at(r, hit.t);
         hit.normal = core::Vec3{n[0], n[1], n[2]};
         hit.material = mat;
+        hit.model = dm.model;
         const bool colors =
             mv.colors != nullptr && m_view.material_count > 0 && m_view.materials[mat].use_point_colors != 0;
         hit.base_color =
@@ -195,55 +196,17 @@ public:
         return ray.tfar < 0.0f;  // Embree sets tfar to -inf on a hit
     }
 
+    /// core::trace_ray's queries (render.h SceneTracer) answered by Embree: its nearest disc, and
     /// core::shade_hit with Embree's shadow rays.
-    core::Vec3 shade(const core::Ray& r, const core::SurfaceHit& h, core::RayCounters& c) const {
-        const core::SceneView& s = m_view;
-        const core::Material& m = s.materials[h.material];
-        if (!(m.diffuse_reflectance > 0.0f)) return core::Vec3{0, 0, 0};
-        const core::Vec3 n = core::facing_normal(h, r);
-        core::Vec3 sum = m.ambient * h.base_color;
-        for (std::uint32_t i = 0; i < s.light_count; ++i) {
-            const core::PointLight& light = s.lights[i];
-            const core::Vec3 to_light = light.position - h.position;
-            const float dist = core::length(to_light);
-            if (!(dist > 0.0f) || !core::is_finite(dist)) continue;
-            const core::Vec3 l = to_light * (1.0f / dist);
-            if (!(core::dot(n, l) > 0.0f)) continue;
-            if (s.params.shadows != 0 && light.casts_shadows != 0) {
-                ++c.shadow;
-                if (occluded(core::Ray{h.position, l, dist, r.flags})) continue;
-            }
-            sum += core::lambert_phong(m, h.base_color, n, l, r.dir, light.color);
-        }
-        return sum * m.diffuse_reflectance;
+    bool closest(const core::SceneView&, const core::PendingRay& p, core::SurfaceHit& h,
+                 core::RayCounters&) const {
+        return closest(p.ray, h);
     }
-
-    /// core::trace_ray with Embree's queries.
-    core::Vec3 trace(const core::Ray& primary, core::RayCounters& c) const {
-        core::PendingRay stack[core::k_max_bounces + 1];
-        std::uint32_t top = 0;
-        core::PendingRay cur{primary, core::Vec3{1, 1, 1}, 0};
-        core::Vec3 color{0, 0, 0};
-        ++c.primary;
-        for (;;) {
-            core::SurfaceHit h;
-            if (!closest(cur.ray, h)) {
-                color += cur.weight * core::background(m_view.environment, cur.ray.dir);
-            } else {
-                color += cur.weight * shade(cur.ray, h, c);
-                core::PendingRay next[2];
-                const std::uint32_t n = core::spawn_secondary(m_view, cur, h, next);
-                c.secondary += n;
-                if (n == 2 && top < core::k_max_bounces + 1) stack[top++] = next[1];
-                if (n > 0) {
-                    cur = next[0];
-                    continue;
-                }
-            }
-            if (top == 0) break;
-            cur = stack[--top];
-        }
-        return color;
+    core::Vec3 shade(const core::SceneView& s, const core::PendingRay& p, const core::SurfaceHit& h,
+                     core::RayCounters& c) const {
+        return core::shade_hit(
+            s, p.ray, h, c,
+            [this](const core::SceneView&, const core::Ray& r, core::RayCounters&) { return occluded(r); });
     }
 
 private:
@@ -283,8 +246,8 @@ rt::FrameStats render_embree(const EmbreeTracer& tracer, const core::PinholeCame
             const std::uint32_t x0 = (t % tiles_x) * k_tile, y0 = (t / tiles_x) * k_tile;
             for (std::uint32_t y = y0; y < std::min(y0 + k_tile, h); ++y) {
                 for (std::uint32_t x = x0; x < std::min(x0 + k_tile, w); ++x) {
-                    core::Vec3 color = tracer.trace(core::primary_ray(cam, x, y, w, h), c);
-                    if (!core::is_finite(color)) color = core::Vec3{0, 0, 0};
+                    const core::Vec3 color = core::sanitize(
+                        core::trace_ray(tracer.view(), core::primary_ray(cam, x, y, w, h), c, tracer), c);
                     const std::size_t i = static_cast<std::size_t>(y) * w + x;
                     image.rgb[i * 3 + 0] = color.x;
                     image.rgb[i * 3 + 1] = color.y;
@@ -299,11 +262,7 @@ rt::FrameStats render_embree(const EmbreeTracer& tracer, const core::PinholeCame
     job(0);
     for (std::thread& t : pool) t.join();
     rt::FrameStats s;
-    for (const core::RayCounters& c : counters) {
-        s.primary += c.primary;
-        s.secondary += c.secondary;
-        s.shadow += c.shadow;
-    }
+    for (const core::RayCounters& c : counters) s += c;
     s.pixels = static_cast<std::uint64_t>(w) * h;
     s.seconds = tool::now_seconds() - t0;
     return s;

@@ -20,45 +20,39 @@ struct PixelWork {
     std::uint32_t tests[core::k_max_bounces + 2] = {};
 };
 
-/// core::trace_ray (render.h) with the work of each ray recorded: the same closest_hit_scene /
-/// shade_hit / spawn_secondary calls in the same order.
-void trace_recorded(const core::SceneView& s, const core::Ray& primary, RayProfile& p, PixelWork& px) {
-    core::PendingRay stack[core::k_max_bounces + 1];
-    std::uint32_t top = 0;
-    core::PendingRay cur{primary, core::Vec3{1, 1, 1}, 0};
-    const std::uint32_t shadow_slot = core::k_max_bounces + 1;
-    for (;;) {
-        core::RayCounters c;
-        core::SurfaceHit h;
-        const bool hit = core::closest_hit_scene(s, cur.ray, h, c);
-        RayWork& w = p.depth[cur.depth];
-        ++w.rays;
+/// core::trace_ray's queries (render.h SceneTracer) with the work of each ray recorded: by depth for
+/// the closest hits, under "shadow" for the shadow rays of each shading.
+struct RecordingTracer {
+    RayProfile& profile;
+    PixelWork& pixel;
+
+    static void record(RayWork& w, std::uint32_t& leaves, std::uint32_t& tests, const core::RayCounters& c) {
         w.leaves += c.leaves;
         w.culled += c.culled;
         w.splat_tests += c.splat_tests;
-        px.leaves[cur.depth] += c.leaves;
-        px.tests[cur.depth] += c.splat_tests;
-        if (hit) {
-            core::RayCounters sc;
-            core::shade_hit(s, cur.ray, h, sc);
-            p.shadow.rays += sc.shadow;
-            p.shadow.leaves += sc.leaves;
-            p.shadow.culled += sc.culled;
-            p.shadow.splat_tests += sc.splat_tests;
-            px.leaves[shadow_slot] += sc.leaves;
-            px.tests[shadow_slot] += sc.splat_tests;
-            core::PendingRay next[2];
-            const std::uint32_t n = core::spawn_secondary(s, cur, h, next);
-            if (n == 2 && top < core::k_max_bounces + 1) stack[top++] = next[1];
-            if (n > 0) {
-                cur = next[0];
-                continue;
-            }
-        }
-        if (top == 0) break;
-        cur = stack[--top];
+        leaves += c.leaves;
+        tests += c.splat_tests;
     }
-}
+    bool closest(const core::SceneView& s, const core::PendingRay& p, core::SurfaceHit& h,
+                 core::RayCounters& c) const {
+        core::RayCounters own;
+        const bool hit = core::closest_hit_scene(s, p.ray, h, own);
+        ++profile.depth[p.depth].rays;
+        record(profile.depth[p.depth], pixel.leaves[p.depth], pixel.tests[p.depth], own);
+        c += own;
+        return hit;
+    }
+    core::Vec3 shade(const core::SceneView& s, const core::PendingRay& p, const core::SurfaceHit& h,
+                     core::RayCounters& c) const {
+        constexpr std::uint32_t shadow_slot = core::k_max_bounces + 1;
+        core::RayCounters own;
+        const core::Vec3 color = core::shade_hit(s, p.ray, h, own);
+        profile.shadow.rays += own.shadow;
+        record(profile.shadow, pixel.leaves[shadow_slot], pixel.tests[shadow_slot], own);
+        c += own;
+        return color;
+    }
+};
 
 void add(RayWork& a, const RayWork& b) {
     a.rays += b.rays;
@@ -92,7 +86,10 @@ RayProfile profile_rays(const core::SceneView& scene, const core::PinholeCamera&
             for (std::uint32_t t = 0; t < k_warp_w * k_warp_h; ++t) {
                 const std::uint32_t x = x0 + t % k_warp_w, y = y0 + t / k_warp_w;
                 if (x >= width || y >= height) continue;  // idle lanes
-                trace_recorded(scene, core::primary_ray(camera, x, y, width, height), local, px[t]);
+                core::RayCounters c;
+                core::trace_ray(scene, core::primary_ray(camera, x, y, width, height), c,
+                                RecordingTracer{local, px[t]});
+                local.dropped += c.dropped;
             }
             // Shadow rays belong to the bounce that spawned them; count them as one more phase.
             for (int kind = 0; kind < 2; ++kind) {
@@ -121,6 +118,7 @@ RayProfile profile_rays(const core::SceneView& scene, const core::PinholeCamera&
         std::lock_guard<std::mutex> lock(mutex);
         for (std::uint32_t d = 0; d < depths; ++d) add(total.depth[d], local.depth[d]);
         add(total.shadow, local.shadow);
+        total.dropped += local.dropped;
         for (int i = 0; i < 6; ++i) sums[i] += s[i];
     };
     const unsigned n = std::max(1u, std::thread::hardware_concurrency());
@@ -148,6 +146,7 @@ nlohmann::json RayProfile::to_json() const {
     for (std::size_t d = 0; d < depth.size(); ++d)
         j["kinds"].push_back(one(d == 0 ? "primary" : "bounce " + std::to_string(d), depth[d]));
     j["kinds"].push_back(one("shadow", shadow));
+    if (dropped) j["dropped_rays"] = dropped;  // never seen: the ray stack holds a whole depth-first tree
     j["simt_efficiency"] = {{"leaves_per_bounce", leaves_simt_per_bounce},
                             {"leaves_whole_path", leaves_simt_whole_path},
                             {"splat_tests_per_bounce", tests_simt_per_bounce},
@@ -170,6 +169,11 @@ std::string RayProfile::table() const {
     for (std::size_t d = 0; d < depth.size(); ++d)
         row(d == 0 ? "primary" : "bounce " + std::to_string(d), depth[d]);
     if (shadow.rays) row("shadow", shadow);
+    if (dropped) {
+        std::snprintf(line, sizeof(line), "  %llu secondary rays dropped (ray stack full)\n",
+                      static_cast<unsigned long long>(dropped));
+        out += line;
+    }
     std::snprintf(
         line, sizeof(line),
         "  SIMT efficiency (32-lane warps, 8x4 pixels): leaves %.2f per bounce, %.2f over the whole "

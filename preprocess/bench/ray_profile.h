@@ -25,6 +25,7 @@ struct RayWork {
 struct RayProfile {
     std::vector<RayWork> depth;  ///< index = bounce depth, 0 = primary rays
     RayWork shadow;
+    std::uint64_t dropped = 0;  ///< secondary rays dropped because the ray stack was full (RayCounters)
     /// SIMT efficiency of the walk steps (leaves) and splat tests: the work of the 32 threads of a
     /// warp over 32 x the work of its busiest thread, summed over warps; "per bounce" takes the
     /// busiest thread of every bounce depth separately (a warp waits at the end of each bounce's
@@ -38,8 +39,8 @@ struct RayProfile {
     std::string table() const;
 };
 
-/// Traces every pixel of a width x height frame on the host (all hardware threads) as
-/// core::trace_ray does, recording the work of each ray.
+/// Traces every pixel of a width x height frame on the host (all hardware threads) with
+/// core::trace_ray, recording the work of each ray.
 RayProfile profile_rays(const core::SceneView& scene, const core::PinholeCamera& camera, std::uint32_t width,
                         std::uint32_t height);
 

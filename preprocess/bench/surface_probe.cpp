@@ -24,38 +24,46 @@ SurfaceProbe::SurfaceProbe(std::shared_ptr<const pool::PoolFile> pool, const std
                            const SurfaceSettings& s)
     : m_pool(std::move(pool)), m_surface(surface), m_s(s) {
     const pool::PoolFile& p = *m_pool;
-    if (surface == "splats") {
-        // RenderScene derives the leaf bounds the renderer culls with (runtime/host).
-        scene::Scene sc;
-        m_scene = std::make_unique<rt::RenderScene>(rt::RenderScene::from_pools(sc, {m_pool}));
-        const core::ModelView& mv = m_scene->models().at(0).view;
-        m_octree = &mv.octree;
-        m_colors = mv.colors;
-        m_bytes = m_scene->bytes();
-    } else if (surface == "iso") {
-        m_iso = rt::load_iso_view(p, s.iso_storage == "q8");
-        if ((s.iso_storage == "q8") != (m_iso.use_q8 && m_iso.leaves_q8 != nullptr))
-            throw Error(p.label() + ": the pool has no " + s.iso_storage + " ISO leaves (prt-iso --storage)");
-        m_bytes = section_bytes(p, {pool::SectionType::iso_info, pool::SectionType::iso_nodes,
-                                    s.iso_storage == "q8" ? pool::SectionType::iso_leaves_q8
-                                                          : pool::SectionType::iso_leaves_f32});
-        m_iso_params.refine_steps = s.iso_refine;
-        m_iso_params.samples = s.iso_samples;
-    } else if (surface == "mls") {
-        m_mls = rt::load_mls_view(p);
-        m_bytes = section_bytes(p, {pool::SectionType::mls_info, pool::SectionType::mls_nodes,
-                                    pool::SectionType::mls_refs, pool::SectionType::mls_splats});
-        m_mls_params.samples = s.mls_k;
-        m_mls_params.refine_steps = s.mls_refine;
-        m_mls_params.faces = s.mls_both_faces ? core::k_mls_faces_both : core::k_mls_faces_by_ray;
-    } else if (surface == "patches") {
-        m_patches = rt::load_patch_view(p);
-        m_bytes = section_bytes(p, {pool::SectionType::patch_info, pool::SectionType::patch_control_points,
-                                    pool::SectionType::patch_bvh, pool::SectionType::patch_subpatch_boxes});
-        m_patch_params.max_iterations = s.patch_iterations;
-        m_patch_params.tolerance = s.patch_tolerance;
-    } else {
-        throw Error("unknown surface \"" + surface + "\" (splats, iso, mls or patches)");
+    if (!scene::parse_surface(surface, m_kind))
+        throw Error("unknown surface \"" + surface + "\" (" + std::string(scene::k_surface_name_list) + ")");
+    switch (m_kind) {
+        case scene::SurfaceKind::splats: {
+            // RenderScene derives the leaf bounds the renderer culls with (runtime/host).
+            scene::Scene sc;
+            m_scene = std::make_unique<rt::RenderScene>(rt::RenderScene::from_pools(sc, {m_pool}));
+            const core::ModelView& mv = m_scene->models().at(0).view;
+            m_octree = &mv.octree;
+            m_colors = mv.colors;
+            m_bytes = m_scene->bytes();
+            break;
+        }
+        case scene::SurfaceKind::iso:
+            m_iso = rt::load_iso_view(p, s.iso_storage == "q8");
+            if ((s.iso_storage == "q8") != (m_iso.use_q8 && m_iso.leaves_q8 != nullptr))
+                throw Error(p.label() + ": the pool has no " + s.iso_storage +
+                            " ISO leaves (prt-iso --storage)");
+            m_bytes = section_bytes(p, {pool::SectionType::iso_info, pool::SectionType::iso_nodes,
+                                        s.iso_storage == "q8" ? pool::SectionType::iso_leaves_q8
+                                                              : pool::SectionType::iso_leaves_f32});
+            m_iso_params.refine_steps = s.iso_refine;
+            m_iso_params.samples = s.iso_samples;
+            break;
+        case scene::SurfaceKind::mls:
+            m_mls = rt::load_mls_view(p);
+            m_bytes = section_bytes(p, {pool::SectionType::mls_info, pool::SectionType::mls_nodes,
+                                        pool::SectionType::mls_refs, pool::SectionType::mls_splats});
+            m_mls_params.samples = s.mls_k;
+            m_mls_params.refine_steps = s.mls_refine;
+            m_mls_params.faces = s.mls_both_faces ? core::k_mls_faces_both : core::k_mls_faces_by_ray;
+            break;
+        case scene::SurfaceKind::patches:
+            m_patches = rt::load_patch_view(p);
+            m_bytes =
+                section_bytes(p, {pool::SectionType::patch_info, pool::SectionType::patch_control_points,
+                                  pool::SectionType::patch_bvh, pool::SectionType::patch_subpatch_boxes});
+            m_patch_params.max_iterations = s.patch_iterations;
+            m_patch_params.tolerance = s.patch_tolerance;
+            break;
     }
 }
 
@@ -64,7 +72,7 @@ SurfaceProbe::~SurfaceProbe() = default;
 bool SurfaceProbe::trace(const core::Ray& r, ProbeHit& out) const {
     ++m_rays;
     bool hit = false;
-    if (m_surface == "splats") {
+    if (m_kind == scene::SurfaceKind::splats) {
         core::SplatSample s{};
         core::WalkStats ws;
         const core::BlendOptions blend{m_s.blend_window, m_s.deep};
@@ -73,14 +81,14 @@ bool SurfaceProbe::trace(const core::Ray& r, ProbeHit& out) const {
         if (hit) out.t = s.t, out.normal = s.normal;
         m_work += ws.splat_tests;
         m_truncated += ws.truncated;
-    } else if (m_surface == "iso") {
+    } else if (m_kind == scene::SurfaceKind::iso) {
         core::IsoHit h;
         core::IsoStats st;
         hit = core::trace_iso(m_iso, r.origin, r.dir, core::k_inf, false, m_iso_params, h, st);
         if (hit) out.t = h.t, out.normal = h.normal;
         m_work += st.evaluations;
         m_truncated += st.truncated;
-    } else if (m_surface == "mls") {
+    } else if (m_kind == scene::SurfaceKind::mls) {
         core::MlsHit h;
         core::MlsStats st;
         hit = m_s.mls_precision == "double"
@@ -108,13 +116,13 @@ bool SurfaceProbe::trace(const core::Ray& r, ProbeHit& out) const {
 }
 
 nlohmann::json SurfaceProbe::settings() const {
-    if (m_surface == "splats")
+    if (m_kind == scene::SurfaceKind::splats)
         return {{"deep_blending", m_s.deep},
                 {"leaf_culling", m_s.leaf_culling},
                 {"blend_window", m_s.blend_window}};
-    if (m_surface == "iso")
+    if (m_kind == scene::SurfaceKind::iso)
         return {{"storage", m_s.iso_storage}, {"refine", m_s.iso_refine}, {"samples", m_s.iso_samples}};
-    if (m_surface == "mls")
+    if (m_kind == scene::SurfaceKind::mls)
         return {{"k", m_s.mls_k},
                 {"refine", m_s.mls_refine},
                 {"precision", m_s.mls_precision},
@@ -127,9 +135,9 @@ nlohmann::json SurfaceProbe::settings() const {
 
 nlohmann::json SurfaceProbe::work() const {
     const double rays = double(std::max<std::uint64_t>(1, m_rays.load()));
-    const char* key = m_surface == "splats"    ? "splat_tests_per_ray"
-                      : m_surface == "patches" ? "newton_iterations_per_ray"
-                                               : "evaluations_per_ray";
+    const char* key = m_kind == scene::SurfaceKind::splats    ? "splat_tests_per_ray"
+                      : m_kind == scene::SurfaceKind::patches ? "newton_iterations_per_ray"
+                                                              : "evaluations_per_ray";
     return {{key, double(m_work.load()) / rays}, {"truncated_walks", m_truncated.load()}};
 }
 

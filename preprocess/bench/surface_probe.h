@@ -22,6 +22,7 @@
 #include "prt/core/ray.h"
 #include "prt/core/splat.h"
 #include "prt/formats/pool.h"
+#include "prt/formats/scene_layout.h"
 
 namespace prt::rt {
 class RenderScene;
@@ -86,6 +87,7 @@ public:
 private:
     std::shared_ptr<const pool::PoolFile> m_pool;
     std::string m_surface;
+    scene::SurfaceKind m_kind = scene::SurfaceKind::splats;  ///< m_surface parsed
     SurfaceSettings m_s;
     std::unique_ptr<rt::RenderScene> m_scene;  // splats: the renderer's leaf bounds
     const core::OctreeView* m_octree = nullptr;

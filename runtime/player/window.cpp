@@ -267,6 +267,7 @@ struct WindowContext {
     bool switch_backend = false;
     core::RenderParams* params = nullptr;
     bool quiet = false;
+    std::string surfaces;  ///< "model: surface" of every model (key K)
 };
 
 void on_key(GLFWwindow* w, int key, int, int action, int) {
@@ -290,9 +291,7 @@ void on_key(GLFWwindow* w, int key, int, int action, int) {
             p.deep_blending ^= 1u;
             break;
         case GLFW_KEY_K:
-            tool::note(ctx->quiet,
-                       "prt-play: surface kind: splats (the only surface this build renders; ISO, MLS and "
-                       "patches are not implemented yet)");
+            tool::note(ctx->quiet, "prt-play: surfaces: %s", ctx->surfaces.c_str());
             break;
         case GLFW_KEY_B:
             if (ctx->backends.size() > 1) {
@@ -359,6 +358,9 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
     WindowContext ctx;
     ctx.quiet = options.quiet;
     ctx.params = &rs.params();
+    for (const rt::LoadedModel& m : rs.models())
+        ctx.surfaces += (ctx.surfaces.empty() ? "" : ", ") + m.name + " " +
+                        std::string(scene::surface_name(m.view.surface));
     const rt::BackendAvailability avail = rt::backend_availability();
     ctx.backends = {"cpu"};
     if (avail.cuda_device) {

@@ -282,6 +282,25 @@ TEST(Scene, RoundTripOfDefaults) {
     expect_same(s, parse_scene(to_json(s), "t.json"));
 }
 
+TEST(Scene, SurfaceNamesAreTheOnesSceneMdLists) {
+    // SCENE.md models[].surface: "splats", "iso", "mls", "patches", in the enum's order (the
+    // core's KernelMask bits are 1 << SurfaceKind).
+    const char* documented[] = {"splats", "iso", "mls", "patches"};
+    ASSERT_EQ(k_surface_kind_count, 4u);
+    for (std::uint32_t i = 0; i < 4; ++i) {
+        SurfaceKind k = SurfaceKind::splats;
+        ASSERT_TRUE(parse_surface(documented[i], k)) << documented[i];
+        EXPECT_EQ(static_cast<std::uint32_t>(k), i);
+        EXPECT_EQ(surface_name(k), documented[i]);
+    }
+    for (const char* bad : {"", "Splats", "iso ", "voxels", "auto"}) {
+        SurfaceKind k = SurfaceKind::mls;
+        EXPECT_FALSE(parse_surface(bad, k)) << bad;
+        EXPECT_EQ(k, SurfaceKind::mls) << "unchanged on failure";
+    }
+    EXPECT_EQ(std::string(k_surface_name_list), "splats, iso, mls or patches");
+}
+
 TEST(Scene, MaterialReferences) {
     const std::string mats = R"("materials": [{"name": "a"}, {"name": "b"}, {}])";
     EXPECT_EQ(parse_scene("{" + mats + R"(, "models": [{"pool": "/x.pool", "material": "b"}]})", "t")

@@ -82,18 +82,6 @@ private:
     bool m_stop = false;
 };
 
-void add_counters(rt::FrameStats& s, const core::RayCounters& c) {
-    s.primary += c.primary;
-    s.secondary += c.secondary;
-    s.shadow += c.shadow;
-    s.leaves += c.leaves;
-    s.splat_tests += c.splat_tests;
-    s.truncated += c.truncated;
-    s.sanitized += c.sanitized;
-    s.dropped += c.dropped;
-    s.culled += c.culled;
-}
-
 class CpuBackend final : public rt::Backend {
 public:
     explicit CpuBackend(unsigned threads) : m_pool(threads) {}
@@ -137,7 +125,7 @@ public:
                         image.rgba8[i] = core::pack_rgba8(core::encode_display(color, scene.params));
                     }
                 }
-                add_counters(total, c);
+                total += c;
             }
         };
         m_pool.run(job);

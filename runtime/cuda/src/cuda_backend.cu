@@ -106,6 +106,67 @@ __global__ void __launch_bounds__(k_block, k_min_blocks)
     flush_counters(c, counters);
 }
 
+// ---- The megakernels this build has ----------------------------------------------------------------
+
+using RenderKernel = void (*)(core::SceneView, core::PinholeCamera, std::uint32_t, std::uint32_t,
+                              std::uint32_t, std::uint32_t, float*, std::uint32_t*, unsigned long long*);
+
+/// One megakernel variant: the code it carries (core::KernelMask: splats only, patches only, or
+/// everything with sampling), its occupancy hint (--min-blocks) and its two ray mappings.
+struct Megakernel {
+    std::uint32_t mask;
+    int min_blocks;
+    RenderKernel zorder, linear;
+};
+
+template <std::uint32_t K, int k_min_blocks>
+Megakernel megakernel() {
+    return {K, k_min_blocks, render_kernel<true, k_min_blocks, K>, render_kernel<false, k_min_blocks, K>};
+}
+
+/// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
+/// launch: splats at 4 blocks per SM, patches at 2, the general kernel at 4. The tuning variants of
+/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4: runtime/README.md) only with the CMake option
+/// PRT_CUDA_TUNING_KERNELS, so a default build compiles 6 megakernels instead of 20.
+const Megakernel k_megakernels[] = {
+    megakernel<core::k_mask_splats, 4>(),   // splats only, the default occupancy
+    megakernel<core::k_mask_patches, 2>(),  // patches only, the default occupancy
+    megakernel<core::k_mask_all, 4>(),      // every surface, sampling
+#if PRT_CUDA_TUNING_KERNELS
+    megakernel<core::k_mask_splats, 1>(),  megakernel<core::k_mask_splats, 2>(),
+    megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats, 5>(),
+    megakernel<core::k_mask_splats, 6>(),  megakernel<core::k_mask_patches, 1>(),
+    megakernel<core::k_mask_patches, 4>(),
+#endif
+};
+
+/// The megakernel a frame needs: patch-only and splat-only Whitted frames get their own kernels
+/// (without the other surfaces' registers), everything else (mixed surfaces, spp > 1, path tracing)
+/// the general one. The occupancy: --min-blocks `asked` (1-6; anything else: the kernel's default).
+/// Patch-only kernels: 2 by default (128 registers), 1 (all it needs, ~255) or 4 for 3-6 (64: heavy
+/// spilling). Measured on an H100 (issue #8), teapot primary / shadow / one reflection: 1.26 / 0.83
+/// / 0.83 Grays/s at 2, 1.27 / 0.82 / 0.76 at 1, 0.76 / 0.53 / 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27
+/// at 2, 0.86 / 0.61 / 0.26 at 1. The general kernel exists at the default occupancy only. Throws
+/// prt::Error (one line) when this build lacks the variant.
+const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int asked) {
+    const std::uint32_t mask =
+        sampling || (surface_mask != core::k_mask_patches && surface_mask != core::k_mask_splats)
+            ? std::uint32_t{core::k_mask_all}
+            : surface_mask;
+    if (asked < 1 || asked > 6) asked = 0;
+    int blocks = 4;  // the splat kernel's default, the general kernel's only occupancy
+    if (mask == core::k_mask_patches)
+        blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
+    else if (mask == core::k_mask_splats && asked != 0)
+        blocks = asked;
+    for (const Megakernel& k : k_megakernels)
+        if (k.mask == mask && k.min_blocks == blocks) return k;
+    throw Error(
+        std::string("CUDA: --min-blocks ") + std::to_string(asked) + " selects the " +
+        (mask == core::k_mask_patches ? "patch" : "splat") + " kernel for " + std::to_string(blocks) +
+        " blocks per SM, a tuning variant this build lacks (configure with -DPRT_CUDA_TUNING_KERNELS=ON)");
+}
+
 // ---- Wavefront kernels (thesis 2.4, Fig. 2.5) ---------------------------------------------------
 
 constexpr std::uint32_t k_no_pixel = 0xffffffffu;
@@ -245,8 +306,10 @@ public:
     std::string device() const override { return m_device; }
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
+        const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
+        find_megakernel(mask, false, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
         const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
-        m_surface_mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
+        m_surface_mask = mask;
         m_scene = m_device_scene.view();
         return stats;
     }
@@ -322,60 +385,8 @@ private:
                                                    rgba_target(req), m_counters.data());
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
-        if (m_surface_mask == core::k_mask_patches && !sampling) {
-            // Patch-only scenes: double-precision Newton without the point surfaces' registers.
-            // --min-blocks picks the occupancy: 2 by default (128 registers), 1 (all it needs,
-            // ~255) or 4 (64: heavy spilling). Measured on an H100 (issue #8), teapot
-            // primary / shadow / one reflection: 1.26 / 0.83 / 0.83 Grays/s at 2, 1.27 / 0.82 /
-            // 0.76 at 1, 0.76 / 0.53 / 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27 at 2, 0.86 / 0.61 /
-            // 0.26 at 1.
-            switch (m_options.cuda_min_blocks) {
-                case 1:
-                    z ? launch(render_kernel<true, 1, core::k_mask_patches>)
-                      : launch(render_kernel<false, 1, core::k_mask_patches>);
-                    break;
-                case 3:
-                case 4:
-                case 5:
-                case 6:
-                    z ? launch(render_kernel<true, 4, core::k_mask_patches>)
-                      : launch(render_kernel<false, 4, core::k_mask_patches>);
-                    break;
-                default:
-                    z ? launch(render_kernel<true, 2, core::k_mask_patches>)
-                      : launch(render_kernel<false, 2, core::k_mask_patches>);
-                    break;
-            }
-            PRT_CUDA_CHECK_LAUNCH();
-            return;
-        }
-        if (m_surface_mask != core::k_mask_splats || sampling) {
-            // The general kernel (every surface, sampling) exists for the default occupancy only.
-            z ? launch(render_kernel<true, 4, core::k_mask_all>)
-              : launch(render_kernel<false, 4, core::k_mask_all>);
-            PRT_CUDA_CHECK_LAUNCH();
-            return;
-        }
-        switch (m_options.cuda_min_blocks) {
-            case 1:
-                z ? launch(render_kernel<true, 1>) : launch(render_kernel<false, 1>);
-                break;
-            case 2:
-                z ? launch(render_kernel<true, 2>) : launch(render_kernel<false, 2>);
-                break;
-            case 3:
-                z ? launch(render_kernel<true, 3>) : launch(render_kernel<false, 3>);
-                break;
-            case 5:
-                z ? launch(render_kernel<true, 5>) : launch(render_kernel<false, 5>);
-                break;
-            case 6:
-                z ? launch(render_kernel<true, 6>) : launch(render_kernel<false, 6>);
-                break;
-            default:
-                z ? launch(render_kernel<true, 4>) : launch(render_kernel<false, 4>);
-                break;
-        }
+        const Megakernel& k = find_megakernel(m_surface_mask, sampling, m_options.cuda_min_blocks);
+        launch(z ? k.zorder : k.linear);
         PRT_CUDA_CHECK_LAUNCH();
     }
 

@@ -1,20 +1,19 @@
 #include "prt/runtime/backend.h"
 
+#include "prt/core/render.h"
+
 namespace prt::rt {
 
 FrameStats& FrameStats::operator+=(const FrameStats& o) {
     seconds += o.seconds;
     device_ms += o.device_ms;
     pixels += o.pixels;
-    primary += o.primary;
-    secondary += o.secondary;
-    shadow += o.shadow;
-    leaves += o.leaves;
-    splat_tests += o.splat_tests;
-    truncated += o.truncated;
-    sanitized += o.sanitized;
-    dropped += o.dropped;
-    culled += o.culled;
+    core::add_ray_counters(*this, o);
+    return *this;
+}
+
+FrameStats& FrameStats::operator+=(const core::RayCounters& c) {
+    core::add_ray_counters(*this, c);
     return *this;
 }
 

@@ -60,50 +60,33 @@ Placement placement(const scene::Transform& t, const pool::ModelInfo& info) {
     return p;
 }
 
-const char* surface_name(scene::SurfaceKind k) {
-    switch (k) {
-    case scene::SurfaceKind::iso: return "iso";
-    case scene::SurfaceKind::mls: return "mls";
-    case scene::SurfaceKind::patches: return "patches";
-    case scene::SurfaceKind::splats: break;
-    }
-    return "splats";
-}
-
 bool has_splats(const pool::PoolFile& pf) {
     return pf.has(pool::SectionType::octree_info) || pf.has(pool::SectionType::octree_nodes) ||
            pf.has(pool::SectionType::splats);
 }
 
-/// The surface a model is traced as: the one asked for, or for "auto" the first the pool holds of
-/// splats, patches, ISO, MLS. A scene's default ("splats") on a pool without splat sections but with
-/// another surface takes that one with a warning (a patch pool named without "surface").
-core::SurfaceKind choose_surface(const pool::PoolFile& pf, const std::string& asked, const std::string& model,
-                                 std::vector<std::string>& warnings) {
-    if (asked == "iso") return core::SurfaceKind::iso;
-    if (asked == "mls") return core::SurfaceKind::mls;
-    if (asked == "patches") return core::SurfaceKind::patches;
-    if (asked == "splats" && has_splats(pf)) return core::SurfaceKind::splats;
+/// The surface a model is traced as: the one asked for, or without one ("auto") the first the pool
+/// holds of splats, patches, ISO, MLS. Splats asked of a pool without splat sections but with another
+/// surface (a scene's default on a patch pool named without "surface") take that one with a warning.
+core::SurfaceKind choose_surface(const pool::PoolFile& pf, std::optional<core::SurfaceKind> asked,
+                                 const std::string& model, std::vector<std::string>& warnings) {
+    if (asked && (*asked != core::SurfaceKind::splats || has_splats(pf))) return *asked;
     core::SurfaceKind k = core::SurfaceKind::splats;
-    const char* name = "splats";
     if (has_splats(pf)) {
         k = core::SurfaceKind::splats;
     } else if (has_patches(pf)) {
         k = core::SurfaceKind::patches;
-        name = "patches";
     } else if (has_iso(pf)) {
         k = core::SurfaceKind::iso;
-        name = "iso";
     } else if (has_mls(pf)) {
         k = core::SurfaceKind::mls;
-        name = "mls";
     } else {
         pf.fail(nullptr, "no surface to render: no octree (prt-octree), ISO (prt-iso), MLS (prt-mls) or patch "
                          "(prt-patches) sections");
     }
-    if (asked == "splats")
-        warnings.push_back("model '" + model + "': the pool has no splat octree: rendering its " + name +
-                           " surface (set models[].surface)");
+    if (asked)
+        warnings.push_back("model '" + model + "': the pool has no splat octree: rendering its " +
+                           std::string(scene::surface_name(k)) + " surface (set models[].surface)");
     return k;
 }
 
@@ -282,13 +265,25 @@ core::RenderParams to_params(const scene::RenderSettings& s, std::vector<std::st
     return p;
 }
 
+void RenderScene::apply_load_options(const LoadOptions& options) {
+    m_surface_auto = options.surface == "auto";
+    m_surface_override.reset();
+    scene::SurfaceKind k{};
+    if (!options.surface.empty() && !m_surface_auto) {
+        if (!scene::parse_surface(options.surface, k))
+            throw Error("unknown surface \"" + options.surface + "\" (expected auto, " +
+                        std::string(scene::k_surface_name_list) + ")");
+        m_surface_override = k;
+    }
+    m_iso_float = options.iso_float;
+    m_point_colors_override = options.point_colors;
+}
+
 RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::path& pool_override,
                               const LoadOptions& options) {
     RenderScene r;
     r.m_scene = sc;
-    r.m_surface_override = options.surface;
-    r.m_iso_float = options.iso_float;
-    r.m_point_colors_override = options.point_colors;
+    r.apply_load_options(options);
     std::vector<std::shared_ptr<const pool::PoolFile>> pools;
     if (!pool_override.empty()) {
         scene::Model m;
@@ -317,9 +312,7 @@ RenderScene RenderScene::from_pools(const scene::Scene& sc,
                                     const LoadOptions& options) {
     RenderScene r;
     r.m_scene = sc;
-    r.m_surface_override = options.surface;
-    r.m_iso_float = options.iso_float;
-    r.m_point_colors_override = options.point_colors;
+    r.apply_load_options(options);
     while (r.m_scene.models.size() < pools.size()) r.m_scene.models.push_back(scene::Model{});
     r.m_scene.models.resize(pools.size());
     r.build(std::move(pools));
@@ -600,8 +593,9 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         lm.name = sm.name.empty() ? pf.label() : sm.name;
         lm.pool = pools[i];
         core::ModelView& v = lm.view;
-        v.surface = choose_surface(pf, m_surface_override.empty() ? surface_name(sm.surface) : m_surface_override,
-                                   lm.name, m_warnings);
+        const std::optional<core::SurfaceKind> asked =
+            m_surface_auto ? std::nullopt : std::optional{m_surface_override.value_or(sm.surface)};
+        v.surface = choose_surface(pf, asked, lm.name, m_warnings);
         switch (v.surface) {
         case core::SurfaceKind::splats: load_splats(pf, lm); break;
         case core::SurfaceKind::iso: {

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "prt/error.h"
+#include "prt/formats/scene_layout.h"
 
 namespace prt::scene {
 
@@ -72,8 +73,6 @@ struct Material {
     std::string texture;             ///< optional tri-planar texture image (prt-texture)
 };
 
-enum class SurfaceKind { splats, iso, mls, patches };
-
 struct Transform {
     Vec3 translate{0, 0, 0};
     Vec3 rotate_degrees{0, 0, 0};  ///< applied X, then Y, then Z
@@ -86,7 +85,7 @@ struct Model {
     std::filesystem::path source;  ///< or a source file (PLY/...); prt-bake imports it
     Transform transform;
     std::uint32_t material = 0;    ///< index into Scene::materials
-    SurfaceKind surface = SurfaceKind::splats;
+    SurfaceKind surface = SurfaceKind::splats;  ///< scene_layout.h
 };
 
 struct Environment {

@@ -41,7 +41,7 @@
 /// whose splats must be read before reading any ("while-while", splat.h next_leaf). The same hits
 /// either way; only how the threads of a GPU warp line up changes. Measured on an H100 (prt-bench,
 /// 1M-point room, runtime/README.md): 1 is 49% slower for primary rays and no faster for 4-bounce
-/// reflections, so 0 is the default; 1 stays selectable for other scenes.
+/// reflections, so 0 is the default; 1 stays selectable for other scenes (CMake: -DPRT_BATCHED_WALK=ON).
 #define PRT_BATCHED_WALK 0
 #endif
 

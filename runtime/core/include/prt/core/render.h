@@ -34,11 +34,46 @@ struct RayCounters {
     std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds (splat.h)
 };
 
-PRT_HD PRT_INLINE void add_walk_stats(RayCounters& c, const WalkStats& w) {
-    c.leaves += w.leaves;
-    c.splat_tests += w.splat_tests;
-    c.truncated += w.truncated;
-    c.culled += w.culled;
+/// Adds the ray counters of b to a: RayCounters, or any type with the same fields (the host's
+/// rt::FrameStats sums them per frame).
+template <class A, class B>
+PRT_HD PRT_INLINE void add_ray_counters(A& a, const B& b) {
+    a.primary += b.primary;
+    a.secondary += b.secondary;
+    a.shadow += b.shadow;
+    a.leaves += b.leaves;
+    a.splat_tests += b.splat_tests;
+    a.truncated += b.truncated;
+    a.sanitized += b.sanitized;
+    a.dropped += b.dropped;
+    a.culled += b.culled;
+}
+
+PRT_HD PRT_INLINE RayCounters& operator+=(RayCounters& a, const RayCounters& b) {
+    add_ray_counters(a, b);
+    return a;
+}
+
+/// Adds one surface's work to the ray counters (leaves: octree leaves / ISO leaves / kd-tree cells /
+/// BVH nodes visited; splat_tests: splat tests / evaluations of f or F / Newton steps).
+PRT_HD PRT_INLINE void add_work(RayCounters& c, std::uint32_t leaves, std::uint32_t tests,
+                                std::uint32_t truncated, std::uint32_t culled) {
+    c.leaves += leaves;
+    c.splat_tests += tests;
+    c.truncated += truncated;
+    c.culled += culled;
+}
+PRT_HD PRT_INLINE void add_stats(RayCounters& c, const WalkStats& w) {
+    add_work(c, w.leaves, w.splat_tests, w.truncated, w.culled);
+}
+PRT_HD PRT_INLINE void add_stats(RayCounters& c, const IsoStats& st) {
+    add_work(c, st.leaves, st.evaluations, st.truncated, 0);
+}
+PRT_HD PRT_INLINE void add_stats(RayCounters& c, const MlsStats& st) {
+    add_work(c, st.cells, st.evaluations, st.truncated, 0);
+}
+PRT_HD PRT_INLINE void add_stats(RayCounters& c, const PatchStats& st) {
+    add_work(c, st.bvh_nodes, st.newton_iterations, 0, 0);
 }
 
 /// A shaded surface point in the render frame.
@@ -101,16 +136,16 @@ PRT_HD PRT_INLINE PatchTraceParams patch_params_for(const SceneView& s, const Mo
 }
 
 /// Which code a kernel carries (a template argument of the functions below): the surfaces it can
-/// meet and whether it samples pixels (path.h). The CUDA backend launches the smallest kernel a
-/// scene needs, so a splat scene keeps the registers (and the speed) of a splat-only kernel; the
-/// CPU backend uses k_mask_all.
+/// meet (bit 1 << SurfaceKind) and whether it samples pixels (path.h). The CUDA backend launches
+/// the smallest kernel a scene needs, so a splat scene keeps the registers (and the speed) of a
+/// splat-only kernel; the CPU backend uses k_mask_all.
 enum KernelMask : std::uint32_t {
-    k_mask_splats = 1u << 0,
-    k_mask_iso = 1u << 1,
-    k_mask_mls = 1u << 2,
-    k_mask_patches = 1u << 3,
-    k_mask_sampling = 1u << 4,  ///< spp > 1 or path tracing
-    k_mask_all = 31u,
+    k_mask_splats = 1u << static_cast<std::uint32_t>(SurfaceKind::splats),
+    k_mask_iso = 1u << static_cast<std::uint32_t>(SurfaceKind::iso),
+    k_mask_mls = 1u << static_cast<std::uint32_t>(SurfaceKind::mls),
+    k_mask_patches = 1u << static_cast<std::uint32_t>(SurfaceKind::patches),
+    k_mask_sampling = 1u << scene::k_surface_kind_count,  ///< spp > 1 or path tracing
+    k_mask_all = (k_mask_sampling << 1) - 1,
 };
 
 /// The mask a scene needs.
@@ -121,112 +156,167 @@ PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
     return m;
 }
 
-/// The closest hit of ray r (render frame) with model m at t in [0, t_max), dispatched on the
-/// model's surface: splats (thesis 3.3 blending), ISO (thesis 4.5), MLS (WS05 3.2), patches
-/// (seed 002, 3). Every surface takes the seamless flag (thesis 3.6) instead of an epsilon.
-/// Counters: leaves = octree leaves / ISO leaves / kd-tree cells / BVH nodes visited;
-/// splat_tests = splat tests / evaluations of f or F / Newton steps.
-template <std::uint32_t K = k_mask_all>
-PRT_HD inline bool closest_hit_model(const SceneView& s, std::uint32_t m, const Ray& r, float t_max,
-                                     ModelHit& out, RayCounters& c) {
-    const ModelView& mv = s.models[m];
+/// A surface kind as a type: what dispatch_surface() hands on, so each surface's code is its own
+/// overload below and a kernel compiles only the overloads its KernelMask names.
+template <SurfaceKind S>
+struct SurfaceTag {
+    static constexpr SurfaceKind kind = S;
+};
+
+/// Ray r in model `model`'s local frame (to_model_frame), as every surface query takes it.
+struct ModelRay {
+    const ModelView& mv;
+    std::uint32_t model;
+    const Ray& ray;  ///< render frame (t is the same in both frames)
     Vec3 o, d;
-    to_model_frame(mv, r, o, d);
-    const bool inside = ray_inside(r);
-    if constexpr ((K & k_mask_iso) != 0) {
-        if (mv.surface == SurfaceKind::iso) {
-            const IsoParams p = iso_params_for(s);
-            IsoHit h;
-            IsoStats st;
-            const bool hit = trace_iso(mv.iso, o, d, t_max, inside, p, h, st);
-            c.leaves += st.leaves;
-            c.splat_tests += st.evaluations;
-            c.truncated += st.truncated;
-            if (!hit) return false;
-            out.t = h.t;
-            out.normal = h.normal;
-            out.color = (mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1};
-            out.point = 0xffffffffu;
-            return true;
-        }
-    }
-    if constexpr ((K & k_mask_mls) != 0) {
-        if (mv.surface == SurfaceKind::mls) {
-            const MlsParams p = mls_params_for(s);
-            MlsHit h;
-            MlsStats st;
-            const bool hit = trace_mls<float>(mv.mls, o, d, t_max, inside, p, h, st);
-            c.leaves += st.cells;
-            c.splat_tests += st.evaluations;
-            c.truncated += st.truncated;
-            if (!hit) return false;
-            out.t = h.t;
-            out.normal = h.normal;
-            out.color = mls_blend_color(mv.mls, mv.colors, h);
-            out.point = h.point;
-            return true;
-        }
-    }
-    if constexpr ((K & k_mask_patches) != 0) {
-        if (mv.surface == SurfaceKind::patches) {
-            const PatchTraceParams p = patch_params_for(s, mv, m, r);
-            PatchHit h;
-            PatchStats st;
-            const bool hit = trace_patches(mv.patches, make_patch_ray(o, d, t_max, inside), p, h, &st);
-            c.leaves += st.bvh_nodes;
-            c.splat_tests += st.newton_iterations;
-            if (!hit || !(h.t < static_cast<double>(t_max))) return false;
-            out.t = static_cast<float>(h.t);
-            out.normal = Vec3{static_cast<float>(h.normal.x), static_cast<float>(h.normal.y),
-                              static_cast<float>(h.normal.z)};
-            out.color = Vec3{1, 1, 1};
-            out.point = 0xffffffffu;
-            out.prim = h.patch;
-            out.u = static_cast<float>(h.u);
-            out.v = static_cast<float>(h.v);
-            return true;
-        }
-    }
-    if constexpr ((K & k_mask_splats) != 0) {
-        const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
-        WalkStats ws;
-        SplatSample h{};
-        const bool hit = closest_hit_splats(mv.octree, mv.colors, o, d, inside, t_max, blend,
-                                            s.params.max_steps, h, ws, s.params.leaf_culling);
-        add_walk_stats(c, ws);
-        if (!hit) return false;
-        out.t = h.t;
-        out.normal = h.normal;
-        out.color = h.color;
-        out.point = h.point;
-        return true;
+    bool inside;
+};
+
+// ---- One surface each: the closest hit in [0, t_max) and whether anything blocks [0, t_max) ----
+// Splats (thesis 3.3 blending), ISO (thesis 4.5), MLS (WS05 3.2), patches (seed 002, 3). Every
+// surface takes the seamless flag (thesis 3.6) instead of an epsilon.
+
+PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q,
+                                  float t_max, ModelHit& out, RayCounters& c) {
+    IsoHit h;
+    IsoStats st;
+    const bool hit = trace_iso(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), h, st);
+    add_stats(c, st);
+    if (hit)
+        out = ModelHit{h.t, h.normal, (q.mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1}};
+    return hit;
+}
+PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q,
+                                   RayCounters& c) {
+    IsoStats st;
+    const bool hit = iso_occluded(q.mv.iso, q.o, q.d, q.ray.t_max, q.inside, iso_params_for(s), st);
+    add_stats(c, st);
+    return hit;
+}
+
+PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::mls>, const SceneView& s, const ModelRay& q,
+                                  float t_max, ModelHit& out, RayCounters& c) {
+    MlsHit h;
+    MlsStats st;
+    const bool hit = trace_mls<float>(q.mv.mls, q.o, q.d, t_max, q.inside, mls_params_for(s), h, st);
+    add_stats(c, st);
+    if (hit) out = ModelHit{h.t, h.normal, mls_blend_color(q.mv.mls, q.mv.colors, h), h.point};
+    return hit;
+}
+PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::mls>, const SceneView& s, const ModelRay& q,
+                                   RayCounters& c) {
+    MlsStats st;
+    const bool hit = mls_occluded<float>(q.mv.mls, q.o, q.d, q.ray.t_max, q.inside, mls_params_for(s), st);
+    add_stats(c, st);
+    return hit;
+}
+
+PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::patches>, const SceneView& s, const ModelRay& q,
+                                  float t_max, ModelHit& out, RayCounters& c) {
+    const PatchTraceParams p = patch_params_for(s, q.mv, q.model, q.ray);
+    PatchHit h;
+    PatchStats st;
+    const bool hit = trace_patches(q.mv.patches, make_patch_ray(q.o, q.d, t_max, q.inside), p, h, &st);
+    add_stats(c, st);
+    if (!hit || !(h.t < static_cast<double>(t_max))) return false;
+    out.t = static_cast<float>(h.t);
+    out.normal =
+        Vec3{static_cast<float>(h.normal.x), static_cast<float>(h.normal.y), static_cast<float>(h.normal.z)};
+    out.color = Vec3{1, 1, 1};
+    out.point = 0xffffffffu;
+    out.prim = h.patch;
+    out.u = static_cast<float>(h.u);
+    out.v = static_cast<float>(h.v);
+    return true;
+}
+PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::patches>, const SceneView& s, const ModelRay& q,
+                                   RayCounters& c) {
+    const PatchTraceParams p = patch_params_for(s, q.mv, q.model, q.ray);
+    PatchStats st;
+    const bool hit = patches_occluded(q.mv.patches, make_patch_ray(q.o, q.d, q.ray.t_max, q.inside), p, &st);
+    add_stats(c, st);
+    return hit;
+}
+
+PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::splats>, const SceneView& s, const ModelRay& q,
+                                  float t_max, ModelHit& out, RayCounters& c) {
+    const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
+    WalkStats ws;
+    SplatSample h{};
+    const bool hit = closest_hit_splats(q.mv.octree, q.mv.colors, q.o, q.d, q.inside, t_max, blend,
+                                        s.params.max_steps, h, ws, s.params.leaf_culling);
+    add_stats(c, ws);
+    if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
+    return hit;
+}
+PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneView& s, const ModelRay& q,
+                                   RayCounters& c) {
+    WalkStats ws;
+    const bool hit = any_hit_splats(q.mv.octree, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                                    s.params.leaf_culling);
+    add_stats(c, ws);
+    return hit;
+}
+
+/// The one surface dispatch: visit(SurfaceTag<kind>{}) for a model's surface kind, among the
+/// kinds K carries; splats take whatever is not ISO, MLS or patches (a kernel is launched only for
+/// scenes whose surfaces it carries: scene_mask()). False for a surface K does not carry.
+template <std::uint32_t K, class Visit>
+PRT_HD PRT_INLINE bool dispatch_surface(SurfaceKind kind, Visit&& visit) {
+    if constexpr ((K & k_mask_iso) != 0)
+        if (kind == SurfaceKind::iso) return visit(SurfaceTag<SurfaceKind::iso>{});
+    if constexpr ((K & k_mask_mls) != 0)
+        if (kind == SurfaceKind::mls) return visit(SurfaceTag<SurfaceKind::mls>{});
+    if constexpr ((K & k_mask_patches) != 0)
+        if (kind == SurfaceKind::patches) return visit(SurfaceTag<SurfaceKind::patches>{});
+    if constexpr ((K & k_mask_splats) != 0) return visit(SurfaceTag<SurfaceKind::splats>{});
+    return false;
+}
+
+/// For each model of s in order: ray r in its frame (ModelRay) and its surface's tag go to
+/// visit(tag, q), which returns true to stop. Returns whether a visit stopped the walk. Closest
+/// hits and shadow rays (and through them every trace: trace_ray, path.h, the profiles) meet the
+/// surfaces here only.
+template <std::uint32_t K, class Visit>
+PRT_HD PRT_INLINE bool for_each_surface(const SceneView& s, const Ray& r, Visit&& visit) {
+    for (std::uint32_t m = 0; m < s.model_count; ++m) {
+        const ModelView& mv = s.models[m];
+        ModelRay q{mv, m, r, Vec3{}, Vec3{}, ray_inside(r)};
+        to_model_frame(mv, r, q.o, q.d);
+        if (dispatch_surface<K>(mv.surface, [&](auto surface) { return visit(surface, q); })) return true;
     }
     return false;
 }
 
-/// Closest hit over all models, t in [0, r.t_max).
+/// The material a hit on model mv at source point `point` shades with: the point's material id
+/// when the pool has them, else the model's, clamped to the scene's materials.
+PRT_HD PRT_INLINE std::uint32_t hit_material(const SceneView& s, const ModelView& mv, std::uint32_t point) {
+    std::uint32_t mat = mv.material;
+    if (mv.material_ids != nullptr && point < mv.point_count) mat = mv.material_ids[point];
+    if (mat >= s.material_count) mat = s.material_count > 0 ? s.material_count - 1 : 0;
+    return mat;
+}
+
+/// Closest hit over all models, t in [0, r.t_max). Counters: RayCounters, add_stats().
 template <std::uint32_t K = k_mask_all>
 PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHit& hit, RayCounters& c) {
     float best = r.t_max;
     bool found = false;
     ModelHit sample;
     std::uint32_t model = 0;
-    for (std::uint32_t m = 0; m < s.model_count; ++m) {
+    for_each_surface<K>(s, r, [&](auto surface, const ModelRay& q) {
         ModelHit cand;
-        if (closest_hit_model<K>(s, m, r, best, cand, c)) {
-            if (cand.t < best || !found) {
-                best = cand.t;
-                sample = cand;
-                model = m;
-                found = true;
-            }
+        if (closest_on(surface, s, q, best, cand, c) && (cand.t < best || !found)) {
+            best = cand.t;
+            sample = cand;
+            model = q.model;
+            found = true;
         }
-    }
+        return false;
+    });
     if (!found) return false;
     const ModelView& mv = s.models[model];
-    std::uint32_t mat = mv.material;
-    if (mv.material_ids != nullptr && sample.point < mv.point_count) mat = mv.material_ids[sample.point];
-    if (mat >= s.material_count) mat = s.material_count > 0 ? s.material_count - 1 : 0;
+    const std::uint32_t mat = hit_material(s, mv, sample.point);
     hit.t = sample.t;
     hit.position = ray_at(r, sample.t);
     hit.normal = normalize(mv.rotation * sample.normal);
@@ -243,52 +333,8 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
 /// Whether anything blocks the segment [0, r.t_max) of a shadow ray (thesis 5.2), any surface.
 template <std::uint32_t K = k_mask_all>
 PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
-    for (std::uint32_t m = 0; m < s.model_count; ++m) {
-        const ModelView& mv = s.models[m];
-        Vec3 o, d;
-        to_model_frame(mv, r, o, d);
-        const bool inside = ray_inside(r);
-        bool hit = false;
-        if constexpr ((K & k_mask_iso) != 0) {
-            if (mv.surface == SurfaceKind::iso) {
-                const IsoParams p = iso_params_for(s);
-                IsoStats st;
-                hit = iso_occluded(mv.iso, o, d, r.t_max, inside, p, st);
-                c.leaves += st.leaves;
-                c.splat_tests += st.evaluations;
-                c.truncated += st.truncated;
-            }
-        }
-        if constexpr ((K & k_mask_mls) != 0) {
-            if (mv.surface == SurfaceKind::mls) {
-                const MlsParams p = mls_params_for(s);
-                MlsStats st;
-                hit = mls_occluded<float>(mv.mls, o, d, r.t_max, inside, p, st);
-                c.leaves += st.cells;
-                c.splat_tests += st.evaluations;
-                c.truncated += st.truncated;
-            }
-        }
-        if constexpr ((K & k_mask_patches) != 0) {
-            if (mv.surface == SurfaceKind::patches) {
-                const PatchTraceParams p = patch_params_for(s, mv, m, r);
-                PatchStats st;
-                hit = patches_occluded(mv.patches, make_patch_ray(o, d, r.t_max, inside), p, &st);
-                c.leaves += st.bvh_nodes;
-                c.splat_tests += st.newton_iterations;
-            }
-        }
-        if constexpr ((K & k_mask_splats) != 0) {
-            if (mv.surface == SurfaceKind::splats) {
-                WalkStats ws;
-                hit = any_hit_splats(mv.octree, o, d, inside, r.t_max, s.params.max_steps, ws,
-                                     s.params.leaf_culling);
-                add_walk_stats(c, ws);
-            }
-        }
-        if (hit) return true;
-    }
-    return false;
+    return for_each_surface<K>(
+        s, r, [&](auto surface, const ModelRay& q) { return occluded_on(surface, s, q, c); });
 }
 
 /// A ray leaving the surface point h (shadow, reflected, refracted): starts exactly at the hit,
@@ -302,6 +348,14 @@ PRT_HD PRT_INLINE Ray leave_surface(const SurfaceHit& h, Vec3 dir, float t_max, 
     return r;
 }
 
+/// The core's answer to shadow rays (shade_hit's default).
+template <std::uint32_t K>
+struct SceneOcclusion {
+    PRT_HD PRT_INLINE bool operator()(const SceneView& s, const Ray& r, RayCounters& c) const {
+        return occluded<K>(s, r, c);
+    }
+};
+
 /// The shading normal: the stored normal turned to face the incoming ray.
 PRT_HD PRT_INLINE Vec3 facing_normal(const SurfaceHit& h, const Ray& r) {
     return dot(h.normal, r.dir) < 0.0f ? h.normal : -h.normal;
@@ -311,8 +365,11 @@ PRT_HD PRT_INLINE Vec3 facing_normal(const SurfaceHit& h, const Ray& r) {
 /// light tested with a shadow ray when shadows are on and the light casts them, all scaled by the
 /// material's diffuse reflectance. Shadow rays keep the ray's front/back flag (thesis 3.6), so the
 /// surface they leave never shadows itself.
-template <std::uint32_t K = k_mask_all>
-PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit& h, RayCounters& c) {
+/// `blocked(s, shadow_ray, c)` answers the shadow rays: by default the core's occluded<K>; a peer
+/// renderer (prt-bench-embree) passes its own.
+template <std::uint32_t K = k_mask_all, class Occlusion = SceneOcclusion<K>>
+PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit& h, RayCounters& c,
+                             const Occlusion& blocked = Occlusion{}) {
     const Material& m = s.materials[h.material];
     if (!(m.diffuse_reflectance > 0.0f)) return Vec3{0, 0, 0};
     const Vec3 n = facing_normal(h, r);
@@ -339,7 +396,7 @@ PRT_HD inline Vec3 shade_hit(const SceneView& s, const Ray& r, const SurfaceHit&
         if (!(dot(n, l) > 0.0f)) continue;
         if (s.params.shadows != 0 && light.casts_shadows != 0) {
             ++c.shadow;
-            if (occluded<K>(s, leave_surface(h, l, dist, r.flags), c)) continue;
+            if (blocked(s, leave_surface(h, l, dist, r.flags), c)) continue;
         }
         sum += lambert_phong(m, h.base_color, n, l, r.dir, light.color);
     }
@@ -393,11 +450,28 @@ PRT_HD inline std::uint32_t spawn_secondary(const SceneView& s, const PendingRay
     return count;
 }
 
+/// The core's closest hits and shading of trace_ray's rays (its default): any other Tracer offers
+/// the same two calls (a peer renderer's queries, prt-bench-embree; the per-ray work records of
+/// prt-bench --profile).
+template <std::uint32_t K>
+struct SceneTracer {
+    PRT_HD PRT_INLINE bool closest(const SceneView& s, const PendingRay& p, SurfaceHit& h,
+                                   RayCounters& c) const {
+        return closest_hit_scene<K>(s, p.ray, h, c);
+    }
+    PRT_HD PRT_INLINE Vec3 shade(const SceneView& s, const PendingRay& p, const SurfaceHit& h,
+                                 RayCounters& c) const {
+        return shade_hit<K>(s, p.ray, h, c);
+    }
+};
+
 /// Traces a primary ray and everything it spawns, iteratively: one branch continues in the
 /// loop, the other waits on a fixed stack (depth-first, so at most k_max_bounces + 1 entries).
-/// Misses see the background. Returns linear radiance.
-template <std::uint32_t K = k_mask_all>
-PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters& c) {
+/// Misses see the background. Returns linear radiance. `tracer` answers the closest hits and
+/// shades them (SceneTracer: the core's own).
+template <std::uint32_t K = k_mask_all, class Tracer = SceneTracer<K>>
+PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters& c,
+                             const Tracer& tracer = Tracer{}) {
     PendingRay stack[k_max_bounces + 1];
     std::uint32_t top = 0;
     PendingRay cur{primary, Vec3{1, 1, 1}, 0};
@@ -407,10 +481,10 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
     // limit, so at most 2^(k_max_bounces+1) rays; the weight cut-off keeps real counts small.
     for (;;) {
         SurfaceHit h;
-        if (!closest_hit_scene<K>(s, cur.ray, h, c)) {
+        if (!tracer.closest(s, cur, h, c)) {
             color += cur.weight * background(s.environment, cur.ray.dir);
         } else {
-            color += cur.weight * shade_hit<K>(s, cur.ray, h, c);
+            color += cur.weight * tracer.shade(s, cur, h, c);
             PendingRay next[2];
             const std::uint32_t n = spawn_secondary(s, cur, h, next);
             c.secondary += n;
@@ -431,6 +505,13 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
     return color;
 }
 
+/// A pixel's radiance as it leaves the renderer: non-finite values become black and are counted.
+PRT_HD PRT_INLINE Vec3 sanitize(Vec3 color, RayCounters& c) {
+    if (is_finite(color)) return color;
+    ++c.sanitized;
+    return Vec3{0, 0, 0};
+}
+
 }  // namespace prt::core
 
 #include "prt/core/path.h"
@@ -448,13 +529,7 @@ PRT_HD inline Vec3 render_pixel(const SceneView& s, const PinholeCamera& cam, st
         if (s.params.spp > 1 || s.params.path_tracing != 0)
             return sample_pixel(s, cam, x, y, width, height, c);
     }
-    const Ray r = primary_ray(cam, x, y, width, height);
-    Vec3 color = trace_ray<K>(s, r, c);
-    if (!is_finite(color)) {
-        color = Vec3{0, 0, 0};
-        ++c.sanitized;
-    }
-    return color;
+    return sanitize(trace_ray<K>(s, primary_ray(cam, x, y, width, height), c), c);
 }
 
 }  // namespace prt::core

@@ -15,6 +15,7 @@
 #include "prt/core/mls.h"
 #include "prt/core/octree.h"
 #include "prt/core/patch.h"
+#include "prt/formats/scene_layout.h"
 
 namespace prt::core {
 
@@ -97,13 +98,8 @@ struct RenderParams {
     PatchTraceParams patch;   ///< seed 002, 3: Newton iteration cap, tolerance, domain margins
 };
 
-/// Which representation of a model rays meet (SCENE.md models[].surface, DESIGN.md "surfaces").
-enum class SurfaceKind : std::uint32_t {
-    splats = 0,   ///< thesis 3: splats in the octree (sections 16-19)
-    iso = 1,      ///< thesis 4: the Implicit Surface Octree (sections 32-35)
-    mls = 2,      ///< WS05: the exact MLS surface over the kd-tree (sections 48-51)
-    patches = 3,  ///< seed 002: bicubic Bezier patches (sections 112-115)
-};
+/// Which representation of a model rays meet: the scene file's own enum (prt/formats/scene_layout.h).
+using scene::SurfaceKind;
 
 /// One model: the view of the surface it is traced as, per-point attributes, and its placement in
 /// the render frame: render = rotation * (scale * local) + offset. Only the view named by

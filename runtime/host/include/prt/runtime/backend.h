@@ -10,6 +10,10 @@
 #include "prt/core/scene_view.h"
 #include "prt/runtime/image.h"
 
+namespace prt::core {
+struct RayCounters;
+}  // namespace prt::core
+
 namespace prt::rt {
 
 /// Counters and timings of one rendered frame.
@@ -25,6 +29,8 @@ struct FrameStats {
 
     std::uint64_t rays() const { return primary + secondary + shadow; }
     FrameStats& operator+=(const FrameStats& o);
+    /// Adds a thread's or a tile's ray counters (core::RayCounters, render.h).
+    FrameStats& operator+=(const core::RayCounters& c);
 };
 
 /// One frame request: a camera in the render frame, settings, an image size and the rows to

@@ -144,12 +144,14 @@ public:
                                       DVec3 up = {0.0, 1.0, 0.0}, double fov_y_degrees = 45.0);
 
 private:
+    void apply_load_options(const LoadOptions& options);
     void build(std::vector<std::shared_ptr<const pool::PoolFile>> pools);
     void convert_materials();
     void load_environment();
 
     scene::Scene m_scene;
-    std::string m_surface_override;  ///< LoadOptions::surface
+    bool m_surface_auto = false;                           ///< LoadOptions::surface "auto"
+    std::optional<scene::SurfaceKind> m_surface_override;  ///< LoadOptions::surface naming a kind
     bool m_iso_float = false;
     core::RenderParams m_params;
     DVec3 m_origin{0, 0, 0};
