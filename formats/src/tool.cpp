@@ -155,8 +155,12 @@ void PoolStep::check_output_folder() const {
 }
 
 std::uint64_t PoolStep::write(const nlohmann::json& parameters) {
+    return write(parameters.dump());
+}
+
+std::uint64_t PoolStep::write(const std::string& parameters_json) {
     pool::PoolWriter& w = writer();
-    w.add_provenance(m_tool, PRT_VERSION, parameters.dump());
+    w.add_provenance(m_tool, PRT_VERSION, parameters_json);
     return w.write(m_output);
 }
 

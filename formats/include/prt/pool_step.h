@@ -84,6 +84,8 @@ public:
     /// Appends the provenance record {tool, version, `parameters`} and writes OUTPUT atomically
     /// (PoolWriter::write). Returns the bytes written.
     std::uint64_t write(const nlohmann::json& parameters);
+    /// write() with the parameters given as JSON object text.
+    std::uint64_t write(const std::string& parameters_json);
 
     /// Seconds since the body started.
     double seconds() const { return now_seconds() - m_start; }
