@@ -123,7 +123,7 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
     return tool::run(
         argc, argv, m_tool, m_description,
         [&](CLI::App& app, CommonOptions&) {
-            if (!m_help.input.empty()) app.add_option("input", m_input, m_help.input)->required();
+            if (!m_help.input.empty()) app.add_option(m_help.input_name, m_input, m_help.input)->required();
             if (!m_help.output.empty()) app.add_option("-o,--output", m_output, m_help.output)->required();
             options(app);
             if (!m_help.stats.empty()) app.add_option("--stats-json", m_stats, m_help.stats);
@@ -131,8 +131,14 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
         [&](const CommonOptions& common) {
             m_common = common;
             m_start = now_seconds();
+            if (m_output_in_place && m_output.empty()) m_output = m_input;
             body(*this);
         });
+}
+
+CLI::Option* PoolStep::add_output(CLI::App& app, const std::string& help) {
+    m_output_in_place = true;
+    return app.add_option("-o,--output", m_output, help);
 }
 
 const pool::PoolFile& PoolStep::input() {

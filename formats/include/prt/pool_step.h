@@ -48,6 +48,7 @@ public:
     /// Help texts of the standard options; an empty text leaves that option out.
     struct Help {
         std::string input = "Input pool file";  ///< the positional INPUT
+        std::string input_name = "input";       ///< its name in the usage line
         std::string output = "Output pool file (written atomically; may equal INPUT)";  ///< -o,--output
         std::string stats = "Also write the statistics as JSON to this file";           ///< --stats-json
     };
@@ -68,6 +69,10 @@ public:
                                     const std::string& help = "Worker threads (0 = all hardware threads)") {
         return app.add_option("-j,--threads", threads, help);
     }
+
+    /// Declares an optional -o,--output here (for steps that give Help::output empty): without
+    /// one, OUTPUT is INPUT (rewritten in place).
+    CLI::Option* add_output(CLI::App& app, const std::string& help);
 
     const std::string& tool() const { return m_tool; }
     bool quiet() const { return m_common.quiet; }
@@ -110,6 +115,7 @@ private:
     CommonOptions m_common;
     std::string m_input, m_output, m_stats;
     double m_start = 0;
+    bool m_output_in_place = false;  ///< add_output(): OUTPUT defaults to INPUT
     std::optional<pool::PoolFile> m_in;
     std::optional<pool::PoolWriter> m_writer;
 };
