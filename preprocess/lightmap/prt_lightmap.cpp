@@ -34,7 +34,6 @@ constexpr const char* k_description =
 
 /// The options of prt-lightmap.
 struct Options {
-    std::string scene_path;
     prt::lightmap::TraceParams trace;
     prt::lightmap::GatherOptions gather;
     std::uint32_t levels_above = 1, per_leaf = 4;
@@ -105,8 +104,8 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
 
 void lightmap_step(prt::tool::PoolStep& step, Options o) {
     using namespace prt;
-    const scene::Scene sc = scene::load_scene(o.scene_path);
-    if (sc.models.empty()) throw Error(o.scene_path + ": no models");
+    const scene::Scene sc = scene::load_scene(step.input_path());
+    if (sc.models.empty()) throw Error(step.input_path() + ": no models");
     const Pools pools = scene_pools(step, sc);
     std::uint64_t total_samples = 0;
     double trace_seconds = 0;
@@ -120,7 +119,7 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
                                        {"gather_radius", o.gather.radius_edges},
                                        {"normal_reject", o.gather.reject_cos},
                                        {"seed", o.trace.seed},
-                                       {"scene", o.scene_path}};
+                                       {"scene", step.input_path()}};
     for (std::size_t p = 0; p < pools.paths.size(); ++p)
         gi::write_gi_pool(pools.paths[p], gi::k_light_map_sections,
                           trees[p] && !trees[p]->leaves.empty() ? &*trees[p] : nullptr, "prt-lightmap",
@@ -133,7 +132,7 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
                             {"leaves", trees[p] ? trees[p]->leaves.size() : 0},
                             {"mean", trees[p] ? trees[p]->info.total[0] : 0.0f},
                             {"max", trees[p] ? trees[p]->info.total[1] : 0.0f}});
-    step.write_stats({{"scene", o.scene_path},
+    step.write_stats({{"scene", step.input_path()},
                       {"parameters", parameters},
                       {"samples", total_samples},
                       {"trace_seconds", trace_seconds},
@@ -145,13 +144,10 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
 int main(int argc, char** argv) {
     Options o;
     prt::tool::PoolStep step("prt-lightmap", k_description,
-                             {.input = "", .output = "", .stats = "Also write the statistics as JSON here"});
+                             prt::tool::PoolStep::scene_help("Also write the statistics as JSON here"));
     return step.run(
         argc, argv,
         [&](CLI::App& app) {
-            app.add_option("scene", o.scene_path,
-                           "Scene file (formats/SCENE.md); its models need pools with an octree")
-                ->required();
             app.add_option("--rays", o.trace.rays, "Paths per sample")->check(CLI::Range(1u, 65536u));
             app.add_option("--bounces", o.trace.bounces,
                            "Vertices per path (1 = one diffuse bounce of direct light)")

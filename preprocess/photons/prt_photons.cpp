@@ -42,7 +42,6 @@ using ull = unsigned long long;
 
 /// The options of prt-photons.
 struct Options {
-    std::string scene_path;
     prt::photons::ShootOptions shoot;
     std::uint32_t caustic_levels = 2;
     float radius = 1.0f, cos_threshold = 0.0f;
@@ -64,8 +63,7 @@ struct Pools {
     std::vector<std::uint32_t> of_model;
 };
 
-Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc,
-                  const std::string& scene_path) {
+Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
     Pools pools;
     for (const prt::scene::Model& m : sc.models) {
         const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
@@ -76,7 +74,7 @@ Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc,
         } else {
             pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
             step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
-                      scene_path.c_str(), p.string().c_str());
+                      step.input_path().c_str(), p.string().c_str());
         }
     }
     return pools;
@@ -181,13 +179,13 @@ nlohmann::json tally_json(const prt::photons::ShootResult& shot) {
 void photons_step(prt::tool::PoolStep& step, Options o) {
     using namespace prt;
     double load_seconds = 0;  // scene, pools and the render scene
-    const scene::Scene sc = scene::load_scene(o.scene_path);
-    if (sc.models.empty()) throw Error(o.scene_path + ": no models");
+    const scene::Scene sc = scene::load_scene(step.input_path());
+    if (sc.models.empty()) throw Error(step.input_path() + ": no models");
     std::string why;
     o.shoot.backend = photons::resolve_backend(o.shoot.backend, &why);
     if (!why.empty()) step.note("prt-photons: --backend auto: using the CPU (%s)", why.c_str());
 
-    const Pools pools = scene_pools(step, sc, o.scene_path);
+    const Pools pools = scene_pools(step, sc);
     std::vector<PoolJob> jobs(pools.paths.size());
     std::uint64_t lights = 0;
     photons::ShootResult shot = shoot(step, sc, o, pools, jobs, lights, load_seconds);
@@ -206,7 +204,7 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
                                        {"gather_radius", o.radius},
                                        {"cos_threshold", o.cos_threshold},
                                        {"seed", o.shoot.params.seed},
-                                       {"scene", o.scene_path}};
+                                       {"scene", step.input_path()}};
     const double write_start = tool::now_seconds();
     for (std::size_t p = 0; p < jobs.size(); ++p)
         gi::write_gi_pool(pools.paths[p], gi::k_caustic_sections, jobs[p].tree ? &*jobs[p].tree : nullptr,
@@ -224,7 +222,7 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
         "prt-photons: phases: load %.3f s, trace %.3f s, gather %.3f s, pool writes %.3f s; total %.3f s",
         load_seconds, shot.seconds, gather_seconds, write_seconds, total_seconds);
     nlohmann::json j = tally_json(shot);
-    j["scene"] = o.scene_path;
+    j["scene"] = step.input_path();
     j["parameters"] = parameters;
     j["lights"] = lights;
     j["gather_seconds"] = gather_seconds;
@@ -246,13 +244,10 @@ int main(int argc, char** argv) {
     Options o;
     prt::tool::PoolStep step(
         "prt-photons", k_description,
-        {.input = "", .output = "", .stats = "Also write the statistics (power accounting) as JSON here"});
+        prt::tool::PoolStep::scene_help("Also write the statistics (power accounting) as JSON here"));
     return step.run(
         argc, argv,
         [&](CLI::App& app) {
-            app.add_option("scene", o.scene_path,
-                           "Scene file (formats/SCENE.md); its models need pools with an octree")
-                ->required();
             app.add_option("--face-res", o.shoot.params.face_res, "Pixels per side of each cube face")
                 ->check(CLI::Range(1u, 8192u));
             app.add_option("--per-pixel", o.shoot.params.per_pixel, "Photons per pixel, jittered inside it")

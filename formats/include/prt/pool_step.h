@@ -53,6 +53,15 @@ public:
         std::string stats = "Also write the statistics as JSON to this file";           ///< --stats-json
     };
 
+    /// Help of a step over a scene (formats/SCENE.md): INPUT is the scene file (input_path(); not
+    /// a pool: input() and the carry-over are not for it), no -o (its pools are rewritten in place).
+    static Help scene_help(std::string stats) {
+        return {.input = "Scene file (formats/SCENE.md); its models need pools with an octree",
+                .input_name = "scene",
+                .output = "",
+                .stats = std::move(stats)};
+    }
+
     PoolStep(std::string tool, std::string description, Help help);
     PoolStep(std::string tool, std::string description)
         : PoolStep(std::move(tool), std::move(description), Help{}) {}
