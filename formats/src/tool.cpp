@@ -1,5 +1,6 @@
 #include "prt/tool.h"
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <exception>
@@ -8,6 +9,7 @@
 #include <new>
 
 #include "prt/pool_step.h"
+#include "prt/scene_pools.h"
 
 namespace prt::tool {
 
@@ -182,6 +184,18 @@ void PoolStep::note(const char* format, ...) const {
     va_start(args, format);
     vnote(format, args);
     va_end(args);
+}
+
+ScenePools scene_pools(const scene::Scene& sc) {
+    ScenePools pools;
+    for (const scene::Model& m : sc.models) {
+        const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
+        const auto it = std::find(pools.paths.begin(), pools.paths.end(), p);
+        pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
+        pools.placed_before.push_back(it != pools.paths.end());
+        if (it == pools.paths.end()) pools.paths.push_back(p);
+    }
+    return pools;
 }
 
 }  // namespace prt::tool

@@ -15,6 +15,7 @@
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
+#include "prt/scene_pools.h"
 
 namespace {
 
@@ -57,26 +58,15 @@ struct PoolJob {
     std::optional<prt::gi::GiOctree> tree;
 };
 
-/// The scene's pools by path: a pool placed twice gets one map (local frame) from both placements.
-struct Pools {
-    std::vector<std::filesystem::path> paths;
-    std::vector<std::uint32_t> of_model;
-};
+using Pools = prt::tool::ScenePools;
 
+/// The scene's pools: a pool placed twice gets one map (local frame) from both placements.
 Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
-    Pools pools;
-    for (const prt::scene::Model& m : sc.models) {
-        const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
-        auto it = std::find(pools.paths.begin(), pools.paths.end(), p);
-        if (it == pools.paths.end()) {
-            pools.paths.push_back(p);
-            pools.of_model.push_back(static_cast<std::uint32_t>(pools.paths.size() - 1));
-        } else {
-            pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
+    Pools pools = prt::tool::scene_pools(sc);
+    for (std::size_t m = 0; m < sc.models.size(); ++m)
+        if (pools.placed_before[m])
             step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
-                      step.input_path().c_str(), p.string().c_str());
-        }
-    }
+                      step.input_path().c_str(), pools.paths[pools.of_model[m]].string().c_str());
     return pools;
 }
 
