@@ -1,9 +1,15 @@
 #include "prt/tool.h"
 
+#include <algorithm>
 #include <cstdarg>
 #include <cstdio>
 #include <exception>
+#include <filesystem>
+#include <fstream>
 #include <new>
+
+#include "prt/pool_step.h"
+#include "prt/scene_pools.h"
 
 namespace prt::tool {
 
@@ -42,8 +48,11 @@ int run(int argc, char** argv, const std::string& tool, const std::string& descr
 }
 
 Progress::Progress(std::string label, std::uint64_t total, bool quiet)
-    : m_label(std::move(label)), m_total(total), m_quiet(quiet),
-      m_start(std::chrono::steady_clock::now()), m_last(m_start) {}
+    : m_label(std::move(label)),
+      m_total(total),
+      m_quiet(quiet),
+      m_start(std::chrono::steady_clock::now()),
+      m_last(m_start) {}
 
 Progress::~Progress() {
     if (!m_finished && m_printed) std::fputc('\n', stderr);
@@ -68,17 +77,125 @@ void Progress::finish() {
     std::fprintf(stderr, "\r%s: done in %.3f s\n", m_label.c_str(), s);
 }
 
+namespace {
+
+void vnote(const char* format, va_list args) {
+    std::vfprintf(stderr, format, args);
+    std::fputc('\n', stderr);
+}
+
+}  // namespace
+
 void note(bool quiet, const char* format, ...) {
     if (quiet) return;
     va_list args;
     va_start(args, format);
-    std::vfprintf(stderr, format, args);
+    vnote(format, args);
     va_end(args);
-    std::fputc('\n', stderr);
 }
 
 double now_seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+void write_json_file(const std::string& path, const nlohmann::json& stats) {
+    std::ofstream out(path);
+    out << stats.dump(2) << "\n";
+    if (!out) throw Error(path + ": cannot write the statistics");
+}
+
+void StagedProgress::update(const char* stage, std::uint64_t done, std::uint64_t total) {
+    if (!m_bar || m_stage != stage) {
+        if (m_bar) m_bar->finish();
+        m_stage = stage;
+        m_bar = std::make_unique<Progress>(m_tool + ": " + stage, total, m_quiet);
+    }
+    m_bar->update(done);
+}
+
+void StagedProgress::finish() {
+    if (m_bar) m_bar->finish();
+}
+
+PoolStep::PoolStep(std::string tool, std::string description, Help help)
+    : m_tool(std::move(tool)), m_description(std::move(description)), m_help(std::move(help)) {}
+
+int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& options,
+                  const std::function<void(PoolStep&)>& body) {
+    return tool::run(
+        argc, argv, m_tool, m_description,
+        [&](CLI::App& app, CommonOptions&) {
+            if (!m_help.input.empty()) app.add_option(m_help.input_name, m_input, m_help.input)->required();
+            if (!m_help.output.empty()) app.add_option("-o,--output", m_output, m_help.output)->required();
+            options(app);
+            if (!m_help.stats.empty()) app.add_option("--stats-json", m_stats, m_help.stats);
+        },
+        [&](const CommonOptions& common) {
+            m_common = common;
+            m_start = now_seconds();
+            if (m_output_in_place && m_output.empty()) m_output = m_input;
+            body(*this);
+        });
+}
+
+CLI::Option* PoolStep::add_output(CLI::App& app, const std::string& help) {
+    m_output_in_place = true;
+    return app.add_option("-o,--output", m_output, help);
+}
+
+const pool::PoolFile& PoolStep::input() {
+    if (!m_in) m_in.emplace(pool::PoolFile::open(m_input));
+    return *m_in;
+}
+
+pool::PoolWriter& PoolStep::writer() {
+    if (!m_writer) {
+        m_writer.emplace();
+        if (!m_help.input.empty()) m_writer->carry_over(input());
+    }
+    return *m_writer;
+}
+
+void PoolStep::check_output_folder() const {
+    const std::filesystem::path folder = std::filesystem::path(m_output).parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder))
+        throw Error(m_output + ": cannot write: folder " + folder.string() + " does not exist");
+}
+
+std::uint64_t PoolStep::write(const nlohmann::json& parameters) {
+    return write(parameters.dump());
+}
+
+std::uint64_t PoolStep::write(const std::string& parameters_json) {
+    pool::PoolWriter& w = writer();
+    w.add_provenance(m_tool, PRT_VERSION, parameters_json);
+    return w.write(m_output);
+}
+
+void PoolStep::write_stats(nlohmann::json stats) const {
+    if (m_stats.empty()) return;
+    stats["tool"] = m_tool;
+    write_json_file(m_stats, stats);
+}
+
+void PoolStep::note(const char* format, ...) const {
+    if (m_common.quiet) return;
+    va_list args;
+    va_start(args, format);
+    vnote(format, args);
+    va_end(args);
+}
+
+ScenePools scene_pools(const scene::Scene& sc) {
+    ScenePools pools;
+    for (const scene::Model& m : sc.models) {
+        const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
+        const auto it = std::find(pools.paths.begin(), pools.paths.end(), p);
+        pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
+        pools.placed_before.push_back(it != pools.paths.end());
+        if (it == pools.paths.end()) pools.paths.push_back(p);
+    }
+    return pools;
 }
 
 }  // namespace prt::tool

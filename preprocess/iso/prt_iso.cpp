@@ -3,18 +3,14 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
 #include "iso_build.h"
 #include "iso_pool.h"
-#include "prt/formats/pool.h"
 #include "prt/formats/scene.h"
-#include "prt/tool.h"
+#include "prt/pool_step.h"
 
 namespace {
 
@@ -58,21 +54,190 @@ std::string check_range(const std::string& s) {
     return {};
 }
 
+using ull = unsigned long long;
+
+/// The colors the leaves bake (SCENE.md point_colors; the same grey levels the player uses).
+struct Bake {
+    std::string what;                    ///< colors, intensity or none
+    std::vector<prt::pool::Rgba8> grey;  ///< intensity: the grey levels
+    std::array<float, 2> range{0, 0};    ///< intensity: the range mapped to black..white
+};
+
+Bake choose_colors(prt::tool::PoolStep& step, const std::string& point_colors,
+                   const std::string& intensity_range, prt::iso::BuildInput& bi) {
+    using namespace prt;
+    const pool::PoolFile& in = step.input();
+    const auto colors = in.array<pool::Rgba8>(pool::SectionType::colors);
+    const auto intensities = in.array<float>(pool::SectionType::intensities);
+    Bake b;
+    b.what = point_colors;
+    if (b.what == "auto") b.what = !colors.empty() ? "colors" : !intensities.empty() ? "intensity" : "none";
+    if (b.what == "colors") bi.colors = colors;
+    if (b.what != "intensity") return b;
+    if (intensities.empty())
+        throw Error(
+            step.input_path() +
+            ": no intensities section: --point-colors intensity needs one (prt-import keeps PLY and PCD "
+            "intensity)");
+    if (!intensity_range.empty()) {
+        const auto comma = intensity_range.find(',');
+        b.range = {std::strtof(intensity_range.substr(0, comma).c_str(), nullptr),
+                   std::strtof(intensity_range.substr(comma + 1).c_str(), nullptr)};
+    } else {
+        b.range = scene::intensity_range(intensities);
+    }
+    std::uint64_t non_finite = 0;
+    b.grey.resize(intensities.size());
+    for (std::size_t i = 0; i < intensities.size(); ++i) {
+        non_finite += !std::isfinite(intensities[i]);
+        const std::uint8_t g = scene::intensity_grey(intensities[i], b.range[0], b.range[1]);
+        b.grey[i] = pool::Rgba8{g, g, g, 255};
+    }
+    bi.colors = b.grey;
+    step.note("prt-iso: baking intensities [%g, %g] to black..white%s", double(b.range[0]),
+              double(b.range[1]), intensity_range.empty() ? " (the 1st-99th percentile)" : "");
+    if (!(b.range[1] > b.range[0]))
+        step.note("prt-iso: warning: the intensities have no spread: baked white");
+    if (non_finite)
+        step.note("prt-iso: warning: %llu intensities are not finite: baked black", ull(non_finite));
+    return b;
+}
+
+nlohmann::json stats_json(const prt::iso::BuildStats& st) {
+    nlohmann::json per_level = nlohmann::json::array();
+    for (std::uint32_t l = 0; l <= prt::pool::k_max_iso_level; ++l)
+        per_level.push_back(st.leaves_per_level[l]);
+    const double leaves = st.leaves > 0 ? double(st.leaves) : 1.0;
+    return {{"points", st.points},
+            {"skipped", st.skipped},
+            {"radius_median", st.radius_median},
+            {"radii_clamped", st.radii_clamped},
+            {"active_leaves", st.active_leaves},
+            {"passive_leaves", st.passive_leaves},
+            {"min_level_splits", st.min_level_splits},
+            {"balance_splits", st.balance_splits},
+            {"closure_leaves", st.closure_leaves},
+            {"uncrossed_leaves", st.uncrossed_leaves},
+            {"unsupported_corners", st.unsupported_corners},
+            {"unsupported_leaves", st.unsupported_leaves},
+            {"leaves", st.leaves},
+            {"leaves_per_level", per_level},
+            {"nodes", st.nodes},
+            {"depth", st.depth},
+            {"corners", st.corners},
+            {"corner_slots", st.corner_slots},
+            {"far_corners", st.far_corners},
+            {"mean_neighbours", double(st.mean_neighbours_x100) / 100.0},
+            {"iso_bytes", st.bytes},
+            {"iso_bytes_per_leaf", double(st.bytes) / leaves},
+            {"seconds_radii", st.seconds_radii},
+            {"seconds_tree", st.seconds_tree},
+            {"seconds_passive", st.seconds_passive},
+            {"seconds_balance", st.seconds_balance},
+            {"seconds_corners", st.seconds_corners},
+            {"seconds_closure", st.seconds_closure},
+            {"seconds_encode", st.seconds_encode},
+            {"seconds_build", st.seconds_total}};
+}
+
+void report(const prt::tool::PoolStep& step, const prt::iso::BuildStats& st, const prt::pool::IsoInfo& info,
+            const std::string& storage, double total) {
+    using namespace prt;
+    const double leaves = st.leaves > 0 ? double(st.leaves) : 1.0;
+    step.note("prt-iso: radii from %s (median %.4g%s), %llu points skipped",
+              (info.flags & pool::k_iso_radii_knn) ? "k-NN" : "the radii section", st.radius_median,
+              st.radii_clamped ? (", " + std::to_string(st.radii_clamped) + " clamped").c_str() : "",
+              ull(st.skipped));
+    step.note(
+        "prt-iso: %llu active + %llu passive leaves (%llu split to min level, %llu by 2:1 balance), %llu "
+        "more by the surface closure; %llu without a sign change and %llu away from the data dropped",
+        ull(st.active_leaves), ull(st.passive_leaves), ull(st.min_level_splits), ull(st.balance_splits),
+        ull(st.closure_leaves), ull(st.uncrossed_leaves), ull(st.unsupported_leaves));
+    step.note("prt-iso: %llu corners (%.2f points each, %llu beyond every support) for %llu corner slots",
+              ull(st.corners), double(st.mean_neighbours_x100) / 100.0, ull(st.far_corners),
+              ull(st.corner_slots));
+    step.note("prt-iso: %llu filled leaves, depth %u, %llu nodes; ISO %.2f MB = %.1f bytes per leaf (%s)",
+              ull(st.leaves), st.depth, ull(st.nodes), double(st.bytes) / 1e6, double(st.bytes) / leaves,
+              storage.c_str());
+    step.note(
+        "prt-iso: radii %.2f s, tree %.2f s, passive %.2f s, balance %.2f s, corners %.2f s, closure %.2f "
+        "s, encode %.2f s; total %.2f s; wrote %s",
+        st.seconds_radii, st.seconds_tree, st.seconds_passive, st.seconds_balance, st.seconds_corners,
+        st.seconds_closure, st.seconds_encode, total, step.output_path().c_str());
+    if (st.leaves == 0) step.note("prt-iso: warning: no leaf holds a surface (check the normals and levels)");
+}
+
+void iso_step(prt::tool::PoolStep& step, const prt::iso::BuildOptions& options, const std::string& storage,
+              const std::string& point_colors, const std::string& intensity_range) {
+    using namespace prt;
+    step.check_output_folder();
+    const pool::PoolFile& in = step.input();
+    iso::BuildInput bi;
+    bi.positions = in.require<pool::Float3>(pool::SectionType::positions, "prt-iso");
+    if (!in.has(pool::SectionType::normals))
+        throw Error(step.input_path() +
+                    ": no normals section: the ISO needs normals (prt-import estimates them)");
+    bi.normals = in.array<pool::Float3>(pool::SectionType::normals);
+    bi.radii = in.array<float>(pool::SectionType::radii);
+    const Bake bake = choose_colors(step, point_colors, intensity_range, bi);
+    step.note("prt-iso: %zu points, levels %u..%u, X = %u, smoothing %g, support %g sigma",
+              bi.positions.size(), options.min_level, options.max_level, options.max_points,
+              double(options.smoothing), double(options.support));
+
+    tool::StagedProgress progress("prt-iso", step.quiet());
+    iso::IsoModel model = step.about_input([&] {
+        return iso::build_iso(bi, options, [&](const char* stage, std::uint64_t done, std::uint64_t total) {
+            progress.update(stage, done, total);
+        });
+    });
+    progress.finish();
+    const iso::BuildStats st = model.stats;
+    const pool::IsoInfo info = model.info;
+
+    iso::write_iso_sections(std::move(model), step.writer());
+    const nlohmann::json parameters = {
+        {"min_level", options.min_level},
+        {"max_level", options.max_level},
+        {"max_points", options.max_points},
+        {"smoothing", options.smoothing},
+        {"support", options.support},
+        {"radius", iso::radius_source_name(options.radius)},
+        {"radius_used", (info.flags & pool::k_iso_radii_knn) ? "knn" : "radii"},
+        {"knn", options.knn},
+        {"knn_clamp", options.knn_clamp},
+        {"passive", options.passive},
+        {"balance", options.balance},
+        {"closure", options.closure},
+        {"drop_uncrossed", options.drop_uncrossed},
+        {"data_reach", options.data_reach},
+        {"one_side", options.one_side},
+        {"storage", storage},
+        {"point_colors", bake.what}};
+    nlohmann::json provenance = parameters;
+    if (bake.what == "intensity") provenance["intensity_range"] = {bake.range[0], bake.range[1]};
+    const std::uint64_t bytes = step.write(provenance);
+    const double total = step.seconds();
+
+    nlohmann::json j = stats_json(st);
+    j["parameters"] = parameters;
+    j["pool_bytes"] = bytes;
+    j["seconds_total"] = total;
+    step.write_stats(std::move(j));
+    report(step, st, info, storage, total);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string input, output, radius = "auto", storage = "q8", stats_json, point_colors = "auto",
-                               intensity_range;
+    std::string radius = "auto", storage = "q8", point_colors = "auto", intensity_range;
     prt::iso::BuildOptions options;
     bool no_passive = false, no_balance = false, no_closure = false, keep_uncrossed = false,
          both_sides = false;
-    return prt::tool::run(
-        argc, argv, "prt-iso", k_description,
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("input", input, "Input pool file (positions and normals; radii optional)")
-                ->required();
-            app.add_option("-o,--output", output, "Output pool file (written atomically; may equal INPUT)")
-                ->required();
+    prt::tool::PoolStep step("prt-iso", k_description,
+                             {.input = "Input pool file (positions and normals; radii optional)"});
+    return step.run(
+        argc, argv,
+        [&](CLI::App& app) {
             app.add_option("--min-level", options.min_level, "Minimum leaf level of filled leaves (root = 0)")
                 ->check(CLI::Range(0u, prt::pool::k_max_iso_level));
             app.add_option("--max-level", options.max_level, "Maximum leaf level (level of detail)")
@@ -100,9 +265,10 @@ int main(int argc, char** argv) {
             app.add_flag("--no-passive", no_passive,
                          "Do not fill passive leaves (thesis 4.3.1; leaves holes)");
             app.add_flag("--no-balance", no_balance, "Do not enforce the 2:1 level balance (thesis 4.5.1)");
-            app.add_flag("--no-closure", no_closure,
-                         "Do not fill the leaves behind faces the surface crosses (the surface closure; "
-                         "leaves holes on noisy scans and coarse levels)");
+            app.add_flag(
+                "--no-closure", no_closure,
+                "Do not fill the leaves behind faces the surface crosses (the surface closure; leaves "
+                "holes on noisy scans and coarse levels)");
             app.add_option(
                    "--data-reach", options.data_reach,
                    "A corner holds surface only where its projection onto the local plane lies within "
@@ -112,27 +278,24 @@ int main(int argc, char** argv) {
             app.add_flag(
                 "--both-sides", both_sides,
                 "Let every point within its support count at a corner (thesis eq. 4.1-4.3 as written); "
-                "by default the points are split by their normal against the corner's heaviest point's and "
-                "only the heavier side counts, so the two sides of a thin part do not cancel");
+                "by default the points are split by their normal against the corner's heaviest point's "
+                "and only the heavier side counts, so the two sides of a thin part do not cancel");
             app.add_flag("--keep-uncrossed", keep_uncrossed,
                          "Keep filled leaves whose corners share one sign (they hold no surface)");
             app.add_option(
                    "--point-colors", point_colors,
                    "What the leaves bake as their color: colors (the points'), intensity (their scanner "
-                   "intensities as grey levels), none (white), or auto (colors, else intensity, else "
-                   "none)")
+                   "intensities as grey levels), none (white), or auto (colors, else intensity, else none)")
                 ->check(CLI::IsMember({"auto", "colors", "intensity", "none"}));
             app.add_option(
                    "--intensity-range", intensity_range,
                    "With intensity: LO,HI map to black..white (default: the 1st and 99th percentiles of "
                    "the pool's intensities)")
                 ->check(CLI::Validator(check_range, "LO,HI"));
-            app.add_option("-j,--threads", options.threads, "Worker threads (0 = all hardware threads)");
-            app.add_option("--stats-json", stats_json, "Also write the statistics as JSON to this file");
+            prt::tool::PoolStep::add_threads(app, options.threads);
         },
-        [&](const prt::tool::CommonOptions& common) {
+        [&](prt::tool::PoolStep& s) {
             using namespace prt;
-            const double start = tool::now_seconds();
             options.radius = iso::parse_radius_source(radius);
             options.storage = iso::parse_storage(storage);
             options.passive = !no_passive;
@@ -145,190 +308,6 @@ int main(int argc, char** argv) {
             } catch (const Error& e) {
                 throw Error(std::string("invalid options: ") + e.what());
             }
-            const std::filesystem::path out_dir = std::filesystem::path(output).parent_path();
-            if (!out_dir.empty() && !std::filesystem::is_directory(out_dir))
-                throw Error(output + ": cannot write: folder " + out_dir.string() + " does not exist");
-            const pool::PoolFile in = pool::PoolFile::open(input);
-            iso::BuildInput bi;
-            bi.positions = in.require<pool::Float3>(pool::SectionType::positions, "prt-iso");
-            if (!in.has(pool::SectionType::normals))
-                throw Error(input +
-                            ": no normals section: the ISO needs normals (prt-import estimates them)");
-            bi.normals = in.array<pool::Float3>(pool::SectionType::normals);
-            bi.radii = in.array<float>(pool::SectionType::radii);
-            // The colors the leaves bake (SCENE.md point_colors; the same grey levels the player uses).
-            const auto colors = in.array<pool::Rgba8>(pool::SectionType::colors);
-            const auto intensities = in.array<float>(pool::SectionType::intensities);
-            std::string bake = point_colors;
-            if (bake == "auto")
-                bake = !colors.empty() ? "colors" : !intensities.empty() ? "intensity" : "none";
-            std::vector<pool::Rgba8> grey;
-            std::array<float, 2> range{0, 0};
-            if (bake == "colors") {
-                bi.colors = colors;
-            } else if (bake == "intensity") {
-                if (intensities.empty())
-                    throw Error(input +
-                                ": no intensities section: --point-colors intensity needs one (prt-import "
-                                "keeps PLY and PCD intensity)");
-                if (!intensity_range.empty()) {
-                    const auto comma = intensity_range.find(',');
-                    range = {std::strtof(intensity_range.substr(0, comma).c_str(), nullptr),
-                             std::strtof(intensity_range.substr(comma + 1).c_str(), nullptr)};
-                } else {
-                    range = scene::intensity_range(intensities);
-                }
-                std::uint64_t non_finite = 0;
-                grey.resize(intensities.size());
-                for (std::size_t i = 0; i < intensities.size(); ++i) {
-                    non_finite += !std::isfinite(intensities[i]);
-                    const std::uint8_t g = scene::intensity_grey(intensities[i], range[0], range[1]);
-                    grey[i] = pool::Rgba8{g, g, g, 255};
-                }
-                bi.colors = grey;
-                tool::note(common.quiet, "prt-iso: baking intensities [%g, %g] to black..white%s",
-                           double(range[0]), double(range[1]),
-                           intensity_range.empty() ? " (the 1st-99th percentile)" : "");
-                if (!(range[1] > range[0]))
-                    tool::note(common.quiet, "prt-iso: warning: the intensities have no spread: baked white");
-                if (non_finite)
-                    tool::note(common.quiet, "prt-iso: warning: %llu intensities are not finite: baked black",
-                               static_cast<unsigned long long>(non_finite));
-            }
-            tool::note(common.quiet,
-                       "prt-iso: %zu points, levels %u..%u, X = %u, smoothing %g, support %g sigma",
-                       bi.positions.size(), options.min_level, options.max_level, options.max_points,
-                       double(options.smoothing), double(options.support));
-
-            iso::IsoModel model;
-            {
-                std::unique_ptr<tool::Progress> bar;
-                std::string stage;
-                auto progress = [&](const char* s, std::uint64_t done, std::uint64_t total) {
-                    if (stage != s) {
-                        if (bar) bar->finish();
-                        stage = s;
-                        bar = std::make_unique<tool::Progress>(std::string("prt-iso: ") + s, total,
-                                                               common.quiet);
-                    }
-                    bar->update(done);
-                };
-                try {
-                    model = iso::build_iso(bi, options, progress);
-                } catch (const Error& e) {
-                    throw Error(input + ": " + e.what());
-                }
-                if (bar) bar->finish();
-            }
-            const iso::BuildStats st = model.stats;
-            const pool::IsoInfo info = model.info;
-
-            pool::PoolWriter writer;
-            writer.carry_over(in);
-            iso::write_iso_sections(std::move(model), writer);
-            const nlohmann::json parameters = {
-                {"min_level", options.min_level},
-                {"max_level", options.max_level},
-                {"max_points", options.max_points},
-                {"smoothing", options.smoothing},
-                {"support", options.support},
-                {"radius", iso::radius_source_name(options.radius)},
-                {"radius_used", (info.flags & pool::k_iso_radii_knn) ? "knn" : "radii"},
-                {"knn", options.knn},
-                {"knn_clamp", options.knn_clamp},
-                {"passive", options.passive},
-                {"balance", options.balance},
-                {"closure", options.closure},
-                {"drop_uncrossed", options.drop_uncrossed},
-                {"data_reach", options.data_reach},
-                {"one_side", options.one_side},
-                {"storage", storage},
-                {"point_colors", bake}};
-            nlohmann::json provenance = parameters;
-            if (bake == "intensity") provenance["intensity_range"] = {range[0], range[1]};
-            writer.add_provenance("prt-iso", PRT_VERSION, provenance.dump());
-            const std::uint64_t bytes = writer.write(output);
-            const double total = tool::now_seconds() - start;
-
-            const double leaves = st.leaves > 0 ? double(st.leaves) : 1.0;
-            if (!stats_json.empty()) {
-                nlohmann::json per_level = nlohmann::json::array();
-                for (std::uint32_t l = 0; l <= pool::k_max_iso_level; ++l)
-                    per_level.push_back(st.leaves_per_level[l]);
-                const nlohmann::json j = {{"tool", "prt-iso"},
-                                          {"points", st.points},
-                                          {"skipped", st.skipped},
-                                          {"parameters", parameters},
-                                          {"radius_median", st.radius_median},
-                                          {"radii_clamped", st.radii_clamped},
-                                          {"active_leaves", st.active_leaves},
-                                          {"passive_leaves", st.passive_leaves},
-                                          {"min_level_splits", st.min_level_splits},
-                                          {"balance_splits", st.balance_splits},
-                                          {"closure_leaves", st.closure_leaves},
-                                          {"uncrossed_leaves", st.uncrossed_leaves},
-                                          {"unsupported_corners", st.unsupported_corners},
-                                          {"unsupported_leaves", st.unsupported_leaves},
-                                          {"leaves", st.leaves},
-                                          {"leaves_per_level", per_level},
-                                          {"nodes", st.nodes},
-                                          {"depth", st.depth},
-                                          {"corners", st.corners},
-                                          {"corner_slots", st.corner_slots},
-                                          {"far_corners", st.far_corners},
-                                          {"mean_neighbours", double(st.mean_neighbours_x100) / 100.0},
-                                          {"iso_bytes", st.bytes},
-                                          {"iso_bytes_per_leaf", double(st.bytes) / leaves},
-                                          {"pool_bytes", bytes},
-                                          {"seconds_radii", st.seconds_radii},
-                                          {"seconds_tree", st.seconds_tree},
-                                          {"seconds_passive", st.seconds_passive},
-                                          {"seconds_balance", st.seconds_balance},
-                                          {"seconds_corners", st.seconds_corners},
-                                          {"seconds_closure", st.seconds_closure},
-                                          {"seconds_encode", st.seconds_encode},
-                                          {"seconds_build", st.seconds_total},
-                                          {"seconds_total", total}};
-                std::ofstream out(stats_json);
-                out << j.dump(2) << "\n";
-                if (!out) throw Error(stats_json + ": cannot write the statistics");
-            }
-            tool::note(common.quiet, "prt-iso: radii from %s (median %.4g%s), %llu points skipped",
-                       (info.flags & pool::k_iso_radii_knn) ? "k-NN" : "the radii section", st.radius_median,
-                       st.radii_clamped ? (", " + std::to_string(st.radii_clamped) + " clamped").c_str() : "",
-                       static_cast<unsigned long long>(st.skipped));
-            tool::note(
-                common.quiet,
-                "prt-iso: %llu active + %llu passive leaves (%llu split to min level, %llu by 2:1 balance), "
-                "%llu more by the surface closure; %llu without a sign change and %llu away from the data "
-                "dropped",
-                static_cast<unsigned long long>(st.active_leaves),
-                static_cast<unsigned long long>(st.passive_leaves),
-                static_cast<unsigned long long>(st.min_level_splits),
-                static_cast<unsigned long long>(st.balance_splits),
-                static_cast<unsigned long long>(st.closure_leaves),
-                static_cast<unsigned long long>(st.uncrossed_leaves),
-                static_cast<unsigned long long>(st.unsupported_leaves));
-            tool::note(
-                common.quiet,
-                "prt-iso: %llu corners (%.2f points each, %llu beyond every support) for %llu corner slots",
-                static_cast<unsigned long long>(st.corners), double(st.mean_neighbours_x100) / 100.0,
-                static_cast<unsigned long long>(st.far_corners),
-                static_cast<unsigned long long>(st.corner_slots));
-            tool::note(
-                common.quiet,
-                "prt-iso: %llu filled leaves, depth %u, %llu nodes; ISO %.2f MB = %.1f bytes per leaf (%s)",
-                static_cast<unsigned long long>(st.leaves), st.depth,
-                static_cast<unsigned long long>(st.nodes), double(st.bytes) / 1e6, double(st.bytes) / leaves,
-                storage.c_str());
-            tool::note(
-                common.quiet,
-                "prt-iso: radii %.2f s, tree %.2f s, passive %.2f s, balance %.2f s, corners %.2f s, closure "
-                "%.2f s, encode %.2f s; total %.2f s; wrote %s",
-                st.seconds_radii, st.seconds_tree, st.seconds_passive, st.seconds_balance, st.seconds_corners,
-                st.seconds_closure, st.seconds_encode, total, output.c_str());
-            if (st.leaves == 0)
-                tool::note(common.quiet,
-                           "prt-iso: warning: no leaf holds a surface (check the normals and levels)");
+            iso_step(s, options, storage, point_colors, intensity_range);
         });
 }

@@ -1,14 +1,10 @@
 // prt-mls: the kd-tree for ray tracing the exact MLS surface (Wald & Seidel 2005, 3.4).
-#include <filesystem>
-#include <fstream>
-#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
 #include "mls_build.h"
 #include "mls_pool.h"
-#include "prt/formats/pool.h"
-#include "prt/tool.h"
+#include "prt/pool_step.h"
 
 namespace {
 
@@ -31,171 +27,146 @@ none left becomes empty; post-collapse (3.4.3) of splits whose two children are 
 INPUT needs positions, normals and radii (prt-import, prt-radii); the other sections are carried
 over, an earlier MLS tree is replaced.)";
 
+using ull = unsigned long long;
+
+void report(const prt::tool::PoolStep& step, const prt::mls::BuildOptions& opt,
+            const prt::mls::BuildStats& st) {
+    if (st.skipped > 0)
+        step.note("prt-mls: skipped %llu of %llu points (no usable radius, normal or position)",
+                  ull(st.skipped), ull(st.points));
+    step.note(
+        "prt-mls: %llu splats; kd-tree %llu nodes, depth %u, %llu leaves (%llu empty), %.1f refs per "
+        "non-empty leaf, %.2f refs per splat",
+        ull(st.splats), ull(st.nodes), st.depth, ull(st.leaves), ull(st.empty_leaves),
+        st.mean_refs_per_leaf(), st.splats ? double(st.refs) / double(st.splats) : 0.0);
+    step.note("prt-mls: SAH: %llu leaves, cost %.2f, %.2f s", ull(st.sah_leaves), st.sah_cost,
+              st.seconds_sah);
+    if (opt.shrink)
+        step.note(
+            "prt-mls: shrinking: %llu leaves shrunk, %llu emptied, %llu splits inserted, %llu refs "
+            "dropped, leaf volume %.1f%% of before, %llu interval boxes, %.2f s",
+            ull(st.shrunk_leaves), ull(st.culled_leaves), ull(st.shrink_splits), ull(st.refs_removed),
+            st.volume_before > 0 ? 100.0 * st.volume_after / st.volume_before : 0.0, ull(st.interval_boxes),
+            st.seconds_shrink);
+    if (opt.collapse) step.note("prt-mls: post-collapse removed %llu splits", ull(st.collapsed));
+}
+
+nlohmann::json stats_json(const prt::mls::BuildStats& st) {
+    return {{"points", st.points},
+            {"skipped", st.skipped},
+            {"splats", st.splats},
+            {"nodes", st.nodes},
+            {"leaves", st.leaves},
+            {"empty_leaves", st.empty_leaves},
+            {"refs", st.refs},
+            {"depth", st.depth},
+            {"refs_per_leaf", st.mean_refs_per_leaf()},
+            {"sah_leaves", st.sah_leaves},
+            {"sah_cost", st.sah_cost},
+            {"shrunk_leaves", st.shrunk_leaves},
+            {"culled_leaves", st.culled_leaves},
+            {"shrink_splits", st.shrink_splits},
+            {"refs_removed", st.refs_removed},
+            {"volume_before", st.volume_before},
+            {"volume_after", st.volume_after},
+            {"interval_boxes", st.interval_boxes},
+            {"collapsed", st.collapsed},
+            {"seconds_sah", st.seconds_sah},
+            {"seconds_shrink", st.seconds_shrink},
+            {"seconds_build", st.seconds_total}};
+}
+
+void mls_step(prt::tool::PoolStep& step, prt::mls::BuildOptions opt) {
+    using namespace prt;
+    const pool::PoolFile& in = step.input();
+    const auto positions = in.require<pool::Float3>(pool::SectionType::positions, "prt-mls");
+    const auto normals =
+        in.require<pool::Float3>(pool::SectionType::normals, "prt-mls (run prt-import with normals)");
+    const auto radii = in.require<float>(pool::SectionType::radii, "prt-mls (run prt-radii)");
+
+    // The leaf count, hence the progress total, is known once the SAH pass is done.
+    tool::StagedProgress progress("prt-mls", step.quiet());
+    mls::MlsModel model = step.about_input([&] {
+        return mls::build_mls(positions, normals, radii, opt, [&](std::uint64_t done, std::uint64_t total) {
+            progress.update("shrinking leaves", done, total);
+        });
+    });
+    progress.finish();
+    const mls::BuildStats st = model.stats;
+    report(step, opt, st);
+
+    const nlohmann::json parameters = {{"support_factor", opt.support_factor},
+                                       {"samples", opt.samples},
+                                       {"cost_traversal", opt.cost_traversal},
+                                       {"cost_intersection", opt.cost_intersection},
+                                       {"shrink", opt.shrink},
+                                       {"slices", opt.shrink_slices},
+                                       {"shrink_axes", opt.shrink_axes},
+                                       {"shrink_depth", opt.shrink_depth},
+                                       {"encourage", opt.encourage},
+                                       {"encourage_limit", opt.encourage_limit},
+                                       {"collapse", opt.collapse},
+                                       {"max_depth", opt.max_depth}};
+    mls::write_mls_sections(std::move(model), step.writer());
+    const std::uint64_t bytes = step.write(parameters);
+    const double total = step.seconds();
+    step.note("prt-mls: wrote %s: %.2f MB (%.1f bytes per point) in %.2f s", step.output_path().c_str(),
+              double(bytes) / 1e6, st.points ? double(bytes) / double(st.points) : 0.0, total);
+
+    nlohmann::json j = stats_json(st);
+    j["parameters"] = parameters;
+    j["seconds_total"] = total;
+    j["bytes"] = bytes;
+    step.write_stats(std::move(j));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-    std::string input, output, stats_json;
     prt::mls::BuildOptions opt;
     bool no_shrink = false, no_encourage = false, no_collapse = false;
-
-    return prt::tool::run(
-        argc, argv, "prt-mls", k_description,
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("input", input, "Input pool (positions, normals, radii)")->required();
-            app.add_option("-o,--output", output, "Output pool (written atomically; may equal INPUT)")
-                ->required();
+    prt::tool::PoolStep step("prt-mls", k_description,
+                             {.input = "Input pool (positions, normals, radii)",
+                              .output = "Output pool (written atomically; may equal INPUT)",
+                              .stats = "Also write the build statistics as JSON to this file"});
+    return step.run(
+        argc, argv,
+        [&](CLI::App& app) {
             app.add_option("--support-factor", opt.support_factor,
                            "MLS support radius R_i as a multiple of the splat radius r_i")
-                ->capture_default_str()
                 ->check(CLI::Range(1e-3f, 1e3f));
             app.add_option("--samples", opt.samples,
                            "Samples per cell interval the tree is built for (WS05 3.2.2's k; recorded, the "
                            "renderer may override)")
-                ->capture_default_str()
                 ->check(CLI::Range(2u, 1024u));
             app.add_option("--cost-traversal", opt.cost_traversal, "SAH C_trav (WS05 eq. 3)")
-                ->capture_default_str()
                 ->check(CLI::PositiveNumber);
             app.add_option("--cost-intersection", opt.cost_intersection,
                            "SAH C_isec per referenced splat (WS05 eq. 3)")
-                ->capture_default_str()
                 ->check(CLI::PositiveNumber);
             app.add_option("--encourage-limit", opt.encourage_limit,
                            "Encouraged splits: refs per cell where E(n) reaches 1 (WS05: 21)")
-                ->capture_default_str()
                 ->check(CLI::Range(1.0f, 1e6f));
             app.add_flag("--no-shrink", no_shrink, "Skip cell shrinking (WS05 3.4.1)");
             app.add_flag("--no-encourage", no_encourage, "Plain SAH cost, no E(n) (WS05 3.4.2)");
             app.add_flag("--no-collapse", no_collapse, "Skip the post-collapse of empty splits (WS05 3.4.3)");
             app.add_option("--slices", opt.shrink_slices, "Shrinking: slices per axis (WS05 uses 7-13)")
-                ->capture_default_str()
                 ->check(CLI::Range(2u, 64u));
             app.add_option(
                    "--shrink-axes", opt.shrink_axes,
                    "Shrinking: 1 = the dominant normal axis only (WS05), 3 = every axis, dominant first")
-                ->capture_default_str()
                 ->check(CLI::IsMember({1u, 3u}));
             app.add_option("--shrink-depth", opt.shrink_depth,
                            "Shrinking: halvings of a slice before an unresolved piece keeps it")
-                ->capture_default_str()
                 ->check(CLI::Range(0u, 16u));
-            app.add_option("--max-depth", opt.max_depth, "Deepest SAH level")
-                ->capture_default_str()
-                ->check(CLI::Range(1u, 58u));
-            app.add_option("-j,--threads", opt.threads, "Worker threads (0 = all hardware threads)")
-                ->capture_default_str();
-            app.add_option("--stats-json", stats_json,
-                           "Also write the build statistics as JSON to this file");
+            app.add_option("--max-depth", opt.max_depth, "Deepest SAH level")->check(CLI::Range(1u, 58u));
+            prt::tool::PoolStep::add_threads(app, opt.threads);
         },
-        [&](const prt::tool::CommonOptions& common) {
-            using namespace prt;
+        [&](prt::tool::PoolStep& s) {
             opt.shrink = !no_shrink;
             opt.encourage = !no_encourage;
             opt.collapse = !no_collapse;
-            mls::validate(opt);
-            const double start = tool::now_seconds();
-            const pool::PoolFile in = pool::PoolFile::open(input);
-            const auto positions = in.require<pool::Float3>(pool::SectionType::positions, "prt-mls");
-            const auto normals =
-                in.require<pool::Float3>(pool::SectionType::normals, "prt-mls (run prt-import with normals)");
-            const auto radii = in.require<float>(pool::SectionType::radii, "prt-mls (run prt-radii)");
-
-            mls::MlsModel model;
-            {
-                // The leaf count, hence the progress total, is known once the SAH pass is done.
-                std::unique_ptr<tool::Progress> bar;
-                try {
-                    model = mls::build_mls(positions, normals, radii, opt,
-                                           [&](std::uint64_t done, std::uint64_t total) {
-                                               if (!bar)
-                                                   bar = std::make_unique<tool::Progress>(
-                                                       "prt-mls: shrinking leaves", total, common.quiet);
-                                               bar->update(done);
-                                           });
-                } catch (const Error& e) {
-                    throw Error(input + ": " + e.what());
-                }
-                if (bar) bar->finish();
-            }
-            const mls::BuildStats st = model.stats;
-            if (st.skipped > 0)
-                tool::note(common.quiet,
-                           "prt-mls: skipped %llu of %llu points (no usable radius, normal or position)",
-                           (unsigned long long)st.skipped, (unsigned long long)st.points);
-            tool::note(
-                common.quiet,
-                "prt-mls: %llu splats; kd-tree %llu nodes, depth %u, %llu leaves (%llu empty), %.1f refs per "
-                "non-empty leaf, %.2f refs per splat",
-                (unsigned long long)st.splats, (unsigned long long)st.nodes, st.depth,
-                (unsigned long long)st.leaves, (unsigned long long)st.empty_leaves, st.mean_refs_per_leaf(),
-                st.splats ? double(st.refs) / double(st.splats) : 0.0);
-            tool::note(common.quiet, "prt-mls: SAH: %llu leaves, cost %.2f, %.2f s",
-                       (unsigned long long)st.sah_leaves, st.sah_cost, st.seconds_sah);
-            if (opt.shrink)
-                tool::note(
-                    common.quiet,
-                    "prt-mls: shrinking: %llu leaves shrunk, %llu emptied, %llu splits inserted, %llu refs "
-                    "dropped, leaf volume %.1f%% of before, %llu interval boxes, %.2f s",
-                    (unsigned long long)st.shrunk_leaves, (unsigned long long)st.culled_leaves,
-                    (unsigned long long)st.shrink_splits, (unsigned long long)st.refs_removed,
-                    st.volume_before > 0 ? 100.0 * st.volume_after / st.volume_before : 0.0,
-                    (unsigned long long)st.interval_boxes, st.seconds_shrink);
-            if (opt.collapse)
-                tool::note(common.quiet, "prt-mls: post-collapse removed %llu splits",
-                           (unsigned long long)st.collapsed);
-
-            const nlohmann::json parameters = {{"support_factor", opt.support_factor},
-                                               {"samples", opt.samples},
-                                               {"cost_traversal", opt.cost_traversal},
-                                               {"cost_intersection", opt.cost_intersection},
-                                               {"shrink", opt.shrink},
-                                               {"slices", opt.shrink_slices},
-                                               {"shrink_axes", opt.shrink_axes},
-                                               {"shrink_depth", opt.shrink_depth},
-                                               {"encourage", opt.encourage},
-                                               {"encourage_limit", opt.encourage_limit},
-                                               {"collapse", opt.collapse},
-                                               {"max_depth", opt.max_depth}};
-            pool::PoolWriter writer;
-            writer.carry_over(in);
-            mls::write_mls_sections(std::move(model), writer);
-            writer.add_provenance("prt-mls", PRT_VERSION, parameters.dump());
-            const std::uint64_t bytes = writer.write(output);
-            const double total = tool::now_seconds() - start;
-            tool::note(common.quiet, "prt-mls: wrote %s: %.2f MB (%.1f bytes per point) in %.2f s",
-                       output.c_str(), double(bytes) / 1e6,
-                       st.points ? double(bytes) / double(st.points) : 0.0, total);
-
-            if (!stats_json.empty()) {
-                const nlohmann::json j = {{"tool", "prt-mls"},
-                                          {"parameters", parameters},
-                                          {"points", st.points},
-                                          {"skipped", st.skipped},
-                                          {"splats", st.splats},
-                                          {"nodes", st.nodes},
-                                          {"leaves", st.leaves},
-                                          {"empty_leaves", st.empty_leaves},
-                                          {"refs", st.refs},
-                                          {"depth", st.depth},
-                                          {"refs_per_leaf", st.mean_refs_per_leaf()},
-                                          {"sah_leaves", st.sah_leaves},
-                                          {"sah_cost", st.sah_cost},
-                                          {"shrunk_leaves", st.shrunk_leaves},
-                                          {"culled_leaves", st.culled_leaves},
-                                          {"shrink_splits", st.shrink_splits},
-                                          {"refs_removed", st.refs_removed},
-                                          {"volume_before", st.volume_before},
-                                          {"volume_after", st.volume_after},
-                                          {"interval_boxes", st.interval_boxes},
-                                          {"collapsed", st.collapsed},
-                                          {"seconds_sah", st.seconds_sah},
-                                          {"seconds_shrink", st.seconds_shrink},
-                                          {"seconds_build", st.seconds_total},
-                                          {"seconds_total", total},
-                                          {"bytes", bytes}};
-                std::ofstream out(stats_json);
-                out << j.dump(2) << "\n";
-                if (!out) throw Error(stats_json + ": cannot write the statistics");
-            }
+            prt::mls::validate(opt);
+            mls_step(s, opt);
         });
 }

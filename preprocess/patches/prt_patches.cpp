@@ -6,8 +6,7 @@
 
 #include "patch_build.h"
 #include "patch_file.h"
-#include "prt/formats/pool.h"
-#include "prt/tool.h"
+#include "prt/pool_step.h"
 
 namespace {
 
@@ -30,89 +29,90 @@ edges and points away from the model; the pool is marked oriented when no confli
 edge joins three or more patches, and only then may a renderer cull back faces or use front/back
 ray flags on it. The surface itself is unchanged either way.)";
 
-}  // namespace
-
-int main(int argc, char** argv) {
+/// The options of prt-patches.
+struct Options {
     std::string input;
-    std::string output;
     std::string format = "auto";
     std::uint32_t depth = 6;
     std::uint32_t bins = 16;
     std::string orient = "outward";
+};
 
-    return prt::tool::run(
-        argc, argv, "prt-patches", k_description,
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("input", input, "Patch file (.bpt or Newell format)")->required();
-            app.add_option("-o,--output", output, "Pool file to write (replaced atomically)")->required();
-            app.add_option("--format", format, "Input format: auto, bpt or newell")
+void report(const prt::tool::PoolStep& step, const prt::patches::PatchModel& model, bool orient,
+            std::size_t count, std::uint32_t depth) {
+    const prt::patches::OrientStats& o = model.orient;
+    if (orient)
+        step.note(
+            "prt-patches: orientation: %u components, %u patches transposed, %u shared / %u boundary / %u "
+            "non-manifold / %u collapsed edges, %u conflicts%s",
+            o.components, o.flipped, o.shared_edges, o.boundary_edges, o.nonmanifold_edges, o.collapsed_edges,
+            o.conflicts,
+            (o.conflicts || o.nonmanifold_edges) ? " (not marked oriented: shade two-sided, no culling)"
+                                                 : "");
+    step.note(
+        "prt-patches: %zu patches (%u with collapsed edges), BVH %zu nodes, depth %u, SAH %.2f; %zu "
+        "subpatch boxes (depth %u)",
+        count, model.degenerate_patches, model.bvh.size(), model.bvh_stats.depth, model.bvh_stats.sah_cost,
+        model.nodes.size(), depth);
+}
+
+void patches_step(prt::tool::PoolStep& step, const Options& o) {
+    namespace pp = prt::patches;
+    step.check_output_folder();
+    pp::PatchSet set = pp::read_patch_file(o.input, pp::parse_patch_format(o.format));
+    const std::size_t count = set.nets.size();
+    step.note("prt-patches: read %s: %zu patches (%s format) in %.3f s", o.input.c_str(), count,
+              pp::patch_format_name(set.format), step.seconds());
+
+    pp::BuildOptions options;
+    options.depth = o.depth;
+    options.bins = o.bins;
+    options.orient = o.orient == "outward";
+    pp::PatchModel model;
+    {
+        prt::tool::Progress bar("prt-patches: subpatch trees", count, step.quiet());
+        model = pp::build_patch_model(std::move(set.nets), options,
+                                      [&](std::uint64_t done, std::uint64_t) { bar.update(done); });
+        bar.finish();
+    }
+    report(step, model, options.orient, count, o.depth);
+
+    pp::write_patch_sections(model, step.writer());
+    const nlohmann::json params = {{"input", std::filesystem::path(o.input).filename().string()},
+                                   {"format", pp::patch_format_name(set.format)},
+                                   {"depth", o.depth},
+                                   {"bins", o.bins},
+                                   {"orient", o.orient},
+                                   {"patches", count},
+                                   {"oriented", (model.patch_info.flags & prt::pool::k_patch_oriented) != 0}};
+    const std::uint64_t bytes = step.write(params);
+    step.note("prt-patches: wrote %s: %.2f MB (%.0f bytes per patch) in %.3f s total",
+              step.output_path().c_str(), double(bytes) / 1e6, double(bytes) / double(count), step.seconds());
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    prt::tool::PoolStep step(
+        "prt-patches", k_description,
+        {.input = "", .output = "Pool file to write (replaced atomically)", .stats = ""});
+    return step.run(
+        argc, argv,
+        [&](CLI::App& app) {
+            app.add_option("input", o.input, "Patch file (.bpt or Newell format)")->required();
+            app.add_option("--format", o.format, "Input format: auto, bpt or newell")
                 ->check(CLI::IsMember({"auto", "bpt", "newell"}));
-            app.add_option("--depth", depth,
+            app.add_option("--depth", o.depth,
                            "Subpatch tree depth: 2^(depth+1)-1 boxes per patch (seed 002 uses 6)")
                 ->check(CLI::Range(0u, prt::pool::k_max_subpatch_depth));
-            app.add_option("--bins", bins, "SAH bins per axis when building the BVH")
+            app.add_option("--bins", o.bins, "SAH bins per axis when building the BVH")
                 ->check(CLI::Range(2u, 1024u));
-            app.add_option("--orient", orient,
-                           "outward (make the u/v orientation consistent, normals away from the model) "
-                           "or none (keep the file's)")
+            app.add_option(
+                   "--orient", o.orient,
+                   "outward (make the u/v orientation consistent, normals away from the model) or none "
+                   "(keep the file's)")
                 ->check(CLI::IsMember({"outward", "none"}));
         },
-        [&](const prt::tool::CommonOptions& common) {
-            namespace pp = prt::patches;
-            const std::filesystem::path out_dir = std::filesystem::path(output).parent_path();
-            if (!out_dir.empty() && !std::filesystem::is_directory(out_dir))
-                throw prt::Error(output + ": cannot write: folder " + out_dir.string() + " does not exist");
-            const double t0 = prt::tool::now_seconds();
-            pp::PatchSet set = pp::read_patch_file(input, pp::parse_patch_format(format));
-            const std::size_t count = set.nets.size();
-            prt::tool::note(common.quiet, "prt-patches: read %s: %zu patches (%s format) in %.3f s",
-                            input.c_str(), count, pp::patch_format_name(set.format),
-                            prt::tool::now_seconds() - t0);
-
-            pp::BuildOptions options;
-            options.depth = depth;
-            options.bins = bins;
-            options.orient = orient == "outward";
-            pp::PatchModel model;
-            {
-                prt::tool::Progress bar("prt-patches: subpatch trees", count, common.quiet);
-                model = pp::build_patch_model(std::move(set.nets), options,
-                                              [&](std::uint64_t done, std::uint64_t) { bar.update(done); });
-                bar.finish();
-            }
-            const pp::OrientStats& o = model.orient;
-            if (options.orient)
-                prt::tool::note(
-                    common.quiet,
-                    "prt-patches: orientation: %u components, %u patches transposed, %u shared / %u "
-                    "boundary / %u non-manifold / %u collapsed edges, %u conflicts%s",
-                    o.components, o.flipped, o.shared_edges, o.boundary_edges, o.nonmanifold_edges,
-                    o.collapsed_edges, o.conflicts,
-                    (o.conflicts || o.nonmanifold_edges)
-                        ? " (not marked oriented: shade two-sided, no culling)"
-                        : "");
-            prt::tool::note(
-                common.quiet,
-                "prt-patches: %zu patches (%u with collapsed edges), BVH %zu nodes, depth %u, SAH %.2f; "
-                "%zu subpatch boxes (depth %u)",
-                count, model.degenerate_patches, model.bvh.size(), model.bvh_stats.depth,
-                model.bvh_stats.sah_cost, model.nodes.size(), depth);
-
-            prt::pool::PoolWriter writer;
-            pp::write_patch_sections(model, writer);
-            nlohmann::json params = {
-                {"input", std::filesystem::path(input).filename().string()},
-                {"format", pp::patch_format_name(set.format)},
-                {"depth", depth},
-                {"bins", bins},
-                {"orient", orient},
-                {"patches", count},
-                {"oriented", (model.patch_info.flags & prt::pool::k_patch_oriented) != 0}};
-            writer.add_provenance("prt-patches", PRT_VERSION, params.dump());
-            const std::uint64_t bytes = writer.write(output);
-            prt::tool::note(common.quiet,
-                            "prt-patches: wrote %s: %.2f MB (%.0f bytes per patch) in %.3f s total",
-                            output.c_str(), double(bytes) / 1e6, double(bytes) / double(count),
-                            prt::tool::now_seconds() - t0);
-        });
+        [&](prt::tool::PoolStep& s) { patches_step(s, o); });
 }

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -13,254 +12,257 @@
 #include <vector>
 
 #include "photons.h"
-#include "prt/formats/pool.h"
 #include "prt/formats/scene.h"
+#include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
-#include "prt/tool.h"
+#include "prt/scene_pools.h"
 
-int main(int argc, char** argv) {
-    std::string scene_path, stats_json;
+namespace {
+
+constexpr const char* k_description =
+    "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light (area lights as "
+    "their "
+    "point samples) with a cube whose 6 faces are --face-res x --face-res pixels, shoots --per-pixel "
+    "photons "
+    "per pixel with jittered directions, each carrying the power of its pixel's solid angle (a light of "
+    "color I emits 4 pi I), and traces them with the renderer's core (on the GPU when there is one). "
+    "Only L "
+    "S+ D paths are kept: photons whose first hit is not specular, or that leave the scene, are dropped; "
+    "specular hits reflect or refract (power x reflectivity + transmissivity) up to --max-bounces; after "
+    "a "
+    "specular hit, a surface with a diffuse share receives a deposit. Deposits go into each model's "
+    "caustic "
+    "octree (model local frame, --caustic-levels below the splat octree's depth) with a density estimate "
+    "at "
+    "every leaf corner (eq. 5.1-5.2, radius --gather-radius leaf edges); the renderer interpolates them. "
+    "Each pool is rewritten in place, atomically, with its other sections carried over; pools that got "
+    "no "
+    "deposit lose any old caustic sections.";
+
+using ull = unsigned long long;
+
+/// The options of prt-photons.
+struct Options {
     prt::photons::ShootOptions shoot;
     std::uint32_t caustic_levels = 2;
     float radius = 1.0f, cos_threshold = 0.0f;
-    return prt::tool::run(
-        argc, argv, "prt-photons",
-        "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light (area lights as "
-        "their "
-        "point samples) with a cube whose 6 faces are --face-res x --face-res pixels, shoots --per-pixel "
-        "photons "
-        "per pixel with jittered directions, each carrying the power of its pixel's solid angle (a light of "
-        "color I emits 4 pi I), and traces them with the renderer's core (on the GPU when there is one). "
-        "Only L "
-        "S+ D paths are kept: photons whose first hit is not specular, or that leave the scene, are dropped; "
-        "specular hits reflect or refract (power x reflectivity + transmissivity) up to --max-bounces; after "
-        "a "
-        "specular hit, a surface with a diffuse share receives a deposit. Deposits go into each model's "
-        "caustic "
-        "octree (model local frame, --caustic-levels below the splat octree's depth) with a density estimate "
-        "at "
-        "every leaf corner (eq. 5.1-5.2, radius --gather-radius leaf edges); the renderer interpolates them. "
-        "Each pool is rewritten in place, atomically, with its other sections carried over; pools that got "
-        "no "
-        "deposit lose any old caustic sections.",
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("scene", scene_path,
-                           "Scene file (formats/SCENE.md); its models need pools with an octree")
-                ->required();
-            app.add_option("--face-res", shoot.params.face_res, "Pixels per side of each cube face")
-                ->check(CLI::Range(1u, 8192u))
-                ->capture_default_str();
-            app.add_option("--per-pixel", shoot.params.per_pixel, "Photons per pixel, jittered inside it")
-                ->check(CLI::Range(1u, 1024u))
-                ->capture_default_str();
-            app.add_option("--max-bounces", shoot.params.max_bounces, "Specular bounces a photon may make")
-                ->check(CLI::Range(1u, 64u))
-                ->capture_default_str();
+};
+
+/// One pool's caustic map: its splat octree's root, the deposits in it and the octree built.
+struct PoolJob {
+    double root_min[3];
+    double root_size = 1;
+    std::uint32_t depth = 0;
+    float scale = 1;
+    std::vector<prt::photons::PhotonDeposit> deposits;
+    std::optional<prt::gi::GiOctree> tree;
+};
+
+using Pools = prt::tool::ScenePools;
+
+/// The scene's pools: a pool placed twice gets one map (local frame) from both placements.
+Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
+    Pools pools = prt::tool::scene_pools(sc);
+    for (std::size_t m = 0; m < sc.models.size(); ++m)
+        if (pools.placed_before[m])
+            step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
+                      step.input_path().c_str(), pools.paths[pools.of_model[m]].string().c_str());
+    return pools;
+}
+
+/// Shoots the photons; the RenderScene maps the pools rewritten later: it lives only in here.
+prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scene::Scene& sc,
+                                const Options& o, const Pools& pools, std::vector<PoolJob>& jobs,
+                                std::uint64_t& lights, double& load_seconds) {
+    using namespace prt;
+    const rt::RenderScene rs = rt::RenderScene::load(sc);
+    for (const std::string& w : rs.warnings()) step.note("prt-photons: %s", w.c_str());
+    for (std::size_t m = 0; m < rs.models().size(); ++m) {
+        PoolJob& job = jobs[pools.of_model[m]];
+        gi::splat_root(*rs.models()[m].pool, job.root_min, job.root_size, job.depth);
+        job.scale = static_cast<float>(sc.models[m].transform.scale);
+    }
+    const core::SceneView view = rs.view();
+    lights = view.light_count;
+    load_seconds = step.seconds();
+    const std::uint64_t total = photons::photons_per_light(o.shoot.params) * view.light_count;
+    step.note("prt-photons: %u lights x %llu photons (%u x %u x 6 faces x %u), backend %s", view.light_count,
+              ull(photons::photons_per_light(o.shoot.params)), o.shoot.params.face_res,
+              o.shoot.params.face_res, o.shoot.params.per_pixel, o.shoot.backend.c_str());
+    tool::Progress progress("prt-photons: shooting", total, step.quiet());
+    photons::ShootResult shot =
+        photons::shoot_photons(view, o.shoot, [&](std::uint64_t d, std::uint64_t) { progress.update(d); });
+    progress.finish();
+    return shot;
+}
+
+/// Builds each pool's caustic octree (eq. 5.1-5.2); returns the leaves, sums the phase times.
+std::uint64_t gather(const prt::tool::PoolStep& step, const Options& o, const Pools& pools,
+                     const prt::photons::PhotonTally& t, std::vector<PoolJob>& jobs,
+                     double gather_phases[5]) {
+    using namespace prt;
+    std::uint64_t leaves = 0;
+    for (std::size_t p = 0; p < jobs.size(); ++p) {
+        PoolJob& job = jobs[p];
+        if (job.deposits.empty()) continue;
+        photons::GatherOptions g;
+        g.depth = std::min(job.depth + o.caustic_levels, pool::k_max_gi_depth);
+        g.radius_edges = o.radius;
+        g.render_scale = job.scale;
+        g.cos_threshold = o.cos_threshold;
+        g.threads = o.shoot.threads;
+        double phases[5] = {0, 0, 0, 0, 0};
+        g.phase_seconds = phases;
+        job.tree = photons::build_caustic_octree(job.deposits, job.root_min, job.root_size, g);
+        for (int k = 0; k < 5; ++k) gather_phases[k] += phases[k];
+        job.tree->info.total[0] = 0.0f;
+        for (const photons::PhotonDeposit& d : job.deposits)
+            job.tree->info.total[0] += 0.2126f * d.flux[0] + 0.7152f * d.flux[1] + 0.0722f * d.flux[2];
+        job.tree->info.total[1] =
+            static_cast<float>(0.2126 * t.emitted[0] + 0.7152 * t.emitted[1] + 0.0722 * t.emitted[2]);
+        leaves += job.tree->leaves.size();
+        step.note("prt-photons: %s: %zu deposits, caustic octree depth %u, %zu leaves (%.1f MiB)",
+                  pools.paths[p].filename().string().c_str(), job.deposits.size(), g.depth,
+                  job.tree->leaves.size(),
+                  double(job.tree->leaves.size() * sizeof(pool::GiLeaf) + job.tree->nodes.size() * 4) /
+                      (1024.0 * 1024.0));
+    }
+    return leaves;
+}
+
+void report(const prt::tool::PoolStep& step, const prt::photons::ShootResult& shot) {
+    const prt::photons::PhotonTally& t = shot.tally;
+    auto lum = [](const double c[3]) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
+    const double emitted = lum(t.emitted);
+    auto pct = [&](const double c[3]) { return emitted > 0 ? 100.0 * lum(c) / emitted : 0.0; };
+    step.note(
+        "prt-photons: %llu photons in %.3f s (%.1f M photons/s; tracing alone %.3f s, %.1f M/s; %s); %llu "
+        "deposits, %llu specular hits",
+        ull(t.photons), shot.seconds, shot.seconds > 0 ? double(t.photons) / shot.seconds * 1e-6 : 0.0,
+        shot.kernel_seconds, shot.kernel_seconds > 0 ? double(t.photons) / shot.kernel_seconds * 1e-6 : 0.0,
+        shot.backend.c_str(), ull(t.deposits), ull(t.specular_hits));
+    step.note(
+        "prt-photons: power: direct %.2f %%, deposited (x albedo share) %.2f %%, absorbed %.2f %%, escaped "
+        "%.2f %%, cut at the bounce limit %.4f %%",
+        pct(t.direct), pct(t.deposited), pct(t.absorbed), pct(t.escaped), pct(t.truncated));
+}
+
+nlohmann::json tally_json(const prt::photons::ShootResult& shot) {
+    const prt::photons::PhotonTally& t = shot.tally;
+    auto rgb = [](const double c[3]) { return nlohmann::json::array({c[0], c[1], c[2]}); };
+    return {{"backend", shot.backend},
+            {"photons", t.photons},
+            {"deposits", t.deposits},
+            {"specular_hits", t.specular_hits},
+            {"rays", t.rays},
+            {"emitted", rgb(t.emitted)},
+            {"direct", rgb(t.direct)},
+            {"deposited", rgb(t.deposited)},
+            {"absorbed", rgb(t.absorbed)},
+            {"escaped", rgb(t.escaped)},
+            {"truncated", rgb(t.truncated)},
+            {"shoot_seconds", shot.seconds},
+            {"trace_seconds", shot.kernel_seconds},
+            {"photons_per_second", shot.seconds > 0 ? double(t.photons) / shot.seconds : 0.0}};
+}
+
+void photons_step(prt::tool::PoolStep& step, Options o) {
+    using namespace prt;
+    double load_seconds = 0;  // scene, pools and the render scene
+    const scene::Scene sc = scene::load_scene(step.input_path());
+    if (sc.models.empty()) throw Error(step.input_path() + ": no models");
+    std::string why;
+    o.shoot.backend = photons::resolve_backend(o.shoot.backend, &why);
+    if (!why.empty()) step.note("prt-photons: --backend auto: using the CPU (%s)", why.c_str());
+
+    const Pools pools = scene_pools(step, sc);
+    std::vector<PoolJob> jobs(pools.paths.size());
+    std::uint64_t lights = 0;
+    photons::ShootResult shot = shoot(step, sc, o, pools, jobs, lights, load_seconds);
+    for (const photons::PhotonDeposit& d : shot.deposits) jobs[pools.of_model[d.model]].deposits.push_back(d);
+    std::vector<photons::PhotonDeposit>().swap(shot.deposits);
+
+    const double gather_start = tool::now_seconds();
+    double gather_phases[5] = {0, 0, 0, 0, 0};  // summed over the pools
+    const std::uint64_t leaves = gather(step, o, pools, shot.tally, jobs, gather_phases);
+    const double gather_seconds = tool::now_seconds() - gather_start;
+
+    const nlohmann::json parameters = {{"face_res", o.shoot.params.face_res},
+                                       {"per_pixel", o.shoot.params.per_pixel},
+                                       {"max_bounces", o.shoot.params.max_bounces},
+                                       {"caustic_levels", o.caustic_levels},
+                                       {"gather_radius", o.radius},
+                                       {"cos_threshold", o.cos_threshold},
+                                       {"seed", o.shoot.params.seed},
+                                       {"scene", step.input_path()}};
+    const double write_start = tool::now_seconds();
+    for (std::size_t p = 0; p < jobs.size(); ++p)
+        gi::write_gi_pool(pools.paths[p], gi::k_caustic_sections, jobs[p].tree ? &*jobs[p].tree : nullptr,
+                          "prt-photons", parameters.dump());
+    const double write_seconds = tool::now_seconds() - write_start;
+
+    report(step, shot);
+    const double total_seconds = step.seconds();
+    step.note(
+        "prt-photons: gather %.3f s (%llu leaves: bin %.3f s, blocks %.3f s, densities + leaves %.3f s, "
+        "encode %.3f s, octree %.3f s)",
+        gather_seconds, ull(leaves), gather_phases[0], gather_phases[1], gather_phases[2], gather_phases[3],
+        gather_phases[4]);
+    step.note(
+        "prt-photons: phases: load %.3f s, trace %.3f s, gather %.3f s, pool writes %.3f s; total %.3f s",
+        load_seconds, shot.seconds, gather_seconds, write_seconds, total_seconds);
+    nlohmann::json j = tally_json(shot);
+    j["scene"] = step.input_path();
+    j["parameters"] = parameters;
+    j["lights"] = lights;
+    j["gather_seconds"] = gather_seconds;
+    j["gather_phase_seconds"] = {{"bin", gather_phases[0]},
+                                 {"blocks", gather_phases[1]},
+                                 {"densities_leaves", gather_phases[2]},
+                                 {"encode", gather_phases[3]},
+                                 {"octree", gather_phases[4]}};
+    j["load_seconds"] = load_seconds;
+    j["write_seconds"] = write_seconds;
+    j["total_seconds"] = total_seconds;
+    j["leaves"] = leaves;
+    step.write_stats(std::move(j));
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    prt::tool::PoolStep step(
+        "prt-photons", k_description,
+        prt::tool::PoolStep::scene_help("Also write the statistics (power accounting) as JSON here"));
+    return step.run(
+        argc, argv,
+        [&](CLI::App& app) {
+            app.add_option("--face-res", o.shoot.params.face_res, "Pixels per side of each cube face")
+                ->check(CLI::Range(1u, 8192u));
+            app.add_option("--per-pixel", o.shoot.params.per_pixel, "Photons per pixel, jittered inside it")
+                ->check(CLI::Range(1u, 1024u));
+            app.add_option("--max-bounces", o.shoot.params.max_bounces, "Specular bounces a photon may make")
+                ->check(CLI::Range(1u, 64u));
             app.add_option(
-                   "--caustic-levels", caustic_levels,
+                   "--caustic-levels", o.caustic_levels,
                    "Levels of the caustic octree below the splat octree's depth (leaf level capped at 20)")
-                ->check(CLI::Range(0u, 12u))
-                ->capture_default_str();
-            app.add_option("--gather-radius", radius, "Gather radius g of eq. 5.1-5.2, in caustic leaf edges")
-                ->check(CLI::Range(0.25f, 4.0f))
-                ->capture_default_str();
+                ->check(CLI::Range(0u, 12u));
+            app.add_option("--gather-radius", o.radius,
+                           "Gather radius g of eq. 5.1-5.2, in caustic leaf edges")
+                ->check(CLI::Range(0.25f, 4.0f));
             app.add_option(
-                   "--cos-threshold", cos_threshold,
+                   "--cos-threshold", o.cos_threshold,
                    "Lookups whose normal makes a cosine below this with a leaf's deposit normal see no "
                    "caustic there (0: the other side of a surface sees none)")
-                ->check(CLI::Range(-1.0f, 1.0f))
-                ->capture_default_str();
-            app.add_option("--seed", shoot.params.seed,
-                           "Seed of the jitter and of the reflect/refract choices")
-                ->capture_default_str();
-            app.add_option("--backend", shoot.backend,
+                ->check(CLI::Range(-1.0f, 1.0f));
+            app.add_option("--seed", o.shoot.params.seed,
+                           "Seed of the jitter and of the reflect/refract choices");
+            app.add_option("--backend", o.shoot.backend,
                            "auto (CUDA when a device is usable, else CPU), cpu or cuda")
-                ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
-                ->capture_default_str();
-            app.add_option("-j,--threads", shoot.threads, "CPU worker threads (0 = all hardware threads)")
-                ->capture_default_str();
-            app.add_option("--stats-json", stats_json,
-                           "Also write the statistics (power accounting) as JSON here");
+                ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
+            prt::tool::PoolStep::add_threads(app, o.shoot.threads,
+                                             "CPU worker threads (0 = all hardware threads)");
         },
-        [&](const prt::tool::CommonOptions& common) {
-            using namespace prt;
-            const double start = tool::now_seconds();
-            double load_seconds = 0;  // scene, pools and the render scene
-            const scene::Scene sc = scene::load_scene(scene_path);
-            if (sc.models.empty()) throw Error(scene_path + ": no models");
-            std::string why;
-            shoot.backend = photons::resolve_backend(shoot.backend, &why);
-            if (!why.empty())
-                tool::note(common.quiet, "prt-photons: --backend auto: using the CPU (%s)", why.c_str());
-
-            // Pools by path: a pool placed twice gets one map (local frame) from both placements.
-            std::vector<std::filesystem::path> pool_paths;
-            std::vector<std::uint32_t> pool_of_model;
-            for (const scene::Model& m : sc.models) {
-                const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
-                auto it = std::find(pool_paths.begin(), pool_paths.end(), p);
-                if (it == pool_paths.end()) {
-                    pool_paths.push_back(p);
-                    pool_of_model.push_back(static_cast<std::uint32_t>(pool_paths.size() - 1));
-                } else {
-                    pool_of_model.push_back(static_cast<std::uint32_t>(it - pool_paths.begin()));
-                    tool::note(common.quiet,
-                               "prt-photons: %s: pool %s placed more than once: one caustic map for all",
-                               scene_path.c_str(), p.string().c_str());
-                }
-            }
-            struct PoolJob {
-                double root_min[3];
-                double root_size = 1;
-                std::uint32_t depth = 0;
-                float scale = 1;
-                std::vector<photons::PhotonDeposit> deposits;
-                std::optional<gi::GiOctree> tree;
-            };
-            std::vector<PoolJob> jobs(pool_paths.size());
-            photons::ShootResult shot;
-            std::uint64_t lights = 0;
-            {
-                // The RenderScene maps the pools rewritten below: it lives only in this scope.
-                const rt::RenderScene rs = rt::RenderScene::load(sc);
-                for (const std::string& w : rs.warnings())
-                    tool::note(common.quiet, "prt-photons: %s", w.c_str());
-                for (std::size_t m = 0; m < rs.models().size(); ++m) {
-                    PoolJob& job = jobs[pool_of_model[m]];
-                    gi::splat_root(*rs.models()[m].pool, job.root_min, job.root_size, job.depth);
-                    job.scale = static_cast<float>(sc.models[m].transform.scale);
-                }
-                const core::SceneView view = rs.view();
-                lights = view.light_count;
-                load_seconds = tool::now_seconds() - start;
-                const std::uint64_t total = photons::photons_per_light(shoot.params) * view.light_count;
-                tool::note(common.quiet,
-                           "prt-photons: %u lights x %llu photons (%u x %u x 6 faces x %u), backend %s",
-                           view.light_count,
-                           static_cast<unsigned long long>(photons::photons_per_light(shoot.params)),
-                           shoot.params.face_res, shoot.params.face_res, shoot.params.per_pixel,
-                           shoot.backend.c_str());
-                tool::Progress progress("prt-photons: shooting", total, common.quiet);
-                shot = photons::shoot_photons(view, shoot,
-                                              [&](std::uint64_t d, std::uint64_t) { progress.update(d); });
-                progress.finish();
-            }
-            for (const photons::PhotonDeposit& d : shot.deposits)
-                jobs[pool_of_model[d.model]].deposits.push_back(d);
-            std::vector<photons::PhotonDeposit>().swap(shot.deposits);
-
-            const double gather_start = tool::now_seconds();
-            std::uint64_t leaves = 0;
-            double gather_phases[5] = {0, 0, 0, 0, 0};  // summed over the pools
-            for (std::size_t p = 0; p < jobs.size(); ++p) {
-                PoolJob& job = jobs[p];
-                if (job.deposits.empty()) continue;
-                photons::GatherOptions g;
-                g.depth = std::min(job.depth + caustic_levels, pool::k_max_gi_depth);
-                g.radius_edges = radius;
-                g.render_scale = job.scale;
-                g.cos_threshold = cos_threshold;
-                g.threads = shoot.threads;
-                double phases[5] = {0, 0, 0, 0, 0};
-                g.phase_seconds = phases;
-                job.tree = photons::build_caustic_octree(job.deposits, job.root_min, job.root_size, g);
-                for (int k = 0; k < 5; ++k) gather_phases[k] += phases[k];
-                const photons::PhotonTally& t = shot.tally;
-                job.tree->info.total[0] = 0.0f;
-                for (const photons::PhotonDeposit& d : job.deposits)
-                    job.tree->info.total[0] +=
-                        0.2126f * d.flux[0] + 0.7152f * d.flux[1] + 0.0722f * d.flux[2];
-                job.tree->info.total[1] =
-                    static_cast<float>(0.2126 * t.emitted[0] + 0.7152 * t.emitted[1] + 0.0722 * t.emitted[2]);
-                leaves += job.tree->leaves.size();
-                tool::note(
-                    common.quiet,
-                    "prt-photons: %s: %zu deposits, caustic octree depth %u, %zu leaves (%.1f MiB)",
-                    pool_paths[p].filename().string().c_str(), job.deposits.size(), g.depth,
-                    job.tree->leaves.size(),
-                    double(job.tree->leaves.size() * sizeof(pool::GiLeaf) + job.tree->nodes.size() * 4) /
-                        (1024.0 * 1024.0));
-            }
-            const double gather_seconds = tool::now_seconds() - gather_start;
-
-            const nlohmann::json parameters = {{"face_res", shoot.params.face_res},
-                                               {"per_pixel", shoot.params.per_pixel},
-                                               {"max_bounces", shoot.params.max_bounces},
-                                               {"caustic_levels", caustic_levels},
-                                               {"gather_radius", radius},
-                                               {"cos_threshold", cos_threshold},
-                                               {"seed", shoot.params.seed},
-                                               {"scene", scene_path}};
-            const double write_start = tool::now_seconds();
-            for (std::size_t p = 0; p < jobs.size(); ++p)
-                gi::write_gi_pool(pool_paths[p], gi::k_caustic_sections,
-                                  jobs[p].tree ? &*jobs[p].tree : nullptr, "prt-photons", parameters.dump());
-            const double write_seconds = tool::now_seconds() - write_start;
-
-            const photons::PhotonTally& t = shot.tally;
-            auto lum = [](const double c[3]) { return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]; };
-            const double emitted = lum(t.emitted);
-            auto pct = [&](const double c[3]) { return emitted > 0 ? 100.0 * lum(c) / emitted : 0.0; };
-            tool::note(
-                common.quiet,
-                "prt-photons: %llu photons in %.3f s (%.1f M photons/s; tracing alone %.3f s, %.1f M/s; %s); "
-                "%llu deposits, %llu specular hits",
-                static_cast<unsigned long long>(t.photons), shot.seconds,
-                shot.seconds > 0 ? double(t.photons) / shot.seconds * 1e-6 : 0.0, shot.kernel_seconds,
-                shot.kernel_seconds > 0 ? double(t.photons) / shot.kernel_seconds * 1e-6 : 0.0,
-                shot.backend.c_str(), static_cast<unsigned long long>(t.deposits),
-                static_cast<unsigned long long>(t.specular_hits));
-            tool::note(
-                common.quiet,
-                "prt-photons: power: direct %.2f %%, deposited (x albedo share) %.2f %%, absorbed %.2f %%, "
-                "escaped %.2f %%, cut at the bounce limit %.4f %%",
-                pct(t.direct), pct(t.deposited), pct(t.absorbed), pct(t.escaped), pct(t.truncated));
-            const double total_seconds = tool::now_seconds() - start;
-            tool::note(
-                common.quiet,
-                "prt-photons: gather %.3f s (%llu leaves: bin %.3f s, blocks %.3f s, densities + leaves "
-                "%.3f s, encode %.3f s, octree %.3f s)",
-                gather_seconds, static_cast<unsigned long long>(leaves), gather_phases[0], gather_phases[1],
-                gather_phases[2], gather_phases[3], gather_phases[4]);
-            tool::note(common.quiet,
-                       "prt-photons: phases: load %.3f s, trace %.3f s, gather %.3f s, pool writes %.3f s; "
-                       "total %.3f s",
-                       load_seconds, shot.seconds, gather_seconds, write_seconds, total_seconds);
-            if (!stats_json.empty()) {
-                auto rgb = [](const double c[3]) { return nlohmann::json::array({c[0], c[1], c[2]}); };
-                const nlohmann::json j = {
-                    {"tool", "prt-photons"},
-                    {"scene", scene_path},
-                    {"parameters", parameters},
-                    {"backend", shot.backend},
-                    {"lights", lights},
-                    {"photons", t.photons},
-                    {"deposits", t.deposits},
-                    {"specular_hits", t.specular_hits},
-                    {"rays", t.rays},
-                    {"emitted", rgb(t.emitted)},
-                    {"direct", rgb(t.direct)},
-                    {"deposited", rgb(t.deposited)},
-                    {"absorbed", rgb(t.absorbed)},
-                    {"escaped", rgb(t.escaped)},
-                    {"truncated", rgb(t.truncated)},
-                    {"shoot_seconds", shot.seconds},
-                    {"trace_seconds", shot.kernel_seconds},
-                    {"photons_per_second", shot.seconds > 0 ? double(t.photons) / shot.seconds : 0.0},
-                    {"gather_seconds", gather_seconds},
-                    {"gather_phase_seconds",
-                     {{"bin", gather_phases[0]},
-                      {"blocks", gather_phases[1]},
-                      {"densities_leaves", gather_phases[2]},
-                      {"encode", gather_phases[3]},
-                      {"octree", gather_phases[4]}}},
-                    {"load_seconds", load_seconds},
-                    {"write_seconds", write_seconds},
-                    {"total_seconds", total_seconds},
-                    {"leaves", leaves}};
-                std::ofstream out(stats_json);
-                out << j.dump(2) << "\n";
-                if (!out) throw Error(stats_json + ": cannot write the statistics");
-            }
-        });
+        [&](prt::tool::PoolStep& s) { photons_step(s, o); });
 }

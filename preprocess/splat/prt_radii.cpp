@@ -1,132 +1,120 @@
 // prt-radii: splat radius per point = distance to its k-th nearest neighbour (thesis 3.1).
 #include <cstdio>
-#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "prt/formats/pool.h"
-#include "prt/tool.h"
+#include "prt/pool_step.h"
 #include "radii.h"
 
+namespace {
+
+constexpr const char* k_description =
+    "Splat radii (thesis 3.1): each point's radius is the distance to its k-th nearest neighbour "
+    "(exact k-NN, FLANN kd-tree, all cores). Outliers are clamped: with m the median raw radius of the "
+    "point's k neighbours (--clamp-scope local) or of the whole model (global), radii above F*m become "
+    "F*m "
+    "(F = --clamp-factor): an isolated point among dense ones is clamped, a sparse region is not. Reads "
+    "the positions of INPUT (local frame) and writes "
+    "OUTPUT with a radii section; the other sections are carried over, an existing octree (which "
+    "depends on the radii) is dropped.";
+
+void report(const prt::tool::PoolStep& step, const prt::pre::RadiiParams& params,
+            const prt::pre::RadiiStats& stats) {
+    using namespace prt;
+    step.note("prt-radii: %llu points, k = %u: radius min %.6g, median %.6g, mean %.6g, max %.6g",
+              static_cast<unsigned long long>(stats.points), params.k, stats.min, stats.median, stats.mean,
+              stats.max);
+    if (params.clamp_factor > 0 && params.scope == pre::ClampScope::local)
+        step.note("prt-radii: clamped %llu radii (%.3f%%) to %.3g x the median radius of their %u neighbours",
+                  static_cast<unsigned long long>(stats.clamped),
+                  100.0 * double(stats.clamped) / double(stats.points), double(params.clamp_factor),
+                  params.k);
+    else if (params.clamp_factor > 0)
+        step.note("prt-radii: clamped %llu radii (%.3f%%) to %.3g x median %.6g = %.6g",
+                  static_cast<unsigned long long>(stats.clamped),
+                  100.0 * double(stats.clamped) / double(stats.points), double(params.clamp_factor),
+                  stats.raw_median, stats.clamp_limit);
+    else
+        step.note("prt-radii: clamping off");
+    if (stats.zero > 0)
+        step.note(
+            "prt-radii: warning: %llu points have radius 0 (k coincident neighbours); prt-octree skips "
+            "them",
+            static_cast<unsigned long long>(stats.zero));
+}
+
+void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const std::string& scope) {
+    using namespace prt;
+    const auto positions = step.input().require<pool::Float3>(pool::SectionType::positions, "prt-radii");
+    if (positions.size() <= params.k)
+        throw Error(step.input_path() + ": " + std::to_string(positions.size()) +
+                    " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
+    params.scope = pre::parse_clamp_scope(scope);
+    tool::Progress progress("prt-radii: k-NN search", positions.size(), step.quiet());
+    pre::RadiiStats stats;
+    std::vector<float> radii = step.about_input([&] {
+        return pre::compute_radii(positions, params, &stats,
+                                  [&](std::uint64_t done) { progress.update(done); });
+    });
+    progress.finish();
+
+    pool::PoolWriter& writer = step.writer();
+    bool dropped_octree = false;
+    for (const pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
+                                      pool::SectionType::leaf_info, pool::SectionType::splats}) {
+        dropped_octree |= writer.has(t);
+        writer.remove(t);
+    }
+    writer.add_array(pool::SectionType::radii, std::move(radii));
+    const nlohmann::json parameters = {
+        {"k", params.k}, {"clamp_factor", params.clamp_factor}, {"clamp_scope", scope}};
+    const std::uint64_t bytes = step.write(parameters);
+
+    const double total_seconds = step.seconds();
+    step.write_stats({{"points", stats.points},
+                      {"parameters", parameters},
+                      {"min", stats.min},
+                      {"median", stats.median},
+                      {"mean", stats.mean},
+                      {"max", stats.max},
+                      {"raw_median", stats.raw_median},
+                      {"clamp_limit", stats.clamp_limit},
+                      {"clamped", stats.clamped},
+                      {"zero", stats.zero},
+                      {"index_seconds", stats.seconds_index},
+                      {"search_seconds", stats.seconds_search},
+                      {"radii_seconds", stats.seconds},
+                      {"total_seconds", total_seconds}});
+    report(step, params, stats);
+    if (dropped_octree) step.note("prt-radii: dropped the input's octree sections (rerun prt-octree)");
+    step.note("prt-radii: time: index %.3f s, search %.3f s, total %.3f s; wrote %s (%llu bytes)",
+              stats.seconds_index, stats.seconds_search, total_seconds, step.output_path().c_str(),
+              static_cast<unsigned long long>(bytes));
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-    std::string input, output;
     prt::pre::RadiiParams params;
-    std::string stats_json, scope = "local";
-    return prt::tool::run(
-        argc, argv, "prt-radii",
-        "Splat radii (thesis 3.1): each point's radius is the distance to its k-th nearest neighbour "
-        "(exact k-NN, FLANN kd-tree, all cores). Outliers are clamped: with m the median raw radius of the "
-        "point's k neighbours (--clamp-scope local) or of the whole model (global), radii above F*m become "
-        "F*m "
-        "(F = --clamp-factor): an isolated point among dense ones is clamped, a sparse region is not. Reads "
-        "the positions of INPUT (local frame) and writes "
-        "OUTPUT with a radii section; the other sections are carried over, an existing octree (which "
-        "depends on the radii) is dropped.",
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("input", input, "Input pool file")->required();
-            app.add_option("-o,--output", output, "Output pool file (written atomically; may equal INPUT)")
-                ->required();
+    std::string scope = "local";
+    prt::tool::PoolStep step("prt-radii", k_description,
+                             {.stats = "Also write the statistics as JSON to this file (benchmarks)"});
+    return step.run(
+        argc, argv,
+        [&](CLI::App& app) {
             app.add_option("-k,--k", params.k,
                            "Neighbour count k: the radius is the distance to the k-th nearest neighbour")
                 ->check(CLI::Range(1u, 1024u));
-            app.add_option(
-                   "--clamp-factor", params.clamp_factor,
-                   "Clamp radii above this factor times the median radius of --clamp-scope to that value "
-                   "(0 = no clamping)")
+            app.add_option("--clamp-factor", params.clamp_factor,
+                           "Clamp radii above this factor times the median radius of --clamp-scope to that "
+                           "value (0 = no clamping)")
                 ->check(CLI::Range(0.0f, 1.0e6f));
             app.add_option(
                    "--clamp-scope", scope,
                    "local: the median raw radius of the point's k neighbours (uneven scans keep their "
                    "sparse regions); global: the whole model's median radius")
                 ->check(CLI::IsMember({"local", "global"}));
-            app.add_option("-j,--threads", params.threads, "Worker threads (0 = all hardware threads)");
-            app.add_option("--stats-json", stats_json,
-                           "Also write the statistics as JSON to this file (benchmarks)");
+            prt::tool::PoolStep::add_threads(app, params.threads);
         },
-        [&](const prt::tool::CommonOptions& common) {
-            using namespace prt;
-            const double start = tool::now_seconds();
-            const pool::PoolFile in = pool::PoolFile::open(input);
-            const auto positions = in.require<pool::Float3>(pool::SectionType::positions, "prt-radii");
-            if (positions.size() <= params.k)
-                throw Error(input + ": " + std::to_string(positions.size()) +
-                            " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
-            params.scope = pre::parse_clamp_scope(scope);
-            tool::Progress progress("prt-radii: k-NN search", positions.size(), common.quiet);
-            pre::RadiiStats stats;
-            std::vector<float> radii;
-            try {
-                radii = pre::compute_radii(positions, params, &stats,
-                                           [&](std::uint64_t done) { progress.update(done); });
-            } catch (const Error& e) {
-                throw Error(input + ": " + e.what());
-            }
-            progress.finish();
-
-            pool::PoolWriter writer;
-            writer.carry_over(in);
-            bool dropped_octree = false;
-            for (const pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
-                                              pool::SectionType::leaf_info, pool::SectionType::splats}) {
-                dropped_octree |= writer.has(t);
-                writer.remove(t);
-            }
-            writer.add_array(pool::SectionType::radii, std::move(radii));
-            const nlohmann::json parameters = {
-                {"k", params.k}, {"clamp_factor", params.clamp_factor}, {"clamp_scope", scope}};
-            writer.add_provenance("prt-radii", PRT_VERSION, parameters.dump());
-            const std::uint64_t bytes = writer.write(output);
-
-            const double total_seconds = tool::now_seconds() - start;
-            if (!stats_json.empty()) {
-                const nlohmann::json j = {{"tool", "prt-radii"},
-                                          {"points", stats.points},
-                                          {"parameters", parameters},
-                                          {"min", stats.min},
-                                          {"median", stats.median},
-                                          {"mean", stats.mean},
-                                          {"max", stats.max},
-                                          {"raw_median", stats.raw_median},
-                                          {"clamp_limit", stats.clamp_limit},
-                                          {"clamped", stats.clamped},
-                                          {"zero", stats.zero},
-                                          {"index_seconds", stats.seconds_index},
-                                          {"search_seconds", stats.seconds_search},
-                                          {"radii_seconds", stats.seconds},
-                                          {"total_seconds", total_seconds}};
-                std::ofstream out(stats_json);
-                out << j.dump(2) << "\n";
-                if (!out) throw Error(stats_json + ": cannot write the statistics");
-            }
-            tool::note(common.quiet,
-                       "prt-radii: %llu points, k = %u: radius min %.6g, median %.6g, mean %.6g, max %.6g",
-                       static_cast<unsigned long long>(stats.points), params.k, stats.min, stats.median,
-                       stats.mean, stats.max);
-            if (params.clamp_factor > 0 && params.scope == pre::ClampScope::local)
-                tool::note(common.quiet,
-                           "prt-radii: clamped %llu radii (%.3f%%) to %.3g x the median radius of their %u "
-                           "neighbours",
-                           static_cast<unsigned long long>(stats.clamped),
-                           100.0 * double(stats.clamped) / double(stats.points), double(params.clamp_factor),
-                           params.k);
-            else if (params.clamp_factor > 0)
-                tool::note(common.quiet,
-                           "prt-radii: clamped %llu radii (%.3f%%) to %.3g x median %.6g = %.6g",
-                           static_cast<unsigned long long>(stats.clamped),
-                           100.0 * double(stats.clamped) / double(stats.points), double(params.clamp_factor),
-                           stats.raw_median, stats.clamp_limit);
-            else
-                tool::note(common.quiet, "prt-radii: clamping off");
-            if (stats.zero > 0)
-                tool::note(common.quiet,
-                           "prt-radii: warning: %llu points have radius 0 (k coincident neighbours); "
-                           "prt-octree skips them",
-                           static_cast<unsigned long long>(stats.zero));
-            if (dropped_octree)
-                tool::note(common.quiet, "prt-radii: dropped the input's octree sections (rerun prt-octree)");
-            tool::note(common.quiet,
-                       "prt-radii: time: index %.3f s, search %.3f s, total %.3f s; wrote %s (%llu bytes)",
-                       stats.seconds_index, stats.seconds_search, total_seconds, output.c_str(),
-                       static_cast<unsigned long long>(bytes));
-        });
+        [&](prt::tool::PoolStep& s) { radii_step(s, params, scope); });
 }

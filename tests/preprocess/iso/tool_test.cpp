@@ -15,35 +15,16 @@
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
-#include "runtime/tool_run.h"
+#include "runtime/tool_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace prt;
 
-class IsoTool : public ::testing::Test {
+class IsoTool : public prt::test::ToolTest {
 protected:
-    void SetUp() override {
-        m_tool = fs::path(PRT_BIN_DIR) / "prt-iso";
-        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-iso is not built in " << PRT_BIN_DIR;
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir =
-            fs::temp_directory_path() / ("prt_iso_tool_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
-    }
-    void TearDown() override {
-        if (!m_dir.empty()) fs::remove_all(m_dir);
-    }
-    /// Runs the tool (tests/runtime/tool_run.h), keeping its output for the checks.
-    int run(const std::string& args) {
-        const prt::test::ToolRun r = prt::test::run_tool("prt-iso", args, m_dir);
-        m_stdout = r.out;
-        m_stderr = r.err;
-        return r.code;
-    }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    IsoTool() : ToolTest("prt-iso", "prt_iso_tool_") {}
     /// A torus pool (positions, normals, colors; radii and normals optional), offset far from the
     /// origin so the local frame matters.
     std::string torus_pool(const std::string& name, bool radii, bool normals = true) {
@@ -61,9 +42,6 @@ protected:
         w.write(path(name));
         return path(name);
     }
-
-    fs::path m_tool, m_dir;
-    std::string m_stdout, m_stderr;
 };
 
 TEST_F(IsoTool, WritesAValidPoolWithStatistics) {

@@ -14,35 +14,16 @@
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
-#include "runtime/tool_run.h"
+#include "runtime/tool_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace prt;
 
-class MlsTool : public ::testing::Test {
+class MlsTool : public prt::test::ToolTest {
 protected:
-    void SetUp() override {
-        m_tool = fs::path(PRT_BIN_DIR) / "prt-mls";
-        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-mls is not built in " << PRT_BIN_DIR;
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir =
-            fs::temp_directory_path() / ("prt_mls_tool_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
-    }
-    void TearDown() override {
-        if (!m_dir.empty()) fs::remove_all(m_dir);
-    }
-    /// Runs the tool (tests/runtime/tool_run.h), keeping its output for the checks.
-    int run(const std::string& args) {
-        const prt::test::ToolRun r = prt::test::run_tool("prt-mls", args, m_dir);
-        m_stdout = r.out;
-        m_stderr = r.err;
-        return r.code;
-    }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    MlsTool() : ToolTest("prt-mls", "prt_mls_tool_") {}
     /// A sphere pool with positions and normals, and radii unless `radii` is false.
     std::string sphere_pool(const std::string& name, bool radii = true) {
         const mls_test::PointSet s = mls_test::fibonacci_sphere(1500);
@@ -58,9 +39,6 @@ protected:
         w.write(path(name));
         return path(name);
     }
-
-    fs::path m_tool, m_dir;
-    std::string m_stdout, m_stderr;
 };
 
 TEST_F(MlsTool, WritesAValidPoolWithStatistics) {

@@ -13,42 +13,19 @@
 #include "patch_pool.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
-#include "runtime/tool_run.h"
+#include "runtime/tool_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 
-class PatchTool : public ::testing::Test {
+class PatchTool : public prt::test::ToolTest {
 protected:
-    void SetUp() override {
-        m_tool = fs::path(PRT_BIN_DIR) / "prt-patches";
-        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-patches is not built in " << PRT_BIN_DIR;
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir =
-            fs::temp_directory_path() / ("prt_patch_tool_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
-    }
-    void TearDown() override {
-        if (!m_dir.empty()) fs::remove_all(m_dir);
-    }
-
-    /// Runs the tool (tests/runtime/tool_run.h), keeping its output for the checks.
-    int run(const std::string& args) {
-        const prt::test::ToolRun r = prt::test::run_tool("prt-patches", args, m_dir);
-        m_stdout = r.out;
-        m_stderr = r.err;
-        return r.code;
-    }
+    PatchTool() : ToolTest("prt-patches", "prt_patch_tool_") {}
     std::string write(const std::string& name, const std::string& text) {
         std::ofstream(m_dir / name) << text;
         return (m_dir / name).string();
     }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
-
-    fs::path m_tool, m_dir;
-    std::string m_stdout, m_stderr;
 };
 
 /// One flat patch in .bpt form, z = 0 over [0,3]^2.

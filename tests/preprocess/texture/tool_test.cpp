@@ -10,37 +10,19 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "../../runtime/tool_run.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/image.h"
+#include "runtime/tool_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace prt;
 
-class TextureTool : public ::testing::Test {
+class TextureTool : public prt::test::ToolTest {
 protected:
-    void SetUp() override {
-        m_tool = fs::path(PRT_BIN_DIR) / "prt-texture";
-        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-texture is not built in " << PRT_BIN_DIR;
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir = fs::temp_directory_path() /
-                ("prt_texture_tool_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
-    }
-    void TearDown() override {
-        if (!m_dir.empty()) fs::remove_all(m_dir);
-    }
-    int run(const std::string& args) {
-        const test::ToolRun r = test::run_tool("prt-texture", args, m_dir);
-        m_stdout = r.out;
-        m_stderr = r.err;
-        return r.code;
-    }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    TextureTool() : ToolTest("prt-texture", "prt_texture_tool_") {}
 
     /// The unit square z = 5 (x, y in [0, 1], 11 x 11 points, normals +z, grey colors, radii),
     /// placed far from the world origin in x so the local frame matters.
@@ -74,9 +56,6 @@ protected:
         rt::write_pfm(path(name), img, 1.0f);
         return path(name);
     }
-
-    fs::path m_tool, m_dir;
-    std::string m_stdout, m_stderr;
 };
 
 TEST_F(TextureTool, PlaneGetsTheQuadrantsWhereTheProjectionPutsThem) {

@@ -1,0 +1,23 @@
+// PointRT: the pools of a scene step (prt-photons, prt-lightmap): the distinct pool files its
+// models place, each rewritten once, in place, however often it is placed.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include "prt/formats/scene.h"
+
+namespace prt::tool {
+
+/// The distinct pools of a scene's models, in order of first placement.
+struct ScenePools {
+    std::vector<std::filesystem::path> paths;  ///< weakly canonical, one per pool file
+    std::vector<std::uint32_t> of_model;       ///< per model: its pool's index in `paths`
+    std::vector<bool> placed_before;           ///< per model: its pool was placed by an earlier model
+};
+
+/// Groups the models of `sc` by pool file (std::filesystem::weakly_canonical paths).
+ScenePools scene_pools(const scene::Scene& sc);
+
+}  // namespace prt::tool
