@@ -19,19 +19,6 @@ namespace prt::pre::import {
 
 namespace {
 
-/// The words of a line, split at spaces, tabs and carriage returns.
-std::vector<std::string_view> line_words(std::string_view line) {
-    std::vector<std::string_view> w;
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-        const std::size_t b = i;
-        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-        if (i > b) w.push_back(line.substr(b, i - b));
-    }
-    return w;
-}
-
 /// What an OFF file's magic word says is in it.
 struct OffMagic {
     bool colors = false, vertex_normals = false;
@@ -43,7 +30,7 @@ struct OffMagic {
 /// does not skip '#' comments: a comment, or counts on the magic line, desynchronise it and a stale
 /// count can then drive its face loop for billions of iterations (fuzzer). Such files are refused.
 OffMagic check_off_magic(const std::string& label, std::string_view bytes, std::size_t line1_end) {
-    const std::vector<std::string_view> line1 = line_words(bytes.substr(0, line1_end));
+    const std::vector<std::string_view> line1 = split_words(bytes.substr(0, line1_end));
     // The magic as OpenMesh parses it: [ST][C][N][4][n]OFF (it accepts anything after "OFF" on
     // that line, so "OFFnOFF" is a plain OFF to it: the word must be exactly the magic here).
     const std::string_view magic = line1.empty() ? std::string_view() : line1[0];
@@ -128,7 +115,7 @@ public:
 
     void check_vertices(std::uint64_t count, bool vertex_normals) {
         for (std::uint64_t v = 0; v < count; ++v) {
-            const auto w = line_words(record(count, "vertices", v));
+            const auto w = split_words(record(count, "vertices", v));
             const std::size_t numbers = vertex_normals ? 6 : 3;  // x y z [nx ny nz], read by operator>>
             if (w.size() < numbers)
                 throw Error(where() + "vertex " + std::to_string(v) + " has fewer than " +
@@ -149,7 +136,7 @@ public:
 
     void check_faces(std::uint64_t count, std::uint64_t vertices, bool colors) {
         for (std::uint64_t f = 0; f < count; ++f) {
-            const auto w = line_words(record(count, "faces", f));
+            const auto w = split_words(record(count, "faces", f));
             std::uint64_t n = 0;
             const auto [p, ec] = std::from_chars(w[0].data(), w[0].data() + w[0].size(), n);
             // Without colors OpenMesh reads exactly n + 1 numbers per face: a longer line would

@@ -16,18 +16,6 @@ namespace prt::pre::import {
 
 namespace {
 
-std::vector<std::string_view> words_of(std::string_view line) {
-    std::vector<std::string_view> out;
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-        const std::size_t b = i;
-        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-        if (i > b) out.push_back(line.substr(b, i - b));
-    }
-    return out;
-}
-
 bool to_u64(std::string_view s, std::uint64_t& v) {
     const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
     return ec == std::errc() && p == s.data() + s.size();
@@ -55,7 +43,7 @@ public:
             pos = eol == std::string_view::npos ? bytes.size() : eol + 1;
             ++line_no;
             if (line.find('\0') != std::string_view::npos) fail("binary bytes in the header");
-            const auto w = words_of(line);
+            const auto w = split_words(line);
             // PCL skips empty lines but crashes (a null read in PCDReader::read, PCL 1.13) on a line
             // of only spaces, tabs or a carriage return before FIELDS: such lines are refused (fuzzer).
             if (w.empty() && !line.empty()) fail("a blank line of spaces, tabs or a carriage return");
@@ -157,7 +145,7 @@ void refuse_header_after_data(const std::string& label, std::string_view bytes, 
                               std::size_t line_no) {
     for (std::size_t p = pos; p < bytes.size();) {
         const std::size_t e = std::min(bytes.find('\n', p), bytes.size());
-        const auto w = words_of(bytes.substr(p, e - p));
+        const auto w = split_words(bytes.substr(p, e - p));
         if (e == p) {
             p = e + 1;
             continue;
