@@ -1,20 +1,13 @@
 // PointRT pool file writer: sections laid out 256-byte aligned, checksummed, written atomically
-// (temporary file PATH.tmp.HOST.PID in the target folder + fsync + rename, then removal of the
-// temporary files of this host's dead writers; formats/POOL.md, "Writing").
-#include <fcntl.h>
-#include <signal.h>
-#include <unistd.h>
-
+// (prt/atomic_file.h: temporary file PATH.tmp.HOST.PID in the target folder + fsync + rename, then
+// removal of the temporary files of this host's dead writers; formats/POOL.md, "Writing").
 #include <algorithm>
-#include <cerrno>
-#include <charconv>
 #include <chrono>
-#include <climits>
 #include <cstring>
 #include <ctime>
 #include <nlohmann/json.hpp>
-#include <string_view>
 
+#include "prt/atomic_file.h"
 #include "prt/formats/pool.h"
 
 namespace prt::pool {
@@ -22,49 +15,6 @@ namespace prt::pool {
 namespace {
 
 std::uint64_t align_up(std::uint64_t v) { return (v + k_alignment - 1) / k_alignment * k_alignment; }
-
-/// This machine's name for temporary file names: gethostname(), with any character other than
-/// letters, digits, '-' and '_' replaced by '_' ('.' included, so the PID after the last '.' of a
-/// temporary name is unambiguous); "localhost" when the name is not available.
-std::string host_tag() {
-    char name[HOST_NAME_MAX + 1] = {};
-    if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "localhost";
-    std::string tag(name);
-    for (char& c : tag) {
-        const bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                          c == '-' || c == '_';
-        if (!keep) c = '_';
-    }
-    return tag;
-}
-
-/// After a successful rename over PATH: removes the temporary files PATH.tmp.HOST.PID that
-/// writers on this host left when they were killed (SIGKILL leaves no chance to clean up).
-/// Only names with this host's HOST and a PID that no longer exists (kill(PID, 0) fails with
-/// ESRCH) are removed; a live writer's file (its PID exists, EPERM included) and other hosts'
-/// files on a shared folder are never touched. Best effort: the pool is already in place, so
-/// a folder that cannot be listed or a file that cannot be removed is not an error.
-void remove_stale_temporaries(const std::filesystem::path& path, const std::string& host) {
-    const std::string prefix = path.filename().string() + ".tmp." + host + ".";
-    std::filesystem::path folder = path.parent_path();
-    if (folder.empty()) folder = ".";
-    std::error_code ec;
-    std::filesystem::directory_iterator it(folder, ec);
-    for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
-        const std::string name = it->path().filename().string();
-        if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-        const std::string_view digits = std::string_view(name).substr(prefix.size());
-        long long pid = 0;
-        const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), pid);
-        if (digits[0] == '0' || r.ec != std::errc() || r.ptr != digits.data() + digits.size() || pid <= 0 ||
-            pid > INT_MAX)
-            continue;  // not a name this writer makes
-        if (static_cast<pid_t>(pid) == ::getpid()) continue;
-        if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or unknown)
-        std::error_code ignored;
-        std::filesystem::remove(it->path(), ignored);
-    }
-}
 
 std::string utc_now() {
     const std::time_t t = std::time(nullptr);
@@ -167,36 +117,7 @@ std::vector<std::byte> PoolWriter::serialize() const {
 
 std::uint64_t PoolWriter::write(const std::filesystem::path& path) const {
     const std::vector<std::byte> bytes = serialize();
-    const std::string host = host_tag();
-    const std::string tmp = path.string() + ".tmp." + host + "." + std::to_string(::getpid());
-    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw Error(path.string() + ": cannot create: " + std::strerror(errno));
-    auto fail = [&](const char* what) {
-        const int err = errno;
-        ::close(fd);
-        ::unlink(tmp.c_str());
-        throw Error(path.string() + ": " + what + ": " + std::strerror(err));
-    };
-    std::size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, std::min<std::size_t>(bytes.size() - done, 1u << 30));
-        if (n < 0) {
-            if (errno == EINTR) continue;
-            fail("write failed");
-        }
-        done += static_cast<std::size_t>(n);
-    }
-    if (::fsync(fd) != 0) fail("fsync failed");
-    if (::close(fd) != 0) {
-        ::unlink(tmp.c_str());
-        throw Error(path.string() + ": close failed: " + std::strerror(errno));
-    }
-    if (::rename(tmp.c_str(), path.c_str()) != 0) {
-        const int err = errno;
-        ::unlink(tmp.c_str());
-        throw Error(path.string() + ": rename failed: " + std::strerror(err));
-    }
-    remove_stale_temporaries(path, host);
+    write_file_atomic(path, bytes);
     return bytes.size();
 }
 

@@ -19,6 +19,8 @@
 #include <sstream>
 #include <utility>
 
+#include "prt/vec3.h"
+
 namespace prt::scene {
 namespace {
 
@@ -251,18 +253,6 @@ private:
     std::string m_path;
 };
 
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double length(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 /// True when a and b (both non-zero) are parallel to within ~1e-6 radians.
 bool parallel(const Vec3& a, const Vec3& b) {
     return length(cross(a, b)) <= 1e-6 * length(a) * length(b);

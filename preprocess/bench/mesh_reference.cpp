@@ -13,22 +13,6 @@ namespace {
 constexpr std::uint32_t k_leaf_triangles = 4;
 constexpr double k_inf = std::numeric_limits<double>::infinity();
 
-D3 sub(const D3& a, const D3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-D3 add(const D3& a, const D3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-D3 mul(const D3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const D3& a, const D3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-D3 cross(const D3& a, const D3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 /// Entry t of the ray into the box, or +inf when it misses within [0, t_max].
 double box_entry(const D3& lo, const D3& hi, const D3& o, const D3& inv_d, double t_max) {
     double t0 = 0, t1 = t_max;

@@ -9,9 +9,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "prt/vec3.h"
+
 namespace prt::bench {
 
-using D3 = std::array<double, 3>;
+using D3 = Vec3d;
 
 /// A ray's first hit on the mesh.
 struct MeshHit {

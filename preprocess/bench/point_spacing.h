@@ -1,7 +1,8 @@
 // PointRT fidelity measurement (issue 15): where a scan has data and how dense it is there.
 //
-// An exact k-d tree over the input points (double, world frame), written here so that the
-// measure does not depend on the k-NN code the pipeline uses (prt-radii, prt-iso).
+// The exact kd-tree of the tools (preprocess/common/kd_tree.h) over the input points in double
+// precision, world frame; it is tested against brute force (tests/preprocess/common), so the measure
+// rests on an exact search, not on the radii the pipeline derived from it.
 //
 // Local spacing. On a surface sampled with density rho (points per unit area), the distance to the
 // k-th nearest neighbour is about r_k = sqrt(k / (pi rho)); the spacing of a square grid of that
@@ -14,9 +15,12 @@
 #include <cstdint>
 #include <vector>
 
+#include "kd_tree.h"
+#include "prt/vec3.h"
+
 namespace prt::bench {
 
-using P3 = std::array<double, 3>;
+using P3 = Vec3d;
 
 /// Neighbours used for the local spacing estimate.
 inline constexpr std::uint32_t k_spacing_neighbours = 8;
@@ -41,15 +45,8 @@ public:
     std::vector<double> local_spacing(unsigned threads) const;
 
 private:
-    struct Node {
-        double lo[3], hi[3];       // box of the node's points
-        std::uint32_t begin, end;  // range in m_order
-        std::uint32_t left = 0;    // first child (the second follows it); 0 for a leaf
-    };
-
     std::vector<P3> m_points;
-    std::vector<std::uint32_t> m_order;
-    std::vector<Node> m_nodes;
+    pre::KdTree<double> m_tree;
 };
 
 }  // namespace prt::bench

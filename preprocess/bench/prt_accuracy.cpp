@@ -41,7 +41,8 @@
 #include <vector>
 
 #include "analytic.h"
-#include "parallel.h"
+#include "prt/atomic_file.h"
+#include "prt/parallel.h"
 #include "prt/core/camera.h"
 #include "prt/core/iso.h"
 #include "prt/core/mls.h"
@@ -52,13 +53,14 @@
 #include "prt/runtime/render_scene.h"
 #include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
+#include "prt/vec3.h"
 #include "surface_probe.h"
 
 namespace {
 
 using namespace prt;
 using core::Vec3;
-using D3 = std::array<double, 3>;
+using D3 = Vec3d;
 using L3 = std::array<long double, 3>;
 
 struct Options {
@@ -84,22 +86,6 @@ struct PixelResult {
     Vec3 normal{0, 0, 1};
 };
 
-D3 add(const D3& a, const D3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-D3 sub(const D3& a, const D3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-D3 scaled(const D3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const D3& a, const D3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double norm(const D3& a) {
-    return std::sqrt(dot(a, a));
-}
-
 /// The camera in the pool's local frame plus the local frame's world origin; world rays are
 /// origin + (o + t d) with o, d exactly the float values the core traces.
 struct View {
@@ -112,15 +98,15 @@ struct View {
 };
 
 View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi) {
-    const D3 centre = scaled(add(lo, hi), 0.5);
-    const double diag = norm(sub(hi, lo));
+    const D3 centre = mul(add(lo, hi), 0.5);
+    const double diag = length(sub(hi, lo));
     D3 dir{o.view[0], o.view[1], o.view[2]};
-    const double len = norm(dir);
+    const double len = length(dir);
     if (!(len > 0) || !std::isfinite(len)) throw Error("--view: must be a finite non-zero vector");
-    dir = scaled(dir, 1.0 / len);
+    dir = mul(dir, 1.0 / len);
     // Distance at which the bounding sphere just fills the vertical field of view.
     const double dist = 0.5 * diag / std::sin(0.5 * o.fov * M_PI / 180.0);
-    const D3 eye = add(centre, scaled(dir, dist));
+    const D3 eye = add(centre, mul(dir, dist));
     View v;
     v.origin = origin;
     v.width = o.width;
@@ -381,7 +367,7 @@ template <class Trace>
 double trace_image(const View& view, unsigned threads, std::vector<PixelResult>& px, Trace&& trace) {
     px.assign(std::size_t(view.width) * view.height, PixelResult{});
     const double t0 = tool::now_seconds();
-    pre::parallel_chunks(view.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+    parallel_chunks(view.height, 1, threads, [&](std::size_t y0, std::size_t y1, unsigned) {
         for (std::size_t y = y0; y < y1; ++y)
             for (std::uint32_t x = 0; x < view.width; ++x)
                 trace(view.ray(x, std::uint32_t(y)), px[y * view.width + x]);
@@ -394,7 +380,7 @@ void set_hit(PixelResult& r, const View& view, const core::Ray& ray, double t, V
     r.hit = true;
     r.t = t;
     const D3 o{ray.origin.x, ray.origin.y, ray.origin.z}, d{ray.dir.x, ray.dir.y, ray.dir.z};
-    r.position = add(view.origin, add(o, scaled(d, t)));
+    r.position = add(view.origin, add(o, mul(d, t)));
     r.normal = normal;
 }
 
@@ -410,7 +396,7 @@ void run_surface(const Options& o, const View& view, Measured& m, std::shared_pt
     const bench::SurfaceProbe probe(std::move(shared), o.surface, o.s);
     m.bytes = probe.bytes();
     m.settings = probe.settings();
-    const unsigned threads = pre::resolve_threads(o.threads);
+    const unsigned threads = resolve_threads(o.threads);
     auto trace = [&](const core::Ray& r, PixelResult& out) {
         bench::ProbeHit h;
         if (!probe.trace(r, h)) return;
@@ -446,14 +432,14 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
             for (const pool::PatchPoint& q : patch_view->nets[i].p) b.grow(D3{q.x, q.y, q.z});
         lo = b.lo, hi = b.hi;
     }
-    if (!(norm(sub(hi, lo)) > 0) || !std::isfinite(norm(sub(hi, lo))))
+    if (!(length(sub(hi, lo)) > 0) || !std::isfinite(length(sub(hi, lo))))
         throw Error(o.pool + ": empty or non-finite model bounds");
     const View view = make_view(o, origin, lo, hi);
 
     // Ground truth.
     std::string truth = "none";
     synth::Shape shape;
-    double diag = norm(sub(hi, lo));
+    double diag = length(sub(hi, lo));
     std::vector<PixelResult> ref;
     std::unique_ptr<TessellatedPatches> tess;
     if (o.surface == "patches") {
@@ -464,14 +450,14 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
             shape = synth::shape_from_provenance(p.provenance_json(), o.pool);
             truth = "analytic";
             const auto b = synth::shape_bounds(shape);
-            diag = norm(sub(b[1], b[0]));
+            diag = length(sub(b[1], b[0]));
         } catch (const Error&) {
         }
     }
     if (truth != "none") {
         tool::note(common.quiet, "prt-accuracy: ground truth (%s) for %ux%u rays\n", truth.c_str(), o.width,
                    o.height);
-        trace_image(view, pre::resolve_threads(o.threads), ref, [&](const core::Ray& r, PixelResult& out) {
+        trace_image(view, resolve_threads(o.threads), ref, [&](const core::Ray& r, PixelResult& out) {
             const D3 d{r.dir.x, r.dir.y, r.dir.z};
             const D3 ol{r.origin.x, r.origin.y, r.origin.z};
             if (tess) {
@@ -483,7 +469,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
             if (const auto h = synth::first_hit(shape, ow, d)) {
                 out.hit = true;
                 out.t = h->t;
-                out.position = add(ow, scaled(d, h->t));
+                out.position = add(ow, mul(d, h->t));
             }
         });
     }
@@ -499,7 +485,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     for (std::size_t i = 0; i < m.px.size(); ++i) {
         const PixelResult& r = m.px[i];
         if (r.hit) ++hits;
-        if (r.hit && (!std::isfinite(r.t) || !std::isfinite(norm(r.position)) || !core::is_finite(r.normal)))
+        if (r.hit && (!std::isfinite(r.t) || !std::isfinite(length(r.position)) || !core::is_finite(r.normal)))
             ++nan;
         if (truth == "none") continue;
         if (ref[i].hit) ++true_hits;
@@ -515,7 +501,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
         }
         if (ref[i].hit) {
             depth_err.push_back(std::abs(r.t - ref[i].t));
-            if (truth != "analytic") hit_err.push_back(norm(sub(r.position, ref[i].position)));
+            if (truth != "analytic") hit_err.push_back(length(sub(r.position, ref[i].position)));
         }
     }
     std::vector<double> s = m.seconds;
@@ -530,7 +516,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     j["settings"] = m.settings;
     j["width"] = o.width;
     j["height"] = o.height;
-    j["threads"] = pre::resolve_threads(o.threads);
+    j["threads"] = resolve_threads(o.threads);
     j["truth"] = truth;
     j["diagonal"] = diag;
     j["points"] = points;
@@ -565,15 +551,7 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     std::printf("\n");
     if (nan) throw Error(o.pool + ": " + std::to_string(nan) + " hits with non-finite values");
     if (!o.image.empty()) rt::write_image(o.image, shade(m.px, view));
-    if (!o.json.empty()) {
-        const std::string tmp = o.json + ".tmp";
-        {
-            std::ofstream f(tmp);
-            f << j.dump(2) << "\n";
-            if (!f) throw Error(o.json + ": cannot write");
-        }
-        std::filesystem::rename(tmp, o.json);
-    }
+    if (!o.json.empty()) write_file_atomic(o.json, j.dump(2) + "\n");
 }
 
 // ---- compare: RMSE / PSNR of two images ----------------------------------------------------------
@@ -626,9 +604,7 @@ void compare(const std::string& a, const std::string& b, const std::string& json
             {"max_abs", max_abs},
             {"peak", 1.0},
             {"encoding", "display (gamma 2.2), [0,1]"}};
-        std::ofstream f(json);
-        f << j.dump(2) << "\n";
-        if (!f) throw Error(json + ": cannot write");
+        write_file_atomic(json, j.dump(2) + "\n");
     }
 }
 

@@ -41,11 +41,12 @@
 #include "analytic.h"
 #include "mesh.h"
 #include "mesh_reference.h"
-#include "parallel.h"
 #include "point_cloud.h"
 #include "point_spacing.h"
+#include "prt/atomic_file.h"
 #include "prt/core/camera.h"
 #include "prt/formats/pool.h"
+#include "prt/parallel.h"
 #include "prt/runtime/image.h"
 #include "prt/tool.h"
 #include "surface_probe.h"
@@ -63,22 +64,6 @@ struct Options {
     double coverage = 2.0, tolerance = 2.0;
     bench::SurfaceSettings s;
 };
-
-D3 add(const D3& a, const D3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-D3 sub(const D3& a, const D3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-D3 mul(const D3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const D3& a, const D3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double norm(const D3& a) {
-    return std::sqrt(dot(a, a));
-}
 
 // ---- the reference ------------------------------------------------------------------------------
 
@@ -184,14 +169,14 @@ std::vector<D3> view_directions(std::uint32_t count) {
         const double r = std::sqrt(std::max(0.0, 1.0 - y * y));
         const double phi = golden * i + 0.3;
         dirs.push_back({r * std::cos(phi), y * 0.96 + 0.02, r * std::sin(phi)});
-        dirs.back() = mul(dirs.back(), 1.0 / norm(dirs.back()));
+        dirs.back() = mul(dirs.back(), 1.0 / length(dirs.back()));
     }
     return dirs;
 }
 
 View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, const D3& dir) {
     const D3 centre = mul(add(lo, hi), 0.5);
-    const double diag = norm(sub(hi, lo));
+    const double diag = length(sub(hi, lo));
     const double dist = 0.5 * diag / std::sin(0.5 * o.fov * M_PI / 180.0);
     const D3 eye = add(centre, mul(dir, dist));
     auto local = [&](const D3& a) {
@@ -328,7 +313,7 @@ bool surrounded(const bench::PointIndex& index, const D3& h, const D3& n, double
     // a basis of the tangent plane
     const D3 a = std::abs(n[0]) < 0.9 ? D3{1, 0, 0} : D3{0, 1, 0};
     D3 u{a[1] * n[2] - a[2] * n[1], a[2] * n[0] - a[0] * n[2], a[0] * n[1] - a[1] * n[0]};
-    u = mul(u, 1.0 / norm(u));
+    u = mul(u, 1.0 / length(u));
     const D3 v{n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]};
     angles.clear();
     for (std::uint32_t i : idx) {
@@ -361,7 +346,7 @@ public:
           m_pool(std::make_shared<const pool::PoolFile>(pool::PoolFile::open(m_o.pool))) {
         const pool::ModelInfo& mi = m_pool->model_info();
         m_origin = {mi.origin[0], mi.origin[1], mi.origin[2]};
-        m_threads = pre::resolve_threads(m_o.threads);
+        m_threads = resolve_threads(m_o.threads);
         m_npx = std::size_t(m_o.width) * m_o.height;
         open_surfaces();
         load_points();
@@ -460,7 +445,7 @@ private:
     /// The reference's first hit per pixel and where the scan has data (see the header).
     std::vector<RefPixel> reference_pass(const View& view) {
         std::vector<RefPixel> ref(m_npx);
-        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+        parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
             std::vector<std::uint32_t> idx;
             std::vector<double> angles;
             for (std::size_t y = y0; y < y1; ++y)
@@ -500,7 +485,7 @@ private:
     /// The surface's hit per pixel, through the core (the timed part).
     std::vector<SurfPixel> surface_pass(const View& view, const bench::SurfaceProbe& probe) const {
         std::vector<SurfPixel> surf(m_npx);
-        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+        parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
             for (std::size_t y = y0; y < y1; ++y)
                 for (std::uint32_t x = 0; x < m_o.width; ++x) {
                     const core::Ray r =
@@ -530,7 +515,7 @@ private:
         const double sx = m_spacing[m_index->nearest(xw, dn)];
         // False hit: farther than F spacings from the reference surface. Near the reference hit,
         // that distance is bounded by |x - h| without a query.
-        const bool near_ref = r.cls != RefClass::background && norm(sub(xw, r.point)) <= m_o.tolerance * sx;
+        const bool near_ref = r.cls != RefClass::background && length(sub(xw, r.point)) <= m_o.tolerance * sx;
         if (!near_ref && m_truth->distance(xw) > m_o.tolerance * sx)
             return ++t.false_hits, PixClass::false_hit;
         const double cosr = std::abs(dot(r.normal, wd));
@@ -545,7 +530,7 @@ private:
         t.depth.push_back(float(std::abs(double(s.t) - r.t) / r.spacing));
         t.distance.push_back(float(std::abs(double(s.t) - r.t) * cosr / r.spacing));
         const D3 n{s.normal.x, s.normal.y, s.normal.z};
-        const double c = std::clamp(dot(n, r.normal) / std::max(1e-30, norm(n)), -1.0, 1.0);
+        const double c = std::clamp(dot(n, r.normal) / std::max(1e-30, length(n)), -1.0, 1.0);
         t.normal_deg.push_back(float(std::acos(c) * 180.0 / M_PI));
         return PixClass::good;
     }
@@ -554,7 +539,7 @@ private:
     Tally classify(const View& view, const std::vector<RefPixel>& ref, const std::vector<SurfPixel>& surf,
                    std::vector<PixClass>& cls) const {
         std::vector<Tally> rows(m_o.height);
-        pre::parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
+        parallel_chunks(m_o.height, 1, m_threads, [&](std::size_t y0, std::size_t y1, unsigned) {
             for (std::size_t y = y0; y < y1; ++y)
                 for (std::uint32_t x = 0; x < m_o.width; ++x) {
                     const std::size_t i = y * m_o.width + x;
@@ -628,7 +613,7 @@ private:
     /// spacings (noise, misregistration, outliers the import kept).
     void input_offsets(nlohmann::json& j) const {
         std::vector<float> off(m_pts.size());
-        pre::parallel_chunks(m_pts.size(), 4096, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+        parallel_chunks(m_pts.size(), 4096, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
             for (std::size_t i = b; i < e; ++i)
                 off[i] = float(m_truth->distance(m_pts[i]) / std::max(m_spacing[i], 1e-300));
         });
@@ -683,15 +668,7 @@ private:
                 sj["rays_per_s"].get<double>() * 1e-6);
         }
         j["per_view"] = m_per_view;
-        if (!m_o.json.empty()) {
-            const std::string tmp = m_o.json + ".tmp";
-            {
-                std::ofstream f(tmp);
-                f << j.dump(2) << "\n";
-                if (!f) throw Error(m_o.json + ": cannot write");
-            }
-            std::filesystem::rename(tmp, m_o.json);
-        }
+        if (!m_o.json.empty()) write_file_atomic(m_o.json, j.dump(2) + "\n");
     }
 
     Options m_o;

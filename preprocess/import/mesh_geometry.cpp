@@ -4,22 +4,13 @@
 
 #include "mesh.h"
 #include "prt/error.h"
+#include "prt/vec3.h"
 
 namespace prt::pre::import {
 
 namespace {
 
-using Vec = std::array<double, 3>;
-
-inline Vec sub(const Vec& a, const Vec& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-inline Vec cross(const Vec& a, const Vec& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-inline double length(const Vec& a) {
-    return std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-}
+using Vec = Vec3d;
 
 inline pool::Float3 unit_or_zero(const Vec& v) {
     const double len = length(v);

@@ -19,10 +19,48 @@ namespace prt::pre::import {
 
 namespace {
 
-void check_off(const MappedFile& file) {
-    const std::string& label = file.label();
-    const std::string_view bytes = file.view();
-    std::size_t pos = 0;
+/// What an OFF file's magic word says is in it.
+struct OffMagic {
+    bool colors = false, vertex_normals = false;
+    bool dimension = false;  ///< "4OFF" or "nOFF" (other dimensions)
+};
+
+/// The first line: the magic word alone. OpenMesh takes the whole first line as the magic line
+/// (anything after the magic is ignored), then reads the counts and the body with operator>>, which
+/// does not skip '#' comments: a comment, or counts on the magic line, desynchronise it and a stale
+/// count can then drive its face loop for billions of iterations (fuzzer). Such files are refused.
+OffMagic check_off_magic(const std::string& label, std::string_view bytes, std::size_t line1_end) {
+    const std::vector<std::string_view> line1 = split_words(bytes.substr(0, line1_end));
+    // The magic as OpenMesh parses it: [ST][C][N][4][n]OFF (it accepts anything after "OFF" on
+    // that line, so "OFFnOFF" is a plain OFF to it: the word must be exactly the magic here).
+    const std::string_view magic = line1.empty() ? std::string_view() : line1[0];
+    std::string_view kind = magic;
+    OffMagic m;
+    if (kind.substr(0, 2) == "ST") kind.remove_prefix(2);
+    if (kind.substr(0, 1) == "C") m.colors = true, kind.remove_prefix(1);
+    if (kind.substr(0, 1) == "N") m.vertex_normals = true, kind.remove_prefix(1);
+    if (kind.substr(0, 1) == "4") m.dimension = true, kind.remove_prefix(1);
+    if (kind.substr(0, 1) == "n") m.dimension = true, kind.remove_prefix(1);
+    if (kind != "OFF")
+        throw Error(label + ": not an OFF file (its first line does not start with OFF, COFF, NOFF, ...)");
+    // Binary OFF: OpenMesh's reader trusts its binary counts (a face count of 2^32 - 1 loops for
+    // minutes, a face of 2^32 - 16 corners allocates 16 GiB; fuzzer): not accepted.
+    if (line1.size() == 2 && line1[1] == "BINARY")
+        throw Error(label + ": binary OFF is not supported (convert it to ASCII OFF or PLY)");
+    if (line1.size() > 1)
+        throw Error(label + ": line 1: " + quoted(line1[1]) + " after " + quoted(magic) +
+                    ": the counts must start on the next line");
+    const std::size_t hash = bytes.find('#', line1_end);
+    if (hash != std::string_view::npos)
+        throw Error(label + ": line " +
+                    std::to_string(1 + std::count(bytes.begin(), bytes.begin() + hash, '\n')) +
+                    ": '#' comment: the mesh reader (OpenMesh) does not skip comments in OFF files");
+    return m;
+}
+
+/// The counts line "V F E" from `pos` (left after the counts), checked against the file's size.
+void read_off_counts(const std::string& label, std::string_view bytes, std::size_t& pos,
+                     std::uint64_t counts[3]) {
     // Next whitespace-separated token, skipping '#' comments.
     auto token = [&]() -> std::string_view {
         while (pos < bytes.size()) {
@@ -41,46 +79,6 @@ void check_off(const MappedFile& file) {
             ++pos;
         return bytes.substr(b, pos - b);
     };
-    // OpenMesh takes the whole first line as the magic line (anything after the magic is ignored),
-    // then reads the counts and the body with operator>>, which does not skip '#' comments: a
-    // comment, or counts on the magic line, desynchronise it and a stale count can then drive its
-    // face loop for billions of iterations (fuzzer). Such files are refused here.
-    const std::size_t line1_end = std::min(bytes.find('\n'), bytes.size());
-    std::vector<std::string_view> line1;
-    for (std::size_t i = 0; i < line1_end;) {
-        while (i < line1_end && (bytes[i] == ' ' || bytes[i] == '\t' || bytes[i] == '\r')) ++i;
-        const std::size_t b = i;
-        while (i < line1_end && bytes[i] != ' ' && bytes[i] != '\t' && bytes[i] != '\r') ++i;
-        if (i > b) line1.push_back(bytes.substr(b, i - b));
-    }
-    // The magic as OpenMesh parses it: [ST][C][N][4][n]OFF (it accepts anything after "OFF" on
-    // that line, so "OFFnOFF" is a plain OFF to it: the word must be exactly the magic here).
-    const std::string_view magic = line1.empty() ? std::string_view() : line1[0];
-    std::string_view kind = magic;
-    bool colors = false, vertex_normals = false, dimension = false;
-    if (kind.substr(0, 2) == "ST") kind.remove_prefix(2);
-    if (kind.substr(0, 1) == "C") colors = true, kind.remove_prefix(1);
-    if (kind.substr(0, 1) == "N") vertex_normals = true, kind.remove_prefix(1);
-    if (kind.substr(0, 1) == "4") dimension = true, kind.remove_prefix(1);
-    if (kind.substr(0, 1) == "n") dimension = true, kind.remove_prefix(1);
-    if (kind != "OFF")
-        throw Error(label + ": not an OFF file (its first line does not start with OFF, COFF, NOFF, ...)");
-    // Binary OFF: OpenMesh's reader trusts its binary counts (a face count of 2^32 - 1 loops for
-    // minutes, a face of 2^32 - 16 corners allocates 16 GiB; fuzzer): not accepted.
-    if (line1.size() == 2 && line1[1] == "BINARY")
-        throw Error(label + ": binary OFF is not supported (convert it to ASCII OFF or PLY)");
-    if (line1.size() > 1)
-        throw Error(label + ": line 1: " + quoted(line1[1]) + " after " + quoted(magic) +
-                    ": the counts must start on the next line");
-    const std::size_t hash = bytes.find('#', line1_end);
-    if (hash != std::string_view::npos)
-        throw Error(label + ": line " +
-                    std::to_string(1 + std::count(bytes.begin(), bytes.begin() + hash, '\n')) +
-                    ": '#' comment: the mesh reader (OpenMesh) does not skip comments in OFF files");
-    // "4OFF" and "nOFF" (other dimensions): OpenMesh refuses them itself.
-    if (dimension) return;
-    pos = line1_end;
-    std::uint64_t counts[3] = {0, 0, 0};
     for (int i = 0; i < 3; ++i) {
         const std::string_view t = token();
         const auto [p, ec] = std::from_chars(t.data(), t.data() + t.size(), counts[i]);
@@ -91,91 +89,114 @@ void check_off(const MappedFile& file) {
                                   : "edge") +
                         " count " + quoted(t) + " is not a non-negative integer");
     }
-    {
-        const std::size_t eol = std::min(bytes.find('\n', pos), bytes.size());
-        const std::string_view after = bytes.substr(pos, eol - pos);
-        if (after.find_first_not_of(" \t\r") != std::string_view::npos)
-            throw Error(label + ": OFF counts line has more than the three counts (vertices faces edges)");
-    }
+    const std::size_t eol = std::min(bytes.find('\n', pos), bytes.size());
+    const std::string_view after = bytes.substr(pos, eol - pos);
+    if (after.find_first_not_of(" \t\r") != std::string_view::npos)
+        throw Error(label + ": OFF counts line has more than the three counts (vertices faces edges)");
     const std::uint64_t rest = bytes.size() - pos;
     if (counts[0] > rest / 6 || counts[1] > rest / 8)
         throw Error(label + ": OFF header declares " + std::to_string(counts[0]) + " vertices and " +
                     std::to_string(counts[1]) + " faces but the file has only " + std::to_string(rest) +
                     " bytes after the header");
+}
 
-    // The body, line by line as OpenMesh reads it: V vertex lines of at least 3 numbers, then F
-    // face lines "n i_1 .. i_n" with n >= 3 and every index a vertex (OpenMesh loops on a
-    // negative n and reads out of bounds on a bad index).
-    while (pos < bytes.size() && bytes[pos] != '\n') ++pos;  // rest of the counts line
-    std::size_t line_no = 1 + static_cast<std::size_t>(std::count(bytes.begin(), bytes.begin() + pos, '\n'));
-    auto next_line = [&](std::string_view& line) {
-        while (pos < bytes.size()) {
-            ++pos;  // past '\n'
-            ++line_no;
-            const std::size_t e = std::min(bytes.find('\n', pos), bytes.size());
-            line = bytes.substr(pos, e - pos);
-            pos = e;
+/// The body, line by line as OpenMesh reads it: V vertex lines of at least 3 numbers, then F face
+/// lines "n i_1 .. i_n" with n >= 3 and every index a vertex (OpenMesh loops on a negative n and
+/// reads out of bounds on a bad index).
+class OffBody {
+public:
+    /// `pos` is on the counts line.
+    OffBody(const std::string& label, std::string_view bytes, std::size_t pos)
+        : m_label(label), m_bytes(bytes) {
+        while (pos < bytes.size() && bytes[pos] != '\n') ++pos;  // rest of the counts line
+        m_pos = pos;
+        m_line_no = 1 + static_cast<std::size_t>(std::count(bytes.begin(), bytes.begin() + pos, '\n'));
+    }
+
+    void check_vertices(std::uint64_t count, bool vertex_normals) {
+        for (std::uint64_t v = 0; v < count; ++v) {
+            const auto w = split_words(record(count, "vertices", v));
+            const std::size_t numbers = vertex_normals ? 6 : 3;  // x y z [nx ny nz], read by operator>>
+            if (w.size() < numbers)
+                throw Error(where() + "vertex " + std::to_string(v) + " has fewer than " +
+                            std::to_string(numbers) +
+                            (vertex_normals ? " numbers (x y z nx ny nz)" : " coordinates"));
+            for (std::size_t k = 0; k < numbers; ++k) {
+                double x = 0;
+                const auto [p, ec] = std::from_chars(w[k].data(), w[k].data() + w[k].size(), x);
+                // operator>> into a float fails on nan, inf and beyond the float range
+                // (desynchronising OpenMesh), where from_chars into a double would succeed.
+                if (ec != std::errc() || p != w[k].data() + w[k].size() ||
+                    !(std::fabs(x) <= std::numeric_limits<float>::max()))
+                    throw Error(where() + quoted(w[k]) + " is not a finite float (vertex " +
+                                std::to_string(v) + ")");
+            }
+        }
+    }
+
+    void check_faces(std::uint64_t count, std::uint64_t vertices, bool colors) {
+        for (std::uint64_t f = 0; f < count; ++f) {
+            const auto w = split_words(record(count, "faces", f));
+            std::uint64_t n = 0;
+            const auto [p, ec] = std::from_chars(w[0].data(), w[0].data() + w[0].size(), n);
+            // Without colors OpenMesh reads exactly n + 1 numbers per face: a longer line would
+            // feed its extra words to the next face.
+            if (ec != std::errc() || p != w[0].data() + w[0].size() || n < 3 || n + 1 > w.size() ||
+                (!colors && n + 1 != w.size()))
+                throw Error(where() + "face " + std::to_string(f) + " is not 'n i_1 .. i_n' with n >= 3" +
+                            (colors ? "" : " (and nothing after it)"));
+            for (std::uint64_t k = 1; k <= n; ++k) {
+                std::uint64_t idx = 0;
+                const auto [q, ec2] = std::from_chars(w[k].data(), w[k].data() + w[k].size(), idx);
+                if (ec2 != std::errc() || q != w[k].data() + w[k].size() || idx >= vertices)
+                    throw Error(where() + "face " + std::to_string(f) + " has vertex index " + quoted(w[k]) +
+                                " (the file has " + std::to_string(vertices) + " vertices)");
+            }
+        }
+    }
+
+private:
+    /// The line of record i of `count` (`what`: "vertices" or "faces"); throws when the file ends.
+    std::string_view record(std::uint64_t count, const char* what, std::uint64_t i) {
+        std::string_view line;
+        if (!next_line(line))
+            throw Error(m_label + ": OFF header declares " + std::to_string(count) + " " + what +
+                        " but the file ends after " + std::to_string(i));
+        return line;
+    }
+    /// The next line with something before a '#' (the comment cut off); false at the end.
+    bool next_line(std::string_view& line) {
+        while (m_pos < m_bytes.size()) {
+            ++m_pos;  // past '\n'
+            ++m_line_no;
+            const std::size_t e = std::min(m_bytes.find('\n', m_pos), m_bytes.size());
+            line = m_bytes.substr(m_pos, e - m_pos);
+            m_pos = e;
             const std::size_t hash = line.find('#');
             if (hash != std::string_view::npos) line = line.substr(0, hash);
             if (line.find_first_not_of(" \t\r") != std::string_view::npos) return true;
         }
         return false;
-    };
-    auto words = [](std::string_view line) {
-        std::vector<std::string_view> w;
-        std::size_t i = 0;
-        while (i < line.size()) {
-            while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-            const std::size_t b = i;
-            while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-            if (i > b) w.push_back(line.substr(b, i - b));
-        }
-        return w;
-    };
-    auto where = [&] { return label + ": line " + std::to_string(line_no) + ": "; };
-    std::string_view line;
-    for (std::uint64_t v = 0; v < counts[0]; ++v) {
-        if (!next_line(line))
-            throw Error(label + ": OFF header declares " + std::to_string(counts[0]) +
-                        " vertices but the file ends after " + std::to_string(v));
-        const auto w = words(line);
-        const std::size_t numbers = vertex_normals ? 6 : 3;  // x y z [nx ny nz], read by operator>>
-        if (w.size() < numbers)
-            throw Error(where() + "vertex " + std::to_string(v) + " has fewer than " +
-                        std::to_string(numbers) +
-                        (vertex_normals ? " numbers (x y z nx ny nz)" : " coordinates"));
-        for (std::size_t k = 0; k < numbers; ++k) {
-            double x = 0;
-            const auto [p, ec] = std::from_chars(w[k].data(), w[k].data() + w[k].size(), x);
-            // operator>> into a float fails on nan, inf and beyond the float range (desynchronising
-            // OpenMesh), where from_chars into a double would succeed.
-            if (ec != std::errc() || p != w[k].data() + w[k].size() ||
-                !(std::fabs(x) <= std::numeric_limits<float>::max()))
-                throw Error(where() + quoted(w[k]) + " is not a finite float (vertex " + std::to_string(v) +
-                            ")");
-        }
     }
-    for (std::uint64_t f = 0; f < counts[1]; ++f) {
-        if (!next_line(line))
-            throw Error(label + ": OFF header declares " + std::to_string(counts[1]) +
-                        " faces but the file ends after " + std::to_string(f));
-        const auto w = words(line);
-        std::uint64_t n = 0;
-        const auto [p, ec] = std::from_chars(w[0].data(), w[0].data() + w[0].size(), n);
-        // Without colors OpenMesh reads exactly n + 1 numbers per face: a longer line would feed
-        // its extra words to the next face.
-        if (ec != std::errc() || p != w[0].data() + w[0].size() || n < 3 || n + 1 > w.size() ||
-            (!colors && n + 1 != w.size()))
-            throw Error(where() + "face " + std::to_string(f) + " is not 'n i_1 .. i_n' with n >= 3" +
-                        (colors ? "" : " (and nothing after it)"));
-        for (std::uint64_t k = 1; k <= n; ++k) {
-            std::uint64_t idx = 0;
-            const auto [q, ec2] = std::from_chars(w[k].data(), w[k].data() + w[k].size(), idx);
-            if (ec2 != std::errc() || q != w[k].data() + w[k].size() || idx >= counts[0])
-                throw Error(where() + "face " + std::to_string(f) + " has vertex index " + quoted(w[k]) +
-                            " (the file has " + std::to_string(counts[0]) + " vertices)");
-        }
-    }
+    std::string where() const { return m_label + ": line " + std::to_string(m_line_no) + ": "; }
+
+    const std::string& m_label;
+    std::string_view m_bytes;
+    std::size_t m_pos = 0, m_line_no = 0;
+};
+
+void check_off(const MappedFile& file) {
+    const std::string& label = file.label();
+    const std::string_view bytes = file.view();
+    const std::size_t line1_end = std::min(bytes.find('\n'), bytes.size());
+    const OffMagic magic = check_off_magic(label, bytes, line1_end);
+    if (magic.dimension) return;  // "4OFF" and "nOFF": OpenMesh refuses them itself
+    std::size_t pos = line1_end;
+    std::uint64_t counts[3] = {0, 0, 0};
+    read_off_counts(label, bytes, pos, counts);
+    OffBody body(label, bytes, pos);
+    body.check_vertices(counts[0], magic.vertex_normals);
+    body.check_faces(counts[1], counts[0], magic.colors);
 }
 
 /// OpenMesh's OBJ reader asserts (abort(): Debian builds it with assertions) when the first

@@ -6,9 +6,9 @@
 #include <limits>
 
 #include "knn.h"
-#include "parallel.h"
 #include "progress.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
 
 namespace prt::pre::import {

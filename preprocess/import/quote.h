@@ -1,8 +1,10 @@
-// PointRT prt-import: input text quoted in one-line error messages, safe to print.
+// PointRT prt-import: the text helpers of the header checks: input text quoted in one-line error
+// messages (safe to print), and a header line split into words.
 #pragma once
 
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace prt::pre::import {
 
@@ -19,6 +21,20 @@ inline std::string quoted(std::string_view text, std::size_t max = 40) {
     if (text.size() > max) out += "...";
     out.push_back('\'');
     return out;
+}
+
+/// The words of a header line, split at spaces, tabs and carriage returns (PCD, PLY and OFF
+/// headers).
+inline std::vector<std::string_view> split_words(std::string_view line) {
+    std::vector<std::string_view> words;
+    std::size_t i = 0;
+    while (i < line.size()) {
+        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+        const std::size_t start = i;
+        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
+        if (i > start) words.push_back(line.substr(start, i - start));
+    }
+    return words;
 }
 
 }  // namespace prt::pre::import

@@ -15,14 +15,16 @@
 
 #include "disk_box.h"
 #include "iso_morton.h"
-#include "parallel.h"
+#include "kd_tree.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
+#include "radix_sort.h"
 
 namespace prt::iso {
 
 using detail::Frame;
 using detail::k_code_level;
-using detail::morton3;
+using pre::morton3;
 
 const char* radius_source_name(RadiusSource s) {
     switch (s) {
@@ -214,142 +216,24 @@ void gather_ball(const InfluenceIndex& index, const PointSet& ps, const double q
 
 // ---- radii of influence: k nearest neighbours (thesis 3.1, as prt-radii) ----------------------
 
-/// Distance from every point to its k-th nearest other point (exact). Points are processed in
-/// blocks of one octree node each; a block's candidates are the points of its node and the 26
-/// around it at a level where nodes hold about k points, so the k-th distance is exact when it
-/// does not exceed the distance to the candidates' box; the rare others search again in a ball.
+/// Distance from every point to its k-th nearest other point (exact: the shared kd-tree in double).
 std::vector<double> knn_distances(const std::vector<double>& pos, std::uint32_t k, unsigned threads,
                                   const Progress& progress) {
     const std::size_t n = pos.size() / 3;
     if (n <= k)
         throw Error("the k-NN radius needs more than k = " + std::to_string(k) + " points, the model has " +
                     std::to_string(n));
-    Frame frame;
-    double lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
-    for (std::size_t i = 0; i < n; ++i)
-        for (int a = 0; a < 3; ++a)
-            lo[a] = std::min(lo[a], pos[3 * i + a]), hi[a] = std::max(hi[a], pos[3 * i + a]);
-    double size = 0;
-    for (int a = 0; a < 3; ++a) size = std::max(size, hi[a] - lo[a]);
-    size = size > 0 ? size * 1.001 : 1.0;
-    double corner[3];
-    for (int a = 0; a < 3; ++a) corner[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * size;
-    frame.set(corner, size);
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
-    pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t i = b; i < e; ++i) {
-            const double* p = &pos[3 * i];
-            order[i] = {morton3(frame.cell(p[0], 0, k_code_level), frame.cell(p[1], 1, k_code_level),
-                                frame.cell(p[2], 2, k_code_level)),
-                        static_cast<std::uint32_t>(i)};
-        }
-    });
-    std::sort(order.begin(), order.end());
-    std::vector<std::uint64_t> codes(n);
-    std::vector<double> sp(3 * n);
-    for (std::size_t i = 0; i < n; ++i) {
-        codes[i] = order[i].first;
-        for (int a = 0; a < 3; ++a) sp[3 * i + a] = pos[3 * order[i].second + a];
-    }
-    // The deepest level whose occupied nodes hold at least k points on average.
-    std::uint32_t level = 0;
-    for (std::uint32_t l = 1; l <= k_code_level; ++l) {
-        const std::uint32_t shift = 3 * (k_code_level - l);
-        std::size_t occupied = 1;
-        for (std::size_t i = 1; i < n; ++i) occupied += (codes[i] >> shift) != (codes[i - 1] >> shift);
-        if (static_cast<double>(n) / static_cast<double>(occupied) < static_cast<double>(k)) break;
-        level = l;
-    }
-    const std::uint32_t shift = 3 * (k_code_level - level);
-    std::vector<std::size_t> blocks{0};
-    for (std::size_t i = 1; i < n; ++i)
-        if ((codes[i] >> shift) != (codes[i - 1] >> shift)) blocks.push_back(i);
-    blocks.push_back(n);
-    const double root_hi[3] = {frame.lo[0] + frame.size, frame.lo[1] + frame.size, frame.lo[2] + frame.size};
-
+    const pre::KdTree<double> tree(
+        n, [&](std::size_t i, double c[3]) { std::copy_n(&pos[3 * i], 3, c); }, threads);
     std::vector<double> result(n);
-    std::atomic<std::uint64_t> done{0};
-    const std::size_t block_count = blocks.size() - 1;
-    pre::parallel_chunks(block_count, 64, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
-        std::vector<std::uint32_t> block_ids, ball_ids;  // candidates: indices into sp
-        std::vector<double> cx, cy, cz, d2;              // their positions (SoA) and distances
-        std::vector<double> best(k);
-        // The k smallest squared distances from sp[i] to candidates other than i (sorted in best);
-        // returns how many were found (< k only when the candidates are too few). The distances
-        // come from a branch-free loop over the candidates' positions in SoA (vectorized).
-        auto load = [&](const std::vector<std::uint32_t>& ids) {
-            cx.resize(ids.size()), cy.resize(ids.size()), cz.resize(ids.size()), d2.resize(ids.size());
-            for (std::size_t c = 0; c < ids.size(); ++c)
-                cx[c] = sp[3 * ids[c]], cy[c] = sp[3 * ids[c] + 1], cz[c] = sp[3 * ids[c] + 2];
-        };
-        auto k_smallest = [&](std::size_t i, const std::vector<std::uint32_t>& ids) {
-            const double px = sp[3 * i], py = sp[3 * i + 1], pz = sp[3 * i + 2];
-            const std::size_t m = ids.size();
-            for (std::size_t c = 0; c < m; ++c) {
-                const double dx = cx[c] - px, dy = cy[c] - py, dz = cz[c] - pz;
-                d2[c] = dx * dx + dy * dy + dz * dz;
-            }
-            std::size_t have = 0;
-            for (std::size_t c = 0; c < m; ++c) {
-                const double v = d2[c];
-                if ((have == k && v >= best[k - 1]) || ids[c] == i) continue;
-                std::size_t at = have < k ? have++ : k - 1;
-                while (at > 0 && best[at - 1] > v) {
-                    best[at] = best[at - 1];
-                    --at;
-                }
-                best[at] = v;
-            }
-            return have;
-        };
-        auto collect = [&](const double lo[3], const double hi[3], std::uint32_t at_level,
-                           std::vector<std::uint32_t>& ids) {
-            ids.clear();
-            detail::for_each_node_range(codes, frame, at_level, lo, hi, [&](std::size_t b, std::size_t en) {
-                for (std::size_t j = b; j < en; ++j) ids.push_back(static_cast<std::uint32_t>(j));
-            });
-        };
-        for (std::size_t bi = b0; bi < b1; ++bi) {
-            const std::size_t first = blocks[bi], last = blocks[bi + 1];
-            const std::uint64_t prefix = codes[first] >> shift;
-            double blo[3], bhi[3];
-            frame.box(level, detail::compact21(prefix), detail::compact21(prefix >> 1),
-                      detail::compact21(prefix >> 2), blo, bhi);
-            const double e = frame.edge(level);
-            double glo[3], ghi[3];
-            for (int a = 0; a < 3; ++a) glo[a] = blo[a] - e, ghi[a] = bhi[a] + e;
-            collect(glo, ghi, level, block_ids);  // the block's node and the 26 around it
-            load(block_ids);
-            for (std::size_t i = first; i < last; ++i) {
-                const double* p = &sp[3 * i];
-                // Every point closer than `margin` is a candidate (no point lies beyond the root).
-                double margin = std::numeric_limits<double>::infinity();
-                for (int a = 0; a < 3; ++a) {
-                    if (glo[a] > frame.lo[a]) margin = std::min(margin, p[a] - glo[a]);
-                    if (ghi[a] < root_hi[a]) margin = std::min(margin, ghi[a] - p[a]);
-                }
-                std::size_t have = k_smallest(i, block_ids);
-                if (!(have == k && best[k - 1] <= margin * margin)) {
-                    // Exact search in a ball: the k smallest are exact once the k-th lies inside it.
-                    double radius = have == k ? std::sqrt(best[k - 1]) : 2 * e;
-                    for (int round = 0; round < 128; ++round, radius *= 2) {
-                        double qlo[3], qhi[3];
-                        for (int a = 0; a < 3; ++a) qlo[a] = p[a] - radius, qhi[a] = p[a] + radius;
-                        collect(qlo, qhi, detail::level_for_extent(frame, 2 * radius, 4.0, k_code_level),
-                                ball_ids);
-                        load(ball_ids);
-                        have = k_smallest(i, ball_ids);
-                        if (have == k && best[k - 1] <= radius * radius) break;
-                    }
-                    load(block_ids);  // back to the block's candidates for the next point
-                }
-                result[order[i].second] = std::sqrt(best[k - 1]);
-            }
-            const std::uint64_t d = done.fetch_add(last - first) + (last - first);
-            if (worker == 0 && progress) progress("k-NN radii", d, n);
-        }
-    });
+    tree.for_each(
+        k, threads,
+        [&](std::uint32_t i, const std::uint32_t*, const double* distance2, std::uint32_t) {
+            result[i] = std::sqrt(distance2[k - 1]);
+        },
+        [&](std::uint64_t done) {
+            if (progress) progress("k-NN radii", done, n);
+        });
     return result;
 }
 
@@ -436,7 +320,7 @@ public:
     /// thesis 4.3.1: marks empty leaves touched by a point's influence disk as passive.
     void mark_passive(unsigned threads, const Progress& progress) {
         std::atomic<std::uint64_t> done{0};
-        pre::parallel_chunks(m_ps.n, 4096, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+        parallel_chunks(m_ps.n, 4096, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
             std::uint32_t stack[8 * (pool::k_max_iso_level + 2)];
             for (std::size_t i = b; i < e; ++i) {
                 const double* p = &m_ps.pos[3 * i];
@@ -823,27 +707,6 @@ struct CornerValue {
     bool supported = true;  ///< the corner's projection onto the local surface lies near data
 };
 
-/// LSD radix sort of (key, slot) pairs by key, 11 bits per pass, passes over constant digits skipped.
-void radix_sort(std::vector<std::pair<std::uint64_t, std::uint32_t>>& v) {
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> tmp(v.size());
-    constexpr int k_bits = 11;
-    constexpr std::size_t k_buckets = std::size_t{1} << k_bits;
-    std::vector<std::size_t> count(k_buckets);
-    for (int shift = 0; shift < 64; shift += k_bits) {
-        std::fill(count.begin(), count.end(), 0);
-        for (const auto& e : v) ++count[(e.first >> shift) & (k_buckets - 1)];
-        if (std::find(count.begin(), count.end(), v.size()) != count.end()) continue;  // one bucket: no-op
-        std::size_t sum = 0;
-        for (std::size_t& c : count) {
-            const std::size_t t = c;
-            c = sum;
-            sum += t;
-        }
-        for (const auto& e : v) tmp[count[(e.first >> shift) & (k_buckets - 1)]++] = e;
-        v.swap(tmp);
-    }
-}
-
 /// Per-thread candidate buffer of the corner evaluation (structure of arrays).
 struct Candidates {
     std::vector<double> px, py, pz, nx, ny, nz, sup2, inv2s2, wn, cr, cg, cb, data2;
@@ -1107,14 +970,10 @@ std::uint8_t quantize_color(float v) {
     return static_cast<std::uint8_t>(std::clamp(std::round(v), 0.0f, 255.0f));
 }
 
-}  // namespace
+// ---- the build, step by step (iso_build.h lists the steps) ----------------------------------------
 
-// ---- the build ------------------------------------------------------------------------------------
-
-IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& progress) {
-    validate(o);
-    const auto t_start = Clock::now();
-    const unsigned threads = pre::resolve_threads(o.threads);
+/// The radius source the input allows (checks the input's arrays against each other).
+RadiusSource checked_radius_source(const BuildInput& in, const BuildOptions& o) {
     const std::size_t count = in.positions.size();
     if (in.normals.size() != count)
         throw Error("the ISO needs a normal per point (prt-import estimates them)");
@@ -1125,15 +984,29 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         source = in.radii.empty() ? RadiusSource::knn : RadiusSource::radii;
     if (source == RadiusSource::radii && in.radii.empty())
         throw Error("no radii section: run prt-radii or use the k-NN radius (--radius knn)");
+    return source;
+}
 
-    IsoModel model;
-    BuildStats& st = model.stats;
-    st.points = count;
-
-    // -- 1. usable points and radii of influence ------------------------------------------------
-    auto t0 = Clock::now();
+/// The points the build uses (indices into the input) and their radii of influence r_i.
+struct Influence {
     std::vector<std::uint32_t> keep;
-    keep.reserve(count);
+    std::vector<double> radius;
+};
+
+double median_of(std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+    return v[v.size() / 2];
+}
+
+/// Step 1 (thesis 3.1): the usable points (finite position, non-zero normal, and a positive radius
+/// when the radii come from the pool) and r_i: the pool's radii, or the k-NN distance with
+/// prt-radii's global clamp (points with k coincident neighbours get 0 and are skipped, as
+/// prt-octree skips them).
+Influence radii_of_influence(const BuildInput& in, RadiusSource source, const BuildOptions& o,
+                             unsigned threads, const Progress& progress, BuildStats& st) {
+    const std::size_t count = in.positions.size();
+    Influence inf;
+    inf.keep.reserve(count);
     for (std::size_t i = 0; i < count; ++i) {
         const pool::Float3 p = in.positions[i], n = in.normals[i];
         const double len = std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
@@ -1141,145 +1014,164 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
             !std::isfinite(len))
             continue;
         if (source == RadiusSource::radii && !(in.radii[i] > 0.0f && std::isfinite(in.radii[i]))) continue;
-        keep.push_back(static_cast<std::uint32_t>(i));
+        inf.keep.push_back(static_cast<std::uint32_t>(i));
     }
-    std::vector<double> radius(keep.size());
+    inf.radius.resize(inf.keep.size());
     if (source == RadiusSource::radii) {
-        for (std::size_t j = 0; j < keep.size(); ++j) radius[j] = in.radii[keep[j]];
-    } else if (!keep.empty()) {
-        std::vector<double> pos(3 * keep.size());
-        for (std::size_t j = 0; j < keep.size(); ++j) {
-            const pool::Float3 p = in.positions[keep[j]];
+        for (std::size_t j = 0; j < inf.keep.size(); ++j) inf.radius[j] = in.radii[inf.keep[j]];
+    } else if (!inf.keep.empty()) {
+        std::vector<double> pos(3 * inf.keep.size());
+        for (std::size_t j = 0; j < inf.keep.size(); ++j) {
+            const pool::Float3 p = in.positions[inf.keep[j]];
             pos[3 * j] = p.x, pos[3 * j + 1] = p.y, pos[3 * j + 2] = p.z;
         }
-        radius = knn_distances(pos, o.knn, threads, progress);
+        inf.radius = knn_distances(pos, o.knn, threads, progress);
         // prt-radii's outlier rule: radii above clamp x median become clamp x median.
-        std::vector<double> sorted(radius);
-        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-        const double limit = o.knn_clamp > 0 ? o.knn_clamp * sorted[sorted.size() / 2] : 0.0;
-        for (double& r : radius)
+        const double limit = o.knn_clamp > 0 ? o.knn_clamp * median_of(inf.radius) : 0.0;
+        for (double& r : inf.radius)
             if (limit > 0 && r > limit) r = limit, ++st.radii_clamped;
-        // Points with k coincident neighbours get radius 0: skipped like prt-octree skips them.
-        std::vector<std::uint32_t> kept2;
-        std::vector<double> radius2;
-        for (std::size_t j = 0; j < keep.size(); ++j)
-            if (radius[j] > 0 && std::isfinite(radius[j]))
-                kept2.push_back(keep[j]), radius2.push_back(radius[j]);
-        keep.swap(kept2);
-        radius.swap(radius2);
+        Influence usable;
+        for (std::size_t j = 0; j < inf.keep.size(); ++j)
+            if (inf.radius[j] > 0 && std::isfinite(inf.radius[j]))
+                usable.keep.push_back(inf.keep[j]), usable.radius.push_back(inf.radius[j]);
+        inf = std::move(usable);
     }
-    st.skipped = count - keep.size();
-    if (keep.empty()) throw Error("no usable point (positions, normals and radii all needed)");
-    {
-        std::vector<double> sorted(radius);
-        std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-        st.radius_median = sorted[sorted.size() / 2];
-    }
-    st.seconds_radii = seconds_since(t0);
+    st.skipped = count - inf.keep.size();
+    if (inf.keep.empty()) throw Error("no usable point (positions, normals and radii all needed)");
+    st.radius_median = median_of(inf.radius);
+    return inf;
+}
 
-    // -- root cube: every influence disk inside ---------------------------------------------------
-    t0 = Clock::now();
-    const std::size_t n = keep.size();
+/// The root cube (thesis 4.3.1): every influence disk inside, its corner and edge in float (the
+/// stored ones) and the same cube in double for the builder.
+struct RootCube {
+    float min[3];
+    float size;
+    Frame frame;
+    double sigma_max;  ///< largest Gaussian sigma_i
+};
+
+RootCube root_cube(const BuildInput& in, const Influence& inf, const BuildOptions& o) {
     double lo[3], hi[3];
     for (int a = 0; a < 3; ++a) lo[a] = std::numeric_limits<double>::infinity(), hi[a] = -lo[a];
-    double sigma_max = 0;
-    for (std::size_t j = 0; j < n; ++j) {
-        const pool::Float3 p = in.positions[keep[j]];
-        const double sigma = o.smoothing * radius[j];
-        const double rho = std::max(radius[j], sigma);
-        sigma_max = std::max(sigma_max, sigma);
+    RootCube cube{};
+    cube.sigma_max = 0;
+    for (std::size_t j = 0; j < inf.keep.size(); ++j) {
+        const pool::Float3 p = in.positions[inf.keep[j]];
+        const double sigma = o.smoothing * inf.radius[j];
+        const double rho = std::max(inf.radius[j], sigma);
+        cube.sigma_max = std::max(cube.sigma_max, sigma);
         const double c[3] = {p.x, p.y, p.z};
         for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], c[a] - rho), hi[a] = std::max(hi[a], c[a] + rho);
     }
     double extent = 0;
     for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
-    const float root_size = static_cast<float>(extent * 1.002);
-    if (!(root_size > 0.0f) || !std::isfinite(root_size)) throw Error("the points span no volume");
-    Frame frame;
-    float root_min[3];
+    cube.size = static_cast<float>(extent * 1.002);
+    if (!(cube.size > 0.0f) || !std::isfinite(cube.size)) throw Error("the points span no volume");
     double corner[3];
     for (int a = 0; a < 3; ++a) {
-        root_min[a] = static_cast<float>(0.5 * (lo[a] + hi[a]) - 0.5 * double(root_size));
+        cube.min[a] = static_cast<float>(0.5 * (lo[a] + hi[a]) - 0.5 * double(cube.size));
         // float rounding must not leave a disk outside the cube
-        while (double(root_min[a]) > lo[a]) root_min[a] = std::nextafter(root_min[a], -INFINITY);
-        while (double(root_min[a]) + double(root_size) < hi[a])
-            root_min[a] = std::nextafter(root_min[a], INFINITY);
-        corner[a] = root_min[a];
+        while (double(cube.min[a]) > lo[a]) cube.min[a] = std::nextafter(cube.min[a], -INFINITY);
+        while (double(cube.min[a]) + double(cube.size) < hi[a])
+            cube.min[a] = std::nextafter(cube.min[a], INFINITY);
+        corner[a] = cube.min[a];
     }
-    frame.set(corner, root_size);
+    cube.frame.set(corner, cube.size);
+    return cube;
+}
 
-    // -- the point set, sorted by code ---------------------------------------------------------------
+/// The usable points with their Gaussians (eq. 4.1), sorted by their level-K code.
+PointSet sorted_points(const BuildInput& in, const Influence& inf, const Frame& frame, const BuildOptions& o,
+                       unsigned threads) {
+    const std::size_t n = inf.keep.size();
     PointSet ps;
     ps.n = n;
-    {
-        std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
-        pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-            for (std::size_t j = b; j < e; ++j) {
-                const pool::Float3 p = in.positions[keep[j]];
-                order[j] = {morton3(frame.cell(p.x, 0, k_code_level), frame.cell(p.y, 1, k_code_level),
-                                    frame.cell(p.z, 2, k_code_level)),
-                            static_cast<std::uint32_t>(j)};
-            }
-        });
-        std::sort(order.begin(), order.end());
-        ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
-        ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
-        if (o.data_reach > 0) ps.data2.resize(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint32_t j = order[i].second;
-            const std::uint32_t src = keep[j];
-            const pool::Float3 p = in.positions[src], nv = in.normals[src];
-            const double len = std::sqrt(double(nv.x) * nv.x + double(nv.y) * nv.y + double(nv.z) * nv.z);
-            ps.pos[3 * i] = p.x, ps.pos[3 * i + 1] = p.y, ps.pos[3 * i + 2] = p.z;
-            ps.nrm[3 * i] = nv.x / len, ps.nrm[3 * i + 1] = nv.y / len, ps.nrm[3 * i + 2] = nv.z / len;
-            const pool::Rgba8 c = in.colors.empty() ? pool::Rgba8{255, 255, 255, 255} : in.colors[src];
-            ps.col[3 * i] = c.r, ps.col[3 * i + 1] = c.g, ps.col[3 * i + 2] = c.b;
-            ps.sigma[i] = o.smoothing * radius[j];
-            ps.support[i] = o.support * ps.sigma[i];
-            ps.rho[i] = std::max(radius[j], ps.sigma[i]);
-            ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
-            if (o.data_reach > 0) ps.data2[i] = (o.data_reach * radius[j]) * (o.data_reach * radius[j]);
-            ps.code[i] = order[i].first;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order(n);
+    parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t j = b; j < e; ++j) {
+            const pool::Float3 p = in.positions[inf.keep[j]];
+            order[j] = {morton3(frame.cell(p.x, 0, k_code_level), frame.cell(p.y, 1, k_code_level),
+                                frame.cell(p.z, 2, k_code_level)),
+                        static_cast<std::uint32_t>(j)};
         }
+    });
+    std::sort(order.begin(), order.end());
+    ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
+    ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
+    if (o.data_reach > 0) ps.data2.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t j = order[i].second;
+        const std::uint32_t src = inf.keep[j];
+        const double r = inf.radius[j];
+        const pool::Float3 p = in.positions[src], nv = in.normals[src];
+        const double len = std::sqrt(double(nv.x) * nv.x + double(nv.y) * nv.y + double(nv.z) * nv.z);
+        ps.pos[3 * i] = p.x, ps.pos[3 * i + 1] = p.y, ps.pos[3 * i + 2] = p.z;
+        ps.nrm[3 * i] = nv.x / len, ps.nrm[3 * i + 1] = nv.y / len, ps.nrm[3 * i + 2] = nv.z / len;
+        const pool::Rgba8 c = in.colors.empty() ? pool::Rgba8{255, 255, 255, 255} : in.colors[src];
+        ps.col[3 * i] = c.r, ps.col[3 * i + 1] = c.g, ps.col[3 * i + 2] = c.b;
+        ps.sigma[i] = o.smoothing * r;
+        ps.support[i] = o.support * ps.sigma[i];
+        ps.rho[i] = std::max(r, ps.sigma[i]);
+        ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
+        if (o.data_reach > 0) ps.data2[i] = (o.data_reach * r) * (o.data_reach * r);
+        ps.code[i] = order[i].first;
     }
-    const InfluenceIndex index = build_index(ps, frame);
+    return ps;
+}
 
-    // -- 2. the octree over the points -----------------------------------------------------------------
-    TreeBuilder tree(ps, index, frame, o);
-    tree.build_from_points();
-    st.seconds_tree = seconds_since(t0);
+/// The corner values of the evaluated leaves: each owns 8 corner slots, which slot_corner maps into
+/// `values` (a corner shared by several leaves is one value).
+struct CornerTable {
+    std::vector<CornerValue> values;
+    std::vector<std::uint32_t> slot_corner;
+    std::vector<std::uint32_t> leaf_slot;  ///< node -> its evaluated leaf (UINT32_MAX: never evaluated)
 
-    // -- 3. passive leaves ------------------------------------------------------------------------------
-    t0 = Clock::now();
-    if (o.passive) {
-        tree.mark_passive(threads, progress);
-        st.min_level_splits = tree.enforce_min_level();
+    const CornerValue& at(std::uint32_t node, std::uint32_t c) const {
+        return values[slot_corner[8 * leaf_slot[node] + c]];
     }
-    st.seconds_passive = seconds_since(t0);
+    /// Bit c: corner c has f > 0. A leaf with a corner away from the data (step 5c) holds no
+    /// surface: its mask is 0, so the closure does not grow from it and step 6 empties it.
+    std::uint32_t sign_mask(std::uint32_t node) const {
+        std::uint32_t m = 0;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            const CornerValue& v = at(node, c);
+            if (!v.supported) return 0u;
+            m |= (v.f > 0 ? 1u : 0u) << c;
+        }
+        return m;
+    }
+    bool unsupported(std::uint32_t node) const {
+        for (std::uint32_t c = 0; c < 8; ++c)
+            if (!at(node, c).supported) return true;
+        return false;
+    }
+};
 
-    // -- 4. 2:1 balance ---------------------------------------------------------------------------------
-    t0 = Clock::now();
-    if (o.balance) st.balance_splits = tree.balance(progress);
-    st.seconds_balance = seconds_since(t0);
-    std::vector<Node>& nodes = tree.nodes;
-
-    // -- 5. corners -------------------------------------------------------------------------------------
-    t0 = Clock::now();
-    std::vector<double> sorted_support(ps.support);
-    std::nth_element(sorted_support.begin(), sorted_support.begin() + n / 2, sorted_support.end());
-    const CornerEvaluator evaluator{index, ps, o.support, sigma_max, 2 * sorted_support[n / 2], o.one_side};
-    // Every evaluated filled leaf owns 8 corner slots; slot_corner maps them into `corners`.
-    // leaf_slot: node -> its evaluated leaf (UINT32_MAX for nodes never evaluated).
+/// The filled leaves (active and passive, counted in `st`), in node order.
+std::vector<std::uint32_t> filled_leaves(const std::vector<Node>& nodes, BuildStats& st) {
     std::vector<std::uint32_t> filled;
     for (std::size_t i = 0; i < nodes.size(); ++i)
         if (nodes[i].child == 0 && is_filled(nodes[i].kind)) {
             filled.push_back(static_cast<std::uint32_t>(i));
             (nodes[i].kind == k_active ? st.active_leaves : st.passive_leaves)++;
         }
-    std::vector<std::uint32_t> leaf_slot(nodes.size(), UINT32_MAX);
-    for (std::size_t f = 0; f < filled.size(); ++f) leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
+    return filled;
+}
+
+/// Step 5 (thesis 4.2-4.3, eq. 4.1-4.3): f(Q), n(Q) and the color at every distinct corner of the
+/// `filled` leaves. The corners are sorted by code and evaluated in blocks sharing a node at a
+/// level about half as wide as the median support (`median_support`): one gather of candidates
+/// per block.
+CornerTable evaluate_corners(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& filled,
+                             const CornerEvaluator& evaluator, const Frame& frame, double median_support,
+                             unsigned threads, const Progress& progress, BuildStats& st) {
+    CornerTable table;
+    table.leaf_slot.assign(nodes.size(), UINT32_MAX);
+    for (std::size_t f = 0; f < filled.size(); ++f)
+        table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
     std::vector<std::pair<std::uint64_t, std::uint32_t>> slots(8 * filled.size());
-    pre::parallel_chunks(filled.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
+    parallel_chunks(filled.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t f = b; f < e; ++f) {
             const Node& nd = nodes[filled[f]];
             const std::uint32_t s = k_code_level - nd.level;
@@ -1289,111 +1181,93 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
                                     static_cast<std::uint32_t>(8 * f + c)};
         }
     });
-    radix_sort(slots);
+    pre::radix_sort_by(slots, 64, threads, [](const auto& e) { return e.first; });
     std::vector<std::uint64_t> corner_keys;
-    std::vector<std::uint32_t> slot_corner(slots.size());
+    table.slot_corner.resize(slots.size());
     for (std::size_t i = 0; i < slots.size(); ++i) {
         if (i == 0 || slots[i].first != slots[i - 1].first) corner_keys.push_back(slots[i].first);
-        slot_corner[slots[i].second] = static_cast<std::uint32_t>(corner_keys.size() - 1);
+        table.slot_corner[slots[i].second] = static_cast<std::uint32_t>(corner_keys.size() - 1);
     }
     std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(slots);
 
-    // Blocks of corners sharing a node at a level about half as wide as the median support: one
-    // gather of candidates per block.
     const std::uint32_t block_level =
-        detail::level_for_extent(frame, 0.5 * sorted_support[n / 2], 1.0, k_code_level);
+        detail::level_for_extent(frame, 0.5 * median_support, 1.0, k_code_level);
     const std::uint32_t block_shift = 3 * (k_code_level - block_level);
     std::vector<std::size_t> blocks{0};
     for (std::size_t i = 1; i < corner_keys.size(); ++i)
         if ((corner_keys[i] >> block_shift) != (corner_keys[i - 1] >> block_shift)) blocks.push_back(i);
     blocks.push_back(corner_keys.size());
-    std::vector<CornerValue> corners(corner_keys.size());
+    table.values.resize(corner_keys.size());
     std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
     const double corner_step = frame.edge(k_code_level);
-    pre::parallel_chunks(
-        blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
-            EvaluatorScratch scratch;
-            std::vector<double> qs;
-            for (std::size_t bi = b0; bi < b1; ++bi) {
-                const std::size_t first = blocks[bi], last = blocks[bi + 1];
-                const std::uint64_t prefix = corner_keys[first] >> block_shift;
-                double blo[3], bhi[3];
-                frame.box(block_level, detail::compact21(prefix), detail::compact21(prefix >> 1),
-                          detail::compact21(prefix >> 2), blo, bhi);
-                qs.clear();
-                for (std::size_t ci = first; ci < last; ++ci) {
-                    const std::uint64_t key = corner_keys[ci];
-                    qs.push_back(frame.lo[0] + corner_step * detail::compact21(key));
-                    qs.push_back(frame.lo[1] + corner_step * detail::compact21(key >> 1));
-                    qs.push_back(frame.lo[2] + corner_step * detail::compact21(key >> 2));
-                }
-                evaluator.evaluate(qs.data(), last - first, blo, bhi, &corners[first], scratch);
-                const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
-                if (worker == 0 && progress) progress("corners", d, corner_keys.size());
+    parallel_chunks(blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
+        EvaluatorScratch scratch;
+        std::vector<double> qs;
+        for (std::size_t bi = b0; bi < b1; ++bi) {
+            const std::size_t first = blocks[bi], last = blocks[bi + 1];
+            const std::uint64_t prefix = corner_keys[first] >> block_shift;
+            double blo[3], bhi[3];
+            frame.box(block_level, pre::compact_bits21(prefix), pre::compact_bits21(prefix >> 1),
+                      pre::compact_bits21(prefix >> 2), blo, bhi);
+            qs.clear();
+            for (std::size_t ci = first; ci < last; ++ci) {
+                const std::uint64_t key = corner_keys[ci];
+                qs.push_back(frame.lo[0] + corner_step * pre::compact_bits21(key));
+                qs.push_back(frame.lo[1] + corner_step * pre::compact_bits21(key >> 1));
+                qs.push_back(frame.lo[2] + corner_step * pre::compact_bits21(key >> 2));
             }
-            far += scratch.far;
-            counted += scratch.counted;
-            unsupported += scratch.unsupported;
-        });
+            evaluator.evaluate(qs.data(), last - first, blo, bhi, &table.values[first], scratch);
+            const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
+            if (worker == 0 && progress) progress("corners", d, corner_keys.size());
+        }
+        far += scratch.far;
+        counted += scratch.counted;
+        unsupported += scratch.unsupported;
+    });
     st.far_corners = far.load();
     st.unsupported_corners = unsupported.load();
     st.mean_neighbours_x100 = corner_keys.size() > st.far_corners
                                   ? 100 * counted.load() / (corner_keys.size() - st.far_corners)
                                   : 0;
     st.corners = corner_keys.size();
-    std::vector<std::uint64_t>().swap(corner_keys);
-    st.seconds_corners = seconds_since(t0);
+    return table;
+}
 
-    // -- 5b. surface closure ----------------------------------------------------------------------------
-    t0 = Clock::now();
-    // bit c: corner c has f > 0. A leaf with a corner away from the data (near_data) holds no
-    // surface: its mask is 0, so the closure does not grow from it and step 6 empties it.
-    auto sign_mask = [&](std::uint32_t node) {
-        const std::uint32_t f = leaf_slot[node];
-        std::uint32_t m = 0;
-        for (std::uint32_t c = 0; c < 8; ++c) {
-            const CornerValue& v = corners[slot_corner[8 * f + c]];
-            if (!v.supported) return 0u;
-            m |= (v.f > 0 ? 1u : 0u) << c;
-        }
-        return m;
-    };
-    auto unsupported_leaf = [&](std::uint32_t node) {
-        const std::uint32_t f = leaf_slot[node];
-        for (std::uint32_t c = 0; c < 8; ++c)
-            if (!corners[slot_corner[8 * f + c]].supported) return true;
-        return false;
-    };
+/// Step 5b (with 5c's support): the surface closure, from the `frontier` of evaluated leaves
+/// until no face leads to a new leaf; the new leaves' corners are evaluated into `table`.
+void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint32_t> frontier,
+                   const CornerEvaluator& evaluator, const Frame& frame, const BuildOptions& o,
+                   unsigned threads, BuildStats& st) {
+    std::vector<Node>& nodes = tree.nodes;
     std::vector<std::uint32_t> near_ids;
-    SurfaceClosure closure(tree, o.max_level,
-                           [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-                               double blo[3], bhi[3];
-                               frame.box(level, x, y, z, blo, bhi);
-                               near_ids.clear();
-                               gather_overlapping(index, ps, ps.support, blo, bhi, near_ids);
-                               return !near_ids.empty();
-                           });
-    std::vector<std::uint32_t> frontier;
-    if (o.closure) frontier = filled;
+    SurfaceClosure closure(
+        tree, o.max_level, [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
+            double blo[3], bhi[3];
+            frame.box(level, x, y, z, blo, bhi);
+            near_ids.clear();
+            gather_overlapping(evaluator.index, evaluator.ps, evaluator.ps.support, blo, bhi, near_ids);
+            return !near_ids.empty();
+        });
     for (std::uint32_t round = 0; round < 256 && !frontier.empty(); ++round) {  // every round adds leaves
-        std::vector<std::uint32_t> added =
-            closure.close(frontier, leaf_slot, sign_mask, [&](std::uint32_t node, double f[8]) {
-                for (std::uint32_t c = 0; c < 8; ++c) f[c] = corners[slot_corner[8 * leaf_slot[node] + c]].f;
+        std::vector<std::uint32_t> added = closure.close(
+            frontier, table.leaf_slot, [&](std::uint32_t node) { return table.sign_mask(node); },
+            [&](std::uint32_t node, double f[8]) {
+                for (std::uint32_t c = 0; c < 8; ++c) f[c] = table.at(node, c).f;
             });
         st.closure_leaves += added.size();
         // New leaves: evaluate their 8 corners each (a corner shared with an older leaf gets the same
         // value again: f depends on the position only).
-        const std::size_t base = slot_corner.size() / 8;
-        leaf_slot.resize(nodes.size(), UINT32_MAX);
+        const std::size_t base = table.slot_corner.size() / 8;
+        table.leaf_slot.resize(nodes.size(), UINT32_MAX);
         for (std::size_t k = 0; k < added.size(); ++k)
-            leaf_slot[added[k]] = static_cast<std::uint32_t>(base + k);
-        slot_corner.resize(slot_corner.size() + 8 * added.size());
-        const std::size_t corner_base = corners.size();
-        corners.resize(corner_base + 8 * added.size());
+            table.leaf_slot[added[k]] = static_cast<std::uint32_t>(base + k);
+        table.slot_corner.resize(table.slot_corner.size() + 8 * added.size());
+        const std::size_t corner_base = table.values.size();
+        table.values.resize(corner_base + 8 * added.size());
         for (std::size_t k = 0; k < 8 * added.size(); ++k)
-            slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
+            table.slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
         std::atomic<std::uint64_t> far_added{0}, unsupported_added{0};
-        pre::parallel_chunks(added.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        parallel_chunks(added.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
             EvaluatorScratch scratch;
             for (std::size_t k = b; k < e; ++k) {
                 const Node& nd = nodes[added[k]];
@@ -1401,7 +1275,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
                 frame.box(nd.level, nd.x, nd.y, nd.z, blo, bhi);
                 for (int c = 0; c < 8; ++c)
                     for (int a = 0; a < 3; ++a) qs[3 * c + a] = ((c >> a) & 1) ? bhi[a] : blo[a];
-                evaluator.evaluate(qs, 8, blo, bhi, &corners[corner_base + 8 * k], scratch);
+                evaluator.evaluate(qs, 8, blo, bhi, &table.values[corner_base + 8 * k], scratch);
             }
             far_added += scratch.far;
             unsupported_added += scratch.unsupported;
@@ -1411,19 +1285,21 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
         st.corner_slots += 8 * added.size();
         frontier.swap(added);
     }
-    st.seconds_closure = seconds_since(t0);
+}
 
-    // -- 6. leaves without a sign change; collapse; 7. encode ------------------------------------------
-    t0 = Clock::now();
+/// Step 6: which nodes survive: filled leaves whose corners change sign (and, unless
+/// drop_uncrossed, those without a change that are not unsupported), and their ancestors.
+std::vector<std::uint8_t> crossed_leaves(const std::vector<Node>& nodes, const CornerTable& table,
+                                         const BuildOptions& o, BuildStats& st) {
     st.corner_slots = 0;
     std::vector<std::uint8_t> keep_node(nodes.size(), 0);
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         if (nodes[i].child != 0 || !is_filled(nodes[i].kind)) continue;
         st.corner_slots += 8;
-        const std::uint32_t m = sign_mask(static_cast<std::uint32_t>(i));
+        const std::uint32_t m = table.sign_mask(static_cast<std::uint32_t>(i));
         if (m != 0 && m != 0xffu) {
             keep_node[i] = 1;
-        } else if (unsupported_leaf(static_cast<std::uint32_t>(i))) {
+        } else if (table.unsupported(static_cast<std::uint32_t>(i))) {
             ++st.unsupported_leaves;
         } else {
             ++st.uncrossed_leaves;
@@ -1433,35 +1309,43 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     for (std::size_t i = nodes.size(); i-- > 0;)  // children come after their parent
         if (nodes[i].child != 0)
             for (std::uint32_t c = 0; c < 8; ++c) keep_node[i] |= keep_node[nodes[i].child + c];
+    return keep_node;
+}
 
-    // Leaf indices in depth-first (Morton) order.
-    std::vector<std::uint32_t> leaf_of(nodes.size(), UINT32_MAX);
+/// The kept leaves in depth-first (Morton) order; leaf_of[node] is a leaf's index among them.
+std::vector<std::uint32_t> depth_first_leaves(const std::vector<Node>& nodes,
+                                              const std::vector<std::uint8_t>& keep_node,
+                                              std::vector<std::uint32_t>& leaf_of) {
+    leaf_of.assign(nodes.size(), UINT32_MAX);
     std::vector<std::uint32_t> dfs_leaves;
-    {
-        std::vector<std::uint32_t> stack{0};
-        while (!stack.empty()) {
-            const std::uint32_t i = stack.back();
-            stack.pop_back();
-            if (!keep_node[i]) continue;
-            if (nodes[i].child == 0) {
-                leaf_of[i] = static_cast<std::uint32_t>(dfs_leaves.size());
-                dfs_leaves.push_back(i);
-                continue;
-            }
-            for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
+    std::vector<std::uint32_t> stack{0};
+    while (!stack.empty()) {
+        const std::uint32_t i = stack.back();
+        stack.pop_back();
+        if (!keep_node[i]) continue;
+        if (nodes[i].child == 0) {
+            leaf_of[i] = static_cast<std::uint32_t>(dfs_leaves.size());
+            dfs_leaves.push_back(i);
+            continue;
         }
+        for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
     }
+    return dfs_leaves;
+}
+
+/// Step 7 (thesis 4.4): the leaf arrays, quantized (56 bytes per leaf) and/or in floats.
+void encode_leaves(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& dfs_leaves,
+                   const CornerTable& table, const Frame& frame, const BuildOptions& o, bool colors,
+                   unsigned threads, IsoModel& model) {
     const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
     if (q8) model.leaves_q8.resize(dfs_leaves.size());
     if (f32) model.leaves_f32.resize(dfs_leaves.size());
-    const bool colors = !in.colors.empty();
-    pre::parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
+    parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t li = b; li < e; ++li) {
             const Node& nd = nodes[dfs_leaves[li]];
-            const std::uint32_t f = leaf_slot[dfs_leaves[li]];
             const double scale = pool::k_iso_q8_range * frame.edge(nd.level);
             for (std::uint32_t c = 0; c < 8; ++c) {
-                const CornerValue& v = corners[slot_corner[8 * f + c]];
+                const CornerValue& v = table.at(dfs_leaves[li], c);
                 if (q8) {
                     pool::IsoLeafQ8& q = model.leaves_q8[li];
                     q.value[c] = quantize_value(v.f, scale);
@@ -1481,8 +1365,12 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
             }
         }
     });
+}
 
-    // Node pool, breadth first; subtrees without a filled leaf become one empty leaf.
+/// Step 7: the node pool, breadth first; subtrees without a filled leaf become one empty leaf.
+void encode_nodes(const std::vector<Node>& nodes, const std::vector<std::uint8_t>& keep_node,
+                  const std::vector<std::uint32_t>& leaf_of, IsoModel& model) {
+    BuildStats& st = model.stats;
     std::vector<std::uint32_t> bfs{0};
     std::vector<std::uint32_t>& words = model.nodes;
     for (std::size_t k = 0; k < bfs.size(); ++k) {
@@ -1502,15 +1390,18 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
             words.push_back(pool::make_node(pool::NodeType::empty_leaf, 0));
         }
     }
-    st.leaves = dfs_leaves.size();
-    st.nodes = words.size();
-    st.seconds_encode = seconds_since(t0);
+}
 
+/// The IsoInfo record of the finished model.
+void fill_info(IsoModel& model, const RootCube& cube, const BuildOptions& o, bool colors,
+               RadiusSource source) {
+    const BuildStats& st = model.stats;
+    const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
     pool::IsoInfo& info = model.info;
-    for (int a = 0; a < 3; ++a) info.root_min[a] = root_min[a];
-    info.root_size = root_size;
-    info.node_count = static_cast<std::uint32_t>(words.size());
-    info.leaf_count = static_cast<std::uint32_t>(dfs_leaves.size());
+    for (int a = 0; a < 3; ++a) info.root_min[a] = cube.min[a];
+    info.root_size = cube.size;
+    info.node_count = static_cast<std::uint32_t>(model.nodes.size());
+    info.leaf_count = static_cast<std::uint32_t>(st.leaves);
     info.min_level = o.min_level;
     info.max_level = o.max_level;
     info.depth = st.depth;
@@ -1522,7 +1413,69 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     info.active_leaves = static_cast<std::uint32_t>(st.active_leaves);
     info.passive_leaves = static_cast<std::uint32_t>(st.passive_leaves);
     info.corner_count = static_cast<std::uint32_t>(std::min<std::uint64_t>(st.corners, UINT32_MAX));
-    st.bytes = sizeof(pool::IsoInfo) + 4 * words.size() + sizeof(pool::IsoLeafQ8) * model.leaves_q8.size() +
+}
+
+}  // namespace
+
+IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& progress) {
+    validate(o);
+    const auto t_start = Clock::now();
+    const unsigned threads = resolve_threads(o.threads);
+    const RadiusSource source = checked_radius_source(in, o);
+    IsoModel model;
+    BuildStats& st = model.stats;
+    st.points = in.positions.size();
+
+    auto t0 = Clock::now();
+    const Influence influence = radii_of_influence(in, source, o, threads, progress, st);  // step 1
+    st.seconds_radii = seconds_since(t0);
+
+    t0 = Clock::now();
+    const RootCube cube = root_cube(in, influence, o);
+    const PointSet ps = sorted_points(in, influence, cube.frame, o, threads);
+    const InfluenceIndex index = build_index(ps, cube.frame);
+    TreeBuilder tree(ps, index, cube.frame, o);
+    tree.build_from_points();  // step 2
+    st.seconds_tree = seconds_since(t0);
+
+    t0 = Clock::now();
+    if (o.passive) {  // step 3
+        tree.mark_passive(threads, progress);
+        st.min_level_splits = tree.enforce_min_level();
+    }
+    st.seconds_passive = seconds_since(t0);
+
+    t0 = Clock::now();
+    if (o.balance) st.balance_splits = tree.balance(progress);  // step 4
+    st.seconds_balance = seconds_since(t0);
+
+    t0 = Clock::now();
+    const std::vector<Node>& nodes = tree.nodes;
+    const double median_support = median_of(ps.support);
+    const CornerEvaluator evaluator{index, ps, o.support, cube.sigma_max, 2 * median_support, o.one_side};
+    const std::vector<std::uint32_t> filled = filled_leaves(nodes, st);
+    CornerTable table =
+        evaluate_corners(nodes, filled, evaluator, cube.frame, median_support, threads, progress, st);
+    st.seconds_corners = seconds_since(t0);
+
+    t0 = Clock::now();
+    if (o.closure) close_surface(tree, table, filled, evaluator, cube.frame, o, threads, st);  // steps 5b, 5c
+    st.seconds_closure = seconds_since(t0);
+
+    t0 = Clock::now();
+    const std::vector<std::uint8_t> keep_node = crossed_leaves(nodes, table, o, st);  // step 6
+    std::vector<std::uint32_t> leaf_of;
+    const std::vector<std::uint32_t> dfs_leaves = depth_first_leaves(nodes, keep_node, leaf_of);
+    const bool colors = !in.colors.empty();
+    encode_leaves(nodes, dfs_leaves, table, cube.frame, o, colors, threads, model);  // step 7
+    encode_nodes(nodes, keep_node, leaf_of, model);
+    st.leaves = dfs_leaves.size();
+    st.nodes = model.nodes.size();
+    st.seconds_encode = seconds_since(t0);
+
+    fill_info(model, cube, o, colors, source);
+    st.bytes = sizeof(pool::IsoInfo) + 4 * model.nodes.size() +
+               sizeof(pool::IsoLeafQ8) * model.leaves_q8.size() +
                sizeof(pool::IsoLeafF32) * model.leaves_f32.size();
     st.seconds_total = seconds_since(t_start);
     return model;

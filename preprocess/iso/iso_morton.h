@@ -1,8 +1,8 @@
 // PointRT preprocess (prt-iso internals): Morton codes at the deepest ISO level and range queries
 // over points sorted by them. Host only.
 //
-// Every point gets the Morton code of its cell at level K = pool::k_max_iso_level (20) of the root
-// cube: 3 x 20 interleaved bits, x lowest (bit 3k = x bit k, 3k + 1 = y, 3k + 2 = z), so the
+// Every point gets the Morton code (morton.h) of its cell at level K = pool::k_max_iso_level (20) of
+// the root cube: 3 x 20 interleaved bits, x lowest (bit 3k = x bit k, 3k + 1 = y, 3k + 2 = z), so the
 // triplet at bits 3 (K - l - 1) .. 3 (K - l) - 1 is the child octant c = x | y << 1 | z << 2 taken at
 // level l, exactly the octree's child order. Sorted by code, the points of any octree node form
 // one contiguous range, found by two binary searches on the node's code prefix. Corners use the
@@ -15,37 +15,12 @@
 #include <cstdint>
 #include <span>
 
+#include "morton.h"
 #include "prt/formats/iso_layout.h"
 
 namespace prt::iso::detail {
 
 inline constexpr std::uint32_t k_code_level = pool::k_max_iso_level;
-
-/// Spreads the low 21 bits of v to every third bit.
-inline std::uint64_t spread21(std::uint64_t v) {
-    v &= 0x1fffffull;
-    v = (v | (v << 32)) & 0x1f00000000ffffull;
-    v = (v | (v << 16)) & 0x1f0000ff0000ffull;
-    v = (v | (v << 8)) & 0x100f00f00f00f00full;
-    v = (v | (v << 4)) & 0x10c30c30c30c30c3ull;
-    v = (v | (v << 2)) & 0x1249249249249249ull;
-    return v;
-}
-
-/// Inverse of spread21: every third bit of v (starting at bit 0) packed into 21 bits.
-inline std::uint32_t compact21(std::uint64_t v) {
-    v &= 0x1249249249249249ull;
-    v = (v | (v >> 2)) & 0x10c30c30c30c30c3ull;
-    v = (v | (v >> 4)) & 0x100f00f00f00f00full;
-    v = (v | (v >> 8)) & 0x1f0000ff0000ffull;
-    v = (v | (v >> 16)) & 0x1f00000000ffffull;
-    v = (v | (v >> 32)) & 0x1fffffull;
-    return static_cast<std::uint32_t>(v);
-}
-
-inline std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return spread21(x) | (spread21(y) << 1) | (spread21(z) << 2);
-}
 
 /// The root cube in double precision (from the stored floats, so the builder's cells and corners
 /// are exactly the ones the runtime's normalized coordinates describe).
@@ -131,7 +106,7 @@ void for_each_node_range(std::span<const std::uint64_t> codes, const Frame& fram
     for (std::uint32_t z = c0[2]; z <= c1[2]; ++z)
         for (std::uint32_t y = c0[1]; y <= c1[1]; ++y)
             for (std::uint32_t x = c0[0]; x <= c1[0]; ++x) {
-                const std::uint64_t prefix = morton3(x, y, z);
+                const std::uint64_t prefix = pre::morton3(x, y, z);
                 const std::uint64_t first = prefix << shift;
                 const std::uint64_t last = first + ((std::uint64_t{1} << shift) - 1);
                 const auto b = std::lower_bound(codes.begin(), codes.end(), first);

@@ -6,8 +6,8 @@
 #include <atomic>
 #include <cmath>
 
-#include "parallel.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 
 namespace prt::lightmap {
 
@@ -46,20 +46,20 @@ void trace_samples(const core::SceneView& scene, const TraceParams& params, std:
                    std::uint64_t first_index, unsigned threads,
                    const std::function<void(std::uint64_t)>& progress) {
     std::atomic<std::uint64_t> done{0};
-    pre::parallel_chunks(samples.size(), 64, pre::resolve_threads(threads),
-                         [&](std::size_t begin, std::size_t end, unsigned worker) {
-                             core::RayCounters c;
-                             for (std::size_t i = begin; i < end; ++i) {
-                                 Sample& s = samples[i];
-                                 const core::Vec3 e = indirect_irradiance(
-                                     scene, params, s.render_position, s.render_normal, first_index + i, c);
-                                 s.irradiance[0] = e.x;
-                                 s.irradiance[1] = e.y;
-                                 s.irradiance[2] = e.z;
-                             }
-                             const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
-                             if (worker == 0 && progress) progress(d);
-                         });
+    parallel_chunks(samples.size(), 64, resolve_threads(threads),
+                    [&](std::size_t begin, std::size_t end, unsigned worker) {
+                        core::RayCounters c;
+                        for (std::size_t i = begin; i < end; ++i) {
+                            Sample& s = samples[i];
+                            const core::Vec3 e = indirect_irradiance(scene, params, s.render_position,
+                                                                     s.render_normal, first_index + i, c);
+                            s.irradiance[0] = e.x;
+                            s.irradiance[1] = e.y;
+                            s.irradiance[2] = e.z;
+                        }
+                        const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
+                        if (worker == 0 && progress) progress(d);
+                    });
 }
 
 gi::GiOctree build_light_map_octree(std::span<const Sample> samples, const double root_min[3],
@@ -79,25 +79,25 @@ gi::GiOctree build_light_map_octree(std::span<const Sample> samples, const doubl
     keys.reserve(bins.cell_keys.size() * 27);
     for (std::uint64_t key : bins.cell_keys) {
         std::uint32_t c[3];
-        gi::demorton3(key, c[0], c[1], c[2]);
+        pre::demorton3(key, c[0], c[1], c[2]);
         for (std::int64_t z = std::int64_t{c[2]} - 1; z <= std::int64_t{c[2]} + 1; ++z)
             for (std::int64_t y = std::int64_t{c[1]} - 1; y <= std::int64_t{c[1]} + 1; ++y)
                 for (std::int64_t x = std::int64_t{c[0]} - 1; x <= std::int64_t{c[0]} + 1; ++x)
                     if (x >= 0 && y >= 0 && z >= 0 && x < cells && y < cells && z < cells)
-                        keys.push_back(gi::morton3(static_cast<std::uint32_t>(x),
-                                                   static_cast<std::uint32_t>(y),
-                                                   static_cast<std::uint32_t>(z)));
+                        keys.push_back(pre::morton3(static_cast<std::uint32_t>(x),
+                                                    static_cast<std::uint32_t>(y),
+                                                    static_cast<std::uint32_t>(z)));
     }
     gi::sort_unique(keys, 3 * depth);
     std::vector<gi::LeafValues> leaves(keys.size());
     std::vector<std::uint8_t> keep(keys.size(), 0);
-    pre::parallel_chunks(
-        keys.size(), 1024, pre::resolve_threads(options.threads),
+    parallel_chunks(
+        keys.size(), 1024, resolve_threads(options.threads),
         [&](std::size_t begin, std::size_t end, unsigned) {
             std::vector<std::uint32_t> near;
             for (std::size_t li = begin; li < end; ++li) {
                 std::uint32_t c[3];
-                gi::demorton3(keys[li], c[0], c[1], c[2]);
+                pre::demorton3(keys[li], c[0], c[1], c[2]);
                 near.clear();
                 for (std::int64_t z = std::int64_t{c[2]} - reach; z <= std::int64_t{c[2]} + reach; ++z)
                     for (std::int64_t y = std::int64_t{c[1]} - reach; y <= std::int64_t{c[1]} + reach; ++y)
@@ -105,8 +105,8 @@ gi::GiOctree build_light_map_octree(std::span<const Sample> samples, const doubl
                              ++x) {
                             if (x < 0 || y < 0 || z < 0 || x >= cells || y >= cells || z >= cells) continue;
                             const std::uint32_t cell = bins.map.find(
-                                gi::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
-                                            static_cast<std::uint32_t>(z)));
+                                pre::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
+                                             static_cast<std::uint32_t>(z)));
                             if (cell == gi::KeyMap::k_missing) continue;
                             for (std::uint32_t j = bins.cell_begin[cell]; j < bins.cell_begin[cell + 1]; ++j)
                                 near.push_back(bins.order[j]);

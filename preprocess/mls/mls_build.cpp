@@ -9,9 +9,11 @@
 #include <numeric>
 #include <string>
 
-#include "parallel.h"
+#include "morton.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
+#include "radix_sort.h"
 
 namespace prt::mls {
 
@@ -141,18 +143,16 @@ bool proven_free(const Box& b, std::span<const pool::MlsSplat> splats,
     return lo > 0.0 || hi < 0.0;
 }
 
-/// Morton code of a point quantized to 21 bits per axis inside [lo, hi].
+/// Morton code of a point quantized to 21 bits per axis inside [lo, hi], x in the highest bit of
+/// each triplet (morton3 with the axes reversed: the order of the stored splats follows from it).
 std::uint64_t morton(const double p[3], const double lo[3], const double hi[3]) {
-    std::uint64_t code = 0;
-    std::uint64_t q[3];
+    std::uint32_t q[3];
     for (int a = 0; a < 3; ++a) {
         const double ext = hi[a] - lo[a];
         const double u = ext > 0.0 ? (p[a] - lo[a]) / ext : 0.0;
-        q[a] = static_cast<std::uint64_t>(std::clamp(u, 0.0, 1.0) * 2097151.0);
+        q[a] = static_cast<std::uint32_t>(std::clamp(u, 0.0, 1.0) * 2097151.0);
     }
-    for (int bit = 20; bit >= 0; --bit)
-        for (int a = 0; a < 3; ++a) code = (code << 1) | ((q[a] >> bit) & 1u);
-    return code;
+    return pre::morton3(q[2], q[1], q[0]);
 }
 
 /// Pass 1 for one subtree: SAH splits (WS05 3.4 eq. 3, with E(n) of 3.4.2) until the leaf cost
@@ -421,21 +421,13 @@ bool may_contain_surface(const Box& b, std::span<const pool::MlsSplat> splats,
     return result;
 }
 
-MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
-                   std::span<const float> radii, const BuildOptions& opt,
-                   const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
-    validate(opt);
-    if (normals.size() != positions.size() || radii.size() != positions.size())
-        throw Error("MLS build: " + std::to_string(positions.size()) + " positions, " +
-                    std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
-                    " radii: every point needs all three");
-    const double t_start = tool::now_seconds();
-    const unsigned threads = pre::resolve_threads(opt.threads);
-    MlsModel model;
-    BuildStats& st = model.stats;
-    st.points = positions.size();
+namespace {
 
-    // ---- Splats: usable points, support radius R = factor x radius, in Morton order ------------
+/// The usable points as splats (finite position, non-zero normal, support radius R = factor x
+/// radius > 0), in input order.
+std::vector<pool::MlsSplat> usable_splats(std::span<const pool::Float3> positions,
+                                          std::span<const pool::Float3> normals, std::span<const float> radii,
+                                          const BuildOptions& opt, BuildStats& st) {
     std::vector<pool::MlsSplat> raw;
     raw.reserve(positions.size());
     for (std::size_t i = 0; i < positions.size(); ++i) {
@@ -457,7 +449,12 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
         throw Error("MLS build: none of the " + std::to_string(positions.size()) +
                     " points has a finite position, a non-zero normal and a radius > 0");
     if (raw.size() > pool::k_mls_index_max) throw Error("MLS build: too many splats for the node layout");
+    return raw;
+}
 
+/// The splats in Morton order into model.splats, their support boxes [p - R, p + R] in `boxes`;
+/// returns the root box (float bounds, rounded outwards).
+Box sort_splats(std::vector<pool::MlsSplat> raw, unsigned threads, MlsModel& model, std::vector<Box>& boxes) {
     Box root{};
     for (int a = 0; a < 3; ++a) {
         root.lo[a] = std::numeric_limits<double>::infinity();
@@ -484,177 +481,178 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
     }
     std::vector<std::uint32_t> order(raw.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::sort(order.begin(), order.end(), [&](std::uint32_t x, std::uint32_t y) {
-        return codes[x] != codes[y] ? codes[x] < codes[y] : x < y;
-    });
+    pre::radix_sort(codes, &order, 63, threads);  // stable: equal codes keep the input order
     model.splats.resize(raw.size());
-    std::vector<Box> boxes(raw.size());
+    boxes.resize(raw.size());
     for (std::size_t i = 0; i < raw.size(); ++i) {
         model.splats[i] = raw[order[i]];
         boxes[i] = raw_boxes[order[i]];
     }
-    raw = {};
-    raw_boxes = {};
-    st.splats = model.splats.size();
-    const std::span<const pool::MlsSplat> splats(model.splats);
+    return root;
+}
 
-    // ---- Pass 1: SAH ----------------------------------------------------------------------------
-    const SahBuilder sah{splats, boxes, opt};
+/// Pass 1 (WS05 3.4, eq. 3): the SAH tree. Breadth first on the calling thread until there are
+/// enough subtrees, then one subtree per task (the same tree whatever the thread count).
+std::vector<BNode> sah_tree(const SahBuilder& sah, std::size_t splat_count, const Box& root,
+                            const BuildOptions& opt, unsigned threads) {
     std::vector<BNode> nodes(1);
     nodes[0].box = root;
-    nodes[0].refs.resize(splats.size());
+    nodes[0].refs.resize(splat_count);
     std::iota(nodes[0].refs.begin(), nodes[0].refs.end(), 0u);
-    {
-        // Breadth first on the calling thread until there are enough subtrees, then one subtree
-        // per task.
-        struct Pending {
-            std::uint32_t index, depth;
-        };
-        std::vector<Pending> frontier{{0, 0}};
-        const std::size_t want = threads > 1 ? 8u * threads : 1u;
-        while (frontier.size() < want) {
-            std::vector<Pending> next;
-            bool progressed = false;
-            for (const Pending& p : frontier) {
-                int axis;
-                float split;
-                if (p.depth < opt.max_depth && sah.find_split(nodes[p.index], axis, split)) {
-                    sah.split_node(nodes, p.index, axis, split);
-                    next.push_back({nodes[p.index].child[0], p.depth + 1});
-                    next.push_back({nodes[p.index].child[1], p.depth + 1});
-                    progressed = true;
-                }
+    struct Pending {
+        std::uint32_t index, depth;
+    };
+    std::vector<Pending> frontier{{0, 0}};
+    const std::size_t want = threads > 1 ? 8u * threads : 1u;
+    while (frontier.size() < want) {
+        std::vector<Pending> next;
+        bool progressed = false;
+        for (const Pending& p : frontier) {
+            int axis;
+            float split;
+            if (p.depth < opt.max_depth && sah.find_split(nodes[p.index], axis, split)) {
+                sah.split_node(nodes, p.index, axis, split);
+                next.push_back({nodes[p.index].child[0], p.depth + 1});
+                next.push_back({nodes[p.index].child[1], p.depth + 1});
+                progressed = true;
             }
-            if (!progressed) {
-                frontier.clear();
-                break;
-            }
-            frontier = std::move(next);
         }
-        std::vector<std::vector<BNode>> local(frontier.size());
-        pre::parallel_chunks(frontier.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-            for (std::size_t f = begin; f < end; ++f) {
-                local[f].resize(1);
-                local[f][0].box = nodes[frontier[f].index].box;
-                local[f][0].refs = std::move(nodes[frontier[f].index].refs);  // one task per node
-                sah.build(local[f], frontier[f].depth);
-            }
-        });
-        for (std::size_t f = 0; f < frontier.size(); ++f) {
-            const auto offset =
-                static_cast<std::uint32_t>(nodes.size()) - 1u;  // local index 1 -> nodes.size()
-            for (std::size_t k = 0; k < local[f].size(); ++k) {
-                BNode& n = local[f][k];
-                if (n.axis >= 0) {
-                    n.child[0] += offset;
-                    n.child[1] += offset;
-                }
-            }
-            nodes[frontier[f].index] = std::move(local[f][0]);
-            for (std::size_t k = 1; k < local[f].size(); ++k) nodes.push_back(std::move(local[f][k]));
-            local[f] = {};
+        if (!progressed) {
+            frontier.clear();
+            break;
         }
+        frontier = std::move(next);
     }
-    {
-        const double sa_root = area(root);
-        double cost = 0.0;
-        for (const BNode& n : nodes) {
-            const double rel = sa_root > 0.0 ? area(n.box) / sa_root : 1.0;
-            if (n.axis >= 0)
-                cost += opt.cost_traversal * rel;
-            else
-                cost += opt.cost_intersection * double(n.refs.size()) * rel;
-            if (n.axis < 0) ++st.sah_leaves;
+    std::vector<std::vector<BNode>> local(frontier.size());
+    parallel_chunks(frontier.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t f = begin; f < end; ++f) {
+            local[f].resize(1);
+            local[f][0].box = nodes[frontier[f].index].box;
+            local[f][0].refs = std::move(nodes[frontier[f].index].refs);  // one task per node
+            sah.build(local[f], frontier[f].depth);
         }
-        st.sah_cost = cost;
+    });
+    for (std::size_t f = 0; f < frontier.size(); ++f) {
+        const auto offset = static_cast<std::uint32_t>(nodes.size()) - 1u;  // local index 1 -> nodes.size()
+        for (std::size_t k = 0; k < local[f].size(); ++k) {
+            BNode& n = local[f][k];
+            if (n.axis >= 0) {
+                n.child[0] += offset;
+                n.child[1] += offset;
+            }
+        }
+        nodes[frontier[f].index] = std::move(local[f][0]);
+        for (std::size_t k = 1; k < local[f].size(); ++k) nodes.push_back(std::move(local[f][k]));
+        local[f] = {};
     }
-    st.seconds_sah = tool::now_seconds() - t_start;
+    return nodes;
+}
 
-    // ---- Pass 2: shrinking (WS05 3.4.1), leaves in parallel --------------------------------------
-    const double t_shrink = tool::now_seconds();
-    for (const BNode& n : nodes)
-        if (n.axis < 0 && !n.refs.empty()) st.volume_before += volume(n.box);
-    if (opt.shrink) {
-        std::vector<std::uint32_t> leaves;
-        for (std::uint32_t i = 0; i < nodes.size(); ++i)
-            if (nodes[i].axis < 0 && !nodes[i].refs.empty()) leaves.push_back(i);
-        std::vector<ShrinkOutcome> outcomes(leaves.size());
-        std::atomic<std::uint64_t> done{0};
-        pre::parallel_chunks(leaves.size(), 64, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
-            for (std::size_t k = begin; k < end; ++k)
-                outcomes[k] = shrink_leaf(nodes[leaves[k]], splats, opt);
-            const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
-            if (worker == 0 && progress) progress(d, leaves.size());
-        });
-        for (std::size_t k = 0; k < leaves.size(); ++k) {
-            ShrinkOutcome& o = outcomes[k];
-            st.interval_boxes += o.boxes;
-            const std::uint32_t leaf = leaves[k];
-            const std::size_t before = nodes[leaf].refs.size();
-            if (o.empty) {
-                ++st.culled_leaves;
-                st.refs_removed += before;
-                nodes[leaf].refs = {};
-                continue;
-            }
-            st.refs_removed += before - o.refs.size();
-            if (o.cuts.empty()) continue;
-            ++st.shrunk_leaves;
-            // The leaf becomes a chain of splits, each with one empty child (WS05 3.4.1: "by
-            // inserting a new split plane"), ending in the shrunk leaf.
-            std::uint32_t at = leaf;
-            Box box = nodes[leaf].box;
-            for (const Cut& c : o.cuts) {
-                BNode empty, rest;
-                empty.box = rest.box = box;
-                if (c.low) {
-                    empty.box.hi[c.axis] = c.value;
-                    rest.box.lo[c.axis] = c.value;
-                } else {
-                    rest.box.hi[c.axis] = c.value;
-                    empty.box.lo[c.axis] = c.value;
-                }
-                const auto first = static_cast<std::uint32_t>(nodes.size());
-                BNode& n = nodes[at];
-                n.axis = c.axis;
-                n.split = c.value;
-                n.refs = {};
-                n.child[0] = first;
-                n.child[1] = first + 1;
-                box = rest.box;
-                if (c.low) {
-                    nodes.push_back(std::move(empty));
-                    nodes.push_back(std::move(rest));
-                    at = first + 1;
-                } else {
-                    nodes.push_back(std::move(rest));
-                    nodes.push_back(std::move(empty));
-                    at = first;
-                }
-                ++st.shrink_splits;
-            }
-            nodes[at].refs = std::move(o.refs);
+/// The tree's SAH cost (WS05 eq. 3, areas relative to the root's) and its leaf count, into `st`.
+void sah_statistics(const std::vector<BNode>& nodes, const Box& root, const BuildOptions& opt,
+                    BuildStats& st) {
+    const double sa_root = area(root);
+    double cost = 0.0;
+    for (const BNode& n : nodes) {
+        const double rel = sa_root > 0.0 ? area(n.box) / sa_root : 1.0;
+        if (n.axis >= 0)
+            cost += opt.cost_traversal * rel;
+        else
+            cost += opt.cost_intersection * double(n.refs.size()) * rel;
+        if (n.axis < 0) ++st.sah_leaves;
+    }
+    st.sah_cost = cost;
+}
+
+/// WS05 3.4.1 ("by inserting a new split plane"): leaf `leaf` becomes a chain of splits, each with
+/// one empty child, at `cuts`, ending in the shrunk leaf holding `refs`.
+void insert_cuts(std::vector<BNode>& nodes, std::uint32_t leaf, const std::vector<Cut>& cuts,
+                 std::vector<std::uint32_t> refs, BuildStats& st) {
+    std::uint32_t at = leaf;
+    Box box = nodes[leaf].box;
+    for (const Cut& c : cuts) {
+        BNode empty, rest;
+        empty.box = rest.box = box;
+        if (c.low) {
+            empty.box.hi[c.axis] = c.value;
+            rest.box.lo[c.axis] = c.value;
+        } else {
+            rest.box.hi[c.axis] = c.value;
+            empty.box.lo[c.axis] = c.value;
+        }
+        const auto first = static_cast<std::uint32_t>(nodes.size());
+        BNode& n = nodes[at];
+        n.axis = c.axis;
+        n.split = c.value;
+        n.refs = {};
+        n.child[0] = first;
+        n.child[1] = first + 1;
+        box = rest.box;
+        if (c.low) {
+            nodes.push_back(std::move(empty));
+            nodes.push_back(std::move(rest));
+            at = first + 1;
+        } else {
+            nodes.push_back(std::move(rest));
+            nodes.push_back(std::move(empty));
+            at = first;
+        }
+        ++st.shrink_splits;
+    }
+    nodes[at].refs = std::move(refs);
+}
+
+/// Pass 2 (WS05 3.4.1): every non-empty leaf shrunk to the surface, leaves in parallel; a leaf the
+/// surface misses loses its references.
+void shrink_leaves(std::vector<BNode>& nodes, std::span<const pool::MlsSplat> splats, const BuildOptions& opt,
+                   unsigned threads, const std::function<void(std::uint64_t, std::uint64_t)>& progress,
+                   BuildStats& st) {
+    std::vector<std::uint32_t> leaves;
+    for (std::uint32_t i = 0; i < nodes.size(); ++i)
+        if (nodes[i].axis < 0 && !nodes[i].refs.empty()) leaves.push_back(i);
+    std::vector<ShrinkOutcome> outcomes(leaves.size());
+    std::atomic<std::uint64_t> done{0};
+    parallel_chunks(leaves.size(), 64, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        for (std::size_t k = begin; k < end; ++k) outcomes[k] = shrink_leaf(nodes[leaves[k]], splats, opt);
+        const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
+        if (worker == 0 && progress) progress(d, leaves.size());
+    });
+    for (std::size_t k = 0; k < leaves.size(); ++k) {
+        ShrinkOutcome& o = outcomes[k];
+        st.interval_boxes += o.boxes;
+        const std::uint32_t leaf = leaves[k];
+        const std::size_t before = nodes[leaf].refs.size();
+        if (o.empty) {
+            ++st.culled_leaves;
+            st.refs_removed += before;
+            nodes[leaf].refs = {};
+            continue;
+        }
+        st.refs_removed += before - o.refs.size();
+        if (o.cuts.empty()) continue;
+        ++st.shrunk_leaves;
+        insert_cuts(nodes, leaf, o.cuts, std::move(o.refs), st);
+    }
+}
+
+/// Pass 3 (WS05 3.4.3): splits whose two children are empty leaves become empty leaves (children
+/// come after their parents, so decreasing indices see the children first).
+void post_collapse(std::vector<BNode>& nodes, BuildStats& st) {
+    for (std::size_t i = nodes.size(); i-- > 0;) {
+        BNode& n = nodes[i];
+        if (n.axis < 0) continue;
+        const BNode& l = nodes[n.child[0]];
+        const BNode& r = nodes[n.child[1]];
+        if (l.axis < 0 && r.axis < 0 && l.refs.empty() && r.refs.empty()) {
+            n.axis = -1;
+            ++st.collapsed;
         }
     }
-    for (const BNode& n : nodes)
-        if (n.axis < 0 && !n.refs.empty()) st.volume_after += volume(n.box);
-    st.seconds_shrink = tool::now_seconds() - t_shrink;
+}
 
-    // ---- Pass 3: post-collapse (WS05 3.4.3): children after parents, so decreasing indices ---------
-    if (opt.collapse) {
-        for (std::size_t i = nodes.size(); i-- > 0;) {
-            BNode& n = nodes[i];
-            if (n.axis < 0) continue;
-            const BNode& l = nodes[n.child[0]];
-            const BNode& r = nodes[n.child[1]];
-            if (l.axis < 0 && r.axis < 0 && l.refs.empty() && r.refs.empty()) {
-                n.axis = -1;
-                ++st.collapsed;
-            }
-        }
-    }
-
-    // ---- Pass 4: flatten, children in pairs, depth first -------------------------------------------
+/// Pass 4: the pool's node and reference arrays, children in pairs, depth first.
+void flatten(const std::vector<BNode>& nodes, MlsModel& model) {
+    BuildStats& st = model.stats;
     struct Emit {
         std::uint32_t node, slot, depth;
     };
@@ -692,7 +690,10 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
     st.nodes = model.nodes.size();
     st.refs = model.refs.size();
     st.depth = depth;
+}
 
+/// The MlsInfo record of the finished model.
+void fill_info(MlsModel& model, const Box& root, const BuildOptions& opt) {
     pool::MlsInfo& info = model.info;
     for (int a = 0; a < 3; ++a) {
         info.root_lo[a] = static_cast<float>(root.lo[a]);
@@ -701,12 +702,56 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
     info.node_count = static_cast<std::uint32_t>(model.nodes.size());
     info.ref_count = static_cast<std::uint32_t>(model.refs.size());
     info.splat_count = static_cast<std::uint32_t>(model.splats.size());
-    info.depth = depth;
+    info.depth = model.stats.depth;
     info.support_factor = opt.support_factor;
     info.samples = opt.samples;
     info.flags = (opt.shrink ? pool::k_mls_shrunk : 0u) | (opt.encourage ? pool::k_mls_encouraged : 0u) |
                  (opt.collapse ? pool::k_mls_collapsed : 0u);
-    info.leaf_count = static_cast<std::uint32_t>(st.leaves);
+    info.leaf_count = static_cast<std::uint32_t>(model.stats.leaves);
+}
+
+double leaf_volume(const std::vector<BNode>& nodes) {
+    double v = 0;
+    for (const BNode& n : nodes)
+        if (n.axis < 0 && !n.refs.empty()) v += volume(n.box);
+    return v;
+}
+
+}  // namespace
+
+MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                   std::span<const float> radii, const BuildOptions& opt,
+                   const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    validate(opt);
+    if (normals.size() != positions.size() || radii.size() != positions.size())
+        throw Error("MLS build: " + std::to_string(positions.size()) + " positions, " +
+                    std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
+                    " radii: every point needs all three");
+    const double t_start = tool::now_seconds();
+    const unsigned threads = resolve_threads(opt.threads);
+    MlsModel model;
+    BuildStats& st = model.stats;
+    st.points = positions.size();
+
+    std::vector<Box> boxes;
+    const Box root = sort_splats(usable_splats(positions, normals, radii, opt, st), threads, model, boxes);
+    st.splats = model.splats.size();
+    const std::span<const pool::MlsSplat> splats(model.splats);
+
+    const SahBuilder sah{splats, boxes, opt};
+    std::vector<BNode> nodes = sah_tree(sah, splats.size(), root, opt, threads);  // pass 1
+    sah_statistics(nodes, root, opt, st);
+    st.seconds_sah = tool::now_seconds() - t_start;
+
+    const double t_shrink = tool::now_seconds();
+    st.volume_before = leaf_volume(nodes);
+    if (opt.shrink) shrink_leaves(nodes, splats, opt, threads, progress, st);  // pass 2
+    st.volume_after = leaf_volume(nodes);
+    st.seconds_shrink = tool::now_seconds() - t_shrink;
+
+    if (opt.collapse) post_collapse(nodes, st);  // pass 3
+    flatten(nodes, model);                       // pass 4
+    fill_info(model, root, opt);
     st.seconds_total = tool::now_seconds() - t_start;
     return model;
 }

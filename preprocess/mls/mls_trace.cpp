@@ -3,7 +3,7 @@
 
 #include <mutex>
 
-#include "parallel.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
 
 namespace prt::mls {
@@ -52,7 +52,7 @@ TraceResult trace_rays(const core::MlsView& view, std::span<const core::Ray> ray
     out.found.assign(rays.size(), 0);
     std::mutex mutex;
     const double t0 = tool::now_seconds();
-    pre::parallel_chunks(rays.size(), k_chunk, pre::resolve_threads(threads),
+    parallel_chunks(rays.size(), k_chunk, resolve_threads(threads),
                     [&](std::size_t begin, std::size_t end, unsigned) {
                         core::MlsStats stats;
                         if (precision == Precision::dual)
@@ -75,8 +75,8 @@ std::vector<std::uint8_t> occluded_rays(const core::MlsView& view, std::span<con
     TraceTotals sum;
     std::mutex mutex;
     const double t0 = tool::now_seconds();
-    pre::parallel_chunks(
-        rays.size(), k_chunk, pre::resolve_threads(threads), [&](std::size_t begin, std::size_t end, unsigned) {
+    parallel_chunks(
+        rays.size(), k_chunk, resolve_threads(threads), [&](std::size_t begin, std::size_t end, unsigned) {
             core::MlsStats stats;
             for (std::size_t i = begin; i < end; ++i) {
                 const core::Ray& r = rays[i];

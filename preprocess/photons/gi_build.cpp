@@ -1,5 +1,6 @@
 // PointRT preprocess: sparse GI octrees (prt/formats/gi_layout.h) shared by prt-photons and
-// prt-lightmap: Morton keys, radix sorting, cell binning, node building and in-place pool writes.
+// prt-lightmap: cell binning over Morton keys (morton.h, radix_sort.h), node building and in-place pool
+// writes.
 #include "gi_build.h"
 
 #include <algorithm>
@@ -7,10 +8,10 @@
 #include <cmath>
 #include <string>
 
-#include "iso_morton.h"
-#include "parallel.h"
 #include "prt/core/gi.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
+#include "radix_sort.h"
 
 namespace prt::gi {
 
@@ -25,64 +26,6 @@ std::uint64_t mix64(std::uint64_t x) {
     return x;
 }
 
-constexpr std::uint32_t k_digit_bits = 11;
-
-}  // namespace
-
-// The interleaving of prt-iso's codes (iso_morton.h), so both trees order children alike.
-std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-    return iso::detail::morton3(x, y, z);
-}
-
-void demorton3(std::uint64_t key, std::uint32_t& x, std::uint32_t& y, std::uint32_t& z) {
-    x = iso::detail::compact21(key);
-    y = iso::detail::compact21(key >> 1);
-    z = iso::detail::compact21(key >> 2);
-}
-
-namespace {
-
-/// Stable LSD radix sort of `keys` (and `values` alongside, when not null) over the low `bits`
-/// bits, 11 bits per pass; each pass counts and scatters contiguous blocks in parallel.
-/// Keys and Values: std::vector or pre::Buffer (whose scratch copies stay uninitialised until the
-/// parallel scatter first touches them).
-template <class Keys, class Values>
-void radix_sort(Keys& keys, Values* values, std::uint32_t bits, unsigned requested_threads) {
-    const std::size_t n = keys.size();
-    constexpr std::size_t k_buckets = std::size_t{1} << k_digit_bits;
-    const unsigned threads = static_cast<unsigned>(
-        std::min<std::size_t>(pre::resolve_threads(requested_threads), std::max<std::size_t>(1, n >> 16)));
-    const std::size_t block = (n + threads - 1) / std::max(1u, threads);
-    Keys tmp_keys(n);
-    Values tmp_values(values ? n : 0);
-    std::vector<std::size_t> count(threads * k_buckets);
-    const std::uint64_t mask = k_buckets - 1;
-    for (std::uint32_t shift = 0; shift < bits; shift += k_digit_bits) {
-        std::fill(count.begin(), count.end(), 0);
-        pre::parallel_chunks(n, block, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-            std::size_t* c = &count[(begin / block) * k_buckets];
-            for (std::size_t i = begin; i < end; ++i) ++c[(keys[i] >> shift) & mask];
-        });
-        std::size_t sum = 0;  // bucket-major, block-minor: stable
-        for (std::size_t d = 0; d < k_buckets; ++d)
-            for (unsigned t = 0; t < threads; ++t) {
-                const std::size_t v = count[t * k_buckets + d];
-                count[t * k_buckets + d] = sum;
-                sum += v;
-            }
-        pre::parallel_chunks(n, block, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-            std::size_t* c = &count[(begin / block) * k_buckets];
-            for (std::size_t i = begin; i < end; ++i) {
-                const std::size_t at = c[(keys[i] >> shift) & mask]++;
-                tmp_keys[at] = keys[i];
-                if (values) tmp_values[at] = (*values)[i];
-            }
-        });
-        keys.swap(tmp_keys);
-        if (values) values->swap(tmp_values);
-    }
-}
-
 }  // namespace
 
 std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std::uint32_t bits,
@@ -90,12 +33,12 @@ std::vector<std::uint32_t> radix_order(std::span<const std::uint64_t> keys, std:
     std::vector<std::uint64_t> k(keys.begin(), keys.end());
     std::vector<std::uint32_t> order(keys.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
-    radix_sort(k, &order, bits, threads);
+    pre::radix_sort(k, &order, bits, threads);
     return order;
 }
 
 void sort_unique(std::vector<std::uint64_t>& keys, std::uint32_t bits, unsigned threads) {
-    radix_sort(keys, static_cast<std::vector<std::uint32_t>*>(nullptr), bits, threads);
+    pre::radix_sort_by(keys, bits, threads, [](std::uint64_t k) { return k; });
     keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
 }
 
@@ -118,22 +61,21 @@ void KeyMap::insert(std::uint64_t key, std::uint32_t value) {
 }
 
 void KeyMap::insert_indices(std::span<const std::uint64_t> keys, unsigned threads) {
-    pre::parallel_chunks(
-        keys.size(), 1 << 14, pre::resolve_threads(threads),
-        [&](std::size_t begin, std::size_t end, unsigned) {
-            for (std::size_t i = begin; i < end; ++i) {
-                const std::uint64_t want = keys[i] + 1;
-                for (std::uint64_t h = mix64(keys[i]) & m_mask;; h = (h + 1) & m_mask) {
-                    std::uint64_t seen = 0;
-                    std::atomic_ref<std::uint64_t> slot(m_keys[h]);
-                    if (slot.load(std::memory_order_relaxed) == 0 &&
-                        slot.compare_exchange_strong(seen, want, std::memory_order_relaxed)) {
-                        m_values[h] = static_cast<std::uint32_t>(i);
-                        break;
-                    }
-                }
-            }
-        });
+    parallel_chunks(keys.size(), 1 << 14, resolve_threads(threads),
+                    [&](std::size_t begin, std::size_t end, unsigned) {
+                        for (std::size_t i = begin; i < end; ++i) {
+                            const std::uint64_t want = keys[i] + 1;
+                            for (std::uint64_t h = mix64(keys[i]) & m_mask;; h = (h + 1) & m_mask) {
+                                std::uint64_t seen = 0;
+                                std::atomic_ref<std::uint64_t> slot(m_keys[h]);
+                                if (slot.load(std::memory_order_relaxed) == 0 &&
+                                    slot.compare_exchange_strong(seen, want, std::memory_order_relaxed)) {
+                                    m_values[h] = static_cast<std::uint32_t>(i);
+                                    break;
+                                }
+                            }
+                        }
+                    });
 }
 
 std::uint32_t KeyMap::find(std::uint64_t key) const {
@@ -160,23 +102,23 @@ void CellBins::cell_of(const float p[3], std::uint32_t c[3]) const {
 
 CellBins bin_keys(pre::Buffer<std::uint64_t> keys, const double root_min[3], double root_size,
                   std::uint32_t depth, unsigned threads, bool with_map) {
-    threads = pre::resolve_threads(threads);
+    threads = resolve_threads(threads);
     CellBins b;
     b.depth = depth;
     b.root_size = root_size;
     for (int a = 0; a < 3; ++a) b.root_min[a] = root_min[a];
     const std::size_t n = keys.size();
     b.order = pre::Buffer<std::uint32_t>(n);
-    pre::parallel_chunks(n, 1 << 16, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    parallel_chunks(n, 1 << 16, threads, [&](std::size_t begin, std::size_t end, unsigned) {
         for (std::size_t i = begin; i < end; ++i) b.order[i] = static_cast<std::uint32_t>(i);
     });
-    radix_sort(keys, &b.order, 3 * depth, threads);  // keys now sorted
+    pre::radix_sort(keys, &b.order, 3 * depth, threads);  // keys now sorted
     // The occupied cells: where the sorted key changes (parallel compaction, order kept).
     auto starts = [&](std::size_t k) { return k == 0 || keys[k] != keys[k - 1]; };
-    const std::size_t cells = pre::parallel_select(n, threads, starts, [](std::size_t, std::size_t) {});
+    const std::size_t cells = parallel_select(n, threads, starts, [](std::size_t, std::size_t) {});
     b.cell_keys.resize(cells);
     b.cell_begin.resize(cells + 1);
-    pre::parallel_select(n, threads, starts, [&](std::size_t rank, std::size_t k) {
+    parallel_select(n, threads, starts, [&](std::size_t rank, std::size_t k) {
         b.cell_keys[rank] = keys[k];
         b.cell_begin[rank] = static_cast<std::uint32_t>(k);
     });
@@ -193,7 +135,7 @@ std::vector<std::uint32_t> build_nodes(std::span<const std::uint64_t> keys, std:
     if (depth > pool::k_max_gi_depth)
         throw Error("GI octree depth " + std::to_string(depth) + " above the limit " +
                     std::to_string(pool::k_max_gi_depth));
-    threads = pre::resolve_threads(threads);
+    threads = resolve_threads(threads);
     if (keys.empty()) return {pool::make_node(pool::NodeType::empty_leaf, 0)};
     if (depth == 0) return {pool::make_node(pool::NodeType::filled_leaf, 0)};
     // prefixes[l]: the distinct key prefixes at level l (the internal nodes there, l < depth), from
@@ -208,22 +150,21 @@ std::vector<std::uint32_t> build_nodes(std::span<const std::uint64_t> keys, std:
         up.resize(below.size());
         auto starts = [&](std::size_t k) { return k == 0 || (below[k] >> 3) != (below[k - 1] >> 3); };
         const std::size_t count =
-            pre::parallel_select(below.size(), threads, starts, [](std::size_t, std::size_t) {});
+            parallel_select(below.size(), threads, starts, [](std::size_t, std::size_t) {});
         prefixes[l].resize(count);
-        pre::parallel_select(below.size(), threads, starts,
-                             [&](std::size_t rank, std::size_t k) { prefixes[l][rank] = below[k] >> 3; });
+        parallel_select(below.size(), threads, starts,
+                        [&](std::size_t rank, std::size_t k) { prefixes[l][rank] = below[k] >> 3; });
         // Ranks of every element: the compaction rank of its run's start.
-        pre::parallel_chunks(
-            below.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-                // Rank at `begin`: the first prefix >= below[begin] >> 3 (prefixes[l] is sorted).
-                const std::uint64_t p0 = below[begin] >> 3;
-                std::size_t r = static_cast<std::size_t>(
-                    std::lower_bound(prefixes[l].begin(), prefixes[l].end(), p0) - prefixes[l].begin());
-                for (std::size_t k = begin; k < end; ++k) {
-                    if (k > begin && starts(k)) ++r;
-                    up[k] = static_cast<std::uint32_t>(r);
-                }
-            });
+        parallel_chunks(below.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+            // Rank at `begin`: the first prefix >= below[begin] >> 3 (prefixes[l] is sorted).
+            const std::uint64_t p0 = below[begin] >> 3;
+            std::size_t r = static_cast<std::size_t>(
+                std::lower_bound(prefixes[l].begin(), prefixes[l].end(), p0) - prefixes[l].begin());
+            for (std::size_t k = begin; k < end; ++k) {
+                if (k > begin && starts(k)) ++r;
+                up[k] = static_cast<std::uint32_t>(r);
+            }
+        });
     }
     // Breadth first: level l's nodes (l >= 1) fill 8 slots per internal node of level l - 1, from
     // base[l]; prefixes[l - 1][i] owns slots base[l] + 8 i .. + 7.
@@ -239,17 +180,15 @@ std::vector<std::uint32_t> build_nodes(std::span<const std::uint64_t> keys, std:
         const std::span<const std::uint64_t> here =
             l == depth ? keys : std::span<const std::uint64_t>(prefixes[l]);
         const std::vector<std::uint32_t>& up = parent[l];
-        pre::parallel_chunks(
-            here.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
-                for (std::size_t j = begin; j < end; ++j) {
-                    const std::uint64_t slot = base[l] + 8ull * up[j] + (here[j] & 7u);
-                    nodes[slot] =
-                        l == depth
-                            ? pool::make_node(pool::NodeType::filled_leaf, static_cast<std::uint32_t>(j))
-                            : pool::make_node(pool::NodeType::internal,
-                                              static_cast<std::uint32_t>(base[l + 1] + 8ull * j));
-                }
-            });
+        parallel_chunks(here.size(), 1 << 15, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+            for (std::size_t j = begin; j < end; ++j) {
+                const std::uint64_t slot = base[l] + 8ull * up[j] + (here[j] & 7u);
+                nodes[slot] =
+                    l == depth ? pool::make_node(pool::NodeType::filled_leaf, static_cast<std::uint32_t>(j))
+                               : pool::make_node(pool::NodeType::internal,
+                                                 static_cast<std::uint32_t>(base[l + 1] + 8ull * j));
+            }
+        });
     }
     return nodes;
 }
@@ -277,7 +216,7 @@ void fill_info(GiOctree& t, const double root_min[3], double root_size, std::uin
 
 GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_min[3], double root_size,
                       std::uint32_t depth, unsigned threads) {
-    threads = pre::resolve_threads(threads);
+    threads = resolve_threads(threads);
     GiOctree t;
     std::vector<std::uint64_t> keys(leaves.size());
     for (std::size_t i = 0; i < leaves.size(); ++i) keys[i] = leaves[i].key;
@@ -285,7 +224,7 @@ GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_m
     // One scale for the map: the largest finite corner value (a maximum: any order gives it).
     constexpr std::size_t k_chunk = 1 << 14;
     std::vector<float> chunk_max((leaves.size() + k_chunk - 1) / k_chunk, 0.0f);
-    pre::parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
         float m = 0.0f;
         for (std::size_t i = begin; i < end; ++i)
             for (const auto& c : leaves[i].corner)
@@ -297,7 +236,7 @@ GiOctree build_octree(const std::vector<LeafValues>& leaves, const double root_m
     for (float m : chunk_max) max_value = std::max(max_value, m);
     const float scale = map_scale(max_value);
     t.leaves.resize(leaves.size());
-    pre::parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    parallel_chunks(leaves.size(), k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned) {
         for (std::size_t i = begin; i < end; ++i) {
             pool::GiLeaf& out = t.leaves[i];
             for (int c = 0; c < 8; ++c) out.corner[c] = encode_corner(leaves[i].corner[c], scale);

@@ -11,17 +11,13 @@
 #include <vector>
 
 #include "buffer.h"
-#include "parallel.h"
+#include "morton.h"
 #include "prt/core/gi.h"
 #include "prt/formats/gi_layout.h"
 #include "prt/formats/pool.h"
+#include "prt/parallel.h"
 
 namespace prt::gi {
-
-/// 3D Morton key of cell coordinates (21 bits per axis at most): bit i of x goes to bit 3i, of y
-/// to 3i + 1, of z to 3i + 2, so the child index at each level is x | y << 1 | z << 2.
-std::uint64_t morton3(std::uint32_t x, std::uint32_t y, std::uint32_t z);
-void demorton3(std::uint64_t key, std::uint32_t& x, std::uint32_t& y, std::uint32_t& z);
 
 /// Sorts keys ascending (LSD radix over the low `bits` bits) and returns the permutation:
 /// order[k] = index of the k-th smallest key. Stable. `threads` 0: every hardware thread.
@@ -83,14 +79,14 @@ CellBins bin_points(std::size_t count, const double root_min[3], double root_siz
     probe.root_size = root_size;
     for (int a = 0; a < 3; ++a) probe.root_min[a] = root_min[a];
     pre::Buffer<std::uint64_t> keys(count);
-    pre::parallel_chunks(count, 1 << 16, pre::resolve_threads(threads),
-                         [&](std::size_t begin, std::size_t end, unsigned) {
-                             for (std::size_t i = begin; i < end; ++i) {
-                                 std::uint32_t c[3];
-                                 probe.cell_of(position_of(i), c);
-                                 keys[i] = morton3(c[0], c[1], c[2]);
-                             }
-                         });
+    parallel_chunks(count, 1 << 16, resolve_threads(threads),
+                    [&](std::size_t begin, std::size_t end, unsigned) {
+                        for (std::size_t i = begin; i < end; ++i) {
+                            std::uint32_t c[3];
+                            probe.cell_of(position_of(i), c);
+                            keys[i] = pre::morton3(c[0], c[1], c[2]);
+                        }
+                    });
     return bin_keys(std::move(keys), root_min, root_size, depth, threads, with_map);
 }
 

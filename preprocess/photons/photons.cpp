@@ -9,8 +9,8 @@
 #include <mutex>
 
 #include "buffer.h"
-#include "parallel.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
 
 #if defined(PRT_HAVE_CUDA)
@@ -186,30 +186,29 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
         result.kernel_seconds = r.kernel_seconds;
 #endif
     } else {
-        const unsigned threads = pre::resolve_threads(options.threads);
+        const unsigned threads = resolve_threads(options.threads);
         std::vector<std::vector<PhotonDeposit>> per_worker(threads);
         std::vector<PhotonTally> tallies(threads);
         std::atomic<std::uint64_t> done{0};
         constexpr std::size_t k_chunk = 1 << 14;
-        pre::parallel_chunks(total, k_chunk, threads,
-                             [&](std::size_t begin, std::size_t end, unsigned worker) {
-                                 PhotonTallyF f;
-                                 std::vector<PhotonDeposit>& out = per_worker[worker];
-                                 for (std::size_t g = begin; g < end; ++g) {
-                                     const std::uint32_t light = static_cast<std::uint32_t>(g / per_light);
-                                     trace_photon(scene, params, light, g - light * per_light, f,
-                                                  [&](const PhotonDeposit& d) { out.push_back(d); });
-                                     // Float tallies stay exact enough over a few thousand photons; flush
-                                     // often.
-                                     if (((g - begin) & 1023u) == 1023u) {
-                                         add_tally(tallies[worker], f);
-                                         f = PhotonTallyF{};
-                                     }
-                                 }
-                                 add_tally(tallies[worker], f);
-                                 const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
-                                 if (worker == 0 && progress) progress(d, total);
-                             });
+        parallel_chunks(total, k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+            PhotonTallyF f;
+            std::vector<PhotonDeposit>& out = per_worker[worker];
+            for (std::size_t g = begin; g < end; ++g) {
+                const std::uint32_t light = static_cast<std::uint32_t>(g / per_light);
+                trace_photon(scene, params, light, g - light * per_light, f,
+                             [&](const PhotonDeposit& d) { out.push_back(d); });
+                // Float tallies stay exact enough over a few thousand photons; flush
+                // often.
+                if (((g - begin) & 1023u) == 1023u) {
+                    add_tally(tallies[worker], f);
+                    f = PhotonTallyF{};
+                }
+            }
+            add_tally(tallies[worker], f);
+            const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
+            if (worker == 0 && progress) progress(d, total);
+        });
         for (unsigned w = 0; w < threads; ++w) {
             result.deposits.insert(result.deposits.end(), per_worker[w].begin(), per_worker[w].end());
             std::vector<PhotonDeposit>().swap(per_worker[w]);
@@ -222,319 +221,342 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
     return result;
 }
 
-// thesis 5.4.2 + eq. 5.1-5.2, in parallel over blocks of S^3 leaf cells (S = 2^s, Morton-aligned, so
-// a block is a contiguous range of keys and a cell's key is its block's key << 3s | its local key).
-// Each block is one independent task: it places the occupied cells within the gather reach of its
-// corners in a dense local grid (no hash lookups), finds its corners (the lattice points within g of
-// an occupied cell, as the serial gather did), estimates the density at each, and emits its leaves
-// (the cells with a non-zero corner) in local Morton order. Blocks in key order then give the leaves
-// sorted, with no global sort or dedupe. Corners on a block's upper faces are also corners of the
-// next blocks: each block computes them again (the same sum, term for term), a few per cent more
-// density work for no communication. Every corner sum adds the same terms in the same order as the
-// serial gather (cells z, y, x, then deposits in input order within a cell), and the map scale is a
-// maximum, so the tree is byte-identical whatever the thread count.
-GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const double root_min[3],
-                              double root_size, const GatherOptions& options) {
-    const std::uint32_t depth = options.depth;
-    if (depth > pool::k_max_gi_depth)
-        throw Error("caustic octree depth " + std::to_string(depth) + " above " +
-                    std::to_string(pool::k_max_gi_depth));
-    if (!(options.radius_edges > 0.0f)) throw Error("gather radius must be positive");
-    const unsigned threads = pre::resolve_threads(options.threads);
-    double mark = tool::now_seconds();
-    auto phase = [&](int k) {
-        const double now = tool::now_seconds();
-        if (options.phase_seconds) options.phase_seconds[k] = now - mark;
-        mark = now;
-    };
-    const CellBins bins = gi::bin_points(
-        deposits.size(), root_min, root_size, depth, [&](std::size_t i) { return deposits[i].position; },
-        threads, /*with_map=*/false);
-    const double ge = options.radius_edges;
-    const std::int64_t reach = static_cast<std::int64_t>(std::ceil(ge));
-    const std::int64_t cells = std::int64_t{1} << depth;
+namespace {
 
-    // The deposits in cell order, as offsets inside their cell (floats keep full precision there
-    // at any depth) with their flux and luminance-weighted normal: the density loop reads them
-    // sequentially, cell by cell.
+/// The deposits in cell order, as offsets inside their cell (floats keep full precision there at
+/// any depth) with their flux and luminance-weighted normal: the density loop reads them
+/// sequentially, cell by cell.
+pre::Buffer<Packed> pack_deposits(std::span<const PhotonDeposit> deposits, const CellBins& bins,
+                                  unsigned threads) {
     pre::Buffer<Packed> packed(deposits.size());  // first touched by the parallel fill
-    pre::parallel_chunks(bins.cell_keys.size(), 4096, threads,
-                         [&](std::size_t begin, std::size_t end, unsigned) {
-                             for (std::size_t c = begin; c < end; ++c) {
-                                 std::uint32_t cell[3];
-                                 gi::demorton3(bins.cell_keys[c], cell[0], cell[1], cell[2]);
-                                 for (std::uint32_t j = bins.cell_begin[c]; j < bins.cell_begin[c + 1]; ++j) {
-                                     // The deposits are read in random order: ask for them early.
-                                     if (j + 16 < deposits.size()) {
-                                         const char* ahead =
-                                             reinterpret_cast<const char*>(&deposits[bins.order[j + 16]]);
-                                         __builtin_prefetch(ahead);
-                                         __builtin_prefetch(ahead + sizeof(PhotonDeposit) - 1);
-                                     }
-                                     const PhotonDeposit& d = deposits[bins.order[j]];
-                                     double g[3];
-                                     bins.grid(d.position, g);
-                                     Packed& p = packed[j];
-                                     p.lum = luminance(d.flux);
-                                     for (int a = 0; a < 3; ++a) {
-                                         p.frac[a] = static_cast<float>(g[a] - cell[a]);
-                                         p.flux[a] = d.flux[a];
-                                         p.normal[a] = p.lum * d.normal[a];
-                                     }
-                                 }
-                             }
-                         });
-    phase(0);
+    parallel_chunks(bins.cell_keys.size(), 4096, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+        for (std::size_t c = begin; c < end; ++c) {
+            std::uint32_t cell[3];
+            pre::demorton3(bins.cell_keys[c], cell[0], cell[1], cell[2]);
+            for (std::uint32_t j = bins.cell_begin[c]; j < bins.cell_begin[c + 1]; ++j) {
+                // The deposits are read in random order: ask for them early.
+                if (j + 16 < deposits.size()) {
+                    const char* ahead = reinterpret_cast<const char*>(&deposits[bins.order[j + 16]]);
+                    __builtin_prefetch(ahead);
+                    __builtin_prefetch(ahead + sizeof(PhotonDeposit) - 1);
+                }
+                const PhotonDeposit& d = deposits[bins.order[j]];
+                double g[3];
+                bins.grid(d.position, g);
+                Packed& p = packed[j];
+                p.lum = luminance(d.flux);
+                for (int a = 0; a < 3; ++a) {
+                    p.frac[a] = static_cast<float>(g[a] - cell[a]);
+                    p.flux[a] = d.flux[a];
+                    p.normal[a] = p.lum * d.normal[a];
+                }
+            }
+        }
+    });
+    return packed;
+}
 
-    // The blocks: S = 16 cells a side (the whole lattice when shallower). Block L's task covers
-    // leaves L*S .. L*S+S-1 and corners L*S .. L*S+S (per axis), so it needs the occupied cells
-    // L*S-r .. L*S+S+r-1 (r = ceil(g)): the cells of blocks within `halo` of L. The tasks are the
-    // blocks within `halo` of an occupied block, sorted and unique (a few thousand keys).
-    const std::uint32_t s = std::min<std::uint32_t>(depth, 4);
-    const std::int64_t S = std::int64_t{1} << s;
-    const std::uint32_t sbits = 3 * s;
-    const std::int64_t halo = (S + reach - 1) / S;
-    const std::int64_t last_block = cells >> s;  // corners reach coordinate `cells`
-    const std::int64_t last_cell_block = (cells - 1) >> s;
+/// The blocks of S^3 leaf cells: S = 16 cells a side (the whole lattice when shallower). Block L's
+/// task covers leaves L*S .. L*S+S-1 and corners L*S .. L*S+S (per axis), so it needs the occupied
+/// cells L*S-r .. L*S+S+r-1 (r = ceil(g)): the cells of blocks within `halo` of L.
+struct Blocks {
+    std::uint32_t s;  ///< S = 2^s
+    std::int64_t S;
+    std::uint32_t sbits;      ///< 3s: a cell's key is its block's key << sbits | its local key
+    std::int64_t reach;       ///< r = ceil(g), in cells
+    std::int64_t cells;       ///< leaf cells a side (2^depth)
+    std::int64_t halo;        ///< blocks a task reaches each way
+    std::int64_t last_block;  ///< corners reach coordinate `cells`
+    std::int64_t last_cell_block;
+    std::int64_t W;  ///< the dense cell grid's side
+    std::int64_t C;  ///< the dense corner grid's side
+
+    Blocks(std::uint32_t depth, double ge)
+        : s(std::min<std::uint32_t>(depth, 4)),
+          S(std::int64_t{1} << s),
+          sbits(3 * s),
+          reach(static_cast<std::int64_t>(std::ceil(ge))),
+          cells(std::int64_t{1} << depth),
+          halo((S + reach - 1) / S),
+          last_block(cells >> s),
+          last_cell_block((cells - 1) >> s),
+          W(S + 2 * reach),
+          C(S + 1) {}
+};
+
+/// The tasks: the blocks within `halo` of an occupied block, sorted and unique (a few thousand keys).
+std::vector<std::uint64_t> block_tasks(const CellBins& bins, const Blocks& bk, std::uint32_t depth,
+                                       unsigned threads) {
     auto starts = [&](std::size_t c) {
-        return c == 0 || (bins.cell_keys[c] >> sbits) != (bins.cell_keys[c - 1] >> sbits);
+        return c == 0 || (bins.cell_keys[c] >> bk.sbits) != (bins.cell_keys[c - 1] >> bk.sbits);
     };
     std::vector<std::uint64_t> occupied(
-        pre::parallel_select(bins.cell_keys.size(), threads, starts, [](std::size_t, std::size_t) {}));
-    pre::parallel_select(bins.cell_keys.size(), threads, starts, [&](std::size_t rank, std::size_t c) {
-        occupied[rank] = bins.cell_keys[c] >> sbits;
-    });
+        parallel_select(bins.cell_keys.size(), threads, starts, [](std::size_t, std::size_t) {}));
+    parallel_select(bins.cell_keys.size(), threads, starts,
+                    [&](std::size_t rank, std::size_t c) { occupied[rank] = bins.cell_keys[c] >> bk.sbits; });
     std::vector<std::uint64_t> tasks;
     for (std::uint64_t b : occupied) {
         std::uint32_t bc[3];
-        gi::demorton3(b, bc[0], bc[1], bc[2]);
+        pre::demorton3(b, bc[0], bc[1], bc[2]);
         std::int64_t lo[3], hi[3];
         for (int a = 0; a < 3; ++a) {
-            lo[a] = std::max<std::int64_t>(0, std::int64_t{bc[a]} - halo);
-            hi[a] = std::min<std::int64_t>(last_block, std::int64_t{bc[a]} + halo);
+            lo[a] = std::max<std::int64_t>(0, std::int64_t{bc[a]} - bk.halo);
+            hi[a] = std::min<std::int64_t>(bk.last_block, std::int64_t{bc[a]} + bk.halo);
         }
         for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
             for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
                 for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
-                    tasks.push_back(gi::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
-                                                static_cast<std::uint32_t>(z)));
+                    tasks.push_back(pre::morton3(static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y),
+                                                 static_cast<std::uint32_t>(z)));
     }
-    gi::sort_unique(tasks, 3 * (depth - s + 1), threads);
-    phase(1);
+    gi::sort_unique(tasks, 3 * (depth - bk.s + 1), threads);
+    return tasks;
+}
 
-    // thesis 5.4.2, eq. 5.1-5.2: per block, the corners, their density estimates and the leaves.
-    struct TaskOut {
-        unsigned worker = 0;
-        std::size_t corner_begin = 0, corner_count = 0;  ///< into the worker's corner values
-        std::size_t leaf_begin = 0, leaf_count = 0;      ///< into the worker's leaves
-    };
-    struct WorkerOut {
-        std::vector<float> corner_values;  ///< 3 per corner
-        std::vector<std::uint64_t> leaf_keys;
-        std::vector<pool::GiLeaf> leaves;  ///< corner[c]: index into the task's corners (or missing)
-        float max_value = 0.0f;            ///< largest finite corner value
-        // Scratch: the dense grids are left all-missing after each task.
-        std::vector<std::uint32_t> grid, corner_at, grid_used;
-        std::vector<std::int64_t> corner_pos;
-        std::vector<CornerSum> sums;
-        std::vector<Lane> lanes;
-        std::vector<std::uint64_t> leaf_bits;
-        std::vector<std::uint8_t> row_used;  ///< per (z, y) row of the cell grid: any cell there
-    };
-    std::vector<TaskOut> task_out(tasks.size());
-    std::vector<WorkerOut> worker_out(threads);
-    const double edge_scene = bins.edge() * options.render_scale;
-    const float norm = static_cast<float>(2.0 / (k_pi * (ge * edge_scene) * (ge * edge_scene)));
-    const float inv_g2 = static_cast<float>(1.0 / (ge * ge));
-    const std::int64_t W = S + 2 * reach;  // the dense cell grid's side
-    const std::int64_t C = S + 1;          // the dense corner grid's side
-    constexpr std::uint32_t k_missing = KeyMap::k_missing;
-    pre::parallel_chunks(tasks.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
-        WorkerOut& out = worker_out[worker];
-        std::vector<std::uint32_t>& grid = out.grid;
-        std::vector<std::uint32_t>& corner_at = out.corner_at;
-        std::vector<std::uint32_t>& grid_used = out.grid_used;
-        std::vector<std::int64_t>& corner_pos = out.corner_pos;
-        std::vector<CornerSum>& sums = out.sums;
-        std::vector<Lane>& lanes = out.lanes;
-        std::vector<std::uint8_t>& row_used = out.row_used;
-        std::vector<std::uint64_t>& leaf_bits = out.leaf_bits;
-        if (grid.empty()) {
-            grid.assign(static_cast<std::size_t>(W * W * W), k_missing);
-            corner_at.assign(static_cast<std::size_t>(C * C * C), k_missing);
-            row_used.assign(static_cast<std::size_t>(W * W), 0);
-            leaf_bits.assign((std::size_t{1} << sbits) / 64 + 1, 0);
+/// What one task wrote, in its worker's arrays.
+struct TaskOut {
+    unsigned worker = 0;
+    std::size_t corner_begin = 0, corner_count = 0;  ///< into the worker's corner values
+    std::size_t leaf_begin = 0, leaf_count = 0;      ///< into the worker's leaves
+};
+
+/// One worker's results and scratch.
+struct WorkerOut {
+    std::vector<float> corner_values;  ///< 3 per corner
+    std::vector<std::uint64_t> leaf_keys;
+    std::vector<pool::GiLeaf> leaves;  ///< corner[c]: index into the task's corners (or missing)
+    float max_value = 0.0f;            ///< largest finite corner value
+    // Scratch: the dense grids are left all-missing after each task.
+    std::vector<std::uint32_t> grid, corner_at, grid_used;
+    std::vector<std::int64_t> corner_pos;
+    std::vector<CornerSum> sums;
+    std::vector<Lane> lanes;
+    std::vector<std::uint64_t> leaf_bits;
+    std::vector<std::uint8_t> row_used;  ///< per (z, y) row of the cell grid: any cell there
+};
+
+constexpr std::uint32_t k_missing = KeyMap::k_missing;
+
+/// thesis 5.4.2, eq. 5.1-5.2 for one block: its corners, their density estimates and its leaves.
+class BlockGather {
+public:
+    BlockGather(const CellBins& bins, const pre::Buffer<Packed>& packed, const Blocks& bk, float norm,
+                float inv_g2)
+        : m_bins(bins), m_packed(packed), m_bk(bk), m_norm(norm), m_inv_g2(inv_g2) {}
+
+    /// The block of key `task`: appends its corner values and leaves to `out`, says where in `to`.
+    void run(std::uint64_t task, WorkerOut& out, TaskOut& to) const {
+        if (out.grid.empty()) {
+            out.grid.assign(static_cast<std::size_t>(m_bk.W * m_bk.W * m_bk.W), k_missing);
+            out.corner_at.assign(static_cast<std::size_t>(m_bk.C * m_bk.C * m_bk.C), k_missing);
+            out.row_used.assign(static_cast<std::size_t>(m_bk.W * m_bk.W), 0);
+            out.leaf_bits.assign((std::size_t{1} << m_bk.sbits) / 64 + 1, 0);
         }
-        for (std::size_t t = begin; t < end; ++t) {
-            TaskOut& to = task_out[t];
-            to.worker = worker;
-            to.corner_begin = out.corner_values.size() / 3;
-            to.leaf_begin = out.leaves.size();
-            std::uint32_t bl[3];
-            gi::demorton3(tasks[t], bl[0], bl[1], bl[2]);
-            std::int64_t o[3], g0[3], clo[3], chi[3];  // block origin, grid origin, cell range
-            for (int a = 0; a < 3; ++a) {
-                o[a] = std::int64_t{bl[a]} * S;
-                g0[a] = o[a] - reach;
-                clo[a] = std::max<std::int64_t>(0, o[a] - reach);
-                chi[a] = std::min<std::int64_t>(cells - 1, o[a] + S + reach - 1);
-            }
-            // The occupied cells in reach: the blocks covering clo..chi, cell by cell.
-            grid_used.clear();
-            corner_pos.clear();
-            for (std::int64_t bz = clo[2] >> s; bz <= (chi[2] >> s); ++bz)
-                for (std::int64_t by = clo[1] >> s; by <= (chi[1] >> s); ++by)
-                    for (std::int64_t bx = clo[0] >> s; bx <= (chi[0] >> s); ++bx) {
-                        if (bx > last_cell_block || by > last_cell_block || bz > last_cell_block) continue;
-                        const std::uint64_t prefix =
-                            gi::morton3(static_cast<std::uint32_t>(bx), static_cast<std::uint32_t>(by),
-                                        static_cast<std::uint32_t>(bz));
-                        const auto first =
-                            std::lower_bound(bins.cell_keys.begin(), bins.cell_keys.end(), prefix << sbits);
-                        const auto last =
-                            std::lower_bound(first, bins.cell_keys.end(), (prefix + 1) << sbits);
-                        for (auto it = first; it != last; ++it) {
-                            std::uint32_t c[3];
-                            gi::demorton3(*it, c[0], c[1], c[2]);
-                            bool inside = true;
-                            for (int a = 0; a < 3; ++a) inside = inside && c[a] >= clo[a] && c[a] <= chi[a];
-                            if (!inside) continue;
-                            const std::uint32_t at = static_cast<std::uint32_t>(
-                                ((c[2] - g0[2]) * W + (c[1] - g0[1])) * W + (c[0] - g0[0]));
-                            grid[at] = static_cast<std::uint32_t>(it - bins.cell_keys.begin());
-                            grid_used.push_back(at);
-                            row_used[at / W] = 1;
-                            // Its corners in this block: c-r+1 .. c+r, within 0..cells.
-                            std::int64_t lo[3], hi[3];
-                            for (int a = 0; a < 3; ++a) {
-                                lo[a] = std::max<std::int64_t>(std::int64_t{c[a]} - reach + 1, o[a]);
-                                hi[a] = std::min<std::int64_t>({std::int64_t{c[a]} + reach, o[a] + S, cells});
-                            }
-                            for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
-                                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
-                                    for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                                        const std::int64_t ca =
-                                            ((z - o[2]) * C + (y - o[1])) * C + (x - o[0]);
-                                        std::uint32_t& k = corner_at[static_cast<std::size_t>(ca)];
-                                        if (k != k_missing) continue;
-                                        k = static_cast<std::uint32_t>(corner_pos.size());
-                                        corner_pos.push_back(ca);
-                                    }
-                        }
-                    }
-            // Density estimate at every corner (eq. 5.1-5.2). Each corner must add the deposits of
-            // its cells in reach z, y, x (then in input order), as the serial gather did: sweeping
-            // the cells in that order and pushing each cell's deposits into the corners it reaches
-            // gives every corner exactly that sequence of additions. A cell's corners (8 for g <= 1)
-            // are handled 8 at a time, one per SIMD-friendly lane, the sums held in the lanes for
-            // the cell's deposits and stored back after: the same additions in the same order.
-            sums.assign(corner_pos.size(), CornerSum{});
-            for (std::int64_t z = clo[2]; z <= chi[2]; ++z)
-                for (std::int64_t y = clo[1]; y <= chi[1]; ++y) {
-                    const std::int64_t row = (z - g0[2]) * W + (y - g0[1]);
-                    if (!row_used[static_cast<std::size_t>(row)]) continue;  // most rows of a surface
-                    for (std::int64_t x = clo[0]; x <= chi[0]; ++x) {
-                        const std::uint32_t cell = grid[static_cast<std::size_t>(row * W + (x - g0[0]))];
-                        if (cell == k_missing) continue;
-                        const std::int64_t c[3] = {x, y, z};
+        to.corner_begin = out.corner_values.size() / 3;
+        to.leaf_begin = out.leaves.size();
+        std::uint32_t bl[3];
+        pre::demorton3(task, bl[0], bl[1], bl[2]);
+        Range r;
+        for (int a = 0; a < 3; ++a) {
+            r.o[a] = std::int64_t{bl[a]} * m_bk.S;
+            r.g0[a] = r.o[a] - m_bk.reach;
+            r.clo[a] = std::max<std::int64_t>(0, r.o[a] - m_bk.reach);
+            r.chi[a] = std::min<std::int64_t>(m_bk.cells - 1, r.o[a] + m_bk.S + m_bk.reach - 1);
+        }
+        place_cells(r, out);
+        estimate(r, out);
+        mark_leaves(r, out);
+        emit_leaves(task, out);
+        for (std::uint32_t at : out.grid_used) {
+            out.grid[at] = k_missing;
+            out.row_used[at / m_bk.W] = 0;
+        }
+        for (std::int64_t ca : out.corner_pos) out.corner_at[static_cast<std::size_t>(ca)] = k_missing;
+        to.corner_count = out.corner_pos.size();
+        to.leaf_count = out.leaves.size() - to.leaf_begin;
+    }
+
+private:
+    /// A task's block origin o, its dense grid's origin g0 and the cells in reach clo..chi.
+    struct Range {
+        std::int64_t o[3], g0[3], clo[3], chi[3];
+    };
+
+    /// The corners of cell c in the block: c-r+1 .. c+r, within 0..cells.
+    void cell_corners(const Range& r, const std::int64_t c[3], std::int64_t lo[3], std::int64_t hi[3]) const {
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::max<std::int64_t>(c[a] - m_bk.reach + 1, r.o[a]);
+            hi[a] = std::min<std::int64_t>({c[a] + m_bk.reach, r.o[a] + m_bk.S, m_bk.cells});
+        }
+    }
+
+    /// The occupied cells in reach (the blocks covering clo..chi, cell by cell) into the dense
+    /// grid, and the corners they reach into corner_at / corner_pos.
+    void place_cells(const Range& r, WorkerOut& out) const {
+        const std::int64_t W = m_bk.W, C = m_bk.C;
+        const std::uint32_t s = m_bk.s;
+        out.grid_used.clear();
+        out.corner_pos.clear();
+        for (std::int64_t bz = r.clo[2] >> s; bz <= (r.chi[2] >> s); ++bz)
+            for (std::int64_t by = r.clo[1] >> s; by <= (r.chi[1] >> s); ++by)
+                for (std::int64_t bx = r.clo[0] >> s; bx <= (r.chi[0] >> s); ++bx) {
+                    if (bx > m_bk.last_cell_block || by > m_bk.last_cell_block || bz > m_bk.last_cell_block)
+                        continue;
+                    const std::uint64_t prefix =
+                        pre::morton3(static_cast<std::uint32_t>(bx), static_cast<std::uint32_t>(by),
+                                     static_cast<std::uint32_t>(bz));
+                    const auto& keys = m_bins.cell_keys;
+                    const auto first = std::lower_bound(keys.begin(), keys.end(), prefix << m_bk.sbits);
+                    const auto last = std::lower_bound(first, keys.end(), (prefix + 1) << m_bk.sbits);
+                    for (auto it = first; it != last; ++it) {
+                        std::uint32_t cu[3];
+                        pre::demorton3(*it, cu[0], cu[1], cu[2]);
+                        const std::int64_t c[3] = {cu[0], cu[1], cu[2]};
+                        bool inside = true;
+                        for (int a = 0; a < 3; ++a) inside = inside && c[a] >= r.clo[a] && c[a] <= r.chi[a];
+                        if (!inside) continue;
+                        const std::uint32_t at = static_cast<std::uint32_t>(
+                            ((c[2] - r.g0[2]) * W + (c[1] - r.g0[1])) * W + (c[0] - r.g0[0]));
+                        out.grid[at] = static_cast<std::uint32_t>(it - keys.begin());
+                        out.grid_used.push_back(at);
+                        out.row_used[at / W] = 1;
                         std::int64_t lo[3], hi[3];
-                        for (int a = 0; a < 3; ++a) {
-                            lo[a] = std::max<std::int64_t>(c[a] - reach + 1, o[a]);
-                            hi[a] = std::min<std::int64_t>({c[a] + reach, o[a] + S, cells});
-                        }
-                        lanes.clear();
-                        for (std::int64_t qz = lo[2]; qz <= hi[2]; ++qz)
-                            for (std::int64_t qy = lo[1]; qy <= hi[1]; ++qy)
-                                for (std::int64_t qx = lo[0]; qx <= hi[0]; ++qx)
-                                    lanes.push_back({corner_at[static_cast<std::size_t>(
-                                                         ((qz - o[2]) * C + (qy - o[1])) * C + (qx - o[0]))],
-                                                     {static_cast<float>(x - qx), static_cast<float>(y - qy),
-                                                      static_cast<float>(z - qz)}});
-                        const std::uint32_t first = bins.cell_begin[cell], last = bins.cell_begin[cell + 1];
-                        for (std::size_t l0 = 0; l0 < lanes.size(); l0 += k_lanes)
-                            accumulate_lanes(&lanes[l0], std::min(k_lanes, lanes.size() - l0), &packed[first],
-                                             last - first, inv_g2, sums.data());
+                        cell_corners(r, c, lo, hi);
+                        for (std::int64_t z = lo[2]; z <= hi[2]; ++z)
+                            for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                                for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                                    const std::int64_t ca =
+                                        ((z - r.o[2]) * C + (y - r.o[1])) * C + (x - r.o[0]);
+                                    std::uint32_t& k = out.corner_at[static_cast<std::size_t>(ca)];
+                                    if (k != k_missing) continue;
+                                    k = static_cast<std::uint32_t>(out.corner_pos.size());
+                                    out.corner_pos.push_back(ca);
+                                }
                     }
                 }
-            float task_max = 0.0f;
-            for (std::size_t k = 0; k < corner_pos.size(); ++k) {
-                const std::int64_t ca = corner_pos[k];
-                const std::int64_t q[3] = {o[0] + ca % C, o[1] + (ca / C) % C, o[2] + ca / (C * C)};
-                CornerSum& s_ = sums[k];
-                for (float& v : s_.value) {
-                    v *= norm;
-                    if (std::isfinite(v)) task_max = std::max(task_max, v);
-                }
-                out.corner_values.insert(out.corner_values.end(), s_.value, s_.value + 3);
-                // Leaves: every cell of this block with a non-zero corner.
-                if (!(s_.value[0] > 0.0f || s_.value[1] > 0.0f || s_.value[2] > 0.0f)) continue;
-                for (std::uint32_t c = 0; c < 8; ++c) {
-                    std::int64_t v[3];
-                    bool inside = true;
-                    for (int a = 0; a < 3; ++a) {
-                        v[a] = q[a] - static_cast<std::int64_t>((c >> a) & 1u);
-                        inside = inside && v[a] >= o[a] && v[a] < o[a] + S && v[a] < cells;
-                    }
-                    if (!inside) continue;
-                    const std::uint64_t m = gi::morton3(static_cast<std::uint32_t>(v[0] - o[0]),
-                                                        static_cast<std::uint32_t>(v[1] - o[1]),
-                                                        static_cast<std::uint32_t>(v[2] - o[2]));
-                    leaf_bits[m >> 6] |= std::uint64_t{1} << (m & 63u);
-                }
-            }
-            out.max_value = std::max(out.max_value, task_max);
-            // The leaves in local Morton order: the flux-weighted normal from their corners.
-            for (std::size_t word = 0; word < leaf_bits.size(); ++word) {
-                for (std::uint64_t bits = leaf_bits[word]; bits != 0; bits &= bits - 1) {
-                    const std::uint64_t m = (word << 6) | static_cast<std::uint64_t>(std::countr_zero(bits));
-                    std::uint32_t l[3];
-                    gi::demorton3(m, l[0], l[1], l[2]);
-                    pool::GiLeaf leaf{};
-                    double n[3] = {0, 0, 0}, w = 0;
-                    for (std::uint32_t c = 0; c < 8; ++c) {
-                        const std::uint32_t k =
-                            corner_at[((l[2] + ((c >> 2) & 1u)) * C + l[1] + ((c >> 1) & 1u)) * C + l[0] +
-                                      (c & 1u)];
-                        leaf.corner[c] = k;
-                        if (k == k_missing) continue;
-                        for (int a = 0; a < 3; ++a) n[a] += sums[k].normal[a];
-                        w += sums[k].weight;
-                    }
-                    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-                    // One-sided when the weighted normals mostly agree: |sum w n| >= w / 2.
-                    for (int a = 0; a < 3; ++a)
-                        leaf.normal[a] = gi::encode_normal(
-                            (w > 0 && len >= 0.5 * w) ? static_cast<float>(n[a] / len) : 0.0f);
-                    out.leaves.push_back(leaf);
-                    out.leaf_keys.push_back((tasks[t] << sbits) | m);
-                }
-                leaf_bits[word] = 0;
-            }
-            for (std::uint32_t at : grid_used) {
-                grid[at] = k_missing;
-                row_used[at / W] = 0;
-            }
-            for (std::int64_t ca : corner_pos) corner_at[static_cast<std::size_t>(ca)] = k_missing;
-            to.corner_count = corner_pos.size();
-            to.leaf_count = out.leaves.size() - to.leaf_begin;
-        }
-    });
-    phase(2);
+    }
 
-    // One scale for the map (the largest corner value: every positive corner is some leaf's), then
-    // the leaves in task order, their corners encoded once per task.
+    /// Density estimate at every corner (eq. 5.1-5.2). Each corner must add the deposits of its
+    /// cells in reach z, y, x (then in input order), as the serial gather did: sweeping the cells in
+    /// that order and pushing each cell's deposits into the corners it reaches gives every corner
+    /// exactly that sequence of additions. A cell's corners (8 for g <= 1) are handled 8 at a time,
+    /// one per SIMD-friendly lane, the sums held in the lanes for the cell's deposits and stored
+    /// back after: the same additions in the same order.
+    void estimate(const Range& r, WorkerOut& out) const {
+        const std::int64_t W = m_bk.W, C = m_bk.C;
+        out.sums.assign(out.corner_pos.size(), CornerSum{});
+        for (std::int64_t z = r.clo[2]; z <= r.chi[2]; ++z)
+            for (std::int64_t y = r.clo[1]; y <= r.chi[1]; ++y) {
+                const std::int64_t row = (z - r.g0[2]) * W + (y - r.g0[1]);
+                if (!out.row_used[static_cast<std::size_t>(row)]) continue;  // most rows of a surface
+                for (std::int64_t x = r.clo[0]; x <= r.chi[0]; ++x) {
+                    const std::uint32_t cell = out.grid[static_cast<std::size_t>(row * W + (x - r.g0[0]))];
+                    if (cell == k_missing) continue;
+                    const std::int64_t c[3] = {x, y, z};
+                    std::int64_t lo[3], hi[3];
+                    cell_corners(r, c, lo, hi);
+                    out.lanes.clear();
+                    for (std::int64_t qz = lo[2]; qz <= hi[2]; ++qz)
+                        for (std::int64_t qy = lo[1]; qy <= hi[1]; ++qy)
+                            for (std::int64_t qx = lo[0]; qx <= hi[0]; ++qx)
+                                out.lanes.push_back(
+                                    {out.corner_at[static_cast<std::size_t>(
+                                         ((qz - r.o[2]) * C + (qy - r.o[1])) * C + (qx - r.o[0]))],
+                                     {static_cast<float>(x - qx), static_cast<float>(y - qy),
+                                      static_cast<float>(z - qz)}});
+                    const std::uint32_t first = m_bins.cell_begin[cell], last = m_bins.cell_begin[cell + 1];
+                    for (std::size_t l0 = 0; l0 < out.lanes.size(); l0 += k_lanes)
+                        accumulate_lanes(&out.lanes[l0], std::min(k_lanes, out.lanes.size() - l0),
+                                         &m_packed[first], last - first, m_inv_g2, out.sums.data());
+                }
+            }
+    }
+
+    /// Normalises the corner values, appends them to the worker's, and marks the leaves: every cell
+    /// of this block with a non-zero corner.
+    void mark_leaves(const Range& r, WorkerOut& out) const {
+        const std::int64_t S = m_bk.S, C = m_bk.C;
+        float task_max = 0.0f;
+        for (std::size_t k = 0; k < out.corner_pos.size(); ++k) {
+            const std::int64_t ca = out.corner_pos[k];
+            const std::int64_t q[3] = {r.o[0] + ca % C, r.o[1] + (ca / C) % C, r.o[2] + ca / (C * C)};
+            CornerSum& s_ = out.sums[k];
+            for (float& v : s_.value) {
+                v *= m_norm;
+                if (std::isfinite(v)) task_max = std::max(task_max, v);
+            }
+            out.corner_values.insert(out.corner_values.end(), s_.value, s_.value + 3);
+            if (!(s_.value[0] > 0.0f || s_.value[1] > 0.0f || s_.value[2] > 0.0f)) continue;
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                std::int64_t v[3];
+                bool inside = true;
+                for (int a = 0; a < 3; ++a) {
+                    v[a] = q[a] - static_cast<std::int64_t>((c >> a) & 1u);
+                    inside = inside && v[a] >= r.o[a] && v[a] < r.o[a] + S && v[a] < m_bk.cells;
+                }
+                if (!inside) continue;
+                const std::uint64_t m = pre::morton3(static_cast<std::uint32_t>(v[0] - r.o[0]),
+                                                     static_cast<std::uint32_t>(v[1] - r.o[1]),
+                                                     static_cast<std::uint32_t>(v[2] - r.o[2]));
+                out.leaf_bits[m >> 6] |= std::uint64_t{1} << (m & 63u);
+            }
+        }
+        out.max_value = std::max(out.max_value, task_max);
+    }
+
+    /// The marked leaves in local Morton order, with the flux-weighted normal from their corners;
+    /// clears the marks.
+    void emit_leaves(std::uint64_t task, WorkerOut& out) const {
+        const std::int64_t C = m_bk.C;
+        for (std::size_t word = 0; word < out.leaf_bits.size(); ++word) {
+            for (std::uint64_t bits = out.leaf_bits[word]; bits != 0; bits &= bits - 1) {
+                const std::uint64_t m = (word << 6) | static_cast<std::uint64_t>(std::countr_zero(bits));
+                std::uint32_t l[3];
+                pre::demorton3(m, l[0], l[1], l[2]);
+                pool::GiLeaf leaf{};
+                double n[3] = {0, 0, 0}, w = 0;
+                for (std::uint32_t c = 0; c < 8; ++c) {
+                    const std::uint32_t k =
+                        out.corner_at[((l[2] + ((c >> 2) & 1u)) * C + l[1] + ((c >> 1) & 1u)) * C + l[0] +
+                                      (c & 1u)];
+                    leaf.corner[c] = k;
+                    if (k == k_missing) continue;
+                    for (int a = 0; a < 3; ++a) n[a] += out.sums[k].normal[a];
+                    w += out.sums[k].weight;
+                }
+                const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                // One-sided when the weighted normals mostly agree: |sum w n| >= w / 2.
+                for (int a = 0; a < 3; ++a)
+                    leaf.normal[a] =
+                        gi::encode_normal((w > 0 && len >= 0.5 * w) ? static_cast<float>(n[a] / len) : 0.0f);
+                out.leaves.push_back(leaf);
+                out.leaf_keys.push_back((task << m_bk.sbits) | m);
+            }
+            out.leaf_bits[word] = 0;
+        }
+    }
+
+    const CellBins& m_bins;
+    const pre::Buffer<Packed>& m_packed;
+    const Blocks& m_bk;
+    float m_norm, m_inv_g2;
+};
+
+/// One scale for the map (the largest corner value: every positive corner is some leaf's), then
+/// the leaves in task order, their corners encoded once per task; their keys into `leaf_keys`.
+void assemble_leaves(const std::vector<TaskOut>& task_out, const std::vector<WorkerOut>& worker_out,
+                     unsigned threads, GiOctree& tree, pre::Buffer<std::uint64_t>& leaf_keys, float& scale) {
     float max_value = 0.0f;
     for (const WorkerOut& w : worker_out) max_value = std::max(max_value, w.max_value);
-    const float scale = gi::map_scale(max_value);
-    std::vector<std::size_t> leaf_offset(tasks.size() + 1, 0);
-    for (std::size_t t = 0; t < tasks.size(); ++t)
-        leaf_offset[t + 1] = leaf_offset[t] + task_out[t].leaf_count;
-    GiOctree tree;
+    scale = gi::map_scale(max_value);
+    const std::size_t task_count = task_out.size();
+    std::vector<std::size_t> leaf_offset(task_count + 1, 0);
+    for (std::size_t t = 0; t < task_count; ++t) leaf_offset[t + 1] = leaf_offset[t] + task_out[t].leaf_count;
     tree.leaves.resize(leaf_offset.back());
-    pre::Buffer<std::uint64_t> leaf_keys(leaf_offset.back());
+    leaf_keys = pre::Buffer<std::uint64_t>(leaf_offset.back());
     const float zero[3] = {0.0f, 0.0f, 0.0f};
     const std::uint32_t encoded_zero = gi::encode_corner(zero, scale);
-    pre::parallel_chunks(tasks.size(), 4, threads, [&](std::size_t begin, std::size_t end, unsigned) {
+    parallel_chunks(task_count, 4, threads, [&](std::size_t begin, std::size_t end, unsigned) {
         std::vector<std::uint32_t> encoded;
         for (std::size_t t = begin; t < end; ++t) {
             const TaskOut& to = task_out[t];
@@ -550,6 +572,64 @@ GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const dou
             }
         }
     });
+}
+
+}  // namespace
+
+// thesis 5.4.2 + eq. 5.1-5.2, in parallel over blocks of S^3 leaf cells (S = 2^s, Morton-aligned, so
+// a block is a contiguous range of keys and a cell's key is its block's key << 3s | its local key).
+// Each block is one independent task (BlockGather): it places the occupied cells within the gather
+// reach of its corners in a dense local grid (no hash lookups), finds its corners (the lattice points
+// within g of an occupied cell, as the serial gather did), estimates the density at each, and emits
+// its leaves (the cells with a non-zero corner) in local Morton order. Blocks in key order then give
+// the leaves sorted, with no global sort or dedupe. Corners on a block's upper faces are also
+// corners of the next blocks: each block computes them again (the same sum, term for term), a few
+// per cent more density work for no communication. Every corner sum adds the same terms in the same
+// order as the serial gather (cells z, y, x, then deposits in input order within a cell), and the
+// map scale is a maximum, so the tree is byte-identical whatever the thread count.
+GiOctree build_caustic_octree(std::span<const PhotonDeposit> deposits, const double root_min[3],
+                              double root_size, const GatherOptions& options) {
+    const std::uint32_t depth = options.depth;
+    if (depth > pool::k_max_gi_depth)
+        throw Error("caustic octree depth " + std::to_string(depth) + " above " +
+                    std::to_string(pool::k_max_gi_depth));
+    if (!(options.radius_edges > 0.0f)) throw Error("gather radius must be positive");
+    const unsigned threads = resolve_threads(options.threads);
+    double mark = tool::now_seconds();
+    auto phase = [&](int k) {
+        const double now = tool::now_seconds();
+        if (options.phase_seconds) options.phase_seconds[k] = now - mark;
+        mark = now;
+    };
+    const CellBins bins = gi::bin_points(
+        deposits.size(), root_min, root_size, depth, [&](std::size_t i) { return deposits[i].position; },
+        threads, /*with_map=*/false);
+    const double ge = options.radius_edges;
+    const pre::Buffer<Packed> packed = pack_deposits(deposits, bins, threads);
+    phase(0);
+
+    const Blocks bk(depth, ge);
+    const std::vector<std::uint64_t> tasks = block_tasks(bins, bk, depth, threads);
+    phase(1);
+
+    std::vector<TaskOut> task_out(tasks.size());
+    std::vector<WorkerOut> worker_out(threads);
+    const double edge_scene = bins.edge() * options.render_scale;
+    const float norm = static_cast<float>(2.0 / (k_pi * (ge * edge_scene) * (ge * edge_scene)));
+    const float inv_g2 = static_cast<float>(1.0 / (ge * ge));
+    const BlockGather gather(bins, packed, bk, norm, inv_g2);
+    parallel_chunks(tasks.size(), 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        for (std::size_t t = begin; t < end; ++t) {
+            task_out[t].worker = worker;
+            gather.run(tasks[t], worker_out[worker], task_out[t]);
+        }
+    });
+    phase(2);
+
+    GiOctree tree;
+    pre::Buffer<std::uint64_t> leaf_keys(0);
+    float scale = 0.0f;
+    assemble_leaves(task_out, worker_out, threads, tree, leaf_keys, scale);
     std::vector<WorkerOut>().swap(worker_out);
     phase(3);
     tree.nodes = gi::build_nodes(leaf_keys, depth, threads);

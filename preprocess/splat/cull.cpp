@@ -40,9 +40,9 @@
 #include <random>
 
 #include "octree_build.h"
-#include "parallel.h"
 #include "prt/core/scene_view.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/cull_cuda.h"

@@ -20,8 +20,10 @@
 #include <string>
 
 #include "disk_box.h"
-#include "parallel.h"
+#include "morton.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
+#include "radix_sort.h"
 
 namespace prt::pre {
 
@@ -440,16 +442,6 @@ private:
     std::atomic<std::uint64_t> m_global_ids{0};
 };
 
-std::uint64_t spread_bits_3d(std::uint64_t v) {  // 21 bits -> every third bit of 63
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-}
-
 float round_down(double v) {
     float f = static_cast<float>(v);
     if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
@@ -570,16 +562,15 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
         const double scale = 2097151.0 / double(info.root_size);
         parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
             for (std::size_t i = b; i < e; ++i) {
-                std::uint64_t key = 0;
-                for (int a = 0; a < 3; ++a) {
-                    const double t =
-                        std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0);
-                    key |= spread_bits_3d(static_cast<std::uint64_t>(t)) << a;
-                }
-                keys[i] = {key, static_cast<std::uint32_t>(i)};
+                std::uint32_t q[3];
+                for (int a = 0; a < 3; ++a)
+                    q[a] = static_cast<std::uint32_t>(
+                        std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0));
+                keys[i] = {pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
             }
         });
-        std::sort(keys.begin(), keys.end());
+        // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
+        pre::radix_sort_by(keys, 63, threads, [](const auto& k) { return k.first; });
         std::vector<BuildSplat> sorted(splats.size());
         for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = splats[keys[i].second];
         splats = std::move(sorted);

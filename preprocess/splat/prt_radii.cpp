@@ -10,7 +10,7 @@ namespace {
 
 constexpr const char* k_description =
     "Splat radii (thesis 3.1): each point's radius is the distance to its k-th nearest neighbour "
-    "(exact k-NN, FLANN kd-tree, all cores). Outliers are clamped: with m the median raw radius of the "
+    "(exact k-NN kd-tree, all cores). Outliers are clamped: with m the median raw radius of the "
     "point's k neighbours (--clamp-scope local) or of the whole model (global), radii above F*m become "
     "F*m "
     "(F = --clamp-factor): an isolated point among dense ones is clamped, a sparse region is not. Reads "

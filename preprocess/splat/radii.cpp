@@ -1,64 +1,18 @@
-// PointRT preprocess: k-NN splat radii (thesis 3.1) through FLANN.
+// PointRT preprocess: k-NN splat radii (thesis 3.1) through the shared exact kd-tree (kd_tree.h).
 #include "radii.h"
-
-#include <flann/algorithms/dist.h>
-#include <flann/algorithms/kdtree_single_index.h>
-#include <flann/util/matrix.h>
-#include <flann/util/result_set.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
 #include <string>
 
-#include "parallel.h"
+#include "kd_tree.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "prt/tool.h"
 
 namespace prt::pre {
-
-namespace {
-
-std::uint64_t spread_bits(std::uint64_t v) {  // 21 bits -> every third bit of 63
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-}
-
-/// Point indices sorted by the Morton code of their cell in a 2^21 grid over the bounding box.
-std::vector<std::uint32_t> morton_order(std::span<const pool::Float3> p, unsigned threads) {
-    float lo[3] = {p[0].x, p[0].y, p[0].z}, hi[3] = {lo[0], lo[1], lo[2]};
-    for (const pool::Float3& q : p) {
-        const float v[3] = {q.x, q.y, q.z};
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], v[a]);
-            hi[a] = std::max(hi[a], v[a]);
-        }
-    }
-    double scale[3];
-    for (int a = 0; a < 3; ++a) scale[a] = hi[a] > lo[a] ? 2097151.0 / (double(hi[a]) - lo[a]) : 0.0;
-    std::vector<std::uint64_t> keys(p.size());
-    parallel_chunks(p.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t i = b; i < e; ++i) {
-            const float v[3] = {p[i].x, p[i].y, p[i].z};
-            std::uint64_t key = 0;
-            for (int a = 0; a < 3; ++a)
-                key |= spread_bits(static_cast<std::uint64_t>((double(v[a]) - lo[a]) * scale[a])) << a;
-            keys[i] = key;
-        }
-    });
-    std::vector<std::uint32_t> order(p.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
-    std::sort(order.begin(), order.end(),
-              [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
-    return order;
-}
-
-}  // namespace
 
 const char* clamp_scope_name(ClampScope s) {
     return s == ClampScope::local ? "local" : "global";
@@ -85,45 +39,29 @@ std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::u
             throw Error("k-NN radii: point " + std::to_string(i) + " has a non-finite position");
     threads = resolve_threads(threads);
 
-    // thesis 3.1: the radius is the distance to the farthest of the k nearest neighbours. An exact
-    // kd-tree (FLANN's single kd-tree, reordered copy of the data) answers each query.
-    double t0 = tool::now_seconds();
-    // FLANN only reads the dataset (it copies it when reordering); its Matrix wants a mutable pointer.
-    flann::Matrix<float> data(const_cast<float*>(&positions[0].x), n, 3);
-    flann::KDTreeSingleIndex<flann::L2_Simple<float>> index(data, flann::KDTreeSingleIndexParams(10, true));
-    index.buildIndex();
+    // thesis 3.1: the radius is the distance to the farthest of the k nearest neighbours, found by
+    // an exact kd-tree over the float positions (squared distances in float).
+    const double t0 = tool::now_seconds();
+    const KdTree<float> tree(
+        n,
+        [&](std::size_t i, float c[3]) {
+            c[0] = positions[i].x;
+            c[1] = positions[i].y;
+            c[2] = positions[i].z;
+        },
+        threads);
     const double t1 = tool::now_seconds();
 
-    // Queries in Morton (Z-curve) order: consecutive queries visit the same tree nodes and data,
-    // which keeps them in cache (input order may be random).
-    const std::vector<std::uint32_t> order = morton_order(positions, threads);
     std::vector<float> radii(n);
     if (neighbours) neighbours->assign(n * std::size_t(k), 0);
-    std::atomic<std::uint64_t> done{0};
-    const flann::SearchParams search(flann::FLANN_CHECKS_UNLIMITED, 0.0f, false);
-    parallel_chunks(n, 4096, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
-        // k + 1 results: the query point itself is found at distance 0.
-        flann::KNNSimpleResultSet<float> result(k + 1);
-        std::vector<std::size_t> ids(k + 1);
-        std::vector<float> d2(k + 1);
-        for (std::size_t j = b; j < e; ++j) {
-            const std::uint32_t i = order[j];
-            result.clear();
-            index.findNeighbors(result, &positions[i].x, search);
-            radii[i] = std::sqrt(result.worstDist());
-            if (neighbours) {
-                // the k others: the query itself is among the k + 1 (first, unless coincident
-                // points tie with it)
-                result.copy(ids.data(), d2.data(), k + 1);
-                std::uint32_t* out = neighbours->data() + std::size_t(i) * k;
-                std::uint32_t m = 0;
-                for (std::uint32_t t = 0; t <= k && m < k; ++t)
-                    if (ids[t] != i) out[m++] = static_cast<std::uint32_t>(ids[t]);
-            }
-        }
-        const std::uint64_t total = done.fetch_add(e - b) + (e - b);
-        if (worker == 0 && progress) progress(total);
-    });
+    tree.for_each(
+        k, threads,
+        [&](std::uint32_t i, const std::uint32_t* index, const float* distance2, std::uint32_t) {
+            radii[i] = std::sqrt(distance2[k - 1]);  // n > k: k others are always found
+            if (neighbours)
+                std::memcpy(neighbours->data() + std::size_t(i) * k, index, k * sizeof(std::uint32_t));
+        },
+        progress);
     if (stats) {
         stats->seconds_index = t1 - t0;
         stats->seconds_search = tool::now_seconds() - t1;

@@ -1,5 +1,5 @@
 // PointRT preprocess: splat radii from the k nearest neighbours (thesis 3.1), shared by prt-radii and
-// the tests. Needs FLANN (library target prt_splat_radii, built only when FLANN is found).
+// the tests (library target prt_splat_radii).
 #pragma once
 
 #include <cstdint>
@@ -42,11 +42,11 @@ struct RadiiStats {
     double seconds_index = 0, seconds_search = 0, seconds = 0;
 };
 
-/// Distance from every point to its k-th nearest other point (exact k-NN through a FLANN
-/// KDTreeSingleIndex, searched from `threads` threads). Coincident points count as neighbours at
+/// Distance from every point to its k-th nearest other point (exact k-NN through the shared kd-tree,
+/// kd_tree.h, searched from `threads` threads). Coincident points count as neighbours at
 /// distance 0. Throws prt::Error when there are not more than k points. `progress`, if set, is
 /// called from one thread with the number of points done. With `neighbours`, also the indices
-/// of each point's k nearest other points (neighbours[i * k + j], nearest first).
+/// of each point's k nearest other points (neighbours[i * k + j], nearest first, ties by index).
 std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::uint32_t k, unsigned threads,
                                  const std::function<void(std::uint64_t)>& progress = {},
                                  RadiiStats* stats = nullptr,

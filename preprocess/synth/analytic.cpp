@@ -14,22 +14,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-Vec3 mul(const Vec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double norm(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-
 /// Rotation about +y by `radians` (right-handed: +z turns towards +x).
 Vec3 rotate_y(const Vec3& v, double radians) {
     const double c = std::cos(radians), s = std::sin(radians);
@@ -217,7 +201,7 @@ void validate(const Shape& s) {
 }
 
 SurfacePoint closest(const Sphere& s, const Vec3& p) {
-    const double d = norm(p);
+    const double d = length(p);
     SurfacePoint r;
     r.normal = d > 0 ? mul(p, 1.0 / d) : Vec3{0, 1, 0};  // the centre: every direction is nearest
     r.point = mul(r.normal, s.radius);
@@ -232,7 +216,7 @@ SurfacePoint closest(const Torus& t, const Vec3& p) {
     const Vec3 radial = q > 0 ? Vec3{p[0] / q, 0, p[2] / q} : Vec3{1, 0, 0};
     const Vec3 c = mul(radial, t.major_radius);
     const Vec3 w = sub(p, c);
-    const double l = norm(w);
+    const double l = length(w);
     SurfacePoint r;
     r.normal = l > 0 ? mul(w, 1.0 / l) : radial;
     r.point = add(c, mul(r.normal, t.minor_radius));
@@ -250,7 +234,7 @@ SurfacePoint closest(const Plane& s, const Vec3& p) {
     SurfacePoint r;
     r.point = {std::clamp(p[0], -h, h), 0.0, std::clamp(p[2], -h, h)};
     r.normal = {0, 1, 0};
-    const double d = norm(sub(p, r.point));
+    const double d = length(sub(p, r.point));
     r.signed_distance = p[1] < 0 ? -d : d;
     return r;
 }
@@ -355,11 +339,11 @@ using MaybeHit = std::optional<LocalHit>;
 /// roots, so neither a distant origin nor an origin near the surface loses digits.
 bool sphere_roots(const Vec3& f, const Vec3& u, double r, double& t0, double& t1) {
     const double b = -dot(f, u);  // closest approach
-    const double q = norm(add(f, mul(u, b)));
+    const double q = length(add(f, mul(u, b)));
     const double disc = (r - q) * (r + q);
     if (!(disc >= 0)) return false;
     const double s = std::sqrt(disc);
-    const double fl = norm(f);
+    const double fl = length(f);
     const double c = (fl - r) * (fl + r);  // t0 t1
     if (b > 0) {
         t1 = b + s;
@@ -396,7 +380,7 @@ MaybeHit sphere_hit(const Vec3& center, double r, const Vec3& o, const Vec3& u, 
     LocalHit h;
     h.t = t;
     const Vec3 w = sub(add(o, mul(u, t)), center);
-    const double l = norm(w);
+    const double l = length(w);
     h.normal = l > 0 ? mul(w, 1.0 / l) : Vec3{0, 1, 0};
     h.point = add(center, mul(h.normal, r));  // on the sphere to rounding
     return h;
@@ -676,8 +660,8 @@ MaybeHit torus_hit(const Torus& tor, const Vec3& o, const Vec3& u, double t_max)
 }  // namespace
 
 std::optional<RayHit> first_hit(const Shape& shape, const Vec3& origin, const Vec3& dir, double t_max) {
-    const double len = norm(dir);
-    if (!(len > 0) || !std::isfinite(len) || !std::isfinite(norm(origin)))
+    const double len = length(dir);
+    if (!(len > 0) || !std::isfinite(len) || !std::isfinite(length(origin)))
         throw Error("first_hit: the ray origin and direction must be finite, the direction non-zero");
     if (!(t_max >= 0)) return std::nullopt;
     const Vec3 o = mul(sub(origin, shape.offset), 1.0 / shape.scale);

@@ -27,10 +27,11 @@
 #include <vector>
 
 #include "prt/formats/pool_layout.h"
+#include "prt/vec3.h"
 
 namespace prt::synth {
 
-using Vec3 = std::array<double, 3>;
+using Vec3 = Vec3d;
 
 enum class ShapeKind : std::uint32_t { sphere, torus, cube, plane, room, ring };
 

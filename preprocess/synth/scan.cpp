@@ -5,10 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
-#include <thread>
 #include <unordered_set>
 
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "synth_random.h"
 
 namespace prt::synth {
@@ -38,25 +38,6 @@ constexpr double k_albedo = 0.8;
 constexpr double k_max_rays = 4294967295.0;
 constexpr double k_max_lines = 1e7;
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-Vec3 mul(const Vec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double norm(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-Vec3 cross(const Vec3& a, const Vec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 std::string num(double v) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.10g", v);
@@ -71,10 +52,10 @@ std::string vec_text(const Vec3& v) {
 struct Frame {
     Vec3 a, e1, e2;
     explicit Frame(const Vec3& axis) {
-        a = mul(axis, 1.0 / norm(axis));
+        a = mul(axis, 1.0 / length(axis));
         const Vec3 helper = std::fabs(a[2]) < 0.9 ? Vec3{0, 0, 1} : Vec3{1, 0, 0};
         e1 = sub(helper, mul(a, dot(helper, a)));
-        e1 = mul(e1, 1.0 / norm(e1));
+        e1 = mul(e1, 1.0 / length(e1));
         e2 = cross(a, e1);
     }
     Vec3 direction(double azimuth_deg, double elevation_deg) const {
@@ -97,11 +78,11 @@ struct Field {
 Field make_field(const ScanOptions& o, const Frame& f, const Vec3& scanner) {
     const auto box = shape_bounds(o.shape);
     const Vec3 centre = mul(add(box[0], box[1]), 0.5);
-    const double radius = 0.5 * norm(sub(box[1], box[0])) * (1 + 1e-9) + 1e-300;
+    const double radius = 0.5 * length(sub(box[1], box[0])) * (1 + 1e-9) + 1e-300;
     bool inside_box = true;
     for (int a = 0; a < 3; ++a) inside_box = inside_box && scanner[a] > box[0][a] && scanner[a] < box[1][a];
     const Vec3 w = sub(centre, scanner);
-    const double dist = norm(w);
+    const double dist = length(w);
     Field fd;
     if (inside_box || dist <= radius) {
         fd.full = true;
@@ -246,7 +227,7 @@ void validate(const ScanOptions& o) {
     range("--outliers", o.outliers, 0, 1, closed, "in [0, 1] (a fraction of the returns)");
     range("--uniform-outliers", o.uniform_outliers, 0, 1, closed, "in [0, 1] (a fraction of the returns)");
     range("--intensity-noise", o.intensity_noise, 0, 1, closed, "in [0, 1]");
-    const double al = norm(o.axis);
+    const double al = length(o.axis);
     if (!(std::isfinite(al) && al > 0))
         throw Error("--scan-axis must be a finite non-zero vector, got " + vec_text(o.axis));
     if (o.scanners.size() > pool::k_max_sensors)
@@ -281,20 +262,11 @@ void validate(const ScanOptions& o) {
     if (o.threads > 4096) throw Error("--threads must be at most 4096, got " + std::to_string(o.threads));
 }
 
-ScanResult scan(const ScanOptions& options,
-                const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
-    ScanOptions o = options;
-    if (o.scanners.empty()) o.scanners = default_scanners(o.shape, 1);
-    validate(o);
-    const Frame frame(o.axis);
-    const double size = shape_size(o.shape);
-    const double sigma0 = o.range_noise * size;
-    const double cos_max = std::cos(o.max_incidence_degrees * k_deg);
-    const std::vector<std::string> names = part_names(o.shape);
+namespace {
 
-    // The fields, the lines, and the size of the pattern.
-    std::vector<Field> fields;
-    std::vector<Line> lines;
+/// The scan pattern: every scanner's field and the scan lines, scanner by scanner.
+void plan_lines(const ScanOptions& o, const Frame& frame, std::vector<Field>& fields,
+                std::vector<Line>& lines) {
     double grid_rays = 0;
     for (std::uint32_t s = 0; s < o.scanners.size(); ++s) {
         fields.push_back(make_field(o, frame, o.scanners[s]));
@@ -310,17 +282,20 @@ ScanResult scan(const ScanOptions& options,
                         " rays: increase --sample-step or --line-step");
         for (std::int64_t k = f.k0; k <= f.k1 && nj > 0; ++k) lines.push_back({s, k});
     }
+}
 
-    // Cast every line; a line's returns depend only on (seed, scanner, k).
-    std::vector<std::vector<Return>> line_returns(lines.size());
-    std::vector<LineCounts> line_counts(lines.size());
-    auto cast_line = [&](std::size_t li) {
-        const Line& line = lines[li];
+/// Casts the rays of one scan line; its returns depend only on (seed, scanner, k).
+struct LineCaster {
+    const ScanOptions& o;
+    const Frame& frame;
+    const std::vector<Field>& fields;
+    double sigma0;   ///< range noise sigma at range 0
+    double cos_max;  ///< cosine of the largest incidence
+
+    void operator()(const Line& line, LineCounts& c, std::vector<Return>& out) const {
         const Field& f = fields[line.scanner];
         const Vec3& origin = o.scanners[line.scanner];
         const double az = double(line.k) * o.line_step_degrees;
-        LineCounts& c = line_counts[li];
-        std::vector<Return>& out = line_returns[li];
         for (std::int64_t j = f.j0; j <= f.j1; ++j) {
             const Vec3 d = frame.direction(az, double(j) * o.sample_step_degrees);
             if (!f.full && dot(d, f.toward) < f.cos_half) continue;  // misses the bounding sphere
@@ -355,32 +330,13 @@ ScanResult scan(const ScanOptions& options,
             r.part = static_cast<std::int8_t>(hit->part);
             out.push_back(r);
         }
-    };
-
-    constexpr std::size_t k_chunk = 8;  // lines per work item
-    const std::size_t chunks = (lines.size() + k_chunk - 1) / k_chunk;
-    std::atomic<std::size_t> next_chunk{0}, done{0};
-    auto work = [&](bool report) {
-        for (std::size_t c; (c = next_chunk.fetch_add(1)) < chunks;) {
-            const std::size_t begin = c * k_chunk, end = std::min(lines.size(), begin + k_chunk);
-            for (std::size_t li = begin; li < end; ++li) cast_line(li);
-            const std::size_t total_done = done.fetch_add(end - begin) + (end - begin);
-            if (report && progress) progress(total_done, lines.size());
-        }
-    };
-    unsigned threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
-    threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(1, chunks)));
-    {
-        std::vector<std::thread> workers;
-        for (unsigned t = 1; t < threads; ++t) workers.emplace_back(work, false);
-        work(true);
-        for (std::thread& t : workers) t.join();
     }
-    if (progress) progress(lines.size(), lines.size());
+};
 
-    // Gather in (scanner, line, sample) order.
-    ScanResult result;
-    result.range_sigma = sigma0;
+/// Per scanner: its field and the counts of its lines; returns the number of returns.
+std::uint64_t tally_scanners(const ScanOptions& o, const std::vector<Field>& fields,
+                             const std::vector<Line>& lines, const std::vector<LineCounts>& line_counts,
+                             const std::vector<std::vector<Return>>& line_returns, ScanResult& result) {
     for (std::size_t s = 0; s < o.scanners.size(); ++s) {
         ScannerStats st;
         st.position = o.scanners[s];
@@ -403,29 +359,16 @@ ScanResult scan(const ScanOptions& options,
         st.returns += line_returns[li].size();
         n += line_returns[li].size();
     }
-    if (n == 0)
-        throw Error("the scan has no returns (every ray missed the " + std::string(shape_name(o.shape.kind)) +
-                    " or was dropped): check --scanner, --max-incidence and --dropout");
-    const std::uint64_t n_uniform = static_cast<std::uint64_t>(std::llround(o.uniform_outliers * double(n)));
-    if (n + n_uniform > k_max_points)
-        throw Error("the scan has " + std::to_string(n + n_uniform) + " points, more than a pool holds (" +
-                    std::to_string(k_max_points) + "): increase --sample-step or --line-step");
-    result.returns = n;
-    const std::size_t total = static_cast<std::size_t>(n + n_uniform);
+    return n;
+}
 
+/// The returns as points, in (scanner, line, sample) order (the line arrays are freed); counts the
+/// returns of each part into part_count. Returns the number of points written.
+std::size_t store_returns(const ScanOptions& o, const std::vector<Line>& lines,
+                          std::vector<std::vector<Return>>& line_returns,
+                          std::vector<std::uint64_t>& part_count, ScanResult& result) {
     pre::PointCloud& cloud = result.cloud;
-    cloud.flags = pool::k_model_synthetic;
-    cloud.positions.resize(total);
-    cloud.intensities.resize(total);
-    if (o.normals) cloud.normals.resize(total);
-    if (o.colors != ColorMode::none) cloud.colors.resize(total);
     const bool many = o.scanners.size() > 1;
-    if (many) cloud.scan_ids.resize(total);
-    result.part.resize(total);
-    for (const Vec3& s : o.scanners)
-        cloud.sensors.push_back(pool::Sensor{{s[0], s[1], s[2]}, pool::k_sensor_point, 0});
-    std::vector<std::uint64_t> part_count(names.size(), 0);
-
     std::size_t i = 0;
     for (std::size_t li = 0; li < lines.size(); ++li) {
         const std::uint32_t s = lines[li].scanner;
@@ -445,10 +388,16 @@ ScanResult scan(const ScanOptions& options,
         }
         std::vector<Return>().swap(line_returns[li]);
     }
+    return i;
+}
 
-    // Mixed-pixel outliers: Floyd's sampling of k distinct indices out of n (Bentley and Floyd,
-    // "A sample of brilliance", CACM 1987), one seeded stream, so the choice is reproducible.
-    const std::uint64_t k_out = static_cast<std::uint64_t>(std::llround(o.outliers * double(n)));
+/// Mixed-pixel outliers: k_out of the n returns moved along their ray. The choice is Floyd's
+/// sampling of k distinct indices out of n (Bentley and Floyd, "A sample of brilliance", CACM
+/// 1987), one seeded stream, so it is reproducible. Returns how many moved towards the scanner.
+std::uint64_t displace_outliers(const ScanOptions& o, std::uint64_t n, std::uint64_t k_out, double size,
+                                ScanResult& result) {
+    pre::PointCloud& cloud = result.cloud;
+    const bool many = o.scanners.size() > 1;
     {
         std::unordered_set<std::uint64_t> chosen;
         chosen.reserve(static_cast<std::size_t>(k_out));
@@ -465,7 +414,7 @@ ScanResult scan(const ScanOptions& options,
         const Vec3& s = o.scanners[many ? cloud.scan_ids[idx] : 0];
         Vec3& p = cloud.positions[idx];
         const Vec3 ray = sub(p, s);
-        const double range = norm(ray);
+        const double range = length(ray);
         if (!(range > 0)) continue;
         Stream ds{hash(o.seed, k_stream_outlier_shift, idx)};
         const bool closer = ds.uniform() < 0.5;
@@ -476,16 +425,15 @@ ScanResult scan(const ScanOptions& options,
         }
         p = add(p, mul(ray, shift / range));
     }
+    return toward;
+}
 
-    // Uniform outliers, appended.
-    result.uniform_first = n;
-    result.uniform_count = n_uniform;
-    const auto box = shape_bounds(o.shape);
-    Vec3 lo, hi;
-    for (int a = 0; a < 3; ++a) {
-        lo[a] = box[0][a] - k_uniform_margin * size;
-        hi[a] = box[1][a] + k_uniform_margin * size;
-    }
+/// Uniform outliers: n_uniform points in the box lo..hi, appended from index `first`.
+void append_uniform_outliers(const ScanOptions& o, std::uint64_t n_uniform, std::size_t first, const Vec3& lo,
+                             const Vec3& hi, ScanResult& result) {
+    pre::PointCloud& cloud = result.cloud;
+    const bool many = o.scanners.size() > 1;
+    std::size_t i = first;
     for (std::uint64_t u = 0; u < n_uniform; ++u, ++i) {
         Stream us{hash(o.seed, k_stream_uniform, u)};
         Vec3 p;
@@ -504,16 +452,17 @@ ScanResult scan(const ScanOptions& options,
         if (many) cloud.scan_ids[i] = static_cast<std::uint16_t>(u % o.scanners.size());
         result.part[i] = -1;
     }
+}
 
-    for (std::size_t p = 0; p < names.size(); ++p) {
-        PartRange r;
-        r.name = names[p];
-        r.count = part_count[p];
-        r.color = part_color(o, int(p));
-        result.parts.push_back(r);
-    }
+/// What the provenance records of the outliers.
+struct OutlierRecord {
+    std::uint64_t count = 0, toward = 0;  ///< mixed-pixel outliers, and those moved closer
+    Vec3 lo{}, hi{};                      ///< the uniform outliers' box
+};
 
-    // Provenance.
+/// The scan's provenance parameters (JSON).
+std::string scan_parameters(const ScanOptions& o, const Frame& frame, double sigma0, const OutlierRecord& out,
+                            const ScanResult& result) {
     nlohmann::ordered_json j;
     j["shape"] = nlohmann::ordered_json::parse(shape_to_json(o.shape));
     j["mode"] = "scan";
@@ -537,6 +486,7 @@ ScanResult scan(const ScanOptions& options,
     j["colors"] = color_mode_name(o.colors);
     j["seed"] = o.seed;
     nlohmann::ordered_json js = nlohmann::ordered_json::array();
+    std::uint64_t rays = 0, misses = 0, grazing = 0, dropout = 0;
     for (const ScannerStats& st : result.scanners) {
         nlohmann::ordered_json e;
         e["position"] = st.position;
@@ -551,39 +501,119 @@ ScanResult scan(const ScanOptions& options,
         e["returns"] = st.returns;
         e["first"] = st.first;
         js.push_back(e);
-    }
-    j["scanners"] = js;
-    std::uint64_t rays = 0, misses = 0, grazing = 0, dropout = 0;
-    for (const ScannerStats& st : result.scanners) {
         rays += st.rays;
         misses += st.misses;
         grazing += st.dropped_grazing;
         dropout += st.dropped_dropout;
     }
+    j["scanners"] = js;
     j["rays"] = rays;
     j["misses"] = misses;
     j["dropped_grazing"] = grazing;
     j["dropped_dropout"] = dropout;
-    j["returns"] = n;
+    j["returns"] = result.returns;
     nlohmann::ordered_json jo;
     jo["fraction"] = o.outliers;
     jo["displacement"] = {k_outlier_min, k_outlier_max};
     jo["displacement_unit"] = "model size, along the ray, either sign";
-    jo["count"] = k_out;
-    jo["toward_scanner"] = toward;
-    if (k_out <= k_max_recorded_outliers) jo["indices"] = result.outlier_indices;
+    jo["count"] = out.count;
+    jo["toward_scanner"] = out.toward;
+    if (out.count <= k_max_recorded_outliers) jo["indices"] = result.outlier_indices;
     j["outliers"] = jo;
     nlohmann::ordered_json ju;
     ju["fraction"] = o.uniform_outliers;
-    ju["box"] = {lo, hi};
-    ju["first"] = n;
-    ju["count"] = n_uniform;
+    ju["box"] = {out.lo, out.hi};
+    ju["first"] = result.uniform_first;
+    ju["count"] = result.uniform_count;
     j["uniform_outliers"] = ju;
-    j["points"] = n + n_uniform;
+    j["points"] = result.returns + result.uniform_count;
     nlohmann::ordered_json jp = nlohmann::ordered_json::array();
     for (const PartRange& p : result.parts) jp.push_back({{"name", p.name}, {"returns", p.count}});
     j["parts"] = jp;
-    result.parameters_json = j.dump();
+    return j.dump();
+}
+
+}  // namespace
+
+ScanResult scan(const ScanOptions& options,
+                const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    ScanOptions o = options;
+    if (o.scanners.empty()) o.scanners = default_scanners(o.shape, 1);
+    validate(o);
+    const Frame frame(o.axis);
+    const double size = shape_size(o.shape);
+    const double sigma0 = o.range_noise * size;
+    const double cos_max = std::cos(o.max_incidence_degrees * k_deg);
+    const std::vector<std::string> names = part_names(o.shape);
+
+    std::vector<Field> fields;
+    std::vector<Line> lines;
+    plan_lines(o, frame, fields, lines);
+
+    // Cast every line.
+    std::vector<std::vector<Return>> line_returns(lines.size());
+    std::vector<LineCounts> line_counts(lines.size());
+    const LineCaster cast{o, frame, fields, sigma0, cos_max};
+    constexpr std::size_t k_chunk = 8;  // lines per work item
+    std::atomic<std::size_t> done{0};
+    // The calling thread (worker 0) is the only one that reports progress.
+    parallel_chunks(lines.size(), k_chunk, resolve_threads(o.threads),
+                    [&](std::size_t begin, std::size_t end, unsigned worker) {
+                        for (std::size_t li = begin; li < end; ++li)
+                            cast(lines[li], line_counts[li], line_returns[li]);
+                        const std::size_t total_done = done.fetch_add(end - begin) + (end - begin);
+                        if (worker == 0 && progress) progress(total_done, lines.size());
+                    });
+    if (progress) progress(lines.size(), lines.size());
+
+    // Gather in (scanner, line, sample) order.
+    ScanResult result;
+    result.range_sigma = sigma0;
+    const std::uint64_t n = tally_scanners(o, fields, lines, line_counts, line_returns, result);
+    if (n == 0)
+        throw Error("the scan has no returns (every ray missed the " + std::string(shape_name(o.shape.kind)) +
+                    " or was dropped): check --scanner, --max-incidence and --dropout");
+    const std::uint64_t n_uniform = static_cast<std::uint64_t>(std::llround(o.uniform_outliers * double(n)));
+    if (n + n_uniform > k_max_points)
+        throw Error("the scan has " + std::to_string(n + n_uniform) + " points, more than a pool holds (" +
+                    std::to_string(k_max_points) + "): increase --sample-step or --line-step");
+    result.returns = n;
+    const std::size_t total = static_cast<std::size_t>(n + n_uniform);
+
+    pre::PointCloud& cloud = result.cloud;
+    cloud.flags = pool::k_model_synthetic;
+    cloud.positions.resize(total);
+    cloud.intensities.resize(total);
+    if (o.normals) cloud.normals.resize(total);
+    if (o.colors != ColorMode::none) cloud.colors.resize(total);
+    if (o.scanners.size() > 1) cloud.scan_ids.resize(total);
+    result.part.resize(total);
+    for (const Vec3& s : o.scanners)
+        cloud.sensors.push_back(pool::Sensor{{s[0], s[1], s[2]}, pool::k_sensor_point, 0});
+    std::vector<std::uint64_t> part_count(names.size(), 0);
+    const std::size_t stored = store_returns(o, lines, line_returns, part_count, result);
+
+    OutlierRecord record;
+    record.count = static_cast<std::uint64_t>(std::llround(o.outliers * double(n)));
+    record.toward = displace_outliers(o, n, record.count, size, result);
+
+    result.uniform_first = n;
+    result.uniform_count = n_uniform;
+    const auto box = shape_bounds(o.shape);
+    for (int a = 0; a < 3; ++a) {
+        record.lo[a] = box[0][a] - k_uniform_margin * size;
+        record.hi[a] = box[1][a] + k_uniform_margin * size;
+    }
+    append_uniform_outliers(o, n_uniform, stored, record.lo, record.hi, result);
+
+    for (std::size_t p = 0; p < names.size(); ++p) {
+        PartRange r;
+        r.name = names[p];
+        r.count = part_count[p];
+        r.color = part_color(o, int(p));
+        result.parts.push_back(r);
+    }
+    result.parameters_json = scan_parameters(o, frame, sigma0, record, result);
     return result;
 }
 

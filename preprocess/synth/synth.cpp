@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <thread>
 
 #include "prt/error.h"
+#include "prt/parallel.h"
 #include "synth_random.h"
 
 namespace prt::synth {
@@ -16,12 +16,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 mul(const Vec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
 Vec3 rotate_y(const Vec3& v, double radians) {
     const double c = std::cos(radians), s = std::sin(radians);
     return {c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]};
@@ -336,50 +330,41 @@ SynthResult synthesize(const SynthOptions& o,
         part_color[i] = o.colors == ColorMode::constant ? o.color : parts[i].color;
 
     constexpr std::uint64_t k_chunk = 1 << 16;
-    const std::uint64_t chunks = (o.count + k_chunk - 1) / k_chunk;
-    std::atomic<std::uint64_t> next_chunk{0}, done{0};
-    // Workers take chunks from a shared counter; the calling thread works too and reports progress
-    // between its chunks (it is the only thread that calls `progress`).
-    auto work = [&](bool report) {
-        for (std::uint64_t c; (c = next_chunk.fetch_add(1)) < chunks;) {
-            const std::uint64_t begin = c * k_chunk, end = std::min(o.count, begin + k_chunk);
-            std::size_t patch = std::upper_bound(first.begin(), first.end(), begin) - first.begin() - 1;
-            for (std::uint64_t i = begin; i < end; ++i) {
-                while (i >= first[patch + 1]) ++patch;
-                const Patch& p = patches[patch];
-                const std::uint64_t j = i - first[patch];
-                double u, v;
-                if (o.sampling == Sampling::r2) {
-                    u = unit(shift[patch][0] + (j + 1) * k_r2_a1);
-                    v = unit(shift[patch][1] + (j + 1) * k_r2_a2);
-                } else {
-                    Stream s{hash(o.seed, k_stream_random, patch, j)};
-                    u = s.uniform();
-                    v = s.uniform();
-                }
-                Vec3 position{}, normal{};
-                evaluate(p, u, v, position, normal);
-                if (sigma_local > 0) {
-                    Stream s{hash(o.seed, k_stream_noise, i)};
-                    position = add(position, mul(normal, sigma_local * truncated_gaussian(s)));
-                }
-                cloud.positions[i] = add(mul(position, o.shape.scale), o.shape.offset);
-                cloud.normals[i] = {float(normal[0]), float(normal[1]), float(normal[2])};
-                if (o.colors == ColorMode::normal)
-                    cloud.colors[i] = normal_color(normal);
-                else if (o.colors != ColorMode::none)
-                    cloud.colors[i] = part_color[p.part];
-            }
-            const std::uint64_t total_done = done.fetch_add(end - begin) + (end - begin);
-            if (report && progress) progress(total_done, o.count);
-        }
-    };
-    unsigned threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
-    threads = static_cast<unsigned>(std::min<std::uint64_t>(threads, chunks));
-    std::vector<std::thread> workers;
-    for (unsigned t = 1; t < threads; ++t) workers.emplace_back(work, false);
-    work(true);
-    for (std::thread& t : workers) t.join();
+    std::atomic<std::uint64_t> done{0};
+    // The calling thread (worker 0) is the only one that calls `progress`.
+    parallel_chunks(o.count, k_chunk, resolve_threads(o.threads),
+                    [&](std::size_t begin, std::size_t end, unsigned worker) {
+                        std::size_t patch =
+                            std::upper_bound(first.begin(), first.end(), begin) - first.begin() - 1;
+                        for (std::uint64_t i = begin; i < end; ++i) {
+                            while (i >= first[patch + 1]) ++patch;
+                            const Patch& p = patches[patch];
+                            const std::uint64_t j = i - first[patch];
+                            double u, v;
+                            if (o.sampling == Sampling::r2) {
+                                u = unit(shift[patch][0] + (j + 1) * k_r2_a1);
+                                v = unit(shift[patch][1] + (j + 1) * k_r2_a2);
+                            } else {
+                                Stream s{hash(o.seed, k_stream_random, patch, j)};
+                                u = s.uniform();
+                                v = s.uniform();
+                            }
+                            Vec3 position{}, normal{};
+                            evaluate(p, u, v, position, normal);
+                            if (sigma_local > 0) {
+                                Stream s{hash(o.seed, k_stream_noise, i)};
+                                position = add(position, mul(normal, sigma_local * truncated_gaussian(s)));
+                            }
+                            cloud.positions[i] = add(mul(position, o.shape.scale), o.shape.offset);
+                            cloud.normals[i] = {float(normal[0]), float(normal[1]), float(normal[2])};
+                            if (o.colors == ColorMode::normal)
+                                cloud.colors[i] = normal_color(normal);
+                            else if (o.colors != ColorMode::none)
+                                cloud.colors[i] = part_color[p.part];
+                        }
+                        const std::uint64_t total_done = done.fetch_add(end - begin) + (end - begin);
+                        if (worker == 0 && progress) progress(total_done, o.count);
+                    });
     if (progress) progress(o.count, o.count);
 
     // Parts in point order (a part's patches are consecutive).

@@ -2,8 +2,8 @@
 
 #include <string>
 
-#include "parallel.h"
 #include "prt/error.h"
+#include "prt/parallel.h"
 
 namespace prt::pre::texture {
 

@@ -381,8 +381,8 @@ private:
             PRT_CUDA_CHECK(
                 cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
                                      m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
-            kernel<<<grid, k_block, 0, m_stream>>>(scene, req.camera, w, h, y0, y1, m_rgb.data(),
-                                                   rgba_target(req), m_counters.data());
+            launch_kernel(launch_grid(grid, k_block, m_stream), kernel, scene, req.camera, w, h, y0, y1,
+                          m_rgb.data(), rgba_target(req), m_counters.data());
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
         const Megakernel& k = find_megakernel(m_surface_mask, sampling, m_options.cuda_min_blocks);
@@ -407,14 +407,9 @@ private:
         m_hits.reserve(capacity);
         m_accum.reserve(static_cast<std::size_t>(w) * h * 3);
         m_queue_count.reserve(2);
-        if (!m_options.cuda_linear_mapping) {
-            wave_primary<true><<<grid, k_block, 0, m_stream>>>(req.camera, w, h, y0, y1, m_queue[0].data(),
-                                                               m_accum.data(), m_counters.data());
-        } else {
-            wave_primary<false><<<grid, k_block, 0, m_stream>>>(req.camera, w, h, y0, y1, m_queue[0].data(),
-                                                                m_accum.data(), m_counters.data());
-        }
-        PRT_CUDA_CHECK_LAUNCH();
+        launch_kernel(launch_grid(grid, k_block, m_stream),
+                      m_options.cuda_linear_mapping ? wave_primary<false> : wave_primary<true>, req.camera, w,
+                      h, y0, y1, m_queue[0].data(), m_accum.data(), m_counters.data());
         const std::uint32_t limit = std::min(req.params.max_bounces, core::k_max_bounces);
         std::uint32_t upper = slots;  // upper bound of the current queue's length
         int cur = 0;
@@ -422,21 +417,17 @@ private:
             const std::uint32_t* count = depth == 0 ? nullptr : m_queue_count.data() + cur;
             std::uint32_t* next_count = m_queue_count.data() + (cur ^ 1);
             PRT_CUDA_CHECK(cudaMemsetAsync(next_count, 0, sizeof(std::uint32_t), m_stream));
-            const dim3 g((upper + k_block - 1) / k_block);
-            wave_trace<<<g, k_block, 0, m_stream>>>(scene, m_queue[cur].data(), count, slots, m_hits.data(),
-                                                    m_counters.data());
-            PRT_CUDA_CHECK_LAUNCH();
-            wave_shade<<<g, k_block, 0, m_stream>>>(scene, m_queue[cur].data(), count, slots, m_hits.data(),
-                                                    m_queue[cur ^ 1].data(), next_count, capacity,
-                                                    m_accum.data(), m_counters.data());
-            PRT_CUDA_CHECK_LAUNCH();
+            const LaunchShape queue = launch_1d(upper, k_block, m_stream);
+            launch_kernel(queue, wave_trace, scene, m_queue[cur].data(), count, slots, m_hits.data(),
+                          m_counters.data());
+            launch_kernel(queue, wave_shade, scene, m_queue[cur].data(), count, slots, m_hits.data(),
+                          m_queue[cur ^ 1].data(), next_count, capacity, m_accum.data(), m_counters.data());
             upper = depth < limit ? std::min<std::uint64_t>(capacity, 2ull * upper) : 0;
             cur ^= 1;
         }
         const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
-        wave_finish<<<static_cast<unsigned>((n + k_block - 1) / k_block), k_block, 0, m_stream>>>(
-            req.params, w, y0, y1, m_accum.data(), m_rgb.data(), rgba_target(req), m_counters.data());
-        PRT_CUDA_CHECK_LAUNCH();
+        launch_kernel(launch_1d(n, k_block, m_stream), wave_finish, req.params, w, y0, y1, m_accum.data(),
+                      m_rgb.data(), rgba_target(req), m_counters.data());
     }
 
     rt::BackendOptions m_options;

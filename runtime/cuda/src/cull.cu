@@ -122,9 +122,8 @@ core::CullCounters cull_leaves_cuda(const core::CullView& host, std::span<std::u
     view.directions = d_dirs.data();
     for (std::uint32_t first = 0; first < leaves; first += k_leaves_per_launch) {
         const std::uint32_t count = std::min(k_leaves_per_launch, leaves - first);
-        cull_kernel<<<(count + k_block - 1) / k_block, k_block>>>(view, first, count, d_keep.data(),
-                                                                  d_votes.data(), d_counters.data());
-        PRT_CUDA_CHECK_LAUNCH();
+        launch_kernel(launch_1d(count, k_block), cull_kernel, view, first, count, d_keep.data(),
+                      d_votes.data(), d_counters.data());
         PRT_CUDA_CHECK(cudaDeviceSynchronize());
         if (progress) progress(first + count, leaves);
     }
@@ -149,11 +148,8 @@ void trace_hole_rays_cuda(const core::OctreeView& full, const core::OctreeView& 
     DeviceOctree f(full), c(culled);
     DeviceBuffer<core::HoleRay> d_rays = upload(rays.data(), rays.size());
     DeviceBuffer<core::HoleSample> d_out(rays.size());
-    constexpr std::uint32_t block = 256;
-    const std::uint64_t blocks = (rays.size() + block - 1) / block;
-    hole_kernel<<<static_cast<unsigned>(blocks), block>>>(f.view, c.view, d_rays.data(), rays.size(), blend,
-                                                          max_steps, d_out.data());
-    PRT_CUDA_CHECK_LAUNCH();
+    launch_kernel(launch_1d(rays.size(), 256), hole_kernel, f.view, c.view, d_rays.data(), rays.size(), blend,
+                  max_steps, d_out.data());
     d_out.download(out.data(), out.size());
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
 }

@@ -4,13 +4,13 @@
 #include <cstring>
 #include <map>
 #include <string>
-#include <thread>
 #include <type_traits>
 #include <vector>
 
 #include "cuda_check.h"
 #include "device_buffer.h"
 #include "prt/cuda/device_scene.h"
+#include "prt/parallel.h"
 
 namespace prt::cuda {
 
@@ -52,20 +52,14 @@ public:
     /// Copies into pinned memory from several threads: reading a memory-mapped pool is bound by
     /// page faults, which parallelise.
     static void parallel_copy(unsigned char* dst, const unsigned char* src, std::size_t n) {
-        const unsigned threads = std::min(8u, std::max(1u, std::thread::hardware_concurrency()));
+        const unsigned threads = std::min(8u, resolve_threads(0));
         if (n < (4u << 20) || threads == 1) {
             std::memcpy(dst, src, n);
             return;
         }
-        const std::size_t slice = (n + threads - 1) / threads;
-        std::vector<std::thread> workers;
-        for (unsigned t = 1; t < threads; ++t) {
-            const std::size_t b = t * slice;
-            if (b >= n) break;
-            workers.emplace_back([=] { std::memcpy(dst + b, src + b, std::min(slice, n - b)); });
-        }
-        std::memcpy(dst, src, std::min(slice, n));
-        for (std::thread& w : workers) w.join();
+        parallel_chunks(n, (n + threads - 1) / threads, threads, [=](std::size_t b, std::size_t e, unsigned) {
+            std::memcpy(dst + b, src + b, e - b);
+        });
     }
     std::uint64_t bytes() const { return m_bytes; }
 

@@ -99,12 +99,9 @@ PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::Ph
         PRT_CUDA_CHECK(
             cudaMemcpy(tally_before.data(), d_tally.data(), d_tally.bytes(), cudaMemcpyDeviceToHost));
         PRT_CUDA_CHECK(cudaMemset(d_count.data(), 0, d_count.bytes()));
-        const std::uint64_t blocks = (count + k_block - 1) / k_block;
         PRT_CUDA_CHECK(cudaEventRecord(start));
-        shoot_kernel<<<static_cast<unsigned>(blocks), k_block>>>(scene.view(), params, first, count,
-                                                                 per_light, d_deposits.data(), capacity,
-                                                                 d_count.data(), d_tally.data());
-        PRT_CUDA_CHECK_LAUNCH();
+        launch_kernel(launch_1d(count, k_block), shoot_kernel, scene.view(), params, first, count, per_light,
+                      d_deposits.data(), capacity, d_count.data(), d_tally.data());
         PRT_CUDA_CHECK(cudaEventRecord(stop));
         PRT_CUDA_CHECK(cudaEventSynchronize(stop));
         float ms = 0.0f;

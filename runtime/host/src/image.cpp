@@ -8,6 +8,7 @@
 #include <fstream>
 #include <memory>
 
+#include "prt/atomic_file.h"
 #include "prt/error.h"
 
 namespace prt::rt {
@@ -24,45 +25,6 @@ std::string lower_extension(const std::filesystem::path& p) {
 bool is_float_format(const std::string& ext) {
     return ext == ".pfm" || ext == ".exr" || ext == ".hdr";
 }
-
-/// Opens a file for writing through a temporary name, renamed over `path` on success (no broken
-/// image is ever left under the final name).
-class AtomicFile {
-public:
-    explicit AtomicFile(const std::filesystem::path& path) : m_path(path), m_tmp(path.string() + ".tmp") {
-        m_file = std::fopen(m_tmp.c_str(), "wb");
-        if (!m_file) throw Error(path.string() + ": cannot write (" + std::strerror(errno) + ")");
-    }
-    ~AtomicFile() {
-        if (m_file) {
-            std::fclose(m_file);
-            std::remove(m_tmp.c_str());
-        }
-    }
-    void write(const void* data, std::size_t n) {
-        if (std::fwrite(data, 1, n, m_file) != n)
-            throw Error(m_path.string() + ": write failed (disk full?)");
-    }
-    void commit() {
-        const bool ok = std::fclose(m_file) == 0;
-        m_file = nullptr;
-        if (!ok) {
-            std::remove(m_tmp.c_str());
-            throw Error(m_path.string() + ": write failed");
-        }
-        std::error_code ec;
-        std::filesystem::rename(m_tmp, m_path, ec);
-        if (ec) {
-            std::remove(m_tmp.c_str());
-            throw Error(m_path.string() + ": cannot rename the temporary file (" + ec.message() + ")");
-        }
-    }
-
-private:
-    std::filesystem::path m_path;
-    std::string m_tmp;
-    std::FILE* m_file = nullptr;
-};
 
 void check_image(const std::filesystem::path& path, const Image& image) {
     const std::size_t n = static_cast<std::size_t>(image.width) * image.height;

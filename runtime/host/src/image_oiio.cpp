@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <string>
 
+#include "prt/atomic_file.h"
 #include "prt/error.h"
 #include "prt/runtime/image.h"
 
@@ -26,12 +27,12 @@ void write_oiio(const std::filesystem::path& path, const Image& image, float exp
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const bool is_float = ext == ".exr" || ext == ".hdr" || ext == ".pfm";
-    const std::string tmp = path.string() + ".tmp" + path.extension().string();
+    AtomicFile file(path, /*keep_extension=*/true);  // removes the temporary file unless committed
     auto out = OIIO::ImageOutput::create(path.string());
     if (!out) throw Error(path.string() + ": no writer for this format (" + OIIO::geterror() + ")");
     OIIO::ImageSpec spec(static_cast<int>(image.width), static_cast<int>(image.height), 3,
                          is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
-    if (!out->open(tmp, spec)) throw Error(path.string() + ": cannot write (" + out->geterror() + ")");
+    if (!out->open(file.temporary(), spec)) throw Error(path.string() + ": cannot write (" + out->geterror() + ")");
     bool ok;
     const std::size_t n = static_cast<std::size_t>(image.width) * image.height;
     if (is_float) {
@@ -50,16 +51,8 @@ void write_oiio(const std::filesystem::path& path, const Image& image, float exp
     }
     const std::string err = ok ? std::string() : out->geterror();
     out->close();
-    std::error_code ec;
-    if (!ok) {
-        std::filesystem::remove(tmp, ec);
-        throw Error(path.string() + ": write failed (" + err + ")");
-    }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        throw Error(path.string() + ": cannot rename the temporary file");
-    }
+    if (!ok) throw Error(path.string() + ": write failed (" + err + ")");
+    file.commit();
 }
 
 namespace {

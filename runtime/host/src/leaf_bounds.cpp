@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <thread>
+
+#include "prt/parallel.h"
 
 namespace prt::rt {
 
@@ -101,31 +102,17 @@ core::LeafBounds leaf(const core::OctreeView& v, std::uint32_t begin, std::uint3
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads) {
     std::vector<core::LeafBounds> out(v.filled_leaves);
     if (v.filled_leaves == 0 || v.leaf_info == nullptr || v.splats == nullptr) return out;
-    const auto work = [&](std::uint32_t first, std::uint32_t last) {
-        for (std::uint32_t l = first; l < last; ++l) {
-            std::uint32_t b = v.leaf_info[l], e = v.leaf_info[l + 1];
-            e = std::min(e, v.splat_count);  // as core::leaf_splats clamps
-            b = std::min(b, e);
-            out[l] = leaf(v, b, e);
-            out[l].begin = b;
-            out[l].end = e;
-        }
-    };
-    unsigned n = threads > 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
-    n = std::min<unsigned>(n, std::max<std::uint32_t>(1, v.filled_leaves / 4096));
-    if (n <= 1) {
-        work(0, v.filled_leaves);
-        return out;
-    }
-    std::vector<std::thread> pool;
-    const std::uint32_t chunk = (v.filled_leaves + n - 1) / n;
-    for (unsigned t = 1; t < n; ++t) {
-        const std::uint32_t a = std::min<std::uint32_t>(t * chunk, v.filled_leaves);
-        const std::uint32_t b = std::min<std::uint32_t>(a + chunk, v.filled_leaves);
-        if (a < b) pool.emplace_back(work, a, b);
-    }
-    work(0, std::min<std::uint32_t>(chunk, v.filled_leaves));
-    for (std::thread& t : pool) t.join();
+    parallel_chunks(v.filled_leaves, 4096, resolve_threads(threads),
+                    [&](std::size_t first, std::size_t last, unsigned) {
+                        for (std::size_t l = first; l < last; ++l) {
+                            std::uint32_t b = v.leaf_info[l], e = v.leaf_info[l + 1];
+                            e = std::min(e, v.splat_count);  // as core::leaf_splats clamps
+                            b = std::min(b, e);
+                            out[l] = leaf(v, b, e);
+                            out[l].begin = b;
+                            out[l].end = e;
+                        }
+                    });
     return out;
 }
 

@@ -16,15 +16,6 @@ namespace prt::rt {
 
 namespace {
 
-DVec3 add(const DVec3& a, const DVec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-DVec3 sub(const DVec3& a, const DVec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-DVec3 mul(const DVec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
 DVec3 mat_apply(const std::array<DVec3, 3>& m, const DVec3& v) {
     DVec3 r{};
     for (int i = 0; i < 3; ++i) r[i] = m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2];
@@ -35,9 +26,6 @@ core::Vec3 to_f(const DVec3& v) {
 }
 core::Vec3 to_f(const scene::Color& c) {
     return {c[0], c[1], c[2]};
-}
-double dlength(const DVec3& v) {
-    return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
 }
 
 /// World position of a model-local point: translate + R (scale (origin + local)).
@@ -383,7 +371,7 @@ UpDetection RenderScene::detect_up(const UpParams& params) const {
     // Into the world frame: the model's rotation (its scale is positive and uniform).
     const Placement pl = placement(m_scene.models.front().transform, info);
     const DVec3 w = mat_apply(pl.rotation, d.up);
-    const double len = dlength(w);
+    const double len = length(w);
     if (len > 0) d.up = mul(w, 1.0 / len);
     return d;
 }
@@ -403,7 +391,7 @@ std::optional<DVec3> RenderScene::front_hint() const {
             const Box& b = robust_bounds();
             d = sub(pl.world(sub(sp, pl.origin)), mul(add(b.lo, b.hi), 0.5));
         }
-        const double len = dlength(d);
+        const double len = length(d);
         if (len > 0 && std::isfinite(len)) return mul(d, 1.0 / len);
     }
     // No sensor: the mean normal (world frame) over a strided sample of at most 200k normals.
@@ -421,7 +409,7 @@ std::optional<DVec3> RenderScene::front_hint() const {
         const Placement pl = placement(m_scene.models[i].transform, pf.model_info());
         for (std::size_t k = 0; k < normals.size(); k += stride) {
             const DVec3 nl{normals[k].x, normals[k].y, normals[k].z};
-            const double len = dlength(nl);
+            const double len = length(nl);
             if (!(len > 0) || !std::isfinite(len)) continue;
             sum = add(sum, mat_apply(pl.rotation, mul(nl, 1.0 / len)));
             ++count;
@@ -429,7 +417,7 @@ std::optional<DVec3> RenderScene::front_hint() const {
     }
     if (count == 0) return std::nullopt;
     const DVec3 mean = mul(sum, 1.0 / static_cast<double>(count));
-    const double len = dlength(mean);
+    const double len = length(mean);
     if (len >= 0.25) return mul(mean, 1.0 / len);
     return std::nullopt;
 }
@@ -444,14 +432,14 @@ scene::Camera RenderScene::default_camera(std::uint32_t width, std::uint32_t hei
 void RenderScene::place_default_light() {
     const scene::Camera& cam = m_scene.camera;
     const Box& b = robust_bounds();
-    const double radius = std::max(0.5 * dlength(sub(b.hi, b.lo)), 1e-30);
+    const double radius = std::max(0.5 * length(sub(b.hi, b.lo)), 1e-30);
     DVec3 u = cam.up;
-    const double ul = dlength(u);
+    const double ul = length(u);
     u = ul > 0 ? mul(u, 1.0 / ul) : DVec3{0, 1, 0};
     DVec3 back = sub(cam.position, cam.look_at);
     DVec3 right{u[1] * back[2] - u[2] * back[1], u[2] * back[0] - u[0] * back[2],
                 u[0] * back[1] - u[1] * back[0]};
-    const double rl = dlength(right);
+    const double rl = length(right);
     scene::PointLight light;
     if (rl > 0 && std::isfinite(rl)) {
         right = mul(right, 1.0 / rl);
@@ -468,20 +456,20 @@ void RenderScene::place_default_light() {
 }
 
 DVec3 RenderScene::default_direction(const DVec3& up_in, const std::optional<DVec3>& front_hint) {
-    const double ul = dlength(up_in);
+    const double ul = length(up_in);
     const DVec3 up = ul > 0 && std::isfinite(ul) ? mul(up_in, 1.0 / ul) : DVec3{0, 1, 0};
     auto perpendicular = [&](const DVec3& v) {  // v without its component along up
         return sub(v, mul(up, v[0] * up[0] + v[1] * up[1] + v[2] * up[2]));
     };
     DVec3 front{0, 0, 0};
     if (front_hint) front = perpendicular(*front_hint);
-    if (dlength(front) < 0.1) {
+    if (length(front) < 0.1) {
         if (std::fabs(up[2]) < 0.9)
             front = perpendicular({0, 0, 1});
         else
             front = perpendicular({0, up[2] > 0 ? -1.0 : 1.0, 0});
     }
-    front = mul(front, 1.0 / dlength(front));
+    front = mul(front, 1.0 / length(front));
     return add(front, mul(up, 0.35));
 }
 
@@ -511,11 +499,11 @@ scene::Camera RenderScene::frame_points(const std::vector<DVec3>& points, std::u
         }
     if (points.empty()) lo = hi = {0, 0, 0};
     DVec3 c = mul(add(lo, hi), 0.5);
-    double radius = 0.5 * dlength(sub(hi, lo));
+    double radius = 0.5 * length(sub(hi, lo));
     if (!(radius > 0) || !std::isfinite(radius)) radius = 1.0;
-    double len = dlength(direction);
+    double len = length(direction);
     direction = len > 0 && std::isfinite(len) ? mul(direction, 1.0 / len) : DVec3{0, 0, 1};
-    len = dlength(up);
+    len = length(up);
     up = len > 0 && std::isfinite(len) ? mul(up, 1.0 / len) : DVec3{0, 1, 0};
     // The camera frame: w toward the camera, r its right, u its (projected) up.
     auto cross = [](const DVec3& a, const DVec3& b) {
@@ -524,11 +512,11 @@ scene::Camera RenderScene::frame_points(const std::vector<DVec3>& points, std::u
     auto dot = [](const DVec3& a, const DVec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; };
     const DVec3& w = direction;
     DVec3 r = cross(up, w);
-    if (dlength(r) < 1e-6) {  // up along the view: any up perpendicular to it
+    if (length(r) < 1e-6) {  // up along the view: any up perpendicular to it
         up = std::fabs(w[1]) < 0.9 ? DVec3{0, 1, 0} : DVec3{0, 0, 1};
         r = cross(up, w);
     }
-    r = mul(r, 1.0 / dlength(r));
+    r = mul(r, 1.0 / length(r));
     const DVec3 u = cross(w, r);
     const double half = 0.5 * cam.fov_y_degrees * 3.14159265358979323846 / 180.0;
     const double aspect = height > 0 ? static_cast<double>(width) / height : 1.0;

@@ -11,28 +11,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-DVec3 add(const DVec3& a, const DVec3& b) {
-    return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-DVec3 sub(const DVec3& a, const DVec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-DVec3 mul(const DVec3& a, double s) {
-    return {a[0] * s, a[1] * s, a[2] * s};
-}
-double dot(const DVec3& a, const DVec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-DVec3 cross(const DVec3& a, const DVec3& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double length(const DVec3& a) {
-    return std::sqrt(dot(a, a));
-}
-DVec3 normalized(const DVec3& a) {
-    const double l = length(a);
-    return l > 0 ? mul(a, 1.0 / l) : DVec3{0, 0, 0};
-}
 DVec3 to_d(const pool::Float3& f) {
     return {f.x, f.y, f.z};
 }
@@ -85,7 +63,7 @@ void eigen_symmetric(std::array<DVec3, 3> a, DVec3& values, std::array<DVec3, 3>
     std::sort(order.begin(), order.end(), [&](int i, int j) { return a[i][i] < a[j][j]; });
     for (int i = 0; i < 3; ++i) {
         values[i] = a[order[i]][order[i]];
-        vectors[i] = normalized({v[0][order[i]], v[1][order[i]], v[2][order[i]]});
+        vectors[i] = normalized(DVec3{v[0][order[i]], v[1][order[i]], v[2][order[i]]});
     }
 }
 
@@ -182,73 +160,264 @@ Box robust_bounds(const std::vector<DVec3>& points, double reach, std::vector<DV
     return b;
 }
 
+namespace {
+
+/// The points detect_up looks at: a fixed-seed sample (with replacement) of the finite positions,
+/// in the pool's local frame, with their unit normals when the pool has normals.
+struct UpSample {
+    std::vector<DVec3> pts, nrm;
+    bool have_normals = false;
+    double tol = 0;         ///< plane inlier distance
+    double cos_normal = 0;  ///< inliers' normals within this cosine of the plane's
+};
+
+/// The dominant plane of a sample: its inliers, unit normal n and a point p on it.
+struct Plane {
+    std::vector<std::size_t> inliers;
+    DVec3 n{0, 1, 0}, p{0, 0, 0};
+};
+
+/// The sample's points within tol of the plane (p0, nn) whose normals (when known) agree with it;
+/// appended to `list` when not null.
+std::size_t plane_inliers(const UpSample& s, const DVec3& p0, const DVec3& nn,
+                          std::vector<std::size_t>* list) {
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < s.pts.size(); ++i) {
+        if (std::fabs(dot(sub(s.pts[i], p0), nn)) > s.tol) continue;
+        if (s.have_normals && std::fabs(dot(s.nrm[i], nn)) < s.cos_normal) continue;
+        ++count;
+        if (list) list->push_back(i);
+    }
+    return count;
+}
+
+/// Rule (1)'s plane: RANSAC on the sample (Fischler and Bolles 1981), then a least-squares refit of
+/// its inliers, twice.
+Plane dominant_plane(const UpSample& s, double diag, std::uint32_t iterations, Rng& rng) {
+    Plane best;
+    const std::vector<DVec3>& pts = s.pts;
+    if (pts.size() < 3 || !(diag > 0)) return best;
+    std::size_t best_count = 0;
+    for (std::uint32_t it = 0; it < iterations; ++it) {
+        const DVec3& a = pts[rng.below(pts.size())];
+        const DVec3& b = pts[rng.below(pts.size())];
+        const DVec3& c = pts[rng.below(pts.size())];
+        const DVec3 cr = cross(sub(b, a), sub(c, a));
+        if (length(cr) <= 1e-9 * diag * diag) continue;
+        const DVec3 nn = normalized(cr);
+        const std::size_t count = plane_inliers(s, a, nn, nullptr);
+        if (count > best_count) {
+            best_count = count;
+            best.n = nn;
+            best.p = a;
+        }
+    }
+    if (best_count >= 3) {
+        for (int refit = 0; refit < 2; ++refit) {  // least squares on the inliers, recounted
+            std::vector<std::size_t> list;
+            plane_inliers(s, best.p, best.n, &list);
+            if (list.size() < 3) break;
+            DVec3 values{};
+            std::array<DVec3, 3> vectors{};
+            fit_plane(pts, list, best.p, values, vectors);
+            best.n = vectors[0];
+        }
+        plane_inliers(s, best.p, best.n, &best.inliers);
+    }
+    return best;
+}
+
+/// The sample's points off the plane (beyond 2 tol) over the plane's own footprint (cells of a
+/// 32 x 32 grid over its inliers that hold one), above (`over`) and below (`under`) it.
+void footprint_sides(const UpSample& s, const Plane& plane, const DVec3& nn, std::size_t& over,
+                     std::size_t& under) {
+    const std::vector<DVec3>& pts = s.pts;
+    const DVec3 a = normalized(cross(nn, std::fabs(nn[0]) < 0.9 ? DVec3{1, 0, 0} : DVec3{0, 1, 0}));
+    const DVec3 b = cross(nn, a);
+    constexpr int g = 32;
+    double lo_a = std::numeric_limits<double>::infinity(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;
+    for (std::size_t i : plane.inliers) {
+        const DVec3 d = sub(pts[i], plane.p);
+        lo_a = std::min(lo_a, dot(d, a));
+        hi_a = std::max(hi_a, dot(d, a));
+        lo_b = std::min(lo_b, dot(d, b));
+        hi_b = std::max(hi_b, dot(d, b));
+    }
+    const double sa = std::max(hi_a - lo_a, 1e-30) / g, sb = std::max(hi_b - lo_b, 1e-30) / g;
+    auto cell = [&](const DVec3& d) -> int {
+        const double u = (dot(d, a) - lo_a) / sa, v = (dot(d, b) - lo_b) / sb;
+        if (!(u >= 0 && u < g && v >= 0 && v < g)) return -1;
+        return static_cast<int>(u) * g + static_cast<int>(v);
+    };
+    std::vector<char> occupied(g * g, 0);
+    for (std::size_t i : plane.inliers) {
+        const int c = cell(sub(pts[i], plane.p));
+        if (c >= 0) occupied[static_cast<std::size_t>(c)] = 1;
+    }
+    over = under = 0;
+    for (const DVec3& p : pts) {
+        const DVec3 d = sub(p, plane.p);
+        const double h = dot(d, nn);
+        if (std::fabs(h) <= 2 * s.tol) continue;
+        const int c = cell(d);
+        if (c < 0 || !occupied[static_cast<std::size_t>(c)]) continue;
+        over += h > 0;
+        under += h < 0;
+    }
+}
+
+/// Turns nn around when more of the sample lies on its negative side (`negative` > `positive`),
+/// swapping the two counts so that `positive` counts the side nn now points to.
+void toward_larger(DVec3& nn, std::size_t& positive, std::size_t& negative) {
+    if (negative > positive) {
+        nn = mul(nn, -1.0);
+        std::swap(positive, negative);
+    }
+}
+
+/// Rule (1)'s sign: toward the sensors (a scanner sees the top of the floor or table it scans);
+/// else toward the side of what stands on the plane over its footprint (a scanner that sees the
+/// top of a floor or table sees only what stands on it: the floor seen beyond a table's edge,
+/// below its plane, lies outside the table's footprint); else toward the side most other points
+/// lie on (objects stand on a floor); else the convention. Sets out.up and out.description.
+void orient_plane(const UpInput& in, const UpSample& s, const Plane& plane, UpDetection& out) {
+    DVec3 nn = plane.n;
+    std::string why;
+    int votes = 0;
+    for (const pool::Sensor& sensor : in.sensors) {
+        const DVec3 sp{sensor.position[0], sensor.position[1], sensor.position[2]};
+        const double side =
+            sensor.kind == pool::k_sensor_direction ? dot(sp, nn) : dot(sub(sub(sp, in.origin), plane.p), nn);
+        votes += side > 0 ? 1 : side < 0 ? -1 : 0;
+    }
+    std::size_t over = 0, under = 0;
+    footprint_sides(s, plane, nn, over, under);
+    if (votes != 0) {
+        nn = mul(nn, votes > 0 ? 1.0 : -1.0);
+        why = "toward the sensors";
+    } else if (std::max(over, under) >= 2 * std::min(over, under) + 20) {
+        toward_larger(nn, over, under);
+        why = "toward the side of what stands on it (" + std::to_string(over) +
+              " of the sample above its footprint, " + std::to_string(under) + " below)";
+    } else {
+        std::size_t above = 0, below = 0;
+        for (const DVec3& p : s.pts) {
+            const double d = dot(sub(p, plane.p), nn);
+            above += d > 2 * s.tol;
+            below += d < -2 * s.tol;
+        }
+        if (above != below) {
+            toward_larger(nn, above, below);
+            why = "toward the side most other points lie on (" + std::to_string(above) +
+                  " of the sample above, " + std::to_string(below) + " below)";
+        } else {
+            nn = mul(nn, convention_sign(nn));
+            why = "no side holds more points: signed toward +y";
+        }
+    }
+    out.up = nn;
+    out.description =
+        "a dominant plane holds " + percent(out.plane_fraction) + " of the points: its normal, " + why;
+}
+
+/// Rule (2)'s plane: the largest set of the (first 64) sensor directions within `band` of a plane
+/// through three of them, and that plane's normal fitted to the set. True when the set holds at
+/// least half of them and spans the plane.
+bool sensor_plane(const std::vector<DVec3>& sensor_dirs, double band, std::vector<std::size_t>& best_set,
+                  DVec3& plane_n) {
+    const std::size_t ns = std::min<std::size_t>(sensor_dirs.size(), 64);
+    if (ns >= 3) {
+        for (std::size_t i = 0; i < ns; ++i)
+            for (std::size_t j = i + 1; j < ns; ++j)
+                for (std::size_t k = j + 1; k < ns; ++k) {
+                    const DVec3 cr =
+                        cross(sub(sensor_dirs[j], sensor_dirs[i]), sub(sensor_dirs[k], sensor_dirs[i]));
+                    if (length(cr) < 1e-6) continue;
+                    const DVec3 nn = normalized(cr);
+                    std::vector<std::size_t> set;
+                    for (std::size_t q = 0; q < ns; ++q)
+                        if (std::fabs(dot(sub(sensor_dirs[q], sensor_dirs[i]), nn)) <= band) set.push_back(q);
+                    if (set.size() > best_set.size()) best_set = std::move(set);
+                }
+    }
+    if (!(best_set.size() >= 3 && 2 * best_set.size() >= ns)) return false;
+    DVec3 c{}, values{};
+    std::array<DVec3, 3> vectors{};
+    fit_plane(sensor_dirs, best_set, c, values, vectors);
+    plane_n = vectors[0];
+    // Spread over the plane (not bunched in one direction: an in-plane variance of 0.01 at least,
+    // directions about 8 degrees from their mean or more), and flat (the variance along the normal
+    // within the band's).
+    return values[1] >= 0.01 && values[0] <= band * band;
+}
+
+/// Rule (2)'s sign: toward the side the sensors lean to; else toward the side more surface normals
+/// face (the face an object rests on is not scanned); else the convention. Sets out.up and
+/// out.description.
+void orient_sensor_plane(const std::vector<DVec3>& sensor_dirs, const std::vector<std::size_t>& best_set,
+                         const DVec3& plane_n, const std::vector<DVec3>& nrm, UpDetection& out) {
+    DVec3 nn = plane_n;
+    std::string why;
+    DVec3 mean{0, 0, 0};
+    for (std::size_t q : best_set) mean = add(mean, sensor_dirs[q]);
+    mean = mul(mean, 1.0 / static_cast<double>(best_set.size()));
+    const double lean = dot(mean, nn);
+    std::size_t up_faces = 0, down_faces = 0;
+    for (const DVec3& v : nrm) {
+        up_faces += dot(v, nn) > 0.5;
+        down_faces += dot(v, nn) < -0.5;
+    }
+    if (std::fabs(lean) >= std::sin(5 * k_pi / 180.0)) {
+        nn = mul(nn, lean > 0 ? 1.0 : -1.0);
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "%.1f",
+                      std::fabs(std::asin(std::clamp(lean, -1.0, 1.0))) * 180.0 / k_pi);
+        why = std::string("toward the side the sensors lean to (") + buf + " degrees above their plane)";
+    } else if (std::max(up_faces, down_faces) >=
+               1.2 * static_cast<double>(std::min(up_faces, down_faces)) + 10) {
+        toward_larger(nn, up_faces, down_faces);
+        why = "toward the side more surface normals face (" + std::to_string(up_faces) +
+              " of the sample against " + std::to_string(down_faces) +
+              ": the face an object rests on is not scanned)";
+    } else {
+        nn = mul(nn, convention_sign(nn));
+        why = "nothing tells the sides apart: signed toward +y";
+    }
+    out.up = nn;
+    out.description = "the directions of " + std::to_string(best_set.size()) + " of " +
+                      std::to_string(sensor_dirs.size()) +
+                      " sensors span a plane (a turntable): its normal, " + why;
+}
+
+}  // namespace
+
 UpDetection detect_up(const UpInput& in, const UpParams& params) {
     UpDetection out;
     const std::size_t n = in.positions.size();
-    const bool have_normals = in.normals.size() == n && n > 0;
-    // A fixed-seed sample (with replacement) of the points, in the pool's local frame.
+    UpSample sample;
+    sample.have_normals = in.normals.size() == n && n > 0;
     Rng rng{params.seed};
-    std::vector<DVec3> pts, nrm;
     const std::size_t m = std::min<std::size_t>(n, params.sample);
-    pts.reserve(m);
+    sample.pts.reserve(m);
     for (std::size_t k = 0; k < m; ++k) {
         const std::size_t i = m == n ? k : rng.below(n);
         const DVec3 p = to_d(in.positions[i]);
         if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
-        pts.push_back(p);
-        if (have_normals) nrm.push_back(normalized(to_d(in.normals[i])));
+        sample.pts.push_back(p);
+        if (sample.have_normals) sample.nrm.push_back(normalized(to_d(in.normals[i])));
     }
-    const Box box = robust_bounds(pts);
+    const Box box = robust_bounds(sample.pts);
     const DVec3 centre = mul(add(box.lo, box.hi), 0.5);
     const double diag = length(sub(box.hi, box.lo));
-    const double tol = params.tolerance * diag;
-    const double cos_normal = std::cos(params.normal_degrees * k_pi / 180.0);
+    sample.tol = params.tolerance * diag;
+    sample.cos_normal = std::cos(params.normal_degrees * k_pi / 180.0);
 
-    // ---- (1) a dominant plane: RANSAC on the sample, then a least-squares refit of its inliers ----
-    std::vector<std::size_t> best;
-    DVec3 best_n{0, 1, 0}, best_p{0, 0, 0};
-    if (pts.size() >= 3 && diag > 0) {
-        auto inliers = [&](const DVec3& p0, const DVec3& nn, std::vector<std::size_t>* list) {
-            std::size_t count = 0;
-            for (std::size_t i = 0; i < pts.size(); ++i) {
-                if (std::fabs(dot(sub(pts[i], p0), nn)) > tol) continue;
-                if (have_normals && std::fabs(dot(nrm[i], nn)) < cos_normal) continue;
-                ++count;
-                if (list) list->push_back(i);
-            }
-            return count;
-        };
-        std::size_t best_count = 0;
-        for (std::uint32_t it = 0; it < params.iterations; ++it) {
-            const DVec3& a = pts[rng.below(pts.size())];
-            const DVec3& b = pts[rng.below(pts.size())];
-            const DVec3& c = pts[rng.below(pts.size())];
-            const DVec3 cr = cross(sub(b, a), sub(c, a));
-            if (length(cr) <= 1e-9 * diag * diag) continue;
-            const DVec3 nn = normalized(cr);
-            const std::size_t count = inliers(a, nn, nullptr);
-            if (count > best_count) {
-                best_count = count;
-                best_n = nn;
-                best_p = a;
-            }
-        }
-        if (best_count >= 3) {
-            for (int refit = 0; refit < 2; ++refit) {  // least squares on the inliers, recounted
-                std::vector<std::size_t> list;
-                inliers(best_p, best_n, &list);
-                if (list.size() < 3) break;
-                DVec3 values{};
-                std::array<DVec3, 3> vectors{};
-                fit_plane(pts, list, best_p, values, vectors);
-                best_n = vectors[0];
-            }
-            inliers(best_p, best_n, &best);
-        }
-    }
-    out.plane_fraction =
-        pts.empty() ? 0.0 : static_cast<double>(best.size()) / static_cast<double>(pts.size());
-    out.plane_point = best_p;
+    // (1) a dominant plane.
+    const Plane plane = dominant_plane(sample, diag, params.iterations, rng);
+    out.plane_fraction = sample.pts.empty() ? 0.0
+                                            : static_cast<double>(plane.inliers.size()) /
+                                                  static_cast<double>(sample.pts.size());
+    out.plane_point = plane.p;
 
     // Sensors in the pool's local frame: unit directions from the points' centre toward each.
     std::vector<DVec3> sensor_dirs;
@@ -262,165 +431,20 @@ UpDetection detect_up(const UpInput& in, const UpParams& params) {
         }
     }
 
-    if (out.plane_fraction >= params.min_plane_fraction && best.size() >= 3) {
+    std::vector<std::size_t> best_set;
+    DVec3 plane_n{0, 0, 0};
+    if (out.plane_fraction >= params.min_plane_fraction && plane.inliers.size() >= 3) {
         out.rule = UpRule::plane;
-        DVec3 nn = best_n;
-        std::string why;
-        // Toward the sensors: a scanner sees the top of the floor or table it scans.
-        int votes = 0;
-        for (const pool::Sensor& s : in.sensors) {
-            const DVec3 sp{s.position[0], s.position[1], s.position[2]};
-            const double side =
-                s.kind == pool::k_sensor_direction ? dot(sp, nn) : dot(sub(sub(sp, in.origin), best_p), nn);
-            votes += side > 0 ? 1 : side < 0 ? -1 : 0;
-        }
-        // Over the plane's own footprint (cells of a 32 x 32 grid over its inliers that hold one),
-        // a scanner that sees the top of a floor or table sees only what stands on it: the floor
-        // seen beyond a table's edge, below its plane, lies outside the table's footprint.
-        std::size_t over = 0, under = 0;
-        {
-            const DVec3 a = normalized(cross(nn, std::fabs(nn[0]) < 0.9 ? DVec3{1, 0, 0} : DVec3{0, 1, 0}));
-            const DVec3 b = cross(nn, a);
-            constexpr int g = 32;
-            double lo_a = std::numeric_limits<double>::infinity(), hi_a = -lo_a, lo_b = lo_a, hi_b = -lo_a;
-            for (std::size_t i : best) {
-                const DVec3 d = sub(pts[i], best_p);
-                lo_a = std::min(lo_a, dot(d, a));
-                hi_a = std::max(hi_a, dot(d, a));
-                lo_b = std::min(lo_b, dot(d, b));
-                hi_b = std::max(hi_b, dot(d, b));
-            }
-            const double sa = std::max(hi_a - lo_a, 1e-30) / g, sb = std::max(hi_b - lo_b, 1e-30) / g;
-            auto cell = [&](const DVec3& d) -> int {
-                const double u = (dot(d, a) - lo_a) / sa, v = (dot(d, b) - lo_b) / sb;
-                if (!(u >= 0 && u < g && v >= 0 && v < g)) return -1;
-                return static_cast<int>(u) * g + static_cast<int>(v);
-            };
-            std::vector<char> occupied(g * g, 0);
-            for (std::size_t i : best) {
-                const int c = cell(sub(pts[i], best_p));
-                if (c >= 0) occupied[static_cast<std::size_t>(c)] = 1;
-            }
-            for (const DVec3& p : pts) {
-                const DVec3 d = sub(p, best_p);
-                const double h = dot(d, nn);
-                if (std::fabs(h) <= 2 * tol) continue;
-                const int c = cell(d);
-                if (c < 0 || !occupied[static_cast<std::size_t>(c)]) continue;
-                over += h > 0;
-                under += h < 0;
-            }
-        }
-        if (votes != 0) {
-            nn = mul(nn, votes > 0 ? 1.0 : -1.0);
-            why = "toward the sensors";
-        } else if (std::max(over, under) >= 2 * std::min(over, under) + 20) {
-            if (under > over) {
-                nn = mul(nn, -1.0);
-                std::swap(over, under);
-            }
-            why = "toward the side of what stands on it (" + std::to_string(over) +
-                  " of the sample above its footprint, " + std::to_string(under) + " below)";
-        } else {
-            // Toward the side most of the other points lie on: objects stand on a floor.
-            std::size_t above = 0, below = 0;
-            for (const DVec3& p : pts) {
-                const double d = dot(sub(p, best_p), nn);
-                above += d > 2 * tol;
-                below += d < -2 * tol;
-            }
-            if (above != below) {
-                if (below > above) {
-                    nn = mul(nn, -1.0);
-                    std::swap(above, below);
-                }
-                why = "toward the side most other points lie on (" + std::to_string(above) +
-                      " of the sample above, " + std::to_string(below) + " below)";
-            } else {
-                nn = mul(nn, convention_sign(nn));
-                why = "no side holds more points: signed toward +y";
-            }
-        }
-        out.up = nn;
-        out.description =
-            "a dominant plane holds " + percent(out.plane_fraction) + " of the points: its normal, " + why;
+        orient_plane(in, sample, plane, out);
+    } else if (sensor_plane(sensor_dirs, std::sin(params.sensor_degrees * k_pi / 180.0), best_set, plane_n)) {
+        out.rule = UpRule::sensor_plane;  // (2) sensor directions spanning a plane (a turntable)
+        orient_sensor_plane(sensor_dirs, best_set, plane_n, sample.nrm, out);
     } else {
-        // ---- (2) sensor directions spanning a plane (a turntable) ----
-        const std::size_t ns = std::min<std::size_t>(sensor_dirs.size(), 64);
-        const double band = std::sin(params.sensor_degrees * k_pi / 180.0);
-        std::vector<std::size_t> best_set;
-        DVec3 plane_n{0, 0, 0};
-        if (ns >= 3) {
-            for (std::size_t i = 0; i < ns; ++i)
-                for (std::size_t j = i + 1; j < ns; ++j)
-                    for (std::size_t k = j + 1; k < ns; ++k) {
-                        const DVec3 cr =
-                            cross(sub(sensor_dirs[j], sensor_dirs[i]), sub(sensor_dirs[k], sensor_dirs[i]));
-                        if (length(cr) < 1e-6) continue;
-                        const DVec3 nn = normalized(cr);
-                        std::vector<std::size_t> set;
-                        for (std::size_t q = 0; q < ns; ++q)
-                            if (std::fabs(dot(sub(sensor_dirs[q], sensor_dirs[i]), nn)) <= band)
-                                set.push_back(q);
-                        if (set.size() > best_set.size()) best_set = std::move(set);
-                    }
-        }
-        bool spans = false;
-        DVec3 values{};
-        if (best_set.size() >= 3 && 2 * best_set.size() >= ns) {
-            DVec3 c{};
-            std::array<DVec3, 3> vectors{};
-            fit_plane(sensor_dirs, best_set, c, values, vectors);
-            plane_n = vectors[0];
-            // Spread over the plane (not bunched in one direction: an in-plane variance of 0.01 at
-            // least, directions about 8 degrees from their mean or more), and flat (the variance
-            // along the normal within the band's).
-            spans = values[1] >= 0.01 && values[0] <= band * band;
-        }
-        if (spans) {
-            out.rule = UpRule::sensor_plane;
-            DVec3 nn = plane_n;
-            std::string why;
-            DVec3 mean{0, 0, 0};
-            for (std::size_t q : best_set) mean = add(mean, sensor_dirs[q]);
-            mean = mul(mean, 1.0 / static_cast<double>(best_set.size()));
-            const double lean = dot(mean, nn);
-            std::size_t up_faces = 0, down_faces = 0;
-            for (const DVec3& v : nrm) {
-                up_faces += dot(v, nn) > 0.5;
-                down_faces += dot(v, nn) < -0.5;
-            }
-            if (std::fabs(lean) >= std::sin(5 * k_pi / 180.0)) {
-                nn = mul(nn, lean > 0 ? 1.0 : -1.0);
-                char buf[64];
-                std::snprintf(buf, sizeof buf, "%.1f",
-                              std::fabs(std::asin(std::clamp(lean, -1.0, 1.0))) * 180.0 / k_pi);
-                why = std::string("toward the side the sensors lean to (") + buf +
-                      " degrees above their plane)";
-            } else if (std::max(up_faces, down_faces) >=
-                       1.2 * static_cast<double>(std::min(up_faces, down_faces)) + 10) {
-                if (down_faces > up_faces) {
-                    nn = mul(nn, -1.0);
-                    std::swap(up_faces, down_faces);
-                }
-                why = "toward the side more surface normals face (" + std::to_string(up_faces) +
-                      " of the sample against " + std::to_string(down_faces) +
-                      ": the face an object rests on is not scanned)";
-            } else {
-                nn = mul(nn, convention_sign(nn));
-                why = "nothing tells the sides apart: signed toward +y";
-            }
-            out.up = nn;
-            out.description = "the directions of " + std::to_string(best_set.size()) + " of " +
-                              std::to_string(sensor_dirs.size()) +
-                              " sensors span a plane (a turntable): its normal, " + why;
-        } else {
-            out.rule = UpRule::fallback;
-            out.up = {0, 1, 0};
-            out.description = "no dominant plane (the largest holds " + percent(out.plane_fraction) +
-                              " of the points, " + percent(params.min_plane_fraction) + " needed)" +
-                              (sensor_dirs.size() >= 3 ? " and the sensors span no plane" : "") + ": +y";
-        }
+        out.rule = UpRule::fallback;
+        out.up = {0, 1, 0};
+        out.description = "no dominant plane (the largest holds " + percent(out.plane_fraction) +
+                          " of the points, " + percent(params.min_plane_fraction) + " needed)" +
+                          (sensor_dirs.size() >= 3 ? " and the sensors span no plane" : "") + ": +y";
     }
     out.up = snap(normalized(out.up), params.snap_degrees, out.snapped);
     if (out.snapped && out.rule != UpRule::fallback)

@@ -1,6 +1,6 @@
 // The ISO octree's structure: leaf levels within the user's bounds (thesis 4.6, independent of the
 // point count), 2:1 balance of filled leaves by brute force over all pairs (thesis 4.5.1), passive
-// leaves (4.3.1), Morton helpers, determinism across thread counts.
+// leaves (4.3.1), determinism across thread counts (the Morton codes: tests/preprocess/common).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -14,23 +14,6 @@ namespace {
 
 using namespace prt;
 using namespace prt::iso_test;
-
-TEST(IsoBuild, MortonCodesInterleaveAndInvert) {
-    for (std::uint32_t x : {0u, 1u, 5u, 1023u, (1u << 20), (1u << 21) - 1})
-        for (std::uint32_t y : {0u, 2u, 77u, (1u << 20) - 3})
-            for (std::uint32_t z : {0u, 3u, 999u, (1u << 21) - 1}) {
-                const std::uint64_t m = iso::detail::morton3(x, y, z);
-                std::uint64_t expected = 0;
-                for (int b = 0; b < 21; ++b)
-                    expected |= (std::uint64_t((x >> b) & 1u) << (3 * b)) |
-                                (std::uint64_t((y >> b) & 1u) << (3 * b + 1)) |
-                                (std::uint64_t((z >> b) & 1u) << (3 * b + 2));
-                EXPECT_EQ(m, expected);
-                EXPECT_EQ(iso::detail::compact21(m), x);
-                EXPECT_EQ(iso::detail::compact21(m >> 1), y);
-                EXPECT_EQ(iso::detail::compact21(m >> 2), z);
-            }
-}
 
 TEST(IsoBuild, FastExpMatchesStdExp) {
     double worst = 0;

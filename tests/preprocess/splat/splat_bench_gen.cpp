@@ -7,22 +7,9 @@
 #include <random>
 #include <string>
 
+#include "morton.h"
 #include "point_cloud.h"
 #include "prt/tool.h"
-
-namespace {
-
-std::uint64_t spread3(std::uint64_t v) {  // 21 bits -> every third bit
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-}
-
-}  // namespace
 
 int main(int argc, char** argv) {
     std::string output;
@@ -53,10 +40,10 @@ int main(int argc, char** argv) {
             if (sorted) {
                 std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(count);
                 for (std::uint32_t i = 0; i < count; ++i) {
-                    std::uint64_t k = 0;
+                    std::uint32_t q[3];
                     for (int a = 0; a < 3; ++a)
-                        k |= spread3(std::uint64_t((cloud.positions[i][a] + 1.0) * 0.5 * 2097151.0)) << a;
-                    keys[i] = {k, i};
+                        q[a] = std::uint32_t((cloud.positions[i][a] + 1.0) * 0.5 * 2097151.0);
+                    keys[i] = {prt::pre::morton3(q[0], q[1], q[2]), i};
                 }
                 std::sort(keys.begin(), keys.end());
                 prt::pre::PointCloud s;

@@ -13,10 +13,11 @@
 
 #include "prt/error.h"
 #include "prt/formats/scene_layout.h"
+#include "prt/vec3.h"
 
 namespace prt::scene {
 
-using Vec3 = std::array<double, 3>;
+using Vec3 = Vec3d;
 using Color = std::array<float, 3>;  ///< linear RGB
 
 struct Camera {

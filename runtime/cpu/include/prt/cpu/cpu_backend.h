@@ -1,5 +1,5 @@
-// PointRT CPU backend: runs the core's per-pixel function (prt/core/render.h) over all cores with a
-// persistent std::thread pool that takes 16x16 tiles from an atomic counter. It is the reference
+// PointRT CPU backend: runs the core's per-pixel function (prt/core/render.h) over all cores through
+// prt::parallel_chunks (prt/parallel.h), 16x16 tiles taken from an atomic counter. It is the reference
 // the CUDA backend is compared against, and the path CI tests.
 #pragma once
 

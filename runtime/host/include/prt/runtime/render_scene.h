@@ -21,10 +21,11 @@
 #include "prt/formats/scene.h"
 #include "prt/runtime/image.h"
 #include "prt/runtime/scan_frame.h"
+#include "prt/vec3.h"
 
 namespace prt::rt {
 
-using DVec3 = std::array<double, 3>;
+using DVec3 = Vec3d;
 
 /// One model as loaded: its pool and the views into it.
 struct LoadedModel {

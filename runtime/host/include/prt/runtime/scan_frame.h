@@ -15,10 +15,11 @@
 #include <vector>
 
 #include "prt/formats/pool_layout.h"
+#include "prt/vec3.h"
 
 namespace prt::rt {
 
-using DVec3 = std::array<double, 3>;
+using DVec3 = Vec3d;
 
 /// An axis-aligned box; `valid` is false for an empty point set.
 struct Box {

@@ -1,6 +1,8 @@
-// PointRT preprocess: a minimal fork-join helper over std::thread shared by the tools (prt-radii,
-// prt-octree, prt-cull, prt-mls, prt-iso). Work is handed out in chunks through an atomic counter
-// (dynamic scheduling); the first exception thrown by any worker is rethrown on the calling thread.
+// PointRT: the one fork-join helper over std::thread, for every host-side parallel loop (the
+// preprocessing tools, the benches, runtime/host, the CPU backend's helpers, the CUDA backend's
+// host copies). Work is handed out in chunks through an atomic counter (dynamic scheduling); the
+// first exception thrown by any worker is rethrown on the calling thread. Host only (no device
+// code includes it); it sits in formats/ so that every layer above can use it.
 #pragma once
 
 #include <algorithm>
@@ -11,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-namespace prt::pre {
+namespace prt {
 
 /// The number of worker threads to use: `requested`, or every hardware thread when 0.
 inline unsigned resolve_threads(unsigned requested) {
@@ -79,4 +81,4 @@ std::size_t parallel_select(std::size_t count, unsigned threads, Keep&& keep, Ou
     return offset[chunks];
 }
 
-}  // namespace prt::pre
+}  // namespace prt

@@ -1,0 +1,52 @@
+// PointRT: the one atomic file write of the project (pools, images, JSON results). The bytes go to a
+// temporary file PATH.tmp.HOST.PID in the target folder, which is fsynced and renamed over PATH, so a
+// reader never sees a partial file under the final name and a failed or killed run leaves PATH as it
+// was (formats/POOL.md, "Writing"). After the rename, the temporary files of this host's writers of
+// PATH that were killed are removed.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace prt {
+
+/// A file written through a temporary name and renamed over its path on commit(). Move-free; the
+/// destructor removes the temporary file unless commit() succeeded. Errors throw prt::Error with
+/// one line "PATH: what: reason".
+class AtomicFile {
+public:
+    /// `keep_extension`: the temporary name ends with PATH's extension too (for libraries that
+    /// choose a format by the name they write to).
+    explicit AtomicFile(std::filesystem::path path, bool keep_extension = false);
+    ~AtomicFile();
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+
+    const std::filesystem::path& path() const { return m_path; }
+    /// The temporary file's name (for writers that open it themselves).
+    const std::string& temporary() const { return m_tmp; }
+    /// Appends n bytes (the temporary file is created on the first call).
+    void write(const void* data, std::size_t n);
+    /// fsync, rename over path(), then removal of this host's dead writers' temporary files.
+    void commit();
+
+private:
+    void open();
+    [[noreturn]] void fail(const char* what, int err);
+
+    std::filesystem::path m_path;
+    std::string m_host;
+    std::string m_tmp;
+    int m_fd = -1;
+    bool m_committed = false;
+};
+
+/// Writes `bytes` to `path` atomically (AtomicFile).
+void write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes);
+/// Writes `text` to `path` atomically (AtomicFile).
+void write_file_atomic(const std::filesystem::path& path, std::string_view text);
+
+}  // namespace prt

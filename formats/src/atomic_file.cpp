@@ -1,0 +1,131 @@
+// PointRT: atomic file writes (prt/atomic_file.h): temporary file PATH.tmp.HOST.PID + fsync + rename,
+// then removal of the temporary files of this host's dead writers.
+#include "prt/atomic_file.h"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <climits>
+#include <cstring>
+#include <string_view>
+
+#include "prt/error.h"
+
+namespace prt {
+
+namespace {
+
+/// This machine's name for temporary file names: gethostname(), with any character other than
+/// letters, digits, '-' and '_' replaced by '_' ('.' included, so the PID after the last '.' of a
+/// temporary name is unambiguous); "localhost" when the name is not available.
+std::string host_tag() {
+    char name[HOST_NAME_MAX + 1] = {};
+    if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "localhost";
+    std::string tag(name);
+    for (char& c : tag) {
+        const bool keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                          c == '-' || c == '_';
+        if (!keep) c = '_';
+    }
+    return tag;
+}
+
+/// After a successful rename over PATH: removes the temporary files PATH.tmp.HOST.PID that
+/// writers on this host left when they were killed (SIGKILL leaves no chance to clean up).
+/// Only names with this host's HOST and a PID that no longer exists (kill(PID, 0) fails with
+/// ESRCH) are removed; a live writer's file (its PID exists, EPERM included) and other hosts'
+/// files on a shared folder are never touched. Best effort: the file is already in place, so
+/// a folder that cannot be listed or a file that cannot be removed is not an error.
+void remove_stale_temporaries(const std::filesystem::path& path, const std::string& host) {
+    const std::string prefix = path.filename().string() + ".tmp." + host + ".";
+    std::filesystem::path folder = path.parent_path();
+    if (folder.empty()) folder = ".";
+    std::error_code ec;
+    std::filesystem::directory_iterator it(folder, ec);
+    for (; !ec && it != std::filesystem::directory_iterator(); it.increment(ec)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+        const std::string_view digits = std::string_view(name).substr(prefix.size());
+        long long pid = 0;
+        const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), pid);
+        if (digits[0] == '0' || r.ec != std::errc() || r.ptr != digits.data() + digits.size() || pid <= 0 ||
+            pid > INT_MAX)
+            continue;  // not a name this writer makes
+        if (static_cast<pid_t>(pid) == ::getpid()) continue;
+        if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // alive (or unknown)
+        std::error_code ignored;
+        std::filesystem::remove(it->path(), ignored);
+    }
+}
+
+}  // namespace
+
+AtomicFile::AtomicFile(std::filesystem::path path, bool keep_extension)
+    : m_path(std::move(path)), m_host(host_tag()) {
+    m_tmp = m_path.string() + ".tmp." + m_host + "." + std::to_string(::getpid());
+    if (keep_extension) m_tmp += m_path.extension().string();
+}
+
+AtomicFile::~AtomicFile() {
+    if (m_fd >= 0) ::close(m_fd);
+    if (!m_committed) ::unlink(m_tmp.c_str());
+}
+
+void AtomicFile::open() {
+    m_fd = ::open(m_tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (m_fd < 0) throw Error(m_path.string() + ": cannot create: " + std::strerror(errno));
+}
+
+void AtomicFile::fail(const char* what, int err) {
+    if (m_fd >= 0) ::close(m_fd);
+    m_fd = -1;
+    ::unlink(m_tmp.c_str());
+    throw Error(m_path.string() + ": " + what + ": " + std::strerror(err));
+}
+
+void AtomicFile::write(const void* data, std::size_t n) {
+    if (m_fd < 0) open();
+    const auto* p = static_cast<const unsigned char*>(data);
+    std::size_t done = 0;
+    while (done < n) {
+        const ssize_t w = ::write(m_fd, p + done, std::min<std::size_t>(n - done, 1u << 30));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            fail("write failed", errno);
+        }
+        done += static_cast<std::size_t>(w);
+    }
+}
+
+void AtomicFile::commit() {
+    if (m_fd < 0) {
+        // Written by someone else through temporary(), or nothing written: an empty file.
+        m_fd = ::open(m_tmp.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
+        if (m_fd < 0) throw Error(m_path.string() + ": cannot create: " + std::strerror(errno));
+    }
+    if (::fsync(m_fd) != 0) fail("fsync failed", errno);
+    const int fd = m_fd;
+    m_fd = -1;
+    if (::close(fd) != 0) fail("close failed", errno);
+    if (::rename(m_tmp.c_str(), m_path.c_str()) != 0) fail("rename failed", errno);
+    m_committed = true;
+    remove_stale_temporaries(m_path, m_host);
+}
+
+void write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes) {
+    AtomicFile f(path);
+    f.write(bytes.data(), bytes.size());
+    f.commit();
+}
+
+void write_file_atomic(const std::filesystem::path& path, std::string_view text) {
+    AtomicFile f(path);
+    f.write(text.data(), text.size());
+    f.commit();
+}
+
+}  // namespace prt

@@ -1,0 +1,194 @@
+// The shared algorithm layer (issue 16): prt/parallel.h's fork-join, the Morton codes (morton.h),
+// the radix sort (radix_sort.h) and the exact kd-tree (kd_tree.h), each against a brute-force or
+// standard-library reference.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "kd_tree.h"
+#include "morton.h"
+#include "prt/parallel.h"
+#include "radix_sort.h"
+
+namespace {
+
+using namespace prt;
+
+TEST(Parallel, EveryIndexOnceWhateverTheThreadCount) {
+    for (unsigned threads : {1u, 2u, 7u})
+        for (std::size_t count : {std::size_t{0}, std::size_t{1}, std::size_t{999}, std::size_t{4096}}) {
+            std::vector<std::atomic<int>> seen(count);
+            std::atomic<unsigned> max_worker{0};
+            parallel_chunks(count, 100, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+                EXPECT_LE(e - b, 100u);
+                for (std::size_t i = b; i < e; ++i) ++seen[i];
+                unsigned m = max_worker.load();
+                while (worker > m && !max_worker.compare_exchange_weak(m, worker)) {
+                }
+            });
+            for (std::size_t i = 0; i < count; ++i) EXPECT_EQ(seen[i].load(), 1) << i;
+            EXPECT_LT(max_worker.load(), threads);
+        }
+}
+
+TEST(Parallel, RethrowsAWorkersException) {
+    EXPECT_THROW(parallel_chunks(1000, 10, 3,
+                                 [](std::size_t b, std::size_t, unsigned) {
+                                     if (b == 500) throw std::runtime_error("chunk 50");
+                                 }),
+                 std::runtime_error);
+}
+
+TEST(Parallel, SelectKeepsTheInputOrder) {
+    const std::size_t n = 100000;
+    std::vector<std::size_t> out(n, ~std::size_t{0});
+    const std::size_t kept = parallel_select(
+        n, 3, [](std::size_t i) { return i % 7 == 3; }, [&](std::size_t r, std::size_t i) { out[r] = i; });
+    ASSERT_EQ(kept, (n - 3 + 6) / 7);
+    for (std::size_t r = 0; r < kept; ++r) EXPECT_EQ(out[r], 7 * r + 3);
+}
+
+TEST(Morton, InterleavesXLowestAndInverts) {
+    for (std::uint32_t x : {0u, 1u, 5u, 1023u, (1u << 20), (1u << 21) - 1})
+        for (std::uint32_t y : {0u, 2u, 77u, (1u << 20) - 3})
+            for (std::uint32_t z : {0u, 3u, 999u, (1u << 21) - 1}) {
+                const std::uint64_t m = pre::morton3(x, y, z);
+                std::uint64_t expected = 0;
+                for (int b = 0; b < 21; ++b)
+                    expected |= (std::uint64_t((x >> b) & 1u) << (3 * b)) |
+                                (std::uint64_t((y >> b) & 1u) << (3 * b + 1)) |
+                                (std::uint64_t((z >> b) & 1u) << (3 * b + 2));
+                EXPECT_EQ(m, expected);
+                std::uint32_t a, b, c;
+                pre::demorton3(m, a, b, c);
+                EXPECT_EQ(a, x);
+                EXPECT_EQ(b, y);
+                EXPECT_EQ(c, z);
+            }
+    EXPECT_EQ(pre::morton3(1, 0, 0), 1u);  // the child index x | y << 1 | z << 2
+    EXPECT_EQ(pre::morton3(0, 1, 0), 2u);
+    EXPECT_EQ(pre::morton3(0, 0, 1), 4u);
+}
+
+TEST(RadixSort, StableLikeStdStableSort) {
+    std::mt19937_64 rng(7);
+    for (std::size_t n : {std::size_t{0}, std::size_t{1}, std::size_t{1000}, std::size_t{300000}})
+        for (std::uint32_t bits : {12u, 40u, 64u}) {
+            std::vector<std::uint64_t> keys(n);
+            // few distinct values in the low bits (ties), constant middle digits (skipped passes)
+            for (auto& k : keys) k = (rng() & 0xfffu) | (bits > 40 ? (rng() % 3) << 50 : 0);
+            std::vector<std::uint32_t> order(n);
+            std::iota(order.begin(), order.end(), 0u);
+            std::vector<std::uint32_t> expected = order;
+            std::stable_sort(expected.begin(), expected.end(),
+                             [&](std::uint32_t a, std::uint32_t b) { return keys[a] < keys[b]; });
+            std::vector<std::uint64_t> sorted = keys;
+            pre::radix_sort(sorted, &order, bits, 3);
+            EXPECT_EQ(order, expected) << n << " keys, " << bits << " bits";
+            for (std::size_t i = 0; i < n; ++i) EXPECT_EQ(sorted[i], keys[expected[i]]);
+        }
+}
+
+TEST(RadixSort, RecordsByKey) {
+    std::mt19937_64 rng(11);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> v(200000);
+    for (std::uint32_t i = 0; i < v.size(); ++i) v[i] = {rng() >> 1, i};
+    auto expected = v;
+    std::sort(expected.begin(), expected.end());  // distinct indices: the stable order
+    pre::radix_sort_by(v, 63, 2, [](const auto& e) { return e.first; });
+    EXPECT_EQ(v, expected);
+}
+
+/// Brute force: the k nearest points to q other than `skip`, by (squared distance, index).
+template <class T>
+std::vector<std::pair<T, std::uint32_t>> brute(const std::vector<std::array<T, 3>>& p, const T q[3],
+                                               std::uint32_t skip, std::size_t k) {
+    std::vector<std::pair<T, std::uint32_t>> d;
+    for (std::uint32_t j = 0; j < p.size(); ++j) {
+        if (j == skip) continue;
+        const T dx = p[j][0] - q[0], dy = p[j][1] - q[1], dz = p[j][2] - q[2];
+        d.push_back({dx * dx + dy * dy + dz * dz, j});
+    }
+    std::sort(d.begin(), d.end());
+    d.resize(std::min(k, d.size()));
+    return d;
+}
+
+template <class T>
+void check_against_brute_force(unsigned threads) {
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(-1, 1);
+    std::vector<std::array<T, 3>> p(70000);  // above the size where the top levels build in parallel
+    for (auto& q : p) q = {T(u(rng)), T(u(rng)), T(0.1 * u(rng))};
+    for (std::size_t i = 0; i < 200; ++i) p[1000 + i] = p[i];                   // duplicates: ties at 0
+    for (std::size_t i = 0; i < 50; ++i) p[2000 + i] = {T(0.5), T(0.5), T(0)};  // a pile of 50
+    const pre::KdTree<T> tree(
+        p.size(), [&](std::size_t i, T c[3]) { std::copy_n(p[i].data(), 3, c); }, threads);
+    const std::uint32_t k = 9;
+    std::vector<std::uint32_t> index(k);
+    std::vector<T> d2(k);
+    for (std::uint32_t i = 0; i < p.size(); i += 97) {
+        const auto expected = brute(p, p[i].data(), i, k);
+        ASSERT_EQ(tree.nearest(i, k, nullptr, index.data(), d2.data()), k);
+        for (std::uint32_t j = 0; j < k; ++j) {
+            EXPECT_EQ(index[j], expected[j].second) << "point " << i;
+            EXPECT_EQ(d2[j], expected[j].first) << "point " << i;
+        }
+    }
+    for (std::uint32_t i : {2000u, 2049u, 1005u}) {  // inside the pile and on a duplicate
+        const auto expected = brute(p, p[i].data(), i, k);
+        tree.nearest(i, k, nullptr, index.data(), d2.data());
+        for (std::uint32_t j = 0; j < k; ++j) EXPECT_EQ(index[j], expected[j].second) << "point " << i;
+    }
+    // for_each: every point once, the same k-th distance as nearest()
+    std::vector<T> kth(p.size(), T(-1));
+    tree.for_each(k, threads, [&](std::uint32_t i, const std::uint32_t*, const T* d, std::uint32_t found) {
+        ASSERT_EQ(found, k);
+        kth[i] = d[k - 1];
+    });
+    for (std::uint32_t i = 0; i < p.size(); i += 31)
+        EXPECT_EQ(kth[i], brute(p, p[i].data(), i, k)[k - 1].first);
+    // arbitrary queries, no skip
+    for (int t = 0; t < 100; ++t) {
+        const T q[3] = {T(1.5 * u(rng)), T(1.5 * u(rng)), T(u(rng))};
+        const auto expected = brute(p, q, ~0u, k);
+        ASSERT_EQ(tree.search(q, ~0u, k, nullptr, index.data(), d2.data()), k);
+        for (std::uint32_t j = 0; j < k; ++j) EXPECT_EQ(index[j], expected[j].second);
+    }
+}
+
+TEST(KdTree, FloatMatchesBruteForce) {
+    check_against_brute_force<float>(1);
+    check_against_brute_force<float>(4);
+}
+
+TEST(KdTree, DoubleMatchesBruteForce) {
+    check_against_brute_force<double>(2);
+}
+
+TEST(KdTree, FewPointsAndExclusion) {
+    const std::vector<std::array<double, 3>> p = {{0, 0, 0}, {1, 0, 0}, {3, 0, 0}, {0, 2, 0}};
+    const pre::KdTree<double> tree(p.size(),
+                                   [&](std::size_t i, double c[3]) { std::copy_n(p[i].data(), 3, c); });
+    std::uint32_t index[8];
+    double d2[8];
+    EXPECT_EQ(tree.nearest(0, 8, nullptr, index, d2), 3u);  // fewer points than k
+    EXPECT_EQ(index[0], 1u);
+    EXPECT_EQ(index[1], 3u);
+    EXPECT_EQ(index[2], 2u);
+    const std::uint8_t excluded[4] = {0, 1, 0, 0};
+    EXPECT_EQ(tree.nearest(0, 2, excluded, index, d2), 2u);
+    EXPECT_EQ(index[0], 3u);
+    EXPECT_EQ(d2[0], 4.0);
+    EXPECT_EQ(tree.point(2)[0], 3.0);
+    const pre::KdTree<float> empty(0, [](std::size_t, float*) {});
+    EXPECT_EQ(empty.size(), 0u);
+}
+
+}  // namespace
