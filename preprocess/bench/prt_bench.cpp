@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -19,6 +18,7 @@
 
 #include "bench_scene.h"
 #include "player_options.h"
+#include "prt/atomic_file.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
@@ -51,6 +51,113 @@ nlohmann::json derived_kind(const rt::FrameStats& with, const rt::FrameStats& ba
     return {{"leaves_per_ray", per(with.leaves, base.leaves)},
             {"culled_leaves_per_ray", per(with.culled, base.culled)},
             {"splat_tests_per_ray", per(with.splat_tests, base.splat_tests)}};
+}
+
+/// Times one scenario (`o.frames` frames after `o.warmup`): prints its row, appends its JSON to
+/// `report` and returns the last frame's counters.
+rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common, rt::Backend& backend,
+                             const rt::RenderScene& rs, const player::BenchScenario& sc,
+                             const std::vector<core::Material>& original, nlohmann::json& report) {
+    // Materials of the scenario (the mirror world of reflect4), uploaded before timing.
+    const std::vector<core::Material> mats = player::scenario_materials(sc, original);
+    core::SceneView view = rs.view();
+    view.materials = mats.data();
+    backend.set_scene(view);
+    rt::FrameRequest req;
+    req.camera = rs.camera();
+    req.params = sc.params;
+    req.width = o.scene.width;
+    req.height = o.scene.height;
+    req.download = false;
+    rt::Image image;
+    image.resize(o.scene.width, o.scene.height);
+    for (std::uint32_t i = 0; i < o.warmup; ++i) backend.render(req, image);
+    std::vector<double> ms, wall_ms;
+    rt::FrameStats last;
+    tool::Progress progress("prt-bench: " + sc.name, o.frames, common.quiet);
+    for (std::uint32_t i = 0; i < o.frames; ++i) {
+        last = backend.render(req, image);
+        // CUDA: kernel time from events; CPU and hybrid: the frame's wall time.
+        ms.push_back(backend.name() == "cuda" ? last.device_ms : last.seconds * 1e3);
+        wall_ms.push_back(last.seconds * 1e3);  // every backend: to compare cuda with hybrid
+        progress.update(i + 1);
+    }
+    progress.finish();
+    const double med = player::median(ms);
+    const double grays = med > 0 ? last.rays() / (med * 1e-3) * 1e-9 : 0;
+    const double rays = last.rays() ? static_cast<double>(last.rays()) : 1.0;
+    std::printf("%-10s %10.3f %8.1f %12llu %12llu %12llu %12llu %10.3f %8.2f %8.2f %8.2f\n", sc.name.c_str(),
+                med, 1e3 / med, static_cast<unsigned long long>(last.rays()),
+                static_cast<unsigned long long>(last.primary), static_cast<unsigned long long>(last.shadow),
+                static_cast<unsigned long long>(last.secondary), grays, sc.target_grays, last.leaves / rays,
+                last.splat_tests / rays);
+    report.push_back({{"name", sc.name},
+                      {"what", sc.what},
+                      {"median_ms", med},
+                      {"min_ms", *std::min_element(ms.begin(), ms.end())},
+                      {"max_ms", *std::max_element(ms.begin(), ms.end())},
+                      {"fps", 1e3 / med},
+                      {"rays_per_frame", last.rays()},
+                      {"primary", last.primary},
+                      {"shadow", last.shadow},
+                      {"secondary", last.secondary},
+                      {"grays_per_s", grays},
+                      {"primary_grays_per_s", last.primary / (med * 1e-3) * 1e-9},
+                      {"shadow_grays_per_s", last.shadow / (med * 1e-3) * 1e-9},
+                      {"secondary_grays_per_s", last.secondary / (med * 1e-3) * 1e-9},
+                      {"leaves_per_ray", last.rays() ? double(last.leaves) / last.rays() : 0.0},
+                      {"culled_leaves_per_ray", last.rays() ? double(last.culled) / last.rays() : 0.0},
+                      {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},
+                      {"truncated", last.truncated},
+                      {"sanitized", last.sanitized},
+                      {"timer", backend.name() == "cuda" ? "cuda events" : "host clock"},
+                      {"wall_median_ms", player::median(wall_ms)},
+                      {"gpu_share", last.gpu_share},
+                      {"target_grays_per_s", sc.target_grays},
+                      {"meets_target", grays >= sc.target_grays}});
+    return last;
+}
+
+/// Work per ray by kind (the shadow and reflect4 scenarios minus the primary one).
+void report_ray_kinds(const std::vector<std::pair<std::string, rt::FrameStats>>& done,
+                      nlohmann::json& report) {
+    const auto find = [&](const std::string& name) -> const rt::FrameStats* {
+        for (const auto& d : done)
+            if (d.first == name) return &d.second;
+        return nullptr;
+    };
+    if (const rt::FrameStats* p = find("primary")) {
+        nlohmann::json kinds;
+        kinds["primary"] = derived_kind(*p, rt::FrameStats{});
+        if (const rt::FrameStats* s = find("shadow")) kinds["shadow"] = derived_kind(*s, *p);
+        if (const rt::FrameStats* r = find("reflect4")) kinds["secondary"] = derived_kind(*r, *p);
+        report["per_ray_kind"] = kinds;
+        std::printf("per ray kind (leaves visited / filled leaves passed by their bounds / splat tests):");
+        for (const char* k : {"primary", "shadow", "secondary"}) {
+            if (!kinds.contains(k) || kinds[k].is_null()) continue;
+            std::printf(" %s %.1f / %.1f / %.1f;", k, kinds[k]["leaves_per_ray"].get<double>(),
+                        kinds[k]["culled_leaves_per_ray"].get<double>(),
+                        kinds[k]["splat_tests_per_ray"].get<double>());
+        }
+        std::printf("\n");
+    }
+}
+
+/// Host-side profile of the shadow and reflect4 scenarios: work by bounce depth, SIMT efficiency.
+void profile_scenarios(const Options& o, const rt::RenderScene& rs,
+                       const std::vector<player::BenchScenario>& all,
+                       const std::vector<core::Material>& original, nlohmann::json& report) {
+    for (const player::BenchScenario& sc : all) {
+        if (sc.name == "primary" || o.scenarios.find(sc.name) == std::string::npos) continue;
+        const std::vector<core::Material> mats = player::scenario_materials(sc, original);
+        core::SceneView view = rs.view();
+        view.materials = mats.data();
+        view.params = sc.params;
+        const player::RayProfile prof =
+            player::profile_rays(view, rs.camera(), o.scene.width, o.scene.height);
+        std::printf("profile of %s (host, the core's functions):\n%s", sc.name.c_str(), prof.table().c_str());
+        report["profile"][sc.name] = prof.to_json();
+    }
 }
 
 void run(Options o, const tool::CommonOptions& common) {
@@ -108,109 +215,11 @@ void run(Options o, const tool::CommonOptions& common) {
     std::vector<std::pair<std::string, rt::FrameStats>> done;
     for (const player::BenchScenario& sc : all) {
         if (o.scenarios.find(sc.name) == std::string::npos) continue;
-        // Materials of the scenario (the mirror world of reflect4), uploaded before timing.
-        const std::vector<core::Material> mats = player::scenario_materials(sc, original);
-        core::SceneView view = rs.view();
-        view.materials = mats.data();
-        backend->set_scene(view);
-        rt::FrameRequest req;
-        req.camera = rs.camera();
-        req.params = sc.params;
-        req.width = o.scene.width;
-        req.height = o.scene.height;
-        req.download = false;
-        rt::Image image;
-        image.resize(o.scene.width, o.scene.height);
-        for (std::uint32_t i = 0; i < o.warmup; ++i) backend->render(req, image);
-        std::vector<double> ms, wall_ms;
-        rt::FrameStats last;
-        tool::Progress progress("prt-bench: " + sc.name, o.frames, common.quiet);
-        for (std::uint32_t i = 0; i < o.frames; ++i) {
-            last = backend->render(req, image);
-            // CUDA: kernel time from events; CPU and hybrid: the frame's wall time.
-            ms.push_back(backend->name() == "cuda" ? last.device_ms : last.seconds * 1e3);
-            wall_ms.push_back(last.seconds * 1e3);  // every backend: to compare cuda with hybrid
-            progress.update(i + 1);
-        }
-        progress.finish();
-        const double med = player::median(ms);
-        const double grays = med > 0 ? last.rays() / (med * 1e-3) * 1e-9 : 0;
-        const double rays = last.rays() ? static_cast<double>(last.rays()) : 1.0;
-        std::printf("%-10s %10.3f %8.1f %12llu %12llu %12llu %12llu %10.3f %8.2f %8.2f %8.2f\n",
-                    sc.name.c_str(), med, 1e3 / med, static_cast<unsigned long long>(last.rays()),
-                    static_cast<unsigned long long>(last.primary),
-                    static_cast<unsigned long long>(last.shadow),
-                    static_cast<unsigned long long>(last.secondary), grays, sc.target_grays,
-                    last.leaves / rays, last.splat_tests / rays);
-        report["scenarios"].push_back(
-            {{"name", sc.name},
-             {"what", sc.what},
-             {"median_ms", med},
-             {"min_ms", *std::min_element(ms.begin(), ms.end())},
-             {"max_ms", *std::max_element(ms.begin(), ms.end())},
-             {"fps", 1e3 / med},
-             {"rays_per_frame", last.rays()},
-             {"primary", last.primary},
-             {"shadow", last.shadow},
-             {"secondary", last.secondary},
-             {"grays_per_s", grays},
-             {"primary_grays_per_s", last.primary / (med * 1e-3) * 1e-9},
-             {"shadow_grays_per_s", last.shadow / (med * 1e-3) * 1e-9},
-             {"secondary_grays_per_s", last.secondary / (med * 1e-3) * 1e-9},
-             {"leaves_per_ray", last.rays() ? double(last.leaves) / last.rays() : 0.0},
-             {"culled_leaves_per_ray", last.rays() ? double(last.culled) / last.rays() : 0.0},
-             {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},
-             {"truncated", last.truncated},
-             {"sanitized", last.sanitized},
-             {"timer", backend->name() == "cuda" ? "cuda events" : "host clock"},
-             {"wall_median_ms", player::median(wall_ms)},
-             {"gpu_share", last.gpu_share},
-             {"target_grays_per_s", sc.target_grays},
-             {"meets_target", grays >= sc.target_grays}});
-        done.emplace_back(sc.name, last);
+        done.emplace_back(sc.name, time_scenario(o, common, *backend, rs, sc, original, report["scenarios"]));
     }
-    // Work per ray by kind (the shadow and reflect4 scenarios minus the primary one).
-    const auto find = [&](const std::string& name) -> const rt::FrameStats* {
-        for (const auto& d : done)
-            if (d.first == name) return &d.second;
-        return nullptr;
-    };
-    if (const rt::FrameStats* p = find("primary")) {
-        nlohmann::json kinds;
-        kinds["primary"] = derived_kind(*p, rt::FrameStats{});
-        if (const rt::FrameStats* s = find("shadow")) kinds["shadow"] = derived_kind(*s, *p);
-        if (const rt::FrameStats* r = find("reflect4")) kinds["secondary"] = derived_kind(*r, *p);
-        report["per_ray_kind"] = kinds;
-        std::printf("per ray kind (leaves visited / filled leaves passed by their bounds / splat tests):");
-        for (const char* k : {"primary", "shadow", "secondary"}) {
-            if (!kinds.contains(k) || kinds[k].is_null()) continue;
-            std::printf(" %s %.1f / %.1f / %.1f;", k, kinds[k]["leaves_per_ray"].get<double>(),
-                        kinds[k]["culled_leaves_per_ray"].get<double>(),
-                        kinds[k]["splat_tests_per_ray"].get<double>());
-        }
-        std::printf("\n");
-    }
-    if (o.profile) {
-        // Host-side profile of the reflect4 and shadow scenarios: work by bounce depth, SIMT efficiency.
-        for (const player::BenchScenario& sc : all) {
-            if (sc.name == "primary" || o.scenarios.find(sc.name) == std::string::npos) continue;
-            const std::vector<core::Material> mats = player::scenario_materials(sc, original);
-            core::SceneView view = rs.view();
-            view.materials = mats.data();
-            view.params = sc.params;
-            const player::RayProfile prof =
-                player::profile_rays(view, rs.camera(), o.scene.width, o.scene.height);
-            std::printf("profile of %s (host, the core's functions):\n%s", sc.name.c_str(),
-                        prof.table().c_str());
-            report["profile"][sc.name] = prof.to_json();
-        }
-    }
-    if (!o.json.empty()) {
-        std::ofstream f(o.json);
-        if (!f) throw Error(o.json + ": cannot write");
-        f << report.dump(2) << "\n";
-        if (!f) throw Error(o.json + ": write failed");
-    }
+    report_ray_kinds(done, report);
+    if (o.profile) profile_scenarios(o, rs, all, original, report);
+    if (!o.json.empty()) write_file_atomic(o.json, report.dump(2) + "\n");
 }
 
 }  // namespace
