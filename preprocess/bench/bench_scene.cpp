@@ -60,6 +60,10 @@ rt::RenderScene bench_scene(const BenchSceneOptions& o, bool quiet) {
         rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool, o.load)
                              : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, o.load);
     } else {
+        // The synthetic room holds splats only: another surface needs a pool that has it.
+        if (!o.load.surface.empty() && o.load.surface != "splats" && o.load.surface != "auto")
+            throw Error("--surface " + o.load.surface +
+                        ": the synthetic room has splats only; give a pool built with prt-iso or prt-mls");
         scene::Scene sc;
         sc.materials.push_back(scene::Material{});
         sc.materials.back().name = "walls";

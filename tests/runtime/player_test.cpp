@@ -263,6 +263,24 @@ TEST_F(PlayerTest, BenchWritesJsonWithEveryScenario) {
     EXPECT_NE(r.out.find("Grays/s"), std::string::npos) << "the table goes to stdout";
 }
 
+TEST_F(PlayerTest, BenchRefusesASurfaceTheSyntheticRoomLacks) {
+    // The synthetic room holds splats only: asking for ISO must not time splats under its name.
+    const fs::path json = m_dir / "iso.json";
+    const ToolRun r = run_tool("prt-bench",
+                               "--synthetic 3000 --width 8 --height 8 --frames 1 --warmup 0 --backend cpu "
+                               "--surface iso --quiet --json " + json.string(),
+                               m_dir);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("--surface iso: the synthetic room has splats only"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(json));
+    EXPECT_EQ(run_tool("prt-bench",
+                       "--synthetic 3000 --width 8 --height 8 --frames 1 --warmup 0 --backend cpu --surface "
+                       "splats --quiet",
+                       m_dir)
+                  .code,
+              0);
+}
+
 TEST_F(PlayerTest, BenchProfileSplitsTheWorkByRayKindAndDepth) {
     const fs::path json = m_dir / "profile.json";
     const ToolRun r =
