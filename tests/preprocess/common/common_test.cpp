@@ -110,13 +110,15 @@ template <class T>
 std::vector<std::pair<T, std::uint32_t>> brute(const std::vector<std::array<T, 3>>& p, const T q[3],
                                                std::uint32_t skip, std::size_t k) {
     std::vector<std::pair<T, std::uint32_t>> d;
+    d.reserve(p.size());
     for (std::uint32_t j = 0; j < p.size(); ++j) {
         if (j == skip) continue;
         const T dx = p[j][0] - q[0], dy = p[j][1] - q[1], dz = p[j][2] - q[2];
         d.push_back({dx * dx + dy * dy + dz * dz, j});
     }
-    std::sort(d.begin(), d.end());
-    d.resize(std::min(k, d.size()));
+    const std::size_t n = std::min(k, d.size());
+    std::partial_sort(d.begin(), d.begin() + std::ptrdiff_t(n), d.end());  // the k smallest, sorted
+    d.resize(n);
     return d;
 }
 
