@@ -6,7 +6,9 @@
 // version and element size against it. Plain constexpr: compiles under g++ and nvcc.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <iterator>
 
 #include "prt/formats/gi_layout.h"
 #include "prt/formats/iso_layout.h"
@@ -109,11 +111,10 @@ inline constexpr const char* section_writer(SectionType type) {
 namespace detail {
 /// Rows in ascending type order (so each type once), versions and element sizes not 0.
 inline constexpr bool section_table_well_formed() {
-    const SectionTypeInfo* previous = nullptr;
-    for (const SectionTypeInfo& row : k_section_types) {
-        if (previous && !(previous->type < row.type)) return false;
-        if (row.version == 0 || row.element_size == 0) return false;
-        previous = &row;
+    // Indices, not pointers: GCC's UBSan instrumentation makes a pointer test non-constant.
+    for (std::size_t i = 0; i < std::size(k_section_types); ++i) {
+        if (i > 0 && !(k_section_types[i - 1].type < k_section_types[i].type)) return false;
+        if (k_section_types[i].version == 0 || k_section_types[i].element_size == 0) return false;
     }
     return true;
 }
