@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,13 @@
 namespace prt_import_test {
 
 namespace fs = std::filesystem;
+
+/// A file prt-import must refuse: its name, its bytes, and a part of the message expected.
+struct BadFile {
+    const char* name;
+    std::string bytes;
+    const char* expect;
+};
 
 /// A fresh folder per test, removed afterwards.
 class TempDirTest : public ::testing::Test {
@@ -38,6 +46,10 @@ protected:
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
         return p;
     }
+
+    /// Writes every file and checks that importing it fails with one line, "<path>: ...",
+    /// containing its `expect`.
+    void expect_one_line_errors(std::span<const BadFile> files) const;
 
     fs::path m_dir;
 };
@@ -68,6 +80,17 @@ std::string error_of(Fn&& fn) {
         return e.what();
     }
     return "";
+}
+
+inline void TempDirTest::expect_one_line_errors(std::span<const BadFile> files) const {
+    for (const BadFile& c : files) {
+        const auto file = write(c.name, c.bytes);
+        prt::pre::import::Report report;
+        const std::string msg = error_of([&] { import(file, report); });
+        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
 }
 
 /// Whether any note contains `text`.
