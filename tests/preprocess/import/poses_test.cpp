@@ -45,6 +45,15 @@ std::string xyz_text(const std::vector<Vec3>& pts) {
 
 using Poses = TempDirTest;
 
+/// Reading the pose list `file` (whose text is `text`) fails with one line, "<file>: ...", containing
+/// `expect`.
+void expect_pose_error(const fs::path& file, const std::string& text, const char* expect) {
+    const std::string msg = error_of([&] { prt::pre::import::read_poses(file); });
+    EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+    EXPECT_NE(msg.find(expect), std::string::npos) << text << " -> " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
 TEST_F(Poses, StanfordConf) {
     write("a.xyz", "0 0 0\n");
     fs::create_directories(path("sub"));
@@ -94,13 +103,7 @@ TEST_F(Poses, StanfordConfErrorsNameTheLine) {
         {"mesh a.xyz 0 0 0 0 0 0 1\n", "line 1: unknown keyword 'mesh'"},
         {"camera 0 0 0 0 0 0 1\n", "no bmesh line"},
     };
-    for (const Case& c : cases) {
-        const auto conf = write("bad.conf", c.text);
-        const std::string msg = error_of([&] { prt::pre::import::read_poses(conf); });
-        EXPECT_EQ(msg.rfind(conf.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.text << " -> " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    for (const Case& c : cases) expect_pose_error(write("bad.conf", c.text), c.text, c.expect);
 }
 
 TEST_F(Poses, JsonPoseList) {
@@ -185,13 +188,7 @@ TEST_F(Poses, JsonErrorsNameTheEntry) {
         {R"({"scans": [{"file": "a.ply"}],})", "line 1: invalid JSON"},
         {"{\"scans\": [\n{\"file\": \"a.ply\"},\n{\"file\": }]}", "line 3: invalid JSON"},
     };
-    for (const Case& c : cases) {
-        const auto json = write("bad.json", c.text);
-        const std::string msg = error_of([&] { prt::pre::import::read_poses(json); });
-        EXPECT_EQ(msg.rfind(json.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.text << " -> " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    for (const Case& c : cases) expect_pose_error(write("bad.json", c.text), c.text, c.expect);
 }
 
 // Two scans of one wavy sheet, each stored in its own frame; the pose list brings them back.
