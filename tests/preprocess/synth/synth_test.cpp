@@ -106,31 +106,24 @@ Check check_point(const Shape& s, const Vec3& p, const prt::pool::Float3& n, prt
         case ShapeKind::room: {
             const Room& r = s.room;
             const double h = 0.5 * r.size;
-            switch (room_part_from_color(color)) {
+            // The six walls, in RoomPart's order (floor, ceiling, left, right, back, front): the axis
+            // each is normal to; the even ones lie at -h with normal +axis, the odd ones at +h, -axis.
+            constexpr int k_wall_axis[] = {1, 1, 0, 0, 2, 2};
+            const int part = room_part_from_color(color);
+            switch (part) {
                 case k_room_floor:
-                    c = box_face_check(p, h, 1, -1);
-                    c.normal = {0, 1, 0};
-                    break;
                 case k_room_ceiling:
-                    c = box_face_check(p, h, 1, 1);
-                    c.normal = {0, -1, 0};
-                    break;
                 case k_room_left_wall:
-                    c = box_face_check(p, h, 0, -1);
-                    c.normal = {1, 0, 0};
-                    break;
                 case k_room_right_wall:
-                    c = box_face_check(p, h, 0, 1);
-                    c.normal = {-1, 0, 0};
-                    break;
                 case k_room_back_wall:
-                    c = box_face_check(p, h, 2, -1);
-                    c.normal = {0, 0, 1};
+                case k_room_front_wall: {
+                    const int axis = k_wall_axis[part];
+                    const double side = part % 2 == 0 ? -1.0 : 1.0;
+                    c = box_face_check(p, h, axis, side);
+                    c.normal = {0, 0, 0};
+                    c.normal[axis] = -side;
                     break;
-                case k_room_front_wall:
-                    c = box_face_check(p, h, 2, 1);
-                    c.normal = {0, 0, -1};
-                    break;
+                }
                 case k_room_sphere: {
                     const Vec3 d{p[0] - r.sphere_center[0], p[1] - r.sphere_center[1],
                                  p[2] - r.sphere_center[2]};
