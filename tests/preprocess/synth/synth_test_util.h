@@ -1,12 +1,15 @@
 // Shared helpers of the prt-synth tests: double-precision vector arithmetic written out here (not
-// the library's), and the analytic shapes the tests sample, sized per test file.
+// the library's), the analytic shapes the tests sample (sized per test file), and runs of the
+// prt-synth binary (a temporary folder per run, its --help text).
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -94,5 +97,20 @@ public:
 private:
     std::filesystem::path m_path;
 };
+
+/// prt-synth's --help text (from PRT_BIN_DIR); fails the test where it cannot run or exits non-zero.
+inline std::string synth_help() {
+    std::string cmd = "'";  // built by appending: GCC 12 warns (-Wrestrict) on "'" + string
+    cmd += (std::filesystem::path(PRT_BIN_DIR) / "prt-synth").string();
+    cmd += "' --help";
+    std::string help;
+    FILE* p = ::popen(cmd.c_str(), "r");
+    EXPECT_NE(p, nullptr);
+    if (p == nullptr) return help;
+    char buf[4096];
+    for (std::size_t k; (k = std::fread(buf, 1, sizeof buf, p)) > 0;) help.append(buf, k);
+    EXPECT_EQ(::pclose(p), 0);
+    return help;
+}
 
 }  // namespace prt::synth_test
