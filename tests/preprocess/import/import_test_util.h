@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
@@ -91,6 +92,11 @@ inline void TempDirTest::expect_one_line_errors(std::span<const BadFile> files) 
         EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
         EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
     }
+}
+
+/// A colour's channels r, g, b, a as one comparable value.
+inline std::array<int, 4> rgba(const prt::pool::Rgba8& c) {
+    return {c.r, c.g, c.b, c.a};
 }
 
 /// Whether any note contains `text`.

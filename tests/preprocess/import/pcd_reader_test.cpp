@@ -53,10 +53,7 @@ TEST_F(PcdTest, AsciiOrganizedWithNansAndPackedColor) {
     EXPECT_EQ(cloud.positions[0], (std::array<double, 3>{1, 2, 3}));
     EXPECT_EQ(cloud.positions[1], (std::array<double, 3>{4.5, 5.5, 6.5}));
     ASSERT_TRUE(cloud.has_colors());
-    EXPECT_EQ(cloud.colors[0].r, 0xFF);
-    EXPECT_EQ(cloud.colors[0].g, 0x80);
-    EXPECT_EQ(cloud.colors[0].b, 0x40);
-    EXPECT_EQ(cloud.colors[0].a, 0x80);
+    EXPECT_EQ(rgba(cloud.colors[0]), (std::array<int, 4>{0xFF, 0x80, 0x40, 0x80}));
     EXPECT_EQ(cloud.colors[1].r, 1);
     EXPECT_EQ(cloud.colors[1].b, 3);
     EXPECT_FALSE(cloud.has_normals());  // --normals keep: none estimated
@@ -84,10 +81,7 @@ TEST_F(PcdTest, BinaryWithNormalsAndRgbFloat) {
     const auto cloud = import(file, report);
     ASSERT_EQ(cloud.size(), 2u);
     EXPECT_FLOAT_EQ(cloud.normals[0].z, 1.f);
-    EXPECT_EQ(cloud.colors[0].r, 0x10);
-    EXPECT_EQ(cloud.colors[0].g, 0x20);
-    EXPECT_EQ(cloud.colors[0].b, 0x30);
-    EXPECT_EQ(cloud.colors[0].a, 255);
+    EXPECT_EQ(rgba(cloud.colors[0]), (std::array<int, 4>{0x10, 0x20, 0x30, 255}));
     EXPECT_TRUE(report.normals_from_file);
     EXPECT_TRUE(has_note(report, "skipped PCD fields: curvature"));
 }
