@@ -4,11 +4,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,13 @@
 namespace prt_import_test {
 
 namespace fs = std::filesystem;
+
+/// A file prt-import must refuse: its name, its bytes, and a part of the message expected.
+struct BadFile {
+    const char* name;
+    std::string bytes;
+    const char* expect;
+};
 
 /// A fresh folder per test, removed afterwards.
 class TempDirTest : public ::testing::Test {
@@ -38,6 +47,10 @@ protected:
         out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
         return p;
     }
+
+    /// Writes every file and checks that importing it fails with one line, "<path>: ...",
+    /// containing its `expect`.
+    void expect_one_line_errors(std::span<const BadFile> files) const;
 
     fs::path m_dir;
 };
@@ -68,6 +81,22 @@ std::string error_of(Fn&& fn) {
         return e.what();
     }
     return "";
+}
+
+inline void TempDirTest::expect_one_line_errors(std::span<const BadFile> files) const {
+    for (const BadFile& c : files) {
+        const auto file = write(c.name, c.bytes);
+        prt::pre::import::Report report;
+        const std::string msg = error_of([&] { import(file, report); });
+        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
+        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+}
+
+/// A colour's channels r, g, b, a as one comparable value.
+inline std::array<int, 4> rgba(const prt::pool::Rgba8& c) {
+    return {c.r, c.g, c.b, c.a};
 }
 
 /// Whether any note contains `text`.

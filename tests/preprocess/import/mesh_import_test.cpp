@@ -164,12 +164,7 @@ TEST_F(MeshTest, UnreferencedVerticesAndCancellingFaces) {
 }
 
 TEST_F(MeshTest, BadMeshFilesFailWithOneLine) {
-    struct Case {
-        const char* name;
-        std::string bytes;
-        const char* expect;
-    };
-    const Case cases[] = {
+    const BadFile cases[] = {
         {"empty.obj", "", "file is empty"},
         {"empty.off", "", "file is empty"},
         {"noface.obj", "v 0 0 0\nv 1 0 0\n", "no faces"},
@@ -188,14 +183,7 @@ TEST_F(MeshTest, BadMeshFilesFailWithOneLine) {
         {"bad_header.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperXy float x\nend_header\n",
          "unknown PLY header keyword"},
     };
-    for (const Case& c : cases) {
-        const auto file = write(c.name, c.bytes);
-        Report report;
-        const std::string msg = error_of([&] { import(file, report); });
-        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    expect_one_line_errors(cases);
 }
 
 // ---- sampling -----------------------------------------------------------------------------------

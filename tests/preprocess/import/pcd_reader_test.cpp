@@ -53,10 +53,7 @@ TEST_F(PcdTest, AsciiOrganizedWithNansAndPackedColor) {
     EXPECT_EQ(cloud.positions[0], (std::array<double, 3>{1, 2, 3}));
     EXPECT_EQ(cloud.positions[1], (std::array<double, 3>{4.5, 5.5, 6.5}));
     ASSERT_TRUE(cloud.has_colors());
-    EXPECT_EQ(cloud.colors[0].r, 0xFF);
-    EXPECT_EQ(cloud.colors[0].g, 0x80);
-    EXPECT_EQ(cloud.colors[0].b, 0x40);
-    EXPECT_EQ(cloud.colors[0].a, 0x80);
+    EXPECT_EQ(rgba(cloud.colors[0]), (std::array<int, 4>{0xFF, 0x80, 0x40, 0x80}));
     EXPECT_EQ(cloud.colors[1].r, 1);
     EXPECT_EQ(cloud.colors[1].b, 3);
     EXPECT_FALSE(cloud.has_normals());  // --normals keep: none estimated
@@ -84,10 +81,7 @@ TEST_F(PcdTest, BinaryWithNormalsAndRgbFloat) {
     const auto cloud = import(file, report);
     ASSERT_EQ(cloud.size(), 2u);
     EXPECT_FLOAT_EQ(cloud.normals[0].z, 1.f);
-    EXPECT_EQ(cloud.colors[0].r, 0x10);
-    EXPECT_EQ(cloud.colors[0].g, 0x20);
-    EXPECT_EQ(cloud.colors[0].b, 0x30);
-    EXPECT_EQ(cloud.colors[0].a, 255);
+    EXPECT_EQ(rgba(cloud.colors[0]), (std::array<int, 4>{0x10, 0x20, 0x30, 255}));
     EXPECT_TRUE(report.normals_from_file);
     EXPECT_TRUE(has_note(report, "skipped PCD fields: curvature"));
 }
@@ -188,27 +182,18 @@ TEST_F(PcdTest, IntensityOfAnyTypeAndRgba) {
 }
 
 TEST_F(PcdTest, MalformedViewpointAndColourFieldsFailWithOneLine) {
-    const std::string body = "1 2 3\n";
-    struct Case {
-        const char* name;
-        std::string bytes;
-        const char* expect;
+    // One ascii point whose header's VIEWPOINT line is `vp`.
+    auto viewpoint = [](const char* vp) {
+        return pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", vp) + "1 2 3\n";
     };
-    const Case cases[] = {
-        {"six.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 1 0 0") + body,
-         "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz), got 6"},
-        {"eight.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 1 0 0 0 0") + body,
-         "VIEWPOINT needs 7 numbers"},
-        {"nan.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 nan 0 1 0 0 0") + body,
-         "VIEWPOINT value 'nan' is not a finite number"},
-        {"inf.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 inf 0 0 0") + body,
-         "VIEWPOINT value 'inf' is not a finite number"},
-        {"word.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 one 0 0 0") + body,
-         "VIEWPOINT value 'one' is not a finite number"},
-        {"scaled.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 2 0 0 0") + body,
-         "VIEWPOINT quaternion (qw qx qy qz) has norm 2, not 1"},
-        {"zero.pcd", pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 1, 1, "ascii", "0 0 0 0 0 0 0") + body,
-         "has norm 0, not 1"},
+    const BadFile cases[] = {
+        {"six.pcd", viewpoint("0 0 0 1 0 0"), "VIEWPOINT needs 7 numbers (tx ty tz qw qx qy qz), got 6"},
+        {"eight.pcd", viewpoint("0 0 0 1 0 0 0 0"), "VIEWPOINT needs 7 numbers"},
+        {"nan.pcd", viewpoint("0 nan 0 1 0 0 0"), "VIEWPOINT value 'nan' is not a finite number"},
+        {"inf.pcd", viewpoint("0 0 0 inf 0 0 0"), "VIEWPOINT value 'inf' is not a finite number"},
+        {"word.pcd", viewpoint("0 0 0 one 0 0 0"), "VIEWPOINT value 'one' is not a finite number"},
+        {"scaled.pcd", viewpoint("0 0 0 2 0 0 0"), "VIEWPOINT quaternion (qw qx qy qz) has norm 2, not 1"},
+        {"zero.pcd", viewpoint("0 0 0 0 0 0 0"), "has norm 0, not 1"},
         {"rgb2.pcd", pcd_header("x y z rgb", "4 4 4 2", "F F F U", "1 1 1 1", 1, 1, "ascii") + "1 2 3 7\n",
          "PCD field rgb has SIZE 2 and COUNT 1; a packed colour is one 4-byte value"},
         {"rgba8.pcd", pcd_header("x y z rgba", "4 4 4 8", "F F F F", "1 1 1 1", 1, 1, "ascii") + "1 2 3 7\n",
@@ -220,25 +205,13 @@ TEST_F(PcdTest, MalformedViewpointAndColourFieldsFailWithOneLine) {
          pcd_header("x y z intensity", "4 4 4 4", "F F F F", "1 1 1 3", 1, 1, "ascii") + "1 2 3 7 8 9\n",
          "PCD field intensity has COUNT 3"},
     };
-    for (const Case& c : cases) {
-        const auto file = write(c.name, c.bytes);
-        Report report;
-        const std::string msg = error_of([&] { import(file, report); });
-        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    expect_one_line_errors(cases);
 }
 
 TEST_F(PcdTest, BadFilesFailWithOneLine) {
     std::string lying = pcd_header("x y z", "4 4 4", "F F F", "1 1 1", 10, 1, "binary");
     for (int i = 0; i < 6; ++i) put<float>(lying, 1.0f * i);  // 2 points of the 10 declared
-    struct Case {
-        const char* name;
-        std::string bytes;
-        const char* expect;
-    };
-    const Case cases[] = {
+    const BadFile cases[] = {
         {"empty.pcd", "", "file is empty"},
         {"garbage.pcd", "\x01\x02garbage that is no PCD header\n", "not a valid PCD file"},
         {"lying.pcd", lying, "header declares 10 points but the data ends after 2"},
@@ -249,14 +222,7 @@ TEST_F(PcdTest, BadFilesFailWithOneLine) {
          "header declares 3 points but the data has 1 lines"},
         {"nodata.pcd", "VERSION 0.7\nFIELDS x y z\n", "no DATA line"},
     };
-    for (const Case& c : cases) {
-        const auto file = write(c.name, c.bytes);
-        Report report;
-        const std::string msg = error_of([&] { import(file, report); });
-        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    expect_one_line_errors(cases);
 }
 
 }  // namespace

@@ -206,10 +206,7 @@ TEST_P(PlyTest, RoundTripKnownValues) {
     EXPECT_FLOAT_EQ(cloud.normals[2].y, -0.6f);
     EXPECT_FLOAT_EQ(cloud.normals[2].z, 0.8f);
     ASSERT_TRUE(cloud.has_colors());
-    EXPECT_EQ(cloud.colors[0].r, 10);
-    EXPECT_EQ(cloud.colors[0].g, 20);
-    EXPECT_EQ(cloud.colors[0].b, 30);
-    EXPECT_EQ(cloud.colors[0].a, 255);
+    EXPECT_EQ(rgba(cloud.colors[0]), (std::array<int, 4>{10, 20, 30, 255}));
     EXPECT_EQ(cloud.colors[1].r, 255);
     EXPECT_EQ(cloud.colors[1].b, 128);
     ASSERT_TRUE(cloud.has_radii());

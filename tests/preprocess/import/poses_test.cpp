@@ -45,6 +45,15 @@ std::string xyz_text(const std::vector<Vec3>& pts) {
 
 using Poses = TempDirTest;
 
+/// Reading the pose list `file` (whose text is `text`) fails with one line, "<file>: ...", containing
+/// `expect`.
+void expect_pose_error(const fs::path& file, const std::string& text, const char* expect) {
+    const std::string msg = error_of([&] { prt::pre::import::read_poses(file); });
+    EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
+    EXPECT_NE(msg.find(expect), std::string::npos) << text << " -> " << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
 TEST_F(Poses, StanfordConf) {
     write("a.xyz", "0 0 0\n");
     fs::create_directories(path("sub"));
@@ -94,13 +103,7 @@ TEST_F(Poses, StanfordConfErrorsNameTheLine) {
         {"mesh a.xyz 0 0 0 0 0 0 1\n", "line 1: unknown keyword 'mesh'"},
         {"camera 0 0 0 0 0 0 1\n", "no bmesh line"},
     };
-    for (const Case& c : cases) {
-        const auto conf = write("bad.conf", c.text);
-        const std::string msg = error_of([&] { prt::pre::import::read_poses(conf); });
-        EXPECT_EQ(msg.rfind(conf.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.text << " -> " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    for (const Case& c : cases) expect_pose_error(write("bad.conf", c.text), c.text, c.expect);
 }
 
 TEST_F(Poses, JsonPoseList) {
@@ -185,13 +188,7 @@ TEST_F(Poses, JsonErrorsNameTheEntry) {
         {R"({"scans": [{"file": "a.ply"}],})", "line 1: invalid JSON"},
         {"{\"scans\": [\n{\"file\": \"a.ply\"},\n{\"file\": }]}", "line 3: invalid JSON"},
     };
-    for (const Case& c : cases) {
-        const auto json = write("bad.json", c.text);
-        const std::string msg = error_of([&] { prt::pre::import::read_poses(json); });
-        EXPECT_EQ(msg.rfind(json.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.text << " -> " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    for (const Case& c : cases) expect_pose_error(write("bad.json", c.text), c.text, c.expect);
 }
 
 // Two scans of one wavy sheet, each stored in its own frame; the pose list brings them back.
@@ -274,44 +271,6 @@ fs::path bunny(const std::string& rel) {
     return fs::path(PRT_SHARED_DATA_DIR) / "points/stanford_bunny" / rel;
 }
 
-/// Distance from q to triangle abc (Ericson, Real-Time Collision Detection, 5.1.5).
-double point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-    auto sub = [](const Vec3& x, const Vec3& y) { return Vec3{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
-    auto dot = [](const Vec3& x, const Vec3& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
-    auto at = [&](double v, double w) {
-        return Vec3{a[0] + v * (b[0] - a[0]) + w * (c[0] - a[0]),
-                    a[1] + v * (b[1] - a[1]) + w * (c[1] - a[1]),
-                    a[2] + v * (b[2] - a[2]) + w * (c[2] - a[2])};
-    };
-    const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-    Vec3 q;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    const Vec3 bp = sub(p, b);
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    const Vec3 cp = sub(p, c);
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-    if (d1 <= 0 && d2 <= 0)
-        q = a;
-    else if (d3 >= 0 && d4 <= d3)
-        q = b;
-    else if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        q = at(d1 / (d1 - d3), 0);
-    else if (d6 >= 0 && d5 <= d6)
-        q = c;
-    else if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        q = at(0, d2 / (d2 - d6));
-    else if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        q = Vec3{b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2])};
-    } else {
-        const double denom = 1 / (va + vb + vc);
-        q = at(vb * denom, vc * denom);
-    }
-    const Vec3 d = sub(p, q);
-    return std::sqrt(dot(d, d));
-}
-
 TEST(RealPoses, BunnyConfConventionMatchesTheMesh) {
     const auto conf = bunny("data/bun.conf");
     const auto mesh = bunny("reconstruction/bun_zipper.ply");
@@ -329,8 +288,8 @@ TEST(RealPoses, BunnyConfConventionMatchesTheMesh) {
         double best = dv;
         for (const std::uint32_t t : around[v]) {
             const auto& tri = ref.triangles[t];
-            best = std::min(
-                best, point_triangle(p, ref.vertices[tri[0]], ref.vertices[tri[1]], ref.vertices[tri[2]]));
+            best = std::min(best, prt_scan_ref::point_triangle(p, ref.vertices[tri[0]], ref.vertices[tri[1]],
+                                                               ref.vertices[tri[2]]));
         }
         return best;
     };

@@ -286,43 +286,6 @@ std::vector<std::pair<std::string, imp::Options>> settings() {
     return out;
 }
 
-double point_triangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-    auto sub = [](const Vec3& x, const Vec3& y) { return Vec3{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
-    auto dot = [](const Vec3& x, const Vec3& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
-    auto at = [&](double v, double w) {
-        return Vec3{a[0] + v * (b[0] - a[0]) + w * (c[0] - a[0]),
-                    a[1] + v * (b[1] - a[1]) + w * (c[1] - a[1]),
-                    a[2] + v * (b[2] - a[2]) + w * (c[2] - a[2])};
-    };
-    const Vec3 ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
-    Vec3 q;
-    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
-    const Vec3 bp = sub(p, b);
-    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
-    const Vec3 cp = sub(p, c);
-    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
-    const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-    if (d1 <= 0 && d2 <= 0)
-        q = a;
-    else if (d3 >= 0 && d4 <= d3)
-        q = b;
-    else if (vc <= 0 && d1 >= 0 && d3 <= 0)
-        q = at(d1 / (d1 - d3), 0);
-    else if (d6 >= 0 && d5 <= d6)
-        q = c;
-    else if (vb <= 0 && d2 >= 0 && d6 <= 0)
-        q = at(0, d2 / (d2 - d6));
-    else if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
-        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-        q = Vec3{b[0] + w * (c[0] - b[0]), b[1] + w * (c[1] - b[1]), b[2] + w * (c[2] - b[2])};
-    } else {
-        const double denom = 1 / (va + vb + vc);
-        q = at(vb * denom, vc * denom);
-    }
-    const Vec3 d = sub(p, q);
-    return std::sqrt(dot(d, d));
-}
-
 void normals_table(const fs::path& data) {
     const fs::path conf = data / "points/stanford_bunny/data/bun.conf";
     const fs::path mesh = data / "points/stanford_bunny/reconstruction/bun_zipper.ply";
@@ -362,7 +325,7 @@ void normals_table(const fs::path& data) {
             for (const std::uint32_t tri : around[v]) {
                 const auto& T = ref.triangles[tri];
                 const Vec3 &a = ref.vertices[T[0]], &b = ref.vertices[T[1]], &cc = ref.vertices[T[2]];
-                const double dd = point_triangle(c.positions[i], a, b, cc);
+                const double dd = prt_scan_ref::point_triangle(c.positions[i], a, b, cc);
                 if (dd < best) {
                     best = dd;
                     const Vec3 u{b[0] - a[0], b[1] - a[1], b[2] - a[2]},

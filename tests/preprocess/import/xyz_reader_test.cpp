@@ -55,28 +55,16 @@ TEST_F(XyzTest, NanAndInfAreCountedByClean) {
 }
 
 TEST_F(XyzTest, BadFilesFailWithOneLine) {
-    struct Case {
-        const char* name;
-        std::string bytes;
-        const char* expect;
-    };
     std::string binary(64, '\0');
     binary[3] = 'x';
-    const Case cases[] = {
+    const BadFile cases[] = {
         {"empty.xyz", "", "file is empty"},
         {"comments.xyz", "# nothing\n\n# here\n", "no points"},
         {"binary.xyz", binary, "binary data"},
         {"words.xyz", "this is not\na point cloud\nat all\n", "no valid"},
         {"mostly.xyz", "1 2 3\nx\ny\nz\n", "not XYZ text: 3 of 4 lines"},
     };
-    for (const Case& c : cases) {
-        const auto file = write(c.name, c.bytes);
-        Report report;
-        const std::string msg = error_of([&] { import(file, report); });
-        EXPECT_EQ(msg.rfind(file.string() + ": ", 0), 0u) << msg;
-        EXPECT_NE(msg.find(c.expect), std::string::npos) << c.name << ": " << msg;
-        EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-    }
+    expect_one_line_errors(cases);
 }
 
 TEST_F(XyzTest, MissingFileFails) {

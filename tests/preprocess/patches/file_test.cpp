@@ -37,6 +37,14 @@ std::string bpt_text() {
     return s;
 }
 
+/// `text` with its line `line` (1-based) replaced by `replacement`.
+std::string replace_line(std::string text, int line, const std::string& replacement) {
+    std::size_t pos = 0;
+    for (int l = 1; l < line; ++l) pos = text.find('\n', pos) + 1;
+    const std::size_t end = text.find('\n', pos);
+    return text.replace(pos, end - pos, replacement);
+}
+
 std::string error_of(const std::string& text, PatchFormat format = PatchFormat::automatic) {
     try {
         parse_patches(text, "f.txt", format);
@@ -105,12 +113,8 @@ TEST(PatchFile, SharedTeapotFilesAgree) {
 
 TEST(PatchFile, NewellErrorsNameFileAndLine) {
     const std::string good = newell_text();
-    auto with_line = [&](int line, const std::string& replacement) {  // 1-based
-        std::string t = good;
-        std::size_t pos = 0;
-        for (int l = 1; l < line; ++l) pos = t.find('\n', pos) + 1;
-        const std::size_t end = t.find('\n', pos);
-        return t.replace(pos, end - pos, replacement);
+    auto with_line = [&](int line, const std::string& replacement) {
+        return replace_line(good, line, replacement);
     };
     EXPECT_EQ(error_of(good), "");
     EXPECT_EQ(error_of(with_line(2, "1,2,3,4,5,6,7,8,9,10,11,12,13,14,15")),
@@ -151,11 +155,7 @@ TEST(PatchFile, NewellErrorsNameFileAndLine) {
 TEST(PatchFile, BptErrorsNameFileAndLine) {
     const std::string good = bpt_text();
     auto with_line = [&](int line, const std::string& replacement) {
-        std::string t = good;
-        std::size_t pos = 0;
-        for (int l = 1; l < line; ++l) pos = t.find('\n', pos) + 1;
-        const std::size_t end = t.find('\n', pos);
-        return t.replace(pos, end - pos, replacement);
+        return replace_line(good, line, replacement);
     };
     EXPECT_EQ(error_of(good), "");
     EXPECT_EQ(error_of(with_line(2, "3 2")),

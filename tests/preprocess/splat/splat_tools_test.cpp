@@ -74,6 +74,19 @@ prt::pre::PointCloud sphere_cloud(std::size_t n) {
     return cloud;
 }
 
+/// The octree prt-octree wrote into `pool` (its info, nodes, leaf table and splats).
+prt::pre::SplatOctree read_octree(const PoolFile& pool) {
+    prt::pre::SplatOctree octree;
+    octree.info = pool.array<prt::pool::OctreeInfo>(SectionType::octree_info)[0];
+    const auto nodes = pool.array<std::uint32_t>(SectionType::octree_nodes);
+    const auto leaves = pool.array<std::uint32_t>(SectionType::leaf_info);
+    const auto splats = pool.array<prt::pool::Splat>(SectionType::splats);
+    octree.nodes.assign(nodes.begin(), nodes.end());
+    octree.leaf_info.assign(leaves.begin(), leaves.end());
+    octree.splats.assign(splats.begin(), splats.end());
+    return octree;
+}
+
 TEST_F(SplatTools, HelpDocumentsEveryOption) {
     if (!built("prt-radii")) GTEST_SKIP() << "prt-radii is not built (needs FLANN) in " << PRT_BIN_DIR;
     if (!built("prt-octree")) GTEST_SKIP() << "prt-octree is not built in " << PRT_BIN_DIR;
@@ -109,14 +122,7 @@ TEST_F(SplatTools, RadiiThenOctree) {
         << m_stderr;
     EXPECT_NE(m_stderr.find("replication factor"), std::string::npos) << m_stderr;
     const PoolFile pool = PoolFile::open(path("octree.pool"));
-    prt::pre::SplatOctree octree;
-    octree.info = pool.array<prt::pool::OctreeInfo>(SectionType::octree_info)[0];
-    const auto nodes = pool.array<std::uint32_t>(SectionType::octree_nodes);
-    const auto leaves = pool.array<std::uint32_t>(SectionType::leaf_info);
-    const auto splats = pool.array<prt::pool::Splat>(SectionType::splats);
-    octree.nodes.assign(nodes.begin(), nodes.end());
-    octree.leaf_info.assign(leaves.begin(), leaves.end());
-    octree.splats.assign(splats.begin(), splats.end());
+    const prt::pre::SplatOctree octree = read_octree(pool);
     prt::pre::OctreeParams params;
     params.max_leaf_splats = 40;
     const auto p2 = pool.array<prt::pool::Float3>(SectionType::positions);
@@ -217,14 +223,7 @@ TEST_F(SplatTools, RealKittenScan) {
     ASSERT_EQ(run("prt-octree", path("r.pool") + " -o " + path("o.pool") + " -X 48"), 0) << m_stderr;
     std::cout << m_stderr;
     const PoolFile pool = PoolFile::open(path("o.pool"));
-    prt::pre::SplatOctree octree;
-    octree.info = pool.array<prt::pool::OctreeInfo>(SectionType::octree_info)[0];
-    const auto nodes = pool.array<std::uint32_t>(SectionType::octree_nodes);
-    const auto leaves = pool.array<std::uint32_t>(SectionType::leaf_info);
-    const auto splats = pool.array<prt::pool::Splat>(SectionType::splats);
-    octree.nodes.assign(nodes.begin(), nodes.end());
-    octree.leaf_info.assign(leaves.begin(), leaves.end());
-    octree.splats.assign(splats.begin(), splats.end());
+    const prt::pre::SplatOctree octree = read_octree(pool);
     prt::pre::OctreeParams kitten_params;
     kitten_params.max_leaf_splats = 48;
     const auto summary =

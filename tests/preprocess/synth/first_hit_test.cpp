@@ -9,37 +9,23 @@
 
 #include "analytic.h"
 #include "prt/error.h"
+#include "synth_test_util.h"
 
 using namespace prt::synth;
+using prt::synth_test::dot;
+using prt::synth_test::len;
+using prt::synth_test::sub;
 
 namespace {
 
 Vec3 add(const Vec3& a, const Vec3& b) {
     return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
 }
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
 Vec3 mul(const Vec3& a, double s) {
     return {a[0] * s, a[1] * s, a[2] * s};
 }
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double len(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-
 Shape make_shape(ShapeKind kind) {
-    Shape s;
-    s.kind = kind;
-    s.sphere.radius = 1.25;
-    s.torus = {1.0, 0.35};
-    s.cube.edge = 1.5;
-    s.plane.size = 3.0;
-    s.room = Room::standard(2.0);
-    s.ring = {1.0, 0.1, 0.5};
-    return s;
+    return prt::synth_test::make_shape(kind, {1.25, {1.0, 0.35}, 1.5, 3.0, {1.0, 0.1, 0.5}});
 }
 
 constexpr ShapeKind k_kinds[] = {ShapeKind::sphere, ShapeKind::torus, ShapeKind::cube,

@@ -20,34 +20,22 @@
 
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "synth_test_util.h"
 
 namespace fs = std::filesystem;
 using namespace prt::synth;
+using prt::synth_test::dot;
+using prt::synth_test::len;
+using prt::synth_test::sub;
+using prt::synth_test::ToolDir;
+using prt::synth_test::ToolRun;
 
 namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-Vec3 sub(const Vec3& a, const Vec3& b) {
-    return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-}
-double dot(const Vec3& a, const Vec3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-double len(const Vec3& a) {
-    return std::sqrt(dot(a, a));
-}
-
 Shape make_shape(ShapeKind kind) {
-    Shape s;
-    s.kind = kind;
-    s.sphere.radius = 1.0;
-    s.torus = {1.0, 0.3};
-    s.cube.edge = 2.0;
-    s.plane.size = 2.0;
-    s.room = Room::standard(2.0);
-    s.ring = {1.0, 0.1, 0.5};
-    return s;
+    return prt::synth_test::make_shape(kind, {1.0, {1.0, 0.3}, 2.0, 2.0, {1.0, 0.1, 0.5}});
 }
 
 /// A coarse scan (fast) of `kind` from the default scanner.
@@ -447,51 +435,10 @@ TEST(Scan, InvalidOptionsThrow) {
 
 // ---- The command line ---------------------------------------------------------------------------
 
-namespace {
-
-struct ToolRun {
-    int exit_code = -1;
-    std::string err;
-};
-
-class ToolDir {
-public:
-    ToolDir() {
-        static std::atomic<int> counter{0};
-        m_path = fs::temp_directory_path() /
-                 ("prt_synth_scan_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(m_path);
-    }
-    ~ToolDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    const fs::path& path() const { return m_path; }
-    ToolRun run(const std::string& args) const {
-        const fs::path err = m_path / "stderr.txt";
-        std::string cmd = "'";  // built by appending: GCC 12 warns (-Wrestrict) on "'" + string
-        cmd += (fs::path(PRT_BIN_DIR) / "prt-synth").string();
-        cmd += "' " + args + " > /dev/null 2> '" + err.string() + "'";
-        const int status = std::system(cmd.c_str());
-        ToolRun r;
-        r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        std::ifstream in(err);
-        std::stringstream s;
-        s << in.rdbuf();
-        r.err = s.str();
-        return r;
-    }
-
-private:
-    fs::path m_path;
-};
-
-}  // namespace
-
 TEST(PrtSynthScanTool, WritesSensorsScanIdsAndProvenance) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    ToolDir dir;
+    ToolDir dir("prt_synth_scan_test_");
     const fs::path out = dir.path() / "scan.pool";
     ToolRun r = dir.run(
         "sphere --scan --scanner 6,1,0 --scanner -6,1,0 --scanner 0,1,6 --sample-step 0.2 "
@@ -566,15 +513,8 @@ TEST(PrtSynthScanTool, WritesSensorsScanIdsAndProvenance) {
 TEST(PrtSynthScanTool, HelpDocumentsEveryScanOption) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    std::string cmd = "'";
-    cmd += (fs::path(PRT_BIN_DIR) / "prt-synth").string();
-    cmd += "' --help";
-    FILE* p = ::popen(cmd.c_str(), "r");
-    ASSERT_NE(p, nullptr);
-    std::string help;
-    char buf[4096];
-    for (std::size_t k; (k = std::fread(buf, 1, sizeof buf, p)) > 0;) help.append(buf, k);
-    EXPECT_EQ(::pclose(p), 0);
+    const std::string help = prt::synth_test::synth_help();
+    ASSERT_FALSE(help.empty());
     for (const char* option :
          {"--scan ", "--scanner ", "--scanners", "--scan-axis", "--sample-step", "--line-step",
           "--blind-cone", "--max-incidence", "--dropout", "--range-noise ", "--range-noise-per-range",
@@ -586,7 +526,7 @@ TEST(PrtSynthScanTool, HelpDocumentsEveryScanOption) {
 TEST(PrtSynthScanTool, BadOptionsFailWithOneLine) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    ToolDir dir;
+    ToolDir dir("prt_synth_scan_test_");
     const fs::path out = dir.path() / "bad.pool";
     const std::string o = " -o '" + out.string() + "'";
     struct Bad {

@@ -17,23 +17,19 @@
 
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "synth_test_util.h"
 
 namespace fs = std::filesystem;
 using namespace prt::synth;
+using prt::synth_test::ToolDir;
+using prt::synth_test::ToolRun;
 
 namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
 Shape make_shape(ShapeKind kind) {
-    Shape s;
-    s.kind = kind;
-    s.sphere.radius = 1.25;
-    s.torus = {1.0, 0.35};
-    s.cube.edge = 1.5;
-    s.plane.size = 3.0;
-    s.room = Room::standard(2.0);
-    return s;
+    return prt::synth_test::make_shape(kind, {1.25, {1.0, 0.35}, 1.5, 3.0});
 }
 
 SynthResult run(ShapeKind kind, std::uint64_t n, Sampling sampling = Sampling::r2,
@@ -110,31 +106,24 @@ Check check_point(const Shape& s, const Vec3& p, const prt::pool::Float3& n, prt
         case ShapeKind::room: {
             const Room& r = s.room;
             const double h = 0.5 * r.size;
-            switch (room_part_from_color(color)) {
+            // The six walls, in RoomPart's order (floor, ceiling, left, right, back, front): the axis
+            // each is normal to; the even ones lie at -h with normal +axis, the odd ones at +h, -axis.
+            constexpr int k_wall_axis[] = {1, 1, 0, 0, 2, 2};
+            const int part = room_part_from_color(color);
+            switch (part) {
                 case k_room_floor:
-                    c = box_face_check(p, h, 1, -1);
-                    c.normal = {0, 1, 0};
-                    break;
                 case k_room_ceiling:
-                    c = box_face_check(p, h, 1, 1);
-                    c.normal = {0, -1, 0};
-                    break;
                 case k_room_left_wall:
-                    c = box_face_check(p, h, 0, -1);
-                    c.normal = {1, 0, 0};
-                    break;
                 case k_room_right_wall:
-                    c = box_face_check(p, h, 0, 1);
-                    c.normal = {-1, 0, 0};
-                    break;
                 case k_room_back_wall:
-                    c = box_face_check(p, h, 2, -1);
-                    c.normal = {0, 0, 1};
+                case k_room_front_wall: {
+                    const int axis = k_wall_axis[part];
+                    const double side = part % 2 == 0 ? -1.0 : 1.0;
+                    c = box_face_check(p, h, axis, side);
+                    c.normal = {0, 0, 0};
+                    c.normal[axis] = -side;
                     break;
-                case k_room_front_wall:
-                    c = box_face_check(p, h, 2, 1);
-                    c.normal = {0, 0, -1};
-                    break;
+                }
                 case k_room_sphere: {
                     const Vec3 d{p[0] - r.sphere_center[0], p[1] - r.sphere_center[1],
                                  p[2] - r.sphere_center[2]};
@@ -502,43 +491,6 @@ TEST(Synth, PoolRoundTripWithOriginAtBoundingBoxCentre) {
 
 namespace {
 
-struct ToolRun {
-    int exit_code = -1;
-    std::string err;
-};
-
-class ToolDir {
-public:
-    ToolDir() {
-        static std::atomic<int> counter{0};
-        m_path = fs::temp_directory_path() /
-                 ("prt_synth_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-        fs::create_directories(m_path);
-    }
-    ~ToolDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    const fs::path& path() const { return m_path; }
-
-    ToolRun run(const std::string& args) const {
-        const fs::path tool = fs::path(PRT_BIN_DIR) / "prt-synth";
-        const fs::path err = m_path / "stderr.txt";
-        const std::string cmd = "'" + tool.string() + "' " + args + " > /dev/null 2> '" + err.string() + "'";
-        const int status = std::system(cmd.c_str());
-        ToolRun r;
-        r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        std::ifstream in(err);
-        std::stringstream s;
-        s << in.rdbuf();
-        r.err = s.str();
-        return r;
-    }
-
-private:
-    fs::path m_path;
-};
-
 std::size_t line_count(const std::string& s) {
     return std::count(s.begin(), s.end(), '\n');
 }
@@ -548,7 +500,7 @@ std::size_t line_count(const std::string& s) {
 TEST(PrtSynthTool, WritesAPool) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    ToolDir dir;
+    ToolDir dir("prt_synth_test_");
     const fs::path out = dir.path() / "t.pool";
     ToolRun r =
         dir.run("torus --major 2 --minor 0.5 -n 5000 --noise 0.001 --offset=1,-2,3 --seed 5 --quiet -o '" +
@@ -579,13 +531,8 @@ TEST(PrtSynthTool, WritesAPool) {
 TEST(PrtSynthTool, HelpDocumentsEveryOption) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    const std::string cmd = "'" + (fs::path(PRT_BIN_DIR) / "prt-synth").string() + "' --help";
-    FILE* p = ::popen(cmd.c_str(), "r");
-    ASSERT_NE(p, nullptr);
-    std::string help;
-    char buf[4096];
-    for (std::size_t k; (k = std::fread(buf, 1, sizeof buf, p)) > 0;) help.append(buf, k);
-    EXPECT_EQ(::pclose(p), 0);
+    const std::string help = prt::synth_test::synth_help();
+    ASSERT_FALSE(help.empty());
     for (const char* option :
          {"--output", "--points", "--radius", "--major", "--minor", "--edge", "--size", "--noise", "--scale",
           "--offset", "--seed", "--sampling", "--colors", "--threads", "--quiet"})
@@ -597,7 +544,7 @@ TEST(PrtSynthTool, HelpDocumentsEveryOption) {
 TEST(PrtSynthTool, BadInputFailsWithoutOutput) {
     if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
         GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    ToolDir dir;
+    ToolDir dir("prt_synth_test_");
     const fs::path out = dir.path() / "bad.pool";
     const std::string o = " -o '" + out.string() + "'";
     // Usage errors: exit 2 (CLI11's message).

@@ -87,21 +87,19 @@ TEST(Bezier, SubpatchDomainsTileTheSquareAlternatingUV) {
     for (std::uint32_t k = 0; k < 63; ++k) {
         const auto p = subpatch_domain(k), a = subpatch_domain(2 * k + 1), b = subpatch_domain(2 * k + 2);
         const std::uint32_t level = prt::core::subpatch_level(k);
-        if (level % 2 == 0) {
-            EXPECT_EQ(a.u0, p.u0);
-            EXPECT_EQ(a.u1, 0.5 * (p.u0 + p.u1));
-            EXPECT_EQ(b.u0, a.u1);
-            EXPECT_EQ(b.u1, p.u1);
-            EXPECT_EQ(a.v0, p.v0);
-            EXPECT_EQ(a.v1, p.v1);
-        } else {
-            EXPECT_EQ(a.v0, p.v0);
-            EXPECT_EQ(a.v1, 0.5 * (p.v0 + p.v1));
-            EXPECT_EQ(b.v0, a.v1);
-            EXPECT_EQ(b.v1, p.v1);
-            EXPECT_EQ(a.u0, p.u0);
-            EXPECT_EQ(a.u1, p.u1);
-        }
+        // the split parameter (u at even levels, v at odd ones) and the kept one, as [lo, hi] members
+        using D = prt::core::PatchDomain;
+        const bool even = level % 2 == 0;
+        double D::*const s0 = even ? &D::u0 : &D::v0;
+        double D::*const s1 = even ? &D::u1 : &D::v1;
+        double D::*const k0 = even ? &D::v0 : &D::u0;
+        double D::*const k1 = even ? &D::v1 : &D::u1;
+        EXPECT_EQ(a.*s0, p.*s0) << "k " << k;
+        EXPECT_EQ(a.*s1, 0.5 * (p.*s0 + p.*s1)) << "k " << k;
+        EXPECT_EQ(b.*s0, a.*s1) << "k " << k;
+        EXPECT_EQ(b.*s1, p.*s1) << "k " << k;
+        EXPECT_EQ(a.*k0, p.*k0) << "k " << k;
+        EXPECT_EQ(a.*k1, p.*k1) << "k " << k;
     }
 }
 
