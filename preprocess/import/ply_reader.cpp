@@ -308,6 +308,15 @@ CameraLayout camera_layout(const PlyElement& camera) {
 
 constexpr std::uint64_t k_progress_every = 1u << 16;
 
+/// The data of `el` ends after `have` of its rows (binary and ASCII bodies alike).
+[[noreturn]] void throw_truncated(const std::string& label, const PlyElement& el, std::uint64_t have) {
+    if (el.name == "vertex")
+        throw Error(label + ": header declares " + std::to_string(el.count) +
+                    " vertices but the data ends after " + std::to_string(have));
+    throw Error(label + ": header declares " + std::to_string(el.count) + " '" + el.name +
+                "' rows but the data ends after " + std::to_string(have));
+}
+
 // ---- binary -------------------------------------------------------------------------------------
 
 template <bool Swap>
@@ -407,11 +416,7 @@ public:
     }
 
     [[noreturn]] void truncated(const PlyElement& el, std::uint64_t have) const {
-        if (el.name == "vertex")
-            throw Error(m_label + ": header declares " + std::to_string(el.count) +
-                        " vertices but the data ends after " + std::to_string(have));
-        throw Error(m_label + ": header declares " + std::to_string(el.count) + " '" + el.name +
-                    "' rows but the data ends after " + std::to_string(have));
+        throw_truncated(m_label, el, have);
     }
 
 private:
@@ -525,11 +530,7 @@ public:
     std::size_t trailing_line() const { return m_trailing_line; }
 
     [[noreturn]] void truncated(const PlyElement& el, std::uint64_t have) const {
-        if (el.name == "vertex")
-            throw Error(m_label + ": header declares " + std::to_string(el.count) +
-                        " vertices but the data ends after " + std::to_string(have));
-        throw Error(m_label + ": header declares " + std::to_string(el.count) + " '" + el.name +
-                    "' rows but the data ends after " + std::to_string(have));
+        throw_truncated(m_label, el, have);
     }
 
 private:
@@ -757,13 +758,10 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
             break;
         }
         case PlyEncoding::binary_little_endian:
-            if constexpr (std::endian::native == std::endian::little)
-                read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
-            else
-                read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
-            break;
         case PlyEncoding::binary_big_endian:
-            if constexpr (std::endian::native == std::endian::little)
+            // Swap bytes when the file's byte order is not this machine's.
+            if ((header.encoding == PlyEncoding::binary_big_endian) ==
+                (std::endian::native == std::endian::little))
                 read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             else
                 read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
