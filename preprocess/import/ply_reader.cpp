@@ -541,12 +541,12 @@ private:
     const std::string& m_label;
 };
 
-template <bool Swap>
-void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
-                 const PlyElement* camera, const CameraLayout& camera_slots, double* view, Report& report,
-                 LazyProgress& progress) {
-    const auto* base = reinterpret_cast<const unsigned char*>(file.data());
-    BinaryReader<Swap> reader(base + header.data_offset, base + file.size(), file.label());
+/// Reads a body element by element (binary or ASCII `reader`): the first "vertex" element into
+/// `sink`, the first row of `camera` into `view`, every other element skipped.
+template <class Reader>
+void read_elements(Reader& reader, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
+                   const PlyElement* camera, const CameraLayout& camera_slots, double* view,
+                   LazyProgress& progress) {
     bool seen_vertex = false;
     for (const PlyElement& el : header.elements) {
         if (el.name == "vertex" && !seen_vertex) {
@@ -558,6 +558,15 @@ void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLa
             reader.skip_element(el);
         }
     }
+}
+
+template <bool Swap>
+void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
+                 const PlyElement* camera, const CameraLayout& camera_slots, double* view, Report& report,
+                 LazyProgress& progress) {
+    const auto* base = reinterpret_cast<const unsigned char*>(file.data());
+    BinaryReader<Swap> reader(base + header.data_offset, base + file.size(), file.label());
+    read_elements(reader, header, layout, sink, camera, camera_slots, view, progress);
     if (reader.remaining() > 0)
         report.notes.push_back(file.label() + ": warning: " + std::to_string(reader.remaining()) +
                                " bytes after the last declared element (the header may declare fewer "
@@ -739,17 +748,7 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
         case PlyEncoding::ascii: {
             AsciiReader reader(file.data() + header.data_offset, file.data() + file.size(),
                                header.header_lines + 1, label);
-            bool seen_vertex = false;
-            for (const PlyElement& el : header.elements) {
-                if (&el == vertex && !seen_vertex) {
-                    seen_vertex = true;
-                    reader.read_vertices(el, layout, sink, progress);
-                } else if (&el == camera) {
-                    reader.read_first_row(el, camera_slots.slot_of, view);
-                } else {
-                    reader.skip_element(el);
-                }
-            }
+            read_elements(reader, header, layout, sink, camera, camera_slots, view, progress);
             if (!reader.at_end())
                 report.notes.push_back(label +
                                        ": warning: data continues after the last declared element (line " +
