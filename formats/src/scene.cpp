@@ -198,14 +198,19 @@ public:
         out = p;
         return true;
     }
+    /// The array of 3 at `key` (null when absent); fails naming `form` ("[x, y, z]") otherwise.
+    const Json* triple(const char* key, const char* form) const {
+        const Json* j = find(key);
+        if (j && (!j->is_array() || j->size() != 3))
+            m_ctx.fail(path(key),
+                       std::string("expected ") + form + " (an array of 3 numbers), got " +
+                           (j->is_array() ? "an array of " + std::to_string(j->size()) : type_name(*j)));
+        return j;
+    }
     /// [x, y, z] of finite numbers.
     bool vec3(const char* key, Vec3& out) const {
-        const Json* j = find(key);
+        const Json* j = triple(key, "[x, y, z]");
         if (!j) return false;
-        if (!j->is_array() || j->size() != 3)
-            m_ctx.fail(path(key),
-                       "expected [x, y, z] (an array of 3 numbers), got " +
-                           (j->is_array() ? "an array of " + std::to_string(j->size()) : type_name(*j)));
         for (std::size_t i = 0; i < 3; ++i) {
             const Json& e = (*j)[i];
             if (!e.is_number()) m_ctx.fail(join(path(key), i), "expected a number, got " + type_name(e));
@@ -216,12 +221,8 @@ public:
     }
     /// [r, g, b], each in [0, hi] (hi = infinity for light and background colors).
     bool color(const char* key, Color& out, double hi) const {
-        const Json* j = find(key);
+        const Json* j = triple(key, "[r, g, b]");
         if (!j) return false;
-        if (!j->is_array() || j->size() != 3)
-            m_ctx.fail(path(key),
-                       "expected [r, g, b] (an array of 3 numbers), got " +
-                           (j->is_array() ? "an array of " + std::to_string(j->size()) : type_name(*j)));
         for (std::size_t i = 0; i < 3; ++i) {
             const Json& e = (*j)[i];
             const std::string p = join(path(key), i);

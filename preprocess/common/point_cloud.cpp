@@ -19,6 +19,30 @@ std::string CleanReport::summary() const {
     return buf;
 }
 
+std::size_t keep_points(PointCloud& cloud, const std::vector<std::uint8_t>& keep,
+                        std::vector<std::size_t>* kept) {
+    std::size_t out = 0;
+    if (kept) kept->clear();
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (!keep[i]) continue;
+        if (kept) kept->push_back(i);
+        cloud.positions[out] = cloud.positions[i];
+        if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
+        if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
+        if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
+        if (cloud.has_intensities()) cloud.intensities[out] = cloud.intensities[i];
+        if (cloud.has_scan_ids()) cloud.scan_ids[out] = cloud.scan_ids[i];
+        ++out;
+    }
+    cloud.positions.resize(out);
+    if (cloud.has_normals()) cloud.normals.resize(out);
+    if (cloud.has_colors()) cloud.colors.resize(out);
+    if (cloud.has_radii()) cloud.radii.resize(out);
+    if (cloud.has_intensities()) cloud.intensities.resize(out);
+    if (cloud.has_scan_ids()) cloud.scan_ids.resize(out);
+    return out;
+}
+
 CleanReport clean(PointCloud& cloud, bool drop_duplicates, std::vector<std::size_t>* kept) {
     CleanReport report;
     const std::size_t n = cloud.size();
@@ -81,26 +105,7 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates, std::vector<std::size
             run = end;
         }
     }
-    std::size_t out = 0;
-    if (kept) kept->clear();
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!keep[i]) continue;
-        if (kept) kept->push_back(i);
-        cloud.positions[out] = cloud.positions[i];
-        if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
-        if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
-        if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
-        if (cloud.has_intensities()) cloud.intensities[out] = cloud.intensities[i];
-        if (cloud.has_scan_ids()) cloud.scan_ids[out] = cloud.scan_ids[i];
-        ++out;
-    }
-    cloud.positions.resize(out);
-    if (cloud.has_normals()) cloud.normals.resize(out);
-    if (cloud.has_colors()) cloud.colors.resize(out);
-    if (cloud.has_radii()) cloud.radii.resize(out);
-    if (cloud.has_intensities()) cloud.intensities.resize(out);
-    if (cloud.has_scan_ids()) cloud.scan_ids.resize(out);
-    report.kept = out;
+    report.kept = keep_points(cloud, keep, kept);
     return report;
 }
 
@@ -143,30 +148,19 @@ void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
     info.flags = cloud.flags;
     writer.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
     writer.add_array(pool::SectionType::positions, std::move(local));
-    if (cloud.has_normals())
-        writer.add_array(pool::SectionType::normals, cloud.normals);
-    else
-        writer.remove(pool::SectionType::normals);
-    if (cloud.has_colors())
-        writer.add_array(pool::SectionType::colors, cloud.colors);
-    else
-        writer.remove(pool::SectionType::colors);
-    if (cloud.has_radii())
-        writer.add_array(pool::SectionType::radii, cloud.radii);
-    else
-        writer.remove(pool::SectionType::radii);
-    if (cloud.has_intensities())
-        writer.add_array(pool::SectionType::intensities, cloud.intensities);
-    else
-        writer.remove(pool::SectionType::intensities);
-    if (!cloud.sensors.empty())
-        writer.add_array(pool::SectionType::sensors, cloud.sensors);
-    else
-        writer.remove(pool::SectionType::sensors);
-    if (cloud.has_scan_ids())
-        writer.add_array(pool::SectionType::scan_ids, cloud.scan_ids);
-    else
-        writer.remove(pool::SectionType::scan_ids);
+    // Each optional section is written when the cloud has it and removed otherwise.
+    const auto put = [&writer](pool::SectionType type, const auto& elements) {
+        if (!elements.empty())
+            writer.add_array(type, elements);
+        else
+            writer.remove(type);
+    };
+    put(pool::SectionType::normals, cloud.normals);
+    put(pool::SectionType::colors, cloud.colors);
+    put(pool::SectionType::radii, cloud.radii);
+    put(pool::SectionType::intensities, cloud.intensities);
+    put(pool::SectionType::sensors, cloud.sensors);
+    put(pool::SectionType::scan_ids, cloud.scan_ids);
 }
 
 PointCloud read_point_sections(const pool::PoolFile& pool) {

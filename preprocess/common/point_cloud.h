@@ -46,6 +46,11 @@ struct CleanReport {
 /// `kept`, when not null, receives the original index of every point kept, in order.
 CleanReport clean(PointCloud& cloud, bool drop_duplicates = true, std::vector<std::size_t>* kept = nullptr);
 
+/// Keeps the points whose `keep[i]` is non-zero, in order, every per-point attribute aligned; returns
+/// how many are kept. `kept`, when not null, receives the original index of every point kept.
+std::size_t keep_points(PointCloud& cloud, const std::vector<std::uint8_t>& keep,
+                        std::vector<std::size_t>* kept = nullptr);
+
 /// Axis-aligned bounds of the positions (world frame); {+inf, -inf} when empty.
 std::array<std::array<double, 3>, 2> bounds(const PointCloud& cloud);
 

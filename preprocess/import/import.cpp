@@ -246,25 +246,10 @@ std::uint64_t decimate(PointCloud& c, double fraction, std::uint64_t seed) {
         h ^= h >> 31;
         return double(h >> 11) * 0x1.0p-53 < fraction;
     };
-    std::size_t out = 0;
     const std::size_t n = c.size();
-    for (std::size_t i = 0; i < n; ++i) {
-        if (!keep(i)) continue;
-        c.positions[out] = c.positions[i];
-        if (c.has_normals()) c.normals[out] = c.normals[i];
-        if (c.has_colors()) c.colors[out] = c.colors[i];
-        if (c.has_radii()) c.radii[out] = c.radii[i];
-        if (c.has_intensities()) c.intensities[out] = c.intensities[i];
-        if (c.has_scan_ids()) c.scan_ids[out] = c.scan_ids[i];
-        ++out;
-    }
-    c.positions.resize(out);
-    if (c.has_normals()) c.normals.resize(out);
-    if (c.has_colors()) c.colors.resize(out);
-    if (c.has_radii()) c.radii.resize(out);
-    if (c.has_intensities()) c.intensities.resize(out);
-    if (c.has_scan_ids()) c.scan_ids.resize(out);
-    return n - out;
+    std::vector<std::uint8_t> keep_flags(n);
+    for (std::size_t i = 0; i < n; ++i) keep_flags[i] = keep(i) ? 1 : 0;
+    return n - keep_points(c, keep_flags);
 }
 
 std::string sensor_text(const pool::Sensor& s) {

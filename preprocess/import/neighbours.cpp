@@ -15,27 +15,6 @@ namespace prt::pre::import {
 
 namespace {
 
-/// Keeps the points whose `keep` is set, every per-point attribute aligned.
-void keep_points(PointCloud& cloud, const std::vector<std::uint8_t>& keep) {
-    std::size_t out = 0;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        if (!keep[i]) continue;
-        cloud.positions[out] = cloud.positions[i];
-        if (cloud.has_normals()) cloud.normals[out] = cloud.normals[i];
-        if (cloud.has_colors()) cloud.colors[out] = cloud.colors[i];
-        if (cloud.has_radii()) cloud.radii[out] = cloud.radii[i];
-        if (cloud.has_intensities()) cloud.intensities[out] = cloud.intensities[i];
-        if (cloud.has_scan_ids()) cloud.scan_ids[out] = cloud.scan_ids[i];
-        ++out;
-    }
-    cloud.positions.resize(out);
-    if (cloud.has_normals()) cloud.normals.resize(out);
-    if (cloud.has_colors()) cloud.colors.resize(out);
-    if (cloud.has_radii()) cloud.radii.resize(out);
-    if (cloud.has_intensities()) cloud.intensities.resize(out);
-    if (cloud.has_scan_ids()) cloud.scan_ids.resize(out);
-}
-
 double median_of(std::vector<float> v) {
     if (v.empty()) return 0;
     const std::size_t mid = (v.size() - 1) / 2;

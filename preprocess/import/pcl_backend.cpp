@@ -25,58 +25,30 @@ void silence_pcl() {
     pcl::console::setVerbosityLevel(pcl::console::L_ALWAYS);
 }
 
+/// The `T` stored at `p` (unaligned), as a double.
+template <class T>
+double load_as_double(const std::uint8_t* p) {
+    T v;
+    std::memcpy(&v, p, sizeof v);
+    return static_cast<double>(v);
+}
+
+/// The field of PCL type `datatype` at `p` as a double; NaN for a type we do not read.
 double load_field(const std::uint8_t* p, std::uint8_t datatype) {
-    switch (datatype) {
-        case pcl::PCLPointField::INT8: {
-            std::int8_t v;
-            std::memcpy(&v, p, 1);
-            return v;
-        }
-        case pcl::PCLPointField::UINT8:
-            return *p;
-        case pcl::PCLPointField::INT16: {
-            std::int16_t v;
-            std::memcpy(&v, p, 2);
-            return v;
-        }
-        case pcl::PCLPointField::UINT16: {
-            std::uint16_t v;
-            std::memcpy(&v, p, 2);
-            return v;
-        }
-        case pcl::PCLPointField::INT32: {
-            std::int32_t v;
-            std::memcpy(&v, p, 4);
-            return v;
-        }
-        case pcl::PCLPointField::UINT32: {
-            std::uint32_t v;
-            std::memcpy(&v, p, 4);
-            return v;
-        }
-        case pcl::PCLPointField::INT64: {
-            std::int64_t v;
-            std::memcpy(&v, p, 8);
-            return static_cast<double>(v);
-        }
-        case pcl::PCLPointField::UINT64: {
-            std::uint64_t v;
-            std::memcpy(&v, p, 8);
-            return static_cast<double>(v);
-        }
-        case pcl::PCLPointField::FLOAT32: {
-            float v;
-            std::memcpy(&v, p, 4);
-            return v;
-        }
-        case pcl::PCLPointField::FLOAT64: {
-            double v;
-            std::memcpy(&v, p, 8);
-            return v;
-        }
-        default:
-            return std::numeric_limits<double>::quiet_NaN();
-    }
+    using F = pcl::PCLPointField;
+    static constexpr struct {
+        std::uint8_t datatype;
+        double (*load)(const std::uint8_t*);
+    } k_loaders[] = {
+        {F::INT8, load_as_double<std::int8_t>},   {F::UINT8, load_as_double<std::uint8_t>},
+        {F::INT16, load_as_double<std::int16_t>}, {F::UINT16, load_as_double<std::uint16_t>},
+        {F::INT32, load_as_double<std::int32_t>}, {F::UINT32, load_as_double<std::uint32_t>},
+        {F::INT64, load_as_double<std::int64_t>}, {F::UINT64, load_as_double<std::uint64_t>},
+        {F::FLOAT32, load_as_double<float>},      {F::FLOAT64, load_as_double<double>},
+    };
+    for (const auto& l : k_loaders)
+        if (l.datatype == datatype) return l.load(p);
+    return std::numeric_limits<double>::quiet_NaN();
 }
 
 std::size_t field_size(std::uint8_t datatype) {

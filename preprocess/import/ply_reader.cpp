@@ -308,6 +308,15 @@ CameraLayout camera_layout(const PlyElement& camera) {
 
 constexpr std::uint64_t k_progress_every = 1u << 16;
 
+/// The data of `el` ends after `have` of its rows (binary and ASCII bodies alike).
+[[noreturn]] void throw_truncated(const std::string& label, const PlyElement& el, std::uint64_t have) {
+    if (el.name == "vertex")
+        throw Error(label + ": header declares " + std::to_string(el.count) +
+                    " vertices but the data ends after " + std::to_string(have));
+    throw Error(label + ": header declares " + std::to_string(el.count) + " '" + el.name +
+                "' rows but the data ends after " + std::to_string(have));
+}
+
 // ---- binary -------------------------------------------------------------------------------------
 
 template <bool Swap>
@@ -407,11 +416,7 @@ public:
     }
 
     [[noreturn]] void truncated(const PlyElement& el, std::uint64_t have) const {
-        if (el.name == "vertex")
-            throw Error(m_label + ": header declares " + std::to_string(el.count) +
-                        " vertices but the data ends after " + std::to_string(have));
-        throw Error(m_label + ": header declares " + std::to_string(el.count) + " '" + el.name +
-                    "' rows but the data ends after " + std::to_string(have));
+        throw_truncated(m_label, el, have);
     }
 
 private:
@@ -525,11 +530,7 @@ public:
     std::size_t trailing_line() const { return m_trailing_line; }
 
     [[noreturn]] void truncated(const PlyElement& el, std::uint64_t have) const {
-        if (el.name == "vertex")
-            throw Error(m_label + ": header declares " + std::to_string(el.count) +
-                        " vertices but the data ends after " + std::to_string(have));
-        throw Error(m_label + ": header declares " + std::to_string(el.count) + " '" + el.name +
-                    "' rows but the data ends after " + std::to_string(have));
+        throw_truncated(m_label, el, have);
     }
 
 private:
@@ -540,12 +541,12 @@ private:
     const std::string& m_label;
 };
 
-template <bool Swap>
-void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
-                 const PlyElement* camera, const CameraLayout& camera_slots, double* view, Report& report,
-                 LazyProgress& progress) {
-    const auto* base = reinterpret_cast<const unsigned char*>(file.data());
-    BinaryReader<Swap> reader(base + header.data_offset, base + file.size(), file.label());
+/// Reads a body element by element (binary or ASCII `reader`): the first "vertex" element into
+/// `sink`, the first row of `camera` into `view`, every other element skipped.
+template <class Reader>
+void read_elements(Reader& reader, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
+                   const PlyElement* camera, const CameraLayout& camera_slots, double* view,
+                   LazyProgress& progress) {
     bool seen_vertex = false;
     for (const PlyElement& el : header.elements) {
         if (el.name == "vertex" && !seen_vertex) {
@@ -557,6 +558,15 @@ void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLa
             reader.skip_element(el);
         }
     }
+}
+
+template <bool Swap>
+void read_binary(const MappedFile& file, const PlyHeader& header, const VertexLayout& layout, Sink& sink,
+                 const PlyElement* camera, const CameraLayout& camera_slots, double* view, Report& report,
+                 LazyProgress& progress) {
+    const auto* base = reinterpret_cast<const unsigned char*>(file.data());
+    BinaryReader<Swap> reader(base + header.data_offset, base + file.size(), file.label());
+    read_elements(reader, header, layout, sink, camera, camera_slots, view, progress);
     if (reader.remaining() > 0)
         report.notes.push_back(file.label() + ": warning: " + std::to_string(reader.remaining()) +
                                " bytes after the last declared element (the header may declare fewer "
@@ -738,17 +748,7 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
         case PlyEncoding::ascii: {
             AsciiReader reader(file.data() + header.data_offset, file.data() + file.size(),
                                header.header_lines + 1, label);
-            bool seen_vertex = false;
-            for (const PlyElement& el : header.elements) {
-                if (&el == vertex && !seen_vertex) {
-                    seen_vertex = true;
-                    reader.read_vertices(el, layout, sink, progress);
-                } else if (&el == camera) {
-                    reader.read_first_row(el, camera_slots.slot_of, view);
-                } else {
-                    reader.skip_element(el);
-                }
-            }
+            read_elements(reader, header, layout, sink, camera, camera_slots, view, progress);
             if (!reader.at_end())
                 report.notes.push_back(label +
                                        ": warning: data continues after the last declared element (line " +
@@ -757,13 +757,10 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
             break;
         }
         case PlyEncoding::binary_little_endian:
-            if constexpr (std::endian::native == std::endian::little)
-                read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
-            else
-                read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
-            break;
         case PlyEncoding::binary_big_endian:
-            if constexpr (std::endian::native == std::endian::little)
+            // Swap bytes when the file's byte order is not this machine's.
+            if ((header.encoding == PlyEncoding::binary_big_endian) ==
+                (std::endian::native == std::endian::little))
                 read_binary<true>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             else
                 read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);

@@ -9,6 +9,7 @@
 #include <numeric>
 #include <string>
 
+#include "float_round.h"
 #include "morton.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
@@ -56,17 +57,8 @@ double nrm(const pool::MlsSplat& s, int a) {
     return a == 0 ? s.normal.x : (a == 1 ? s.normal.y : s.normal.z);
 }
 
-/// A double rounded to float, then towards -inf / +inf (outward box bounds).
-float round_down(double v) {
-    float f = static_cast<float>(v);
-    if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
-}
-float round_up(double v) {
-    float f = static_cast<float>(v);
-    if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-    return f;
-}
+using pre::round_down;  // outward box bounds (float_round.h)
+using pre::round_up;
 
 /// Squared distance from p to the box (0 inside) and to its farthest corner.
 void box_distances(const pool::MlsSplat& s, const Box& b, double& near2, double& far2) {

@@ -10,6 +10,7 @@
 #include <numeric>
 #include <utility>
 
+#include "float_round.h"
 #include "prt/core/bezier.h"
 #include "prt/error.h"
 
@@ -22,17 +23,8 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-float round_down(double x) {
-    float f = static_cast<float>(x);
-    if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
-}
-
-float round_up(double x) {
-    float f = static_cast<float>(x);
-    if (static_cast<double>(f) < x) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-    return f;
-}
+using pre::round_down;  // outward box bounds (float_round.h)
+using pre::round_up;
 
 double area(const Box& b) {
     const double dx = b.hi[0] - b.lo[0], dy = b.hi[1] - b.lo[1], dz = b.hi[2] - b.lo[2];

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "disk_box.h"
+#include "float_round.h"
 #include "morton.h"
 #include "prt/parallel.h"
 #include "prt/tool.h"
@@ -441,17 +442,6 @@ private:
     std::atomic<std::uint64_t> m_global_nodes{1};
     std::atomic<std::uint64_t> m_global_ids{0};
 };
-
-float round_down(double v) {
-    float f = static_cast<float>(v);
-    if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-    return f;
-}
-float round_up(double v) {
-    float f = static_cast<float>(v);
-    if (double(f) < v) f = std::nextafter(f, std::numeric_limits<float>::infinity());
-    return f;
-}
 
 }  // namespace
 

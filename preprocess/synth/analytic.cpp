@@ -14,12 +14,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-/// Rotation about +y by `radians` (right-handed: +z turns towards +x).
-Vec3 rotate_y(const Vec3& v, double radians) {
-    const double c = std::cos(radians), s = std::sin(radians);
-    return {c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]};
-}
-
 /// Exact closest point of an axis-aligned box [-h, h] (centred at the origin) to p.
 /// Outside: the clamped point; inside: p pushed onto the face of the axis where it is farthest out.
 /// The face returned (axis, sign) is the one of the largest |p_a| - h_a in both cases.
@@ -292,27 +286,7 @@ SurfacePoint closest(const Ring& ring, const Vec3& p) {
 
 SurfacePoint closest(const Shape& shape, const Vec3& world_point) {
     const Vec3 p = mul(sub(world_point, shape.offset), 1.0 / shape.scale);
-    SurfacePoint r;
-    switch (shape.kind) {
-        case ShapeKind::sphere:
-            r = closest(shape.sphere, p);
-            break;
-        case ShapeKind::torus:
-            r = closest(shape.torus, p);
-            break;
-        case ShapeKind::cube:
-            r = closest(shape.cube, p);
-            break;
-        case ShapeKind::plane:
-            r = closest(shape.plane, p);
-            break;
-        case ShapeKind::room:
-            r = closest(shape.room, p);
-            break;
-        case ShapeKind::ring:
-            r = closest(shape.ring, p);
-            break;
-    }
+    SurfacePoint r = visit_shape(shape, [&p](const auto& s) { return closest(s, p); });
     r.point = add(mul(r.point, shape.scale), shape.offset);
     r.signed_distance *= shape.scale;
     return r;
@@ -333,6 +307,22 @@ struct LocalHit {
 };
 using MaybeHit = std::optional<LocalHit>;
 
+/// The roots b -+ s of a quadratic whose roots multiply to c (in order up to rounding): the one of
+/// larger magnitude from b + sign(b) s, the other as c over it, so neither loses digits to
+/// cancellation (Haines et al., Ray Tracing Gems 2019, ch. 7).
+void stable_roots(double b, double s, double c, double& t0, double& t1) {
+    if (b > 0) {
+        t1 = b + s;
+        t0 = c / t1;
+    } else if (b < 0) {
+        t0 = b - s;
+        t1 = c / t0;
+    } else {
+        t0 = -s;
+        t1 = s;
+    }
+}
+
 /// Both roots t0 <= t1 of |f + t u|^2 = r^2 for the unit direction u and the offset f of the ray
 /// origin from the centre, or false. Haines et al. (Ray Tracing Gems 2019, ch. 7): the discriminant
 /// from the perpendicular offset at closest approach, and the smaller root from the product of the
@@ -345,16 +335,7 @@ bool sphere_roots(const Vec3& f, const Vec3& u, double r, double& t0, double& t1
     const double s = std::sqrt(disc);
     const double fl = length(f);
     const double c = (fl - r) * (fl + r);  // t0 t1
-    if (b > 0) {
-        t1 = b + s;
-        t0 = c / t1;
-    } else if (b < 0) {
-        t0 = b - s;
-        t1 = c / t0;
-    } else {
-        t0 = -s;
-        t1 = s;
-    }
+    stable_roots(b, s, c, t0, t1);
     if (t0 > t1) std::swap(t0, t1);
     return true;
 }
@@ -424,7 +405,7 @@ MaybeHit box_hit(const Vec3& half, const Vec3& o, const Vec3& u, double t_max) {
     return h;
 }
 
-MaybeHit plane_hit(const Plane& s, const Vec3& o, const Vec3& u, double t_max) {
+MaybeHit local_hit(const Plane& s, const Vec3& o, const Vec3& u, double t_max) {
     if (u[1] == 0) return {};  // in or parallel to the plane: grazing, no crossing
     const double t = -o[1] / u[1];
     if (!(t >= 0 && t <= t_max)) return {};
@@ -437,7 +418,7 @@ MaybeHit plane_hit(const Plane& s, const Vec3& o, const Vec3& u, double t_max) {
     return r;
 }
 
-MaybeHit room_hit(const Room& room, const Vec3& o, const Vec3& u, double t_max) {
+MaybeHit local_hit(const Room& room, const Vec3& o, const Vec3& u, double t_max) {
     const double hs = 0.5 * room.size;
     MaybeHit best = box_hit({hs, hs, hs}, o, u, t_max);
     if (best) {  // the walls: the box's faces with normals into the room
@@ -486,16 +467,7 @@ bool cylinder_span(double radius, const Vec3& o, const Vec3& u, int part, Span& 
     const double s = std::sqrt(disc);
     const double c = (wl - radius) * (wl + radius) / a;
     double t0, t1;
-    if (b > 0) {
-        t1 = b + s;
-        t0 = c / t1;
-    } else if (b < 0) {
-        t0 = b - s;
-        t1 = c / t0;
-    } else {
-        t0 = -s;
-        t1 = s;
-    }
+    stable_roots(b, s, c, t0, t1);
     span.lo = std::min(t0, t1);
     span.hi = std::max(t0, t1);
     return true;
@@ -503,7 +475,7 @@ bool cylinder_span(double radius, const Vec3& o, const Vec3& u, int part, Span& 
 
 /// The ring as a solid: (inside the outer cylinder and the slab |y| <= h/2) minus the open inside
 /// of the inner cylinder; its boundary points along the ray in order, the first one >= 0 wins.
-MaybeHit ring_hit(const Ring& ring, const Vec3& o, const Vec3& u, double t_max) {
+MaybeHit local_hit(const Ring& ring, const Vec3& o, const Vec3& u, double t_max) {
     const double hh = 0.5 * ring.height, outer = ring.radius + ring.thickness;
     Span band;
     if (!cylinder_span(outer, o, u, k_ring_outer, band)) return {};
@@ -588,7 +560,7 @@ double bisect(const F& f, double a, double b) {
 /// signed distance differs in sign at its ends: the first such piece is bisected on the signed
 /// distance itself (exact to rounding; the polynomial only places the pieces). The critical points
 /// (roots of the cubic f') come the same way from the roots of the quadratic f''.
-MaybeHit torus_hit(const Torus& tor, const Vec3& o, const Vec3& u, double t_max) {
+MaybeHit local_hit(const Torus& tor, const Vec3& o, const Vec3& u, double t_max) {
     const double R = tor.major_radius, r = tor.minor_radius;
     double s0, s1;
     if (!sphere_roots(o, u, R + r, s0, s1) || s1 < 0) return {};  // the bounding sphere
@@ -657,6 +629,14 @@ MaybeHit torus_hit(const Torus& tor, const Vec3& o, const Vec3& u, double t_max)
     return {};
 }
 
+MaybeHit local_hit(const Sphere& s, const Vec3& o, const Vec3& u, double t_max) {
+    return sphere_hit({0, 0, 0}, s.radius, o, u, t_max);
+}
+MaybeHit local_hit(const Cube& c, const Vec3& o, const Vec3& u, double t_max) {
+    const double e = 0.5 * c.edge;
+    return box_hit({e, e, e}, o, u, t_max);
+}
+
 }  // namespace
 
 std::optional<RayHit> first_hit(const Shape& shape, const Vec3& origin, const Vec3& dir, double t_max) {
@@ -667,29 +647,7 @@ std::optional<RayHit> first_hit(const Shape& shape, const Vec3& origin, const Ve
     const Vec3 o = mul(sub(origin, shape.offset), 1.0 / shape.scale);
     const Vec3 u = mul(dir, 1.0 / len);
     const double local_max = t_max * len / shape.scale;  // +inf stays +inf
-    MaybeHit h;
-    switch (shape.kind) {
-        case ShapeKind::sphere:
-            h = sphere_hit({0, 0, 0}, shape.sphere.radius, o, u, local_max);
-            break;
-        case ShapeKind::torus:
-            h = torus_hit(shape.torus, o, u, local_max);
-            break;
-        case ShapeKind::cube: {
-            const double e = 0.5 * shape.cube.edge;
-            h = box_hit({e, e, e}, o, u, local_max);
-            break;
-        }
-        case ShapeKind::plane:
-            h = plane_hit(shape.plane, o, u, local_max);
-            break;
-        case ShapeKind::room:
-            h = room_hit(shape.room, o, u, local_max);
-            break;
-        case ShapeKind::ring:
-            h = ring_hit(shape.ring, o, u, local_max);
-            break;
-    }
+    const MaybeHit h = visit_shape(shape, [&](const auto& s) { return local_hit(s, o, u, local_max); });
     if (!h) return std::nullopt;
     RayHit r;
     r.t = std::min(h->t * shape.scale / len, t_max);

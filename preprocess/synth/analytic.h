@@ -20,6 +20,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <optional>
@@ -32,6 +33,12 @@
 namespace prt::synth {
 
 using Vec3 = Vec3d;
+
+/// Rotation about +y by `radians` (right-handed: +z turns towards +x).
+inline Vec3 rotate_y(const Vec3& v, double radians) {
+    const double c = std::cos(radians), s = std::sin(radians);
+    return {c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]};
+}
 
 enum class ShapeKind : std::uint32_t { sphere, torus, cube, plane, room, ring };
 
@@ -115,6 +122,27 @@ struct Shape {
     double scale = 1.0;
     Vec3 offset{0, 0, 0};
 };
+
+/// `f(parameters)` for the parameters of the shape's kind (shape.sphere, shape.torus, ...): one
+/// dispatch for the per-shape overloads (closest, ray hits) instead of a switch in each.
+template <class F>
+decltype(auto) visit_shape(const Shape& shape, F&& f) {
+    switch (shape.kind) {
+        case ShapeKind::sphere:
+            break;
+        case ShapeKind::torus:
+            return f(shape.torus);
+        case ShapeKind::cube:
+            return f(shape.cube);
+        case ShapeKind::plane:
+            return f(shape.plane);
+        case ShapeKind::room:
+            return f(shape.room);
+        case ShapeKind::ring:
+            return f(shape.ring);
+    }
+    return f(shape.sphere);
+}
 
 /// Throws prt::Error ("what: value") when a parameter is not finite or out of range: radii, edges
 /// and sizes > 0, minor < major radius, scale > 0, the room's objects inside the room.

@@ -16,11 +16,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-Vec3 rotate_y(const Vec3& v, double radians) {
-    const double c = std::cos(radians), s = std::sin(radians);
-    return {c * v[0] + s * v[2], v[1], -s * v[0] + c * v[2]};
-}
-
 using namespace detail;
 
 // Roberts' R2 sequence: x_n = frac(s + n * (1/g, 1/g^2)), g the plastic number (x^3 = x + 1),
