@@ -17,11 +17,9 @@
 #   JOBS (build jobs, default: all cores), EXTRA (more prt-bench-embree arguments, e.g.
 #   "--scenarios primary,shadow" or "--max-leaf 64").
 set -euo pipefail
-if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
-    sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'
-    exit 2
-fi
-build=$1
+# shellcheck source=lib/bench-common.sh
+. "$(dirname "$0")/lib/bench-common.sh"
+bench_args "$@"
 points=${2:-1000000}
 size=${3:-512}
 frames=${4:-3}
@@ -30,7 +28,7 @@ if ! cmake --build "$build" -j "${JOBS:-$(nproc)}" --target prt-bench-embree >/d
          "found by CMake (PRT_WITH_EMBREE)? See the configure log." >&2
     exit 1
 fi
-echo "# machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# machine: $(nproc) cores, $(bench_cpu_model), load average $(bench_load)"
 args=(--synthetic "$points" --width "$size" --height "$size" --frames "$frames" --warmup 1 --threads "${THREADS:-0}" --quiet)
 [ -n "${JSON:-}" ] && args+=(--json "$JSON")
 # shellcheck disable=SC2086

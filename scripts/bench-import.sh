@@ -10,28 +10,21 @@
 #   POINTS     points in the generated file (default 1000000)
 #   REPEAT     timed runs per reader after one warm-up (default 5); the table shows median and min
 set -euo pipefail
-if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
-    sed -n '2,13p' "$0" | sed 's/^# \{0,1\}//'
-    exit 2
-fi
-build=$1
+# shellcheck source=lib/bench-common.sh
+. "$(dirname "$0")/lib/bench-common.sh"
+bench_args "$@"
 points=${2:-1000000}
 repeat=${3:-5}
 bench=$build/bin/prt-bench-import
 tool=$build/bin/prt-import
-for b in "$bench" "$tool"; do
-    if [ ! -x "$b" ]; then
-        echo "bench-import: $b is missing (build it: make -C $build prt-bench-import prt-import)" >&2
-        exit 1
-    fi
-done
+bench_need bench-import "$build" "prt-bench-import prt-import" "$bench" "$tool"
 
 work=$(mktemp -d "${TMPDIR:-/tmp}/prt-bench-import.XXXXXX")
 trap 'rm -rf "$work"' EXIT
 ply=$work/points.ply
 
 echo "# PLY import, $points points (binary_little_endian, float x y z nx ny nz), $repeat runs"
-echo "# machine: $(nproc) cores, $(uname -m), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+echo "# machine: $(nproc) cores, $(uname -m), $(bench_cpu_model)"
 "$bench" --points "$points" --file "$ply" --repeat "$repeat" --quiet
 
 # The tool end to end, as a user runs it (one warm-up, then REPEAT runs; wall clock).

@@ -18,37 +18,24 @@
 # Wall times count the time the build waits for a core on a shared machine: the load average is
 # printed with the results, and the CPU seconds (user + sys) do not depend on it.
 set -euo pipefail
-if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
-    sed -n '2,21p' "$0" | sed 's/^# \{0,1\}//'
-    exit 2
-fi
-build=$1
+# shellcheck source=lib/bench-common.sh
+. "$(dirname "$0")/lib/bench-common.sh"
+bench_args "$@"
 points=${2:-1000000}
 repeat=${REPEAT:-3}
 shape=${SHAPE:-sphere}
 levels=${LEVELS:-"4 5 6 7 8 9"}
 threads=${THREADS:-0}
 bin=$build/bin
-for b in prt-synth prt-iso; do
-    if [ ! -x "$bin/$b" ]; then
-        echo "bench-iso: $bin/$b is missing (build it: make -C $build prt-synth prt-iso prt-radii iso-bench)" >&2
-        exit 1
-    fi
-done
+bench_need bench-iso "$build" "prt-synth prt-iso prt-radii iso-bench" "$bin/prt-synth" "$bin/prt-iso"
 command -v python3 >/dev/null || { echo "bench-iso: python3 is needed to tabulate the JSON results" >&2; exit 1; }
 [ -x /usr/bin/time ] || { echo "bench-iso: /usr/bin/time (Debian package 'time') is needed for CPU seconds" >&2; exit 1; }
 
-if [ -n "${OUT:-}" ]; then
-    work=$OUT
-    mkdir -p "$work"
-else
-    work=$(mktemp -d "${TMPDIR:-/tmp}/prt-bench-iso.XXXXXX")
-    if [ "${KEEP:-0}" != 1 ]; then trap 'rm -rf "$work"' EXIT; fi
-fi
+bench_workdir bench-iso "${OUT:-}"
 
 echo "# prt-iso (Implicit Surface Octree, thesis ch. 4): $shape of $points points, median of $repeat builds"
-echo "# machine: $(nproc) cores, $(uname -m), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), $(free -g | awk '/Mem:/ {print $2}') GiB"
-echo "# load average before: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# machine: $(nproc) cores, $(uname -m), $(bench_cpu_model), $(free -g | awk '/Mem:/ {print $2}') GiB"
+echo "# load average before: $(bench_load)"
 echo "# results (pools, JSON): $work"
 echo
 
@@ -153,4 +140,4 @@ else
     echo "bench-iso: $bin/iso-bench not built: skipping the ray tracing numbers" >&2
 fi
 echo
-echo "# load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# load average after: $(bench_load)"

@@ -20,11 +20,9 @@
 # Rays/s are wall-clock medians on whatever else the machine runs: the load average is printed
 # with the results; the per-ray statistics and accuracies do not depend on it.
 set -euo pipefail
-if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
-    sed -n '2,24p' "$0" | sed 's/^# \{0,1\}//'
-    exit 2
-fi
-build=$1
+# shellcheck source=lib/bench-common.sh
+. "$(dirname "$0")/lib/bench-common.sh"
+bench_args "$@"
 points=${2:-100000}
 repeat=${REPEAT:-5}
 width=${WIDTH:-512}
@@ -33,24 +31,14 @@ bunny_points=${BUNNY_POINTS:-200000}
 here=$(cd "$(dirname "$0")/.." && pwd)
 data=${DATA:-$here/../shared/data}
 bin=$build/bin
-for b in prt-synth prt-radii prt-import prt-mls mls-bench; do
-    if [ ! -x "$bin/$b" ]; then
-        echo "bench-mls: $bin/$b is missing (build it: make -C $build prt-synth prt-radii prt-import prt-mls mls-bench)" >&2
-        exit 1
-    fi
-done
+bench_need bench-mls "$build" "prt-synth prt-radii prt-import prt-mls mls-bench" \
+    "$bin/prt-synth" "$bin/prt-radii" "$bin/prt-import" "$bin/prt-mls" "$bin/mls-bench"
 command -v python3 >/dev/null || { echo "bench-mls: python3 is needed to tabulate the JSON results" >&2; exit 1; }
 
-if [ -n "${OUT:-}" ]; then
-    work=$OUT
-    mkdir -p "$work"
-else
-    work=$(mktemp -d "${TMPDIR:-/tmp}/prt-bench-mls.XXXXXX")
-    if [ "${KEEP:-0}" != 1 ]; then trap 'rm -rf "$work"' EXIT; fi
-fi
+bench_workdir bench-mls "${OUT:-}"
 
 echo "# MLS surface (WS05), CPU, ${width}x${height} primary rays, median of $repeat runs"
-echo "# machine: $(nproc) cores, $(uname -m), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# machine: $(nproc) cores, $(uname -m), $(bench_cpu_model), load average $(bench_load)"
 echo "# results (JSON): $work"
 echo
 
@@ -221,4 +209,4 @@ for m in models:
               f"{vr['max_dt_over_size']:.2e} | {vr['missed']} | {vr['mean_normal_deg']:.3f} |")
 EOF
 echo
-echo "# load average after: $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# load average after: $(bench_load)"

@@ -18,11 +18,9 @@
 # of k = 9 disks, so the tree stops only at the --min-cell limit (measured on a 1M random sphere:
 # 182 stored splats per point, 6 KB per point, 12 GB of memory).
 set -euo pipefail
-if [ $# -lt 1 ] || [ "$1" = "-h" ] || [ "$1" = "--help" ]; then
-    sed -n '2,19p' "$0" | sed 's/^# \{0,1\}//'
-    exit 2
-fi
-build=$1
+# shellcheck source=lib/bench-common.sh
+. "$(dirname "$0")/lib/bench-common.sh"
+bench_args "$@"
 points=${2:-1000000}
 repeat=${3:-3}
 threads=${THREADS:-0}
@@ -31,15 +29,9 @@ sweep_centres=${SWEEP_CENTRES:-10 16 24 32 48}
 sweep_repeat=${SWEEP_REPEAT:-1}
 radii=$build/bin/prt-radii
 octree=$build/bin/prt-octree
-for b in "$radii" "$octree"; do
-    if [ ! -x "$b" ]; then
-        echo "bench-splat: $b is missing (build it: make -C $build prt-radii prt-octree)" >&2
-        exit 1
-    fi
-done
+bench_need bench-splat "$build" "prt-radii prt-octree" "$radii" "$octree"
 
-work=$(mktemp -d "${TMPDIR:-/tmp}/prt-bench-splat.XXXXXX")
-if [ "${KEEP:-0}" != 1 ]; then trap 'rm -rf "$work"' EXIT; fi
+bench_workdir bench-splat
 
 # -- the model ------------------------------------------------------------------------------------
 if [ -x "$build/bin/prt-synth" ]; then
@@ -73,7 +65,7 @@ timed() {
 }
 
 echo "# splat pipeline, $points points, model: $generator, threads: $threads"
-echo "# machine: $(nproc) cores, $(uname -m), $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load average $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# machine: $(nproc) cores, $(uname -m), $(bench_cpu_model), load average $(bench_load)"
 echo
 printf '%-34s %9s %9s %s\n' "step (defaults)" "median s" "min s" "notes"
 read -r med min < <(timed "$radii" "$work/model.pool" -o "$work/radii.pool" -j "$threads" --stats-json "$work/radii.json")

@@ -11,6 +11,18 @@
 
 namespace prt::player {
 
+void add_scene_options(CLI::App& app, BenchSceneOptions& o, const char* pool_help, const char* max_leaf_help,
+                       bool save_pool) {
+    app.add_option("pool", o.pool, pool_help)->check(CLI::ExistingFile);
+    app.add_option("--scene", o.scene, "Scene JSON (camera, lights, materials)")->check(CLI::ExistingFile);
+    app.add_option("--synthetic", o.synthetic, "Points of the synthetic room when no pool is given")
+        ->check(CLI::Range(std::uint64_t{1000}, std::uint64_t{1} << 31));
+    app.add_option("--max-leaf", o.max_leaf, max_leaf_help)->check(CLI::Range(1u, 100000u));
+    if (save_pool) app.add_option("--save-pool", o.save_pool, "Also write the synthetic room's pool here");
+    app.add_option("--width", o.width, "Image width")->check(CLI::Range(1u, 16384u));
+    app.add_option("--height", o.height, "Image height")->check(CLI::Range(1u, 16384u));
+}
+
 std::shared_ptr<const pool::PoolFile> synthetic_room_pool(std::uint64_t n, std::uint32_t max_leaf,
                                                           const std::filesystem::path& save, bool quiet) {
     synth::SynthOptions so;

@@ -12,6 +12,10 @@
 #include "prt/formats/pool.h"
 #include "prt/runtime/render_scene.h"
 
+namespace CLI {
+class App;
+}
+
 namespace prt::player {
 
 /// Where the benchmark scene comes from.
@@ -24,6 +28,12 @@ struct BenchSceneOptions {
     rt::LoadOptions load;               ///< surface choice (--surface, --iso-float)
     std::uint32_t width = 1024, height = 1024;
 };
+
+/// Declares the scene options prt-bench and prt-bench-embree share, in this order: the positional
+/// `pool` (help `pool_help`), --scene, --synthetic, --max-leaf (help `max_leaf_help`), --save-pool
+/// (only with `save_pool`), --width and --height.
+void add_scene_options(CLI::App& app, BenchSceneOptions& o, const char* pool_help, const char* max_leaf_help,
+                       bool save_pool);
 
 /// The synthetic benchmark pool: prt-synth's room (a closed box with a sphere and a cube) of `n`
 /// points, splat radii from the sampling density (thesis 3.1's k-NN radius for k = 9 at uniform

@@ -235,20 +235,9 @@ int main(int argc, char** argv) {
         "Without a "
         "pool or scene it renders a synthetic room of --synthetic points from inside.",
         [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("pool", o.scene.pool,
-                           "Pool with the octree sections (default: the synthetic room)")
-                ->check(CLI::ExistingFile);
-            app.add_option("--scene", o.scene.scene, "Scene JSON (camera, lights, materials)")
-                ->check(CLI::ExistingFile);
-            app.add_option("--synthetic", o.scene.synthetic,
-                           "Points of the synthetic room when no pool is given")
-                ->check(CLI::Range(std::uint64_t{1000}, std::uint64_t{1} << 31));
-            app.add_option("--max-leaf", o.scene.max_leaf,
-                           "Synthetic room: splats per octree leaf before a split (thesis 3.2's X)")
-                ->check(CLI::Range(1u, 100000u));
-            app.add_option("--save-pool", o.scene.save_pool, "Also write the synthetic room's pool here");
-            app.add_option("--width", o.scene.width, "Image width")->check(CLI::Range(1u, 16384u));
-            app.add_option("--height", o.scene.height, "Image height")->check(CLI::Range(1u, 16384u));
+            player::add_scene_options(
+                app, o.scene, "Pool with the octree sections (default: the synthetic room)",
+                "Synthetic room: splats per octree leaf before a split (thesis 3.2's X)", true);
             app.add_option("--frames", o.frames, "Timed frames per scenario (the median is reported)")
                 ->check(CLI::Range(1u, 100000u));
             app.add_option("--warmup", o.warmup, "Untimed frames before timing")

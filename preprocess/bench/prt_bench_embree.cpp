@@ -408,18 +408,9 @@ int main(int argc, char** argv) {
         "per point, rtcIntersect1 with the seamless front/back filter of thesis 3.6), both on --threads "
         "threads. Prints frame times, rays per second and ours / Embree per scenario.",
         [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("pool", o.scene.pool,
-                           "Pool with points, radii and octree (default: the synthetic room)")
-                ->check(CLI::ExistingFile);
-            app.add_option("--scene", o.scene.scene, "Scene JSON (camera, lights, materials)")
-                ->check(CLI::ExistingFile);
-            app.add_option("--synthetic", o.scene.synthetic,
-                           "Points of the synthetic room when no pool is given")
-                ->check(CLI::Range(std::uint64_t{1000}, std::uint64_t{1} << 31));
-            app.add_option("--max-leaf", o.scene.max_leaf, "Synthetic room: our octree's splats per leaf")
-                ->check(CLI::Range(1u, 100000u));
-            app.add_option("--width", o.scene.width, "Image width")->check(CLI::Range(1u, 16384u));
-            app.add_option("--height", o.scene.height, "Image height")->check(CLI::Range(1u, 16384u));
+            player::add_scene_options(app, o.scene,
+                                      "Pool with points, radii and octree (default: the synthetic room)",
+                                      "Synthetic room: our octree's splats per leaf", false);
             app.add_option("--frames", o.frames,
                            "Timed frames per scenario and renderer (the median is reported)")
                 ->check(CLI::Range(1u, 100000u));

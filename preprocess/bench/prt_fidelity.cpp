@@ -174,11 +174,11 @@ std::vector<D3> view_directions(std::uint32_t count) {
     return dirs;
 }
 
-View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, const D3& dir) {
-    const D3 centre = mul(add(lo, hi), 0.5);
-    const double diag = length(sub(hi, lo));
-    const double dist = 0.5 * diag / std::sin(0.5 * o.fov * M_PI / 180.0);
-    const D3 eye = add(centre, mul(dir, dist));
+/// A --width x --height pinhole view from `eye` towards `target` along `dir` (pool coordinates; the
+/// camera in those relative to `origin`), field of view `fov` degrees; the up hint is +z where
+/// |dir.y| > `up_limit`, +y otherwise.
+View pinhole_view(const Options& o, const D3& origin, const D3& eye, const D3& target, const D3& dir,
+                  double up_limit, float fov) {
     auto local = [&](const D3& a) {
         return core::Vec3{float(a[0] - origin[0]), float(a[1] - origin[1]), float(a[2] - origin[2])};
     };
@@ -188,9 +188,17 @@ View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, c
     v.eye = eye;
     v.width = o.width;
     v.height = o.height;
-    const core::Vec3 up = std::abs(dir[1]) > 0.95 ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
-    v.camera = core::make_pinhole(local(eye), local(centre), up, o.fov, o.width, o.height);
+    const core::Vec3 up = std::abs(dir[1]) > up_limit ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
+    v.camera = core::make_pinhole(local(eye), local(target), up, fov, o.width, o.height);
     return v;
+}
+
+View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi, const D3& dir) {
+    const D3 centre = mul(add(lo, hi), 0.5);
+    const double diag = length(sub(hi, lo));
+    const double dist = 0.5 * diag / std::sin(0.5 * o.fov * M_PI / 180.0);
+    const D3 eye = add(centre, mul(dir, dist));
+    return pinhole_view(o, origin, eye, centre, dir, 0.95, o.fov);
 }
 
 /// The six faces of a cube map around each point sensor (fov 90): what the scanner saw, from where
@@ -202,18 +210,7 @@ std::vector<View> sensor_views(const Options& o, const pool::PoolFile& p, const 
         const D3 eye{s.position[0], s.position[1], s.position[2]};
         for (const D3& dir :
              {D3{1, 0, 0}, D3{-1, 0, 0}, D3{0, 1, 0}, D3{0, -1, 0}, D3{0, 0, 1}, D3{0, 0, -1}}) {
-            auto local = [&](const D3& a) {
-                return core::Vec3{float(a[0] - origin[0]), float(a[1] - origin[1]), float(a[2] - origin[2])};
-            };
-            View v;
-            v.origin = origin;
-            v.direction = dir;
-            v.eye = eye;
-            v.width = o.width;
-            v.height = o.height;
-            const core::Vec3 up = std::abs(dir[1]) > 0.5 ? core::Vec3{0, 0, 1} : core::Vec3{0, 1, 0};
-            v.camera = core::make_pinhole(local(eye), local(add(eye, dir)), up, 90.0f, o.width, o.height);
-            views.push_back(v);
+            views.push_back(pinhole_view(o, origin, eye, add(eye, dir), dir, 0.5, 90.0f));
         }
     }
     if (views.empty())
