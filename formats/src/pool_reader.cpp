@@ -1,11 +1,6 @@
 // PointRT pool file reader: memory-mapped, every read validated (formats/POOL.md, "Validation").
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -32,44 +27,28 @@ PoolFile::PoolFile(PoolFile&& o) noexcept { *this = std::move(o); }
 
 PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
     if (this == &o) return *this;
-    if (m_map) ::munmap(m_map, m_size);
     m_label = std::move(o.m_label);
-    m_data = o.m_data;
-    m_size = o.m_size;
-    m_map = o.m_map;
+    m_file = std::move(o.m_file);
     m_owned = std::move(o.m_owned);
-    if (!m_map && !m_owned.empty()) m_data = m_owned.data();
+    m_size = o.m_size;
+    m_data = m_file.data() ? reinterpret_cast<const std::byte*>(m_file.data())
+                           : (m_owned.empty() ? nullptr : m_owned.data());
     o.m_data = nullptr;
     o.m_size = 0;
-    o.m_map = nullptr;
     return *this;
 }
 
-PoolFile::~PoolFile() {
-    if (m_map) ::munmap(m_map, m_size);
-}
+PoolFile::~PoolFile() = default;
 
 PoolFile PoolFile::open(const std::filesystem::path& path) {
     PoolFile pool;
     pool.m_label = path.string();
-    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd < 0) throw Error(pool.m_label + ": cannot open: " + std::strerror(errno));
-    struct stat st {};
-    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-        ::close(fd);
-        throw Error(pool.m_label + ": not a regular file");
-    }
-    pool.m_size = static_cast<std::uint64_t>(st.st_size);
-    if (pool.m_size < sizeof(PoolHeader)) {
-        ::close(fd);
+    pool.m_file = MappedFile::open(path, MappedFile::Access::random);
+    pool.m_size = pool.m_file.size();
+    if (pool.m_size < sizeof(PoolHeader))
         throw Error(pool.m_label + ": header: file is " + std::to_string(pool.m_size) +
                     " bytes, too short for a pool header (truncated or not a pool file)");
-    }
-    void* map = ::mmap(nullptr, pool.m_size, PROT_READ, MAP_PRIVATE, fd, 0);
-    ::close(fd);
-    if (map == MAP_FAILED) throw Error(pool.m_label + ": cannot map: " + std::strerror(errno));
-    pool.m_map = map;
-    pool.m_data = static_cast<const std::byte*>(map);
+    pool.m_data = reinterpret_cast<const std::byte*>(pool.m_file.data());
     pool.validate();
     return pool;
 }

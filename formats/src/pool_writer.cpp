@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstring>
 #include <ctime>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "prt/atomic_file.h"
@@ -26,6 +27,24 @@ std::string utc_now() {
 }
 
 }  // namespace
+
+void set_point_bounds(ModelInfo& info, std::span<const Float3> local) {
+    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                   std::numeric_limits<float>::max()};
+    float hi[3] = {-lo[0], -lo[1], -lo[2]};
+    for (const Float3& p : local) {
+        const float v[3] = {p.x, p.y, p.z};
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], v[a]);
+            hi[a] = std::max(hi[a], v[a]);
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        info.bounds_min[a] = lo[a];
+        info.bounds_max[a] = hi[a];
+    }
+    info.point_count = local.size();
+}
 
 void PoolWriter::add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
                             std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive) {

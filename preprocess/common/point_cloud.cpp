@@ -127,24 +127,10 @@ void write_point_sections(const PointCloud& cloud, pool::PoolWriter& writer) {
     pool::ModelInfo info{};
     for (int a = 0; a < 3; ++a) info.origin[a] = 0.5 * (b[0][a] + b[1][a]);
     std::vector<pool::Float3> local(cloud.size());
-    float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-                   std::numeric_limits<float>::max()};
-    float hi[3] = {-lo[0], -lo[1], -lo[2]};
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-        const float v[3] = {float(cloud.positions[i][0] - info.origin[0]),
-                            float(cloud.positions[i][1] - info.origin[1]),
-                            float(cloud.positions[i][2] - info.origin[2])};
-        local[i] = {v[0], v[1], v[2]};
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], v[a]);
-            hi[a] = std::max(hi[a], v[a]);
-        }
-    }
-    for (int a = 0; a < 3; ++a) {
-        info.bounds_min[a] = lo[a];
-        info.bounds_max[a] = hi[a];
-    }
-    info.point_count = cloud.size();
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        local[i] = {float(cloud.positions[i][0] - info.origin[0]), float(cloud.positions[i][1] - info.origin[1]),
+                    float(cloud.positions[i][2] - info.origin[2])};
+    pool::set_point_bounds(info, local);
     info.flags = cloud.flags;
     writer.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
     writer.add_array(pool::SectionType::positions, std::move(local));

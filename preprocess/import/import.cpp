@@ -8,7 +8,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 #include "mesh.h"
 #include "orient.h"
 #include "pcl_backend.h"

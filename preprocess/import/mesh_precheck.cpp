@@ -9,7 +9,7 @@
 #include <limits>
 #include <vector>
 
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 #include "mesh.h"
 #include "ply_reader.h"
 #include "prt/error.h"

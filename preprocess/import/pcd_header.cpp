@@ -7,7 +7,7 @@
 #include <cstring>
 #include <set>
 
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 #include "poses.h"
 #include "prt/error.h"
 #include "quote.h"

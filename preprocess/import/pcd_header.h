@@ -11,9 +11,11 @@
 
 #include "import.h"
 
-namespace prt::pre::import {
-
+namespace prt {
 class MappedFile;
+}
+
+namespace prt::pre::import {
 
 struct PcdHeader {
     std::vector<std::string> fields;

@@ -11,7 +11,7 @@
 #include <limits>
 #include <memory>
 
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 #include "pcd_header.h"
 #include "progress.h"
 #include "prt/error.h"

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <limits>
 
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 #include "progress.h"
 #include "prt/error.h"
 #include "quote.h"

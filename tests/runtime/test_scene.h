@@ -268,19 +268,7 @@ inline std::shared_ptr<const pool::PoolFile> make_pool(const TestModel& m, bool 
     pool::PoolWriter w;
     pool::ModelInfo info{};
     for (int a = 0; a < 3; ++a) info.origin[a] = m.origin[a];
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    for (const auto& p : m.positions) {
-        const float v[3] = {p.x, p.y, p.z};
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], v[a]);
-            hi[a] = std::max(hi[a], v[a]);
-        }
-    }
-    for (int a = 0; a < 3; ++a) {
-        info.bounds_min[a] = lo[a];
-        info.bounds_max[a] = hi[a];
-    }
-    info.point_count = m.positions.size();
+    pool::set_point_bounds(info, m.positions);
     info.flags = pool::k_model_synthetic;
     w.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
     w.add_array(pool::SectionType::positions, m.positions);

@@ -13,6 +13,7 @@
 #include "prt/error.h"
 #include "prt/formats/pool_layout.h"
 #include "prt/formats/section_table.h"
+#include "prt/mapped_file.h"
 
 namespace prt::pool {
 
@@ -80,7 +81,7 @@ private:
     std::string m_label;
     const std::byte* m_data = nullptr;
     std::uint64_t m_size = 0;
-    void* m_map = nullptr;             // mmap base when mapped
+    MappedFile m_file;                 // the file when mapped
     std::vector<std::byte> m_owned;    // storage when built from bytes
 };
 
@@ -134,6 +135,10 @@ private:
 
 /// XXH3-64 of a byte range (the pool's checksum).
 std::uint64_t checksum(std::span<const std::byte> bytes);
+
+/// Sets `info`'s point_count and bounding box (bounds_min, bounds_max) from the points' positions
+/// in its local frame (an empty set: min = FLT_MAX, max = -FLT_MAX).
+void set_point_bounds(ModelInfo& info, std::span<const Float3> local);
 
 /// Bytes per input point of a pool: file size / point count (prt-info, benchmarks).
 double bytes_per_point(const PoolFile& pool);

@@ -1,5 +1,5 @@
-// PointRT prt-import: a read-only memory-mapped input file (the readers parse straight out of the
-// page cache: no per-line stream reads, no copies).
+// PointRT: a read-only memory-mapped file. The import readers parse straight out of the page cache
+// (no per-line stream reads, no copies); the pool reader maps a pool and validates it in place.
 #pragma once
 
 #include <cstddef>
@@ -7,14 +7,20 @@
 #include <string>
 #include <string_view>
 
-namespace prt::pre::import {
+namespace prt {
 
 /// A whole file mapped read-only. Move-only. An empty file maps to an empty view.
 class MappedFile {
 public:
-    /// Maps `path`; throws prt::Error "PATH: cannot open: REASON" (or "is a directory").
-    static MappedFile open(const std::filesystem::path& path);
+    /// How the file will be read: front to back once (the import readers: aggressive read-ahead)
+    /// or anywhere (a pool's sections).
+    enum class Access { sequential, random };
 
+    /// Maps `path`; throws prt::Error "PATH: cannot open: REASON" (or "cannot stat", "is a
+    /// directory, not a file", "not a regular file", "cannot map").
+    static MappedFile open(const std::filesystem::path& path, Access access = Access::sequential);
+
+    MappedFile() = default;  ///< nothing mapped
     MappedFile(MappedFile&& other) noexcept;
     MappedFile& operator=(MappedFile&& other) noexcept;
     MappedFile(const MappedFile&) = delete;
@@ -28,7 +34,6 @@ public:
     const std::string& label() const { return m_label; }
 
 private:
-    MappedFile() = default;
     void release();
 
     const char* m_data = nullptr;
@@ -36,4 +41,4 @@ private:
     std::string m_label;
 };
 
-}  // namespace prt::pre::import
+}  // namespace prt

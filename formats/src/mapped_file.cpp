@@ -1,4 +1,4 @@
-#include "mapped_file.h"
+#include "prt/mapped_file.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -11,9 +11,9 @@
 
 #include "prt/error.h"
 
-namespace prt::pre::import {
+namespace prt {
 
-MappedFile MappedFile::open(const std::filesystem::path& path) {
+MappedFile MappedFile::open(const std::filesystem::path& path, Access access) {
     MappedFile file;
     file.m_label = path.string();
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
@@ -28,6 +28,10 @@ MappedFile MappedFile::open(const std::filesystem::path& path) {
         ::close(fd);
         throw Error(file.m_label + ": is a directory, not a file");
     }
+    if (!S_ISREG(st.st_mode)) {
+        ::close(fd);
+        throw Error(file.m_label + ": not a regular file");
+    }
     file.m_size = static_cast<std::size_t>(st.st_size);
     if (file.m_size > 0) {
         void* map = ::mmap(nullptr, file.m_size, PROT_READ, MAP_PRIVATE, fd, 0);
@@ -36,10 +40,12 @@ MappedFile MappedFile::open(const std::filesystem::path& path) {
             ::close(fd);
             throw Error(file.m_label + ": cannot map: " + std::strerror(err));
         }
-        // The readers walk the file front to back once: ask for aggressive read-ahead.
-        // (advice values are not flags: two calls).
-        ::madvise(map, file.m_size, MADV_SEQUENTIAL);
-        ::madvise(map, file.m_size, MADV_WILLNEED);
+        if (access == Access::sequential) {
+            // The reader walks the file front to back once: ask for aggressive read-ahead
+            // (advice values are not flags: two calls).
+            ::madvise(map, file.m_size, MADV_SEQUENTIAL);
+            ::madvise(map, file.m_size, MADV_WILLNEED);
+        }
         file.m_data = static_cast<const char*>(map);
     }
     ::close(fd);
@@ -71,4 +77,4 @@ void MappedFile::release() {
     m_size = 0;
 }
 
-}  // namespace prt::pre::import
+}  // namespace prt
