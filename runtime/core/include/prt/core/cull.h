@@ -1,5 +1,5 @@
 // PointRT core: the device-callable half of probe-ray splat culling (thesis 3.4) and of the
-// hole-rate measurement, run by prt-cull's CPU path (preprocess/splat/cull.cpp, where the method is
+// hole-rate measurement, run by prt-cull's CPU path (preprocess/splat/cull_build.cpp, where the method is
 // described) and its CUDA path (runtime/cuda/src/cull.cu) alike: PRT_HD, no STL, no allocation, no
 // recursion. Probe directions come from a table the host computes once (no transcendental
 // functions per probe), so the two backends shoot bit-identical probes when the CUDA code is
@@ -315,6 +315,22 @@ PRT_HD inline bool probe_leaf_range(const CullView& v, std::uint32_t leaf, Vec3 
     return false;
 }
 
+/// Probe line k of `leaf` (`frame` is set at the first line of each of its directions): the ray
+/// o + t d, its range [t0, t1] inside the leaf, and both sides' nearest hits among the leaf's
+/// centre splats [begin, end) (probe_hits). False when the line misses the leaf.
+PRT_HD inline bool trace_probe_line(const CullView& v, std::uint32_t leaf, const ProbeRegion& region,
+                                    ProbeFrame& frame, std::uint32_t k, std::uint32_t begin, std::uint32_t end,
+                                    const std::uint8_t* keep, Vec3& o, Vec3& d, float& t0, float& t1,
+                                    cull_detail::SideHits hits[2], CullCounters& c) {
+    const std::uint32_t per_dir = v.grid * v.grid;
+    float t_max;
+    if (k % per_dir == 0) probe_frame(v, leaf, region, k / per_dir, frame);
+    if (!make_probe(v, leaf, region, frame, k, o, d, t_max) || !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
+        return false;
+    cull_detail::probe_hits(v.octree, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
+    return true;
+}
+
 /// thesis 3.4: culls the replicas of filled leaf `leaf`. `keep` holds one flag per stored splat:
 /// on entry k_keep_centre for the leaf's centre splats and k_keep_none for its replicas; on return
 /// the replicas a probe needed are k_keep_probe. `votes` (one counter per stored splat, zero on
@@ -342,7 +358,6 @@ PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t
         return;
     }
     const std::uint32_t lines = probes_per_leaf(v);
-    const std::uint32_t per_dir = v.grid * v.grid;
     ProbeFrame frame{};
     const bool use_votes = v.policy == CullPolicy::votes && votes != nullptr;
     const pool::Splat* splats = v.octree.splats;
@@ -350,13 +365,9 @@ PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t
     // inside its blending window (thesis 3.4's per-splat counter).
     for (std::uint32_t k = 0; use_votes && k < lines; ++k) {
         Vec3 o, d;
-        float t_max, t0, t1;
-        if (k % per_dir == 0) probe_frame(v, leaf, region, k / per_dir, frame);
-        if (!make_probe(v, leaf, region, frame, k, o, d, t_max) ||
-            !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
-            continue;
+        float t0, t1;
         cull_detail::SideHits hits[2];
-        cull_detail::probe_hits(v.octree, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
+        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c)) continue;
         for (std::uint32_t side = 0; side < 2; ++side) {
             const cull_detail::SideHits& h = hits[side];
             if (!(h.near_s < k_inf)) continue;
@@ -374,15 +385,10 @@ PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t
     }
     for (std::uint32_t k = 0; k < lines; ++k) {
         Vec3 o, d;
-        float t_max, t0, t1;
-        if (k % per_dir == 0) probe_frame(v, leaf, region, k / per_dir, frame);
-        if (!make_probe(v, leaf, region, frame, k, o, d, t_max) ||
-            !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
-            continue;
-        c.probes += 2;
+        float t0, t1;
         cull_detail::SideHits hits[2];
-        cull_detail::probe_hits(v.octree, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
-
+        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c)) continue;
+        c.probes += 2;
         for (std::uint32_t side = 0; side < 2; ++side) {
             const cull_detail::SideHits& h = hits[side];
             if (!(h.near_s < k_inf)) continue;
@@ -452,7 +458,7 @@ PRT_HD inline void trace_hole_ray(const OctreeView& full, const OctreeView& cull
     out.n_culled = b.normal;
 }
 
-/// One ray of the hole measurement (preprocess/splat/cull.h makes them).
+/// One ray of the hole measurement (preprocess/splat/cull_build.h makes them).
 struct HoleRay {
     Vec3 o, d;             ///< model local frame, d unit
     std::uint32_t inside;  ///< 1: an inside ray (expects back faces)

@@ -349,6 +349,16 @@ PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool 
                             w.o.y * scale - static_cast<float>(leaf.cell.y),
                             w.o.z * scale - static_cast<float>(leaf.cell.z)};
         const Vec3 b = w.d * scale;
+        // The closest hit so far becomes (t_hit, front_hit) in this leaf.
+        const auto take = [&](float t_hit, bool front_hit) {
+            best = t_hit;
+            found = true;
+            best_front = front_hit;
+            best_leaf = index;
+            best_level = leaf.level;
+            best_a = a;
+            best_b = b;
+        };
         // Seam stitch: this leaf starts where the previous filled leaf ended, or within one edge,
         // with the other sign, and f of this leaf runs the same way along the ray (falling into
         // the object for + to -, rising out of it for - to +). The slope test rejects the seam
@@ -362,13 +372,7 @@ PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool 
         if (p.stitch_seams != 0 && contiguous && prev_outside != entry_outside && leaf.t0 < best &&
             (p.faces == k_iso_faces_both || prev_outside != inside) &&
             (dot(iso_detail::trilinear_gradient(c, u0), b) < 0.0f) == prev_outside) {
-            best = leaf.t0;
-            found = true;
-            best_front = prev_outside;
-            best_leaf = index;
-            best_level = leaf.level;
-            best_a = a;
-            best_b = b;
+            take(leaf.t0, prev_outside);
             if (any) break;
         }
         prev_valid = true;
@@ -389,13 +393,7 @@ PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool 
         if (iso_intersect_leaf(c, a, b, lo, hi, intervals, p.faces, inside, p.refine_steps, t, front,
                                stats.evaluations)) {
             if (t < best) {
-                best = t;
-                found = true;
-                best_front = front;
-                best_leaf = index;
-                best_level = leaf.level;
-                best_a = a;
-                best_b = b;
+                take(t, front);
                 if (any) break;
             }
         }

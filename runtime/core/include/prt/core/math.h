@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 
 #include "prt/core/config.h"
@@ -138,6 +139,24 @@ PRT_HD PRT_INLINE float exp2_neg(std::uint32_t n) {
     static_assert(sizeof(f) == sizeof(bits));
     __builtin_memcpy(&f, &bits, sizeof(f));
     return f;
+#endif
+}
+
+/// Reads a 32-byte pool element (Splat, MlsSplat, LeafBounds): on the GPU two 16-byte read-only
+/// loads through the texture cache (pool payloads are 256-byte aligned, so 32-byte elements are
+/// 16-byte aligned), on the host a plain copy.
+template <class T>
+PRT_HD PRT_INLINE T load_32_bytes(const T* p) {
+    static_assert(sizeof(T) == 32, "load_32_bytes reads 32-byte elements");
+#if PRT_DEVICE_CODE
+    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
+    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
+    T s;
+    memcpy(&s, &a, sizeof(a));
+    memcpy(reinterpret_cast<char*>(&s) + sizeof(a), &b, sizeof(b));
+    return s;
+#else
+    return *p;
 #endif
 }
 

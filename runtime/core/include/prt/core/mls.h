@@ -136,21 +136,9 @@ PRT_HD PRT_INLINE double mls_abs(double v) {
     return fabs(v);
 }
 
-/// Reads a splat (two 16-byte read-only loads on the GPU: payloads are 256-byte aligned and an
-/// MlsSplat is 32 bytes).
+/// Reads a splat (load_32_bytes: two 16-byte read-only loads on the GPU).
 PRT_HD PRT_INLINE pool::MlsSplat load_mls_splat(const pool::MlsSplat* p) {
-#if PRT_DEVICE_CODE
-    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
-    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
-    pool::MlsSplat s;
-    s.position = pool::Float3{a.x, a.y, a.z};
-    s.inv_support = a.w;
-    s.normal = pool::Float3{b.x, b.y, b.z};
-    s.point = __float_as_uint(b.w);
-    return s;
-#else
-    return *p;
-#endif
+    return load_32_bytes(p);
 }
 
 PRT_HD PRT_INLINE float mls_split_value(const pool::MlsNode& n) {

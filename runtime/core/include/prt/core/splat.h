@@ -42,21 +42,9 @@ enum LeafCulling : std::uint32_t {
     k_cull_slabs = 2,  ///< also skip leaves whose slab the ray does not cross inside the leaf
 };
 
-/// Reads a splat (two 16-byte read-only loads on the GPU: pool payloads are 256-byte aligned and a
-/// Splat is 32 bytes).
+/// Reads a splat (load_32_bytes: two 16-byte read-only loads on the GPU).
 PRT_HD PRT_INLINE pool::Splat load_splat(const pool::Splat* p) {
-#if PRT_DEVICE_CODE
-    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
-    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
-    pool::Splat s;
-    s.position = pool::Float3{a.x, a.y, a.z};
-    s.radius = a.w;
-    s.normal = pool::Float3{b.x, b.y, b.z};
-    s.point = __float_as_uint(b.w);
-    return s;
-#else
-    return *p;
-#endif
+    return load_32_bytes(p);
 }
 
 /// thesis 3.3: intersects the ray o + t d with one splat. On a hit with t in [t_lo, t_hi] (and the
@@ -78,15 +66,9 @@ PRT_HD PRT_INLINE bool intersect_splat(const pool::Splat& s, Vec3 o, Vec3 d, boo
     return true;
 }
 
-/// Reads a leaf's bounds (two 16-byte read-only loads on the GPU).
+/// Reads a leaf's bounds (load_32_bytes: two 16-byte read-only loads on the GPU).
 PRT_HD PRT_INLINE LeafBounds load_leaf_bounds(const LeafBounds* p) {
-#if PRT_DEVICE_CODE
-    const float4 a = __ldg(reinterpret_cast<const float4*>(p));
-    const float4 b = __ldg(reinterpret_cast<const float4*>(p) + 1);
-    return LeafBounds{a.x, a.y, a.z, a.w, b.x, b.y, __float_as_uint(b.z), __float_as_uint(b.w)};
-#else
-    return *p;
-#endif
+    return load_32_bytes(p);
 }
 
 /// Whether a filled leaf can hold a hit the ray o + t d accepts with t in [t_lo, t_hi] (`inv_dlen`
