@@ -276,10 +276,6 @@ __global__ void __launch_bounds__(k_block)
 
 // ---- Host side --------------------------------------------------------------------------------
 
-std::string error_line(cudaError_t e) {
-    return std::string(cudaGetErrorName(e)) + ": " + cudaGetErrorString(e);
-}
-
 class CudaBackend final : public rt::Backend {
 public:
     explicit CudaBackend(const rt::BackendOptions& options) : m_options(options) {
@@ -447,34 +443,6 @@ private:
 };
 
 }  // namespace
-
-bool device_available(std::string* why) {
-    int count = 0;
-    const cudaError_t e = cudaGetDeviceCount(&count);
-    if (e != cudaSuccess) {
-        if (why) {
-            *why = e == cudaErrorInsufficientDriver
-                       ? "no usable CUDA device: no NVIDIA driver, or one too old for this build ("
-                   : e == cudaErrorNoDevice ? "no CUDA device found ("
-                                            : "no usable CUDA device (";
-            *why += error_line(e) + ")";
-        }
-        cudaGetLastError();  // clear the sticky-free error so later calls start clean
-        return false;
-    }
-    if (count == 0) {
-        if (why) *why = "no CUDA device found";
-        return false;
-    }
-    return true;
-}
-
-std::string device_name() {
-    if (!device_available()) return {};
-    cudaDeviceProp prop{};
-    if (cudaGetDeviceProperties(&prop, 0) != cudaSuccess) return {};
-    return prop.name;
-}
 
 std::unique_ptr<rt::Backend> make_cuda_backend(const rt::BackendOptions& options) {
     return std::make_unique<CudaBackend>(options);

@@ -15,6 +15,7 @@
 
 #include "cuda_check.h"
 #include "device_buffer.h"
+#include "prt/cuda/device.h"
 #include "prt/cuda/cull_cuda.h"
 
 namespace prt::cuda {
@@ -77,25 +78,11 @@ struct DeviceOctree {
 }  // namespace
 
 bool cull_device_available(std::string* why) {
-    int n = 0;
-    const cudaError_t e = cudaGetDeviceCount(&n);
-    if (e != cudaSuccess) {
-        if (why) *why = std::string("no usable CUDA device: ") + cudaGetErrorString(e);
-        cudaGetLastError();  // clear the sticky error state of this failed query
-        return false;
-    }
-    if (n == 0) {
-        if (why) *why = "no usable CUDA device: no device found";
-        return false;
-    }
-    return true;
+    return device_available(why);
 }
 
 std::string cull_device_name() {
-    if (!cull_device_available()) return "";
-    cudaDeviceProp p{};
-    if (cudaGetDeviceProperties(&p, 0) != cudaSuccess) return "";
-    return p.name;
+    return device_name();
 }
 
 core::CullCounters cull_leaves_cuda(const core::CullView& host, std::span<std::uint8_t> keep,

@@ -16,7 +16,7 @@
 
 #include "cuda_check.h"
 #include "device_buffer.h"
-#include "prt/cuda/cuda_backend.h"
+#include "prt/cuda/device.h"
 #include "prt/cuda/device_scene.h"
 #include "prt/cuda/photons_cuda.h"
 

@@ -1,6 +1,6 @@
 // PointRT CUDA: prt-cull's GPU path (thesis 3.4): the per-leaf probe-ray culling and the hole-rate
-// rays of preprocess/splat/cull.h, run in kernels over the same functions the CPU path runs. Plain
-// C++ header (no CUDA types), so cull.cpp, compiled by g++, calls it. Implemented in
+// rays of preprocess/splat/cull_build.h, run in kernels over the same functions the CPU path runs. Plain
+// C++ header (no CUDA types), so cull_build.cpp, compiled by g++, calls it. Implemented in
 // runtime/cuda/src/cull.cu; built only with nvcc (target prt_cull_cuda).
 #pragma once
 

@@ -1,0 +1,17 @@
+// PointRT CUDA: whether a device can be used here, and its name. One answer for the backend and
+// the preprocessing tools' GPU paths (prt-cull, prt-photons). Plain C++ header: no CUDA types.
+// Implemented in runtime/cuda/src/device.cpp (target prt_cuda_device).
+#pragma once
+
+#include <string>
+
+namespace prt::cuda {
+
+/// Whether a CUDA device can be used here. On false, `why` (if given) gets one line saying why
+/// (no driver, no device, ...). Never throws.
+bool device_available(std::string* why = nullptr);
+
+/// Name of device 0 ("NVIDIA H100 80GB HBM3"), or "" when none.
+std::string device_name();
+
+}  // namespace prt::cuda
