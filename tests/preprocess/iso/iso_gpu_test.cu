@@ -73,19 +73,7 @@ TEST(IsoGpu, KernelMatchesTheCpu) {
     ASSERT_TRUE(d_nodes && d_q8 && d_f32) << "upload failed";
 
     // 1024 x 1024 primary rays of a pinhole camera looking at the torus from above.
-    const int size = 1024;
-    std::vector<core::Ray> rays;
-    const core::Vec3 eye{0.6f, 2.4f, 2.8f};
-    const core::Vec3 f = core::normalize(core::Vec3{0, 0, 0} - eye);
-    const core::Vec3 right = core::normalize(core::cross(f, core::Vec3{0, 1, 0}));
-    const core::Vec3 up = core::cross(right, f);
-    const float tan_half = std::tan(22.0f * core::k_pi / 180.0f);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            const float sx = ((x + 0.5f) / size * 2 - 1) * tan_half,
-                        sy = (1 - (y + 0.5f) / size * 2) * tan_half;
-            rays.push_back({eye, core::normalize(f + right * sx + up * sy), core::k_inf, 0u});
-        }
+    const std::vector<core::Ray> rays = prt::test::pinhole_rays(core::Vec3{0.6f, 2.4f, 2.8f}, 1024, 22.0f);
     const core::IsoParams params;
     for (int q8 = 1; q8 >= 0; --q8) {
         core::IsoView host = iso::make_view(m, q8 == 1);
@@ -117,30 +105,19 @@ TEST(IsoGpu, KernelMatchesTheCpu) {
         PRT_CUDA_CHECK(cudaGetLastError());
         PRT_CUDA_CHECK(cudaDeviceSynchronize());
         // Timing: the primary rays only.
-        cudaEvent_t e0, e1;
-        PRT_CUDA_CHECK(cudaEventCreate(&e0));
-        PRT_CUDA_CHECK(cudaEventCreate(&e1));
         std::vector<float> ms;
-        for (int rep = 0; rep < 11; ++rep) {
-            PRT_CUDA_CHECK(cudaEventRecord(e0));
+        PRT_CUDA_CHECK(prt::test::time_launches(11, [&] {
             trace_kernel<<<(primary + block - 1) / block, block>>>(dev, d_rays, primary, params, d_hits,
                                                                    d_found);
-            PRT_CUDA_CHECK(cudaGetLastError());
-            PRT_CUDA_CHECK(cudaEventRecord(e1));
-            PRT_CUDA_CHECK(cudaEventSynchronize(e1));
-            float t_ms = 0;
-            PRT_CUDA_CHECK(cudaEventElapsedTime(&t_ms, e0, e1));
-            ms.push_back(t_ms);
-        }
-        std::sort(ms.begin(), ms.end());
+        }, ms));
         trace_kernel<<<(n + block - 1) / block, block>>>(dev, d_rays, n, params, d_hits, d_found);
         occluded_kernel<<<(n + block - 1) / block, block>>>(dev, d_rays, n, params, d_occ);
         PRT_CUDA_CHECK(cudaGetLastError());
-        std::vector<core::IsoHit> hits(n);
-        std::vector<std::uint32_t> found(n), occ(n);
-        PRT_CUDA_CHECK(cudaMemcpy(hits.data(), d_hits, n * sizeof(core::IsoHit), cudaMemcpyDeviceToHost));
-        PRT_CUDA_CHECK(cudaMemcpy(found.data(), d_found, n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
-        PRT_CUDA_CHECK(cudaMemcpy(occ.data(), d_occ, n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
+        std::vector<core::IsoHit> hits;
+        std::vector<std::uint32_t> found, occ;
+        PRT_CUDA_CHECK(prt::test::download(hits, d_hits, n));
+        PRT_CUDA_CHECK(prt::test::download(found, d_found, n));
+        PRT_CUDA_CHECK(prt::test::download(occ, d_occ, n));
         std::uint32_t flips = 0, both = 0, inside = 0, occ_flips = 0;
         double worst_t = 0, worst_deg = 0;
         for (std::uint32_t i = 0; i < n; ++i) {
@@ -174,8 +151,6 @@ TEST(IsoGpu, KernelMatchesTheCpu) {
         EXPECT_LE(occ_flips, n / 10000 + 5);
         EXPECT_LT(worst_t, 1e-3);
         EXPECT_LT(worst_deg, 0.5);
-        cudaEventDestroy(e0);
-        cudaEventDestroy(e1);
     }
 }
 

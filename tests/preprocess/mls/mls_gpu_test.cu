@@ -59,18 +59,7 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
     ASSERT_TRUE(dev.nodes && dev.refs && dev.splats) << "upload failed";
 
     // 512 x 512 primary rays of a pinhole camera at distance 4 looking at the sphere.
-    const int size = 512;
-    std::vector<core::Ray> rays;
-    const core::Vec3 eye{0.8f, 1.2f, 3.6f};
-    const core::Vec3 f = core::normalize(core::Vec3{0, 0, 0} - eye);
-    const core::Vec3 right = core::normalize(core::cross(f, core::Vec3{0, 1, 0}));
-    const core::Vec3 up = core::cross(right, f);
-    const float t = std::tan(20.0f * core::k_pi / 180.0f);
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            const float sx = ((x + 0.5f) / size * 2 - 1) * t, sy = (1 - (y + 0.5f) / size * 2) * t;
-            rays.push_back({eye, core::normalize(f + right * sx + up * sy), core::k_inf, 0u});
-        }
+    const std::vector<core::Ray> rays = prt::test::pinhole_rays(core::Vec3{0.8f, 1.2f, 3.6f}, 512, 20.0f);
     const auto n = static_cast<std::uint32_t>(rays.size());
     const core::Ray* d_rays = d.upload(rays.data(), n);
     core::MlsHit* d_hits = d.alloc<core::MlsHit>(n);
@@ -82,27 +71,15 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
     trace_kernel<<<grid, block>>>(dev, d_rays, n, params, d_hits, d_found, d_stats);  // warm-up
     PRT_CUDA_CHECK(cudaGetLastError());
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
-    cudaEvent_t e0, e1;
-    PRT_CUDA_CHECK(cudaEventCreate(&e0));
-    PRT_CUDA_CHECK(cudaEventCreate(&e1));
     std::vector<float> ms;
-    for (int rep = 0; rep < 11; ++rep) {
-        PRT_CUDA_CHECK(cudaEventRecord(e0));
-        trace_kernel<<<grid, block>>>(dev, d_rays, n, params, d_hits, d_found, d_stats);
-        PRT_CUDA_CHECK(cudaGetLastError());
-        PRT_CUDA_CHECK(cudaEventRecord(e1));
-        PRT_CUDA_CHECK(cudaEventSynchronize(e1));
-        float t_ms = 0;
-        PRT_CUDA_CHECK(cudaEventElapsedTime(&t_ms, e0, e1));
-        ms.push_back(t_ms);
-    }
-    std::sort(ms.begin(), ms.end());
-    std::vector<core::MlsHit> hits(n);
-    std::vector<std::uint32_t> found(n);
-    std::vector<core::MlsStats> stats(n);
-    PRT_CUDA_CHECK(cudaMemcpy(hits.data(), d_hits, n * sizeof(core::MlsHit), cudaMemcpyDeviceToHost));
-    PRT_CUDA_CHECK(cudaMemcpy(found.data(), d_found, n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
-    PRT_CUDA_CHECK(cudaMemcpy(stats.data(), d_stats, n * sizeof(core::MlsStats), cudaMemcpyDeviceToHost));
+    PRT_CUDA_CHECK(prt::test::time_launches(
+        11, [&] { trace_kernel<<<grid, block>>>(dev, d_rays, n, params, d_hits, d_found, d_stats); }, ms));
+    std::vector<core::MlsHit> hits;
+    std::vector<std::uint32_t> found;
+    std::vector<core::MlsStats> stats;
+    PRT_CUDA_CHECK(prt::test::download(hits, d_hits, n));
+    PRT_CUDA_CHECK(prt::test::download(found, d_found, n));
+    PRT_CUDA_CHECK(prt::test::download(stats, d_stats, n));
 
     const mls::TraceResult cpu = mls::trace_rays(host, rays, params, 0);
     std::uint32_t flips = 0, both = 0;
@@ -130,13 +107,11 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
     std::uint32_t* d_occ = d.alloc<std::uint32_t>(n);
     occluded_kernel<<<grid, block>>>(dev, d_rays, n, params, d_occ);
     PRT_CUDA_CHECK(cudaGetLastError());
-    std::vector<std::uint32_t> occ(n);
-    PRT_CUDA_CHECK(cudaMemcpy(occ.data(), d_occ, n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
+    std::vector<std::uint32_t> occ;
+    PRT_CUDA_CHECK(prt::test::download(occ, d_occ, n));
     std::uint32_t disagree = 0;
     for (std::uint32_t i = 0; i < n; ++i) disagree += (occ[i] != 0) != (found[i] != 0);
     EXPECT_LE(disagree, n / 10000 + 5);
-    cudaEventDestroy(e0);
-    cudaEventDestroy(e1);
 }
 
 }  // namespace

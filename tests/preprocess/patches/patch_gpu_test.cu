@@ -89,27 +89,13 @@ void compare_on_device(const prt::pool::PoolFile& pool, const std::string& name)
     trace_kernel<<<grid, block>>>(d.view, d_rays, n, params, d_hits, d_flags);  // warm-up
     PRT_CUDA_CHECK(cudaGetLastError());
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
-    cudaEvent_t start, stop;
-    PRT_CUDA_CHECK(cudaEventCreate(&start));
-    PRT_CUDA_CHECK(cudaEventCreate(&stop));
     std::vector<float> ms;
-    for (int i = 0; i < 20; ++i) {
-        PRT_CUDA_CHECK(cudaEventRecord(start));
-        trace_kernel<<<grid, block>>>(d.view, d_rays, n, params, d_hits, d_flags);
-        PRT_CUDA_CHECK(cudaEventRecord(stop));
-        PRT_CUDA_CHECK(cudaEventSynchronize(stop));
-        float t = 0;
-        PRT_CUDA_CHECK(cudaEventElapsedTime(&t, start, stop));
-        ms.push_back(t);
-    }
-    PRT_CUDA_CHECK(cudaGetLastError());
-    cudaEventDestroy(start);
-    cudaEventDestroy(stop);
-    std::sort(ms.begin(), ms.end());
-    std::vector<PatchHit> hits(n);
-    std::vector<std::uint32_t> flags(n);
-    PRT_CUDA_CHECK(cudaMemcpy(hits.data(), d_hits, n * sizeof(PatchHit), cudaMemcpyDeviceToHost));
-    PRT_CUDA_CHECK(cudaMemcpy(flags.data(), d_flags, n * sizeof(std::uint32_t), cudaMemcpyDeviceToHost));
+    PRT_CUDA_CHECK(prt::test::time_launches(
+        20, [&] { trace_kernel<<<grid, block>>>(d.view, d_rays, n, params, d_hits, d_flags); }, ms));
+    std::vector<PatchHit> hits;
+    std::vector<std::uint32_t> flags;
+    PRT_CUDA_CHECK(prt::test::download(hits, d_hits, n));
+    PRT_CUDA_CHECK(prt::test::download(flags, d_flags, n));
 
     std::uint32_t both = 0, flips = 0, cpu_hits = 0;
     double worst = 0;
