@@ -72,10 +72,6 @@ rt::RenderScene bench_scene(const BenchSceneOptions& o, bool quiet) {
         rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool, o.load)
                              : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, o.load);
     } else {
-        // The synthetic room holds splats only: another surface needs a pool that has it.
-        if (!o.load.surface.empty() && o.load.surface != "splats" && o.load.surface != "auto")
-            throw Error("--surface " + o.load.surface +
-                        ": the synthetic room has splats only; give a pool built with prt-iso or prt-mls");
         scene::Scene sc;
         sc.materials.push_back(scene::Material{});
         sc.materials.back().name = "walls";
@@ -85,8 +81,9 @@ rt::RenderScene bench_scene(const BenchSceneOptions& o, bool quiet) {
         scene::PointLight light;
         light.position = {0.2, 0.8, 0.3};
         sc.point_lights.push_back(light);
-        rs = rt::RenderScene::from_pools(sc,
-                                         {synthetic_room_pool(o.synthetic, o.max_leaf, o.save_pool, quiet)});
+        // The synthetic room holds splats only: the load options refuse another surface.
+        rs = rt::RenderScene::from_pools(sc, {synthetic_room_pool(o.synthetic, o.max_leaf, o.save_pool, quiet)},
+                                         o.load);
     }
     rs.scene().camera.width = o.width;
     rs.scene().camera.height = o.height;

@@ -4,7 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "cull.h"
+#include "cull_build.h"
 #include "prt/pool_step.h"
 
 namespace {

@@ -271,7 +271,7 @@ TEST_F(PlayerTest, BenchRefusesASurfaceTheSyntheticRoomLacks) {
                                "--surface iso --quiet --json " + json.string(),
                                m_dir);
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("--surface iso: the synthetic room has splats only"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("synthetic room: no ISO sections (run prt-iso)"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(json));
     EXPECT_EQ(run_tool("prt-bench",
                        "--synthetic 3000 --width 8 --height 8 --frames 1 --warmup 0 --backend cpu --surface "

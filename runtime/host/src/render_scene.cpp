@@ -622,26 +622,22 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         lm.bytes += (v.colors ? std::size_t{v.point_count} * sizeof(pool::Rgba8) : 0) +
                     (v.material_ids ? material_ids.size_bytes() : 0);
         // thesis 5.3-5.4: precomputed global illumination, when the scene asks for it.
-        if (m_scene.render.caustics) {
-            if (has_caustics(pf)) {
-                v.caustics = load_caustic_view(pf);
-                lm.bytes += std::size_t{v.caustics.tree.node_count} * 4 +
-                            std::size_t{v.caustics.tree.leaf_count} * sizeof(pool::GiLeaf);
-            } else {
-                m_warnings.push_back("model '" + lm.name + "': render.caustics is on but " + pf.label() +
-                                     " has no caustic octree (run prt-photons on the scene)");
+        const auto load_gi = [&](bool wanted, const char* option, bool present, auto load, auto& view,
+                                 const char* missing) {
+            if (!wanted) return;
+            if (!present) {
+                m_warnings.push_back("model '" + lm.name + "': render." + option + " is on but " + pf.label() +
+                                     " has no " + missing);
+                return;
             }
-        }
-        if (m_scene.render.light_map) {
-            if (has_light_map(pf)) {
-                v.light_map = load_light_map_view(pf);
-                lm.bytes += std::size_t{v.light_map.tree.node_count} * 4 +
-                            std::size_t{v.light_map.tree.leaf_count} * sizeof(pool::GiLeaf);
-            } else {
-                m_warnings.push_back("model '" + lm.name + "': render.light_map is on but " + pf.label() +
-                                     " has no light map (run prt-lightmap on the scene)");
-            }
-        }
+            view = load(pf);
+            lm.bytes +=
+                std::size_t{view.tree.node_count} * 4 + std::size_t{view.tree.leaf_count} * sizeof(pool::GiLeaf);
+        };
+        load_gi(m_scene.render.caustics, "caustics", has_caustics(pf), load_caustic_view, v.caustics,
+                "caustic octree (run prt-photons on the scene)");
+        load_gi(m_scene.render.light_map, "light_map", has_light_map(pf), load_light_map_view, v.light_map,
+                "light map (run prt-lightmap on the scene)");
 
         const Placement pl = placement(sm.transform, info);
         const DVec3 world_origin = pl.world({0, 0, 0});

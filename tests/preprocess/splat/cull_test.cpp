@@ -1,4 +1,4 @@
-// Probe-ray culling (thesis 3.4, preprocess/splat/cull.h) and prt-cull.
+// Probe-ray culling (thesis 3.4, preprocess/splat/cull_build.h) and prt-cull.
 //
 // Built twice from this file: prt_cull_tests (label cpu) runs everything but the GPU comparison;
 // prt_cull_gpu_tests (label gpu, PRT_CULL_GPU_TESTS=1) compares the CUDA path with the CPU path
@@ -9,7 +9,7 @@
 // in double with tolerances that make a float rounding difference at a rim or a leaf face count
 // for the code, never against it (strict on the unculled side, lenient on the culled side). The
 // probes themselves are the code's (make_probe and friends): "the same probes" is what is tested.
-#include "cull.h"
+#include "cull_build.h"
 
 #include <gtest/gtest.h>
 #include <sys/wait.h>

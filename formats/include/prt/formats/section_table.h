@@ -78,34 +78,38 @@ inline constexpr const SectionTypeInfo* section_type_info(SectionType type) {
     return nullptr;
 }
 
+namespace detail {
+/// A field of a section type's row, or `absent` for a type this build does not know.
+template <class T>
+inline constexpr T row_field(SectionType type, T SectionTypeInfo::*field, T absent) {
+    const SectionTypeInfo* row = section_type_info(type);
+    return row ? row->*field : absent;
+}
+}  // namespace detail
+
 /// Current version of a section type's payload layout (0 for types this build does not know).
 inline constexpr std::uint32_t section_version(SectionType type) {
-    const SectionTypeInfo* row = section_type_info(type);
-    return row ? row->version : 0;
+    return detail::row_field(type, &SectionTypeInfo::version, 0u);
 }
 
 /// Human-readable name of a section type ("unknown" for types this build does not know).
 inline constexpr const char* section_name(SectionType type) {
-    const SectionTypeInfo* row = section_type_info(type);
-    return row ? row->name : "unknown";
+    return detail::row_field(type, &SectionTypeInfo::name, "unknown");
 }
 
 /// Element size a section type must have (0 for types this build does not know).
 inline constexpr std::uint32_t section_element_size(SectionType type) {
-    const SectionTypeInfo* row = section_type_info(type);
-    return row ? row->element_size : 0;
+    return detail::row_field(type, &SectionTypeInfo::element_size, 0u);
 }
 
 /// Whether a section type holds one element per point (ModelInfo::point_count).
 inline constexpr bool section_per_point(SectionType type) {
-    const SectionTypeInfo* row = section_type_info(type);
-    return row && row->per_point;
+    return detail::row_field(type, &SectionTypeInfo::per_point, false);
 }
 
 /// The tools that write a section type ("" for types this build does not know).
 inline constexpr const char* section_writer(SectionType type) {
-    const SectionTypeInfo* row = section_type_info(type);
-    return row ? row->written_by : "";
+    return detail::row_field(type, &SectionTypeInfo::written_by, "");
 }
 
 namespace detail {

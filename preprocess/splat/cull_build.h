@@ -28,7 +28,7 @@
 // every probe sees the same surface, within the blending window, before and after culling.
 //
 // The device-callable half is prt/core/cull.h (PRT_HD, no STL, no allocation, no recursion): the CPU
-// path (cull.cpp) and the CUDA path (runtime/cuda/src/cull.cu) run the same functions.
+// path (cull_build.cpp) and the CUDA path (runtime/cuda/src/cull.cu) run the same functions.
 // Probe directions come from a table computed once on the host (no transcendental functions in
 // the per-probe code), so the two backends shoot bit-identical probes when the CUDA code is
 // compiled without FMA contraction (it is: --fmad=false).
@@ -77,7 +77,7 @@ core::OctreeView octree_view(const OctreeSections& s);
 struct CullParams {
     /// Probe line directions per leaf, spread evenly over a hemisphere; each line is probed both
     /// ways, so a leaf is probed from 2 x directions directions. Each leaf uses one of 64 random
-    /// rotations of the set. Default (with grid) chosen by measurement: cull.cpp's header comment.
+    /// rotations of the set. Default (with grid) chosen by measurement: cull_build.cpp's header comment.
     std::uint32_t directions = 4;
     /// G: a G x G jittered grid of parallel probe lines per direction.
     std::uint32_t grid = 8;

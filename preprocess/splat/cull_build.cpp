@@ -31,7 +31,7 @@
 // few probes enough (100k-point sphere, an earlier version of the measurement counting misses
 // only: whole cell, 8 one-way directions x 8 x 8 = 512 probe rays per leaf: 1.068 splats per
 // point, 0.079 % holes; ProbeRegion, 4 two-way directions x 4 x 4 = 128 rays: 1.069, 0.038 %).
-#include "cull.h"
+#include "cull_build.h"
 
 #include <algorithm>
 #include <atomic>
