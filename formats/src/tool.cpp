@@ -156,6 +156,16 @@ pool::PoolWriter& PoolStep::writer() {
     return *m_writer;
 }
 
+bool PoolStep::drop_sections(std::initializer_list<pool::SectionType> types) {
+    pool::PoolWriter& w = writer();
+    bool dropped = false;
+    for (const pool::SectionType t : types) {
+        dropped |= w.has(t);
+        w.remove(t);
+    }
+    return dropped;
+}
+
 void PoolStep::check_output_folder() const {
     const std::filesystem::path folder = std::filesystem::path(m_output).parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder))
