@@ -196,14 +196,18 @@ void PoolStep::note(const char* format, ...) const {
     va_end(args);
 }
 
-ScenePools scene_pools(const scene::Scene& sc) {
+ScenePools scene_pools(const scene::Scene& sc,
+                       const std::function<void(const std::filesystem::path&)>& placed_again) {
     ScenePools pools;
     for (const scene::Model& m : sc.models) {
         const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
         const auto it = std::find(pools.paths.begin(), pools.paths.end(), p);
         pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
         pools.placed_before.push_back(it != pools.paths.end());
-        if (it == pools.paths.end()) pools.paths.push_back(p);
+        if (it == pools.paths.end())
+            pools.paths.push_back(p);
+        else if (placed_again)
+            placed_again(p);
     }
     return pools;
 }
