@@ -156,6 +156,16 @@ pool::PoolWriter& PoolStep::writer() {
     return *m_writer;
 }
 
+bool PoolStep::drop_sections(std::initializer_list<pool::SectionType> types) {
+    pool::PoolWriter& w = writer();
+    bool dropped = false;
+    for (const pool::SectionType t : types) {
+        dropped |= w.has(t);
+        w.remove(t);
+    }
+    return dropped;
+}
+
 void PoolStep::check_output_folder() const {
     const std::filesystem::path folder = std::filesystem::path(m_output).parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder))
@@ -186,14 +196,18 @@ void PoolStep::note(const char* format, ...) const {
     va_end(args);
 }
 
-ScenePools scene_pools(const scene::Scene& sc) {
+ScenePools scene_pools(const scene::Scene& sc,
+                       const std::function<void(const std::filesystem::path&)>& placed_again) {
     ScenePools pools;
     for (const scene::Model& m : sc.models) {
         const std::filesystem::path p = std::filesystem::weakly_canonical(m.pool);
         const auto it = std::find(pools.paths.begin(), pools.paths.end(), p);
         pools.of_model.push_back(static_cast<std::uint32_t>(it - pools.paths.begin()));
         pools.placed_before.push_back(it != pools.paths.end());
-        if (it == pools.paths.end()) pools.paths.push_back(p);
+        if (it == pools.paths.end())
+            pools.paths.push_back(p);
+        else if (placed_again)
+            placed_again(p);
     }
     return pools;
 }

@@ -26,6 +26,13 @@
 
 namespace {
 
+constexpr const char* k_description =
+    "PointRT benchmark: rays per second by ray kind and frames per second for three scenarios (primary; "
+    "one "
+    "shadow light; 4-bounce reflections), median over frames after warm-up (CUDA events on the GPU). "
+    "Without a "
+    "pool or scene it renders a synthetic room of --synthetic points from inside.";
+
 using namespace prt;
 
 struct Options {
@@ -226,15 +233,9 @@ void run(Options o, const tool::CommonOptions& common) {
 
 int main(int argc, char** argv) {
     Options o;
-    bool usage_error = false;  // camera options that contradict the scene: exit 2 like other usage errors
-    const int code = prt::tool::run(
-        argc, argv, "prt-bench",
-        "PointRT benchmark: rays per second by ray kind and frames per second for three scenarios (primary; "
-        "one "
-        "shadow light; 4-bounce reflections), median over frames after warm-up (CUDA events on the GPU). "
-        "Without a "
-        "pool or scene it renders a synthetic room of --synthetic points from inside.",
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
+    return prt::player::run_tool(
+        argc, argv, "prt-bench", k_description,
+        [&](CLI::App& app) {
             player::add_scene_options(
                 app, o.scene, "Pool with the octree sections (default: the synthetic room)",
                 "Synthetic room: splats per octree leaf before a split (thesis 3.2's X)", true);
@@ -254,13 +255,5 @@ int main(int argc, char** argv) {
             prt::player::add_backend_options(app, o.backend);
             prt::player::add_render_options(app, o.render);
         },
-        [&](const prt::tool::CommonOptions& common) {
-            try {
-                run(o, common);
-            } catch (const player::CameraUsageError& e) {
-                std::fprintf(stderr, "prt-bench: error: %s (see --help)\n", e.what());
-                usage_error = true;
-            }
-        });
-    return usage_error ? prt::k_exit_usage_error : code;
+        [&](const prt::tool::CommonOptions& common) { run(o, common); });
 }

@@ -69,6 +69,15 @@ SurfaceProbe::SurfaceProbe(std::shared_ptr<const pool::PoolFile> pool, const std
 
 SurfaceProbe::~SurfaceProbe() = default;
 
+template <class Hit>
+bool SurfaceProbe::record(bool hit, const Hit& h, std::uint64_t work, std::uint64_t truncated,
+                          ProbeHit& out) const {
+    if (hit) out.t = h.t, out.normal = h.normal;
+    m_work += work;
+    m_truncated += truncated;
+    return hit;
+}
+
 bool SurfaceProbe::trace(const core::Ray& r, ProbeHit& out) const {
     ++m_rays;
     bool hit = false;
@@ -78,25 +87,19 @@ bool SurfaceProbe::trace(const core::Ray& r, ProbeHit& out) const {
         const core::BlendOptions blend{m_s.blend_window, m_s.deep};
         hit = core::closest_hit_splats(*m_octree, m_colors, r.origin, r.dir, false, core::k_inf, blend,
                                        1u << 16, s, ws, m_s.leaf_culling);
-        if (hit) out.t = s.t, out.normal = s.normal;
-        m_work += ws.splat_tests;
-        m_truncated += ws.truncated;
+        return record(hit, s, ws.splat_tests, ws.truncated, out);
     } else if (m_kind == scene::SurfaceKind::iso) {
         core::IsoHit h;
         core::IsoStats st;
         hit = core::trace_iso(m_iso, r.origin, r.dir, core::k_inf, false, m_iso_params, h, st);
-        if (hit) out.t = h.t, out.normal = h.normal;
-        m_work += st.evaluations;
-        m_truncated += st.truncated;
+        return record(hit, h, st.evaluations, st.truncated, out);
     } else if (m_kind == scene::SurfaceKind::mls) {
         core::MlsHit h;
         core::MlsStats st;
         hit = m_s.mls_precision == "double"
                   ? core::trace_mls<double>(m_mls, r.origin, r.dir, core::k_inf, false, m_mls_params, h, st)
                   : core::trace_mls<float>(m_mls, r.origin, r.dir, core::k_inf, false, m_mls_params, h, st);
-        if (hit) out.t = h.t, out.normal = h.normal;
-        m_work += st.evaluations;
-        m_truncated += st.truncated;
+        return record(hit, h, st.evaluations, st.truncated, out);
     } else {
         core::PatchHit h;
         core::PatchStats st;

@@ -100,6 +100,11 @@ private:
     core::PatchTraceParams m_patch_params{};
     std::uint64_t m_bytes = 0;
     mutable std::atomic<std::uint64_t> m_rays{0}, m_work{0}, m_truncated{0};
+
+    /// A trace's result: `h`'s distance and normal into `out` when it hit; its work and truncated
+    /// walks added to the counters. Returns `hit`.
+    template <class Hit>
+    bool record(bool hit, const Hit& h, std::uint64_t work, std::uint64_t truncated, ProbeHit& out) const;
 };
 
 }  // namespace prt::bench

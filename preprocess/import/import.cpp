@@ -573,6 +573,12 @@ PointCloud finish(std::vector<Scan>& scans, std::vector<Report>& scan_reports, c
 
 }  // namespace
 
+void throw_missing_library(const std::filesystem::path& path, const char* what, const char* library,
+                           const char* hint) {
+    throw Error(path.string() + ": " + what + " needs " + library + ", and this build of prt-import has no " +
+                library + " (" + hint + ")");
+}
+
 Format detect_format(const fs::path& path) {
     const std::string ext = lower_extension(path);
     if (ext == ".ply") return Format::ply;

@@ -154,4 +154,9 @@ inline std::string options_json(const std::filesystem::path& input, const Option
 bool have_pcl();
 bool have_openmesh();
 
+/// For the stubs built without PCL or OpenMesh: throws "PATH: WHAT needs LIBRARY, and this build
+/// of prt-import has no LIBRARY (HINT)".
+[[noreturn]] void throw_missing_library(const std::filesystem::path& path, const char* what,
+                                        const char* library, const char* hint);
+
 }  // namespace prt::pre::import

@@ -1,6 +1,5 @@
 // Built instead of mesh_openmesh.cpp when OpenMesh is absent (PRT_WITH_OPENMESH=OFF or not found).
 #include "mesh.h"
-#include "prt/error.h"
 
 namespace prt::pre::import {
 
@@ -9,10 +8,9 @@ bool have_openmesh() {
 }
 
 MeshData read_mesh(const std::filesystem::path& path, Report&, bool) {
-    throw Error(path.string() +
-                ": mesh import needs OpenMesh, and this build of prt-import has no OpenMesh "
-                "(rebuild with PRT_WITH_OPENMESH=ON, or import a PLY's vertices with "
-                "--mesh-mode points)");
+    throw_missing_library(
+        path, "mesh import", "OpenMesh",
+        "rebuild with PRT_WITH_OPENMESH=ON, or import a PLY's vertices with --mesh-mode points");
 }
 
 }  // namespace prt::pre::import

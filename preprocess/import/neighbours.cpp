@@ -1,6 +1,7 @@
 #include "neighbours.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -9,6 +10,7 @@
 #include "progress.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
+#include "prt/symmetric_eigen.h"
 #include "prt/tool.h"
 
 namespace prt::pre::import {
@@ -20,44 +22,6 @@ double median_of(std::vector<float> v) {
     const std::size_t mid = (v.size() - 1) / 2;
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(mid), v.end());
     return v[mid];
-}
-
-/// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations (Golub & Van Loan,
-/// "Matrix Computations", 8.5): eigenvalues in w (ascending) and the eigenvector of w[0] in `v0`.
-void symmetric_eigen(double a[3][3], double w[3], double v0[3]) {
-    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    for (int sweep = 0; sweep < 50; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if (off <= 1e-30 * diag || off == 0.0) break;
-        for (int p = 0; p < 2; ++p)
-            for (int q = p + 1; q < 3; ++q) {
-                if (a[p][q] == 0.0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                const double t =
-                    (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1.0));
-                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-                for (int r = 0; r < 3; ++r) {  // A <- A J (columns p, q)
-                    const double arp = a[r][p], arq = a[r][q];
-                    a[r][p] = c * arp - s * arq;
-                    a[r][q] = s * arp + c * arq;
-                }
-                for (int r = 0; r < 3; ++r) {  // A <- J^T A (rows p, q)
-                    const double apr = a[p][r], aqr = a[q][r];
-                    a[p][r] = c * apr - s * aqr;
-                    a[q][r] = s * apr + c * aqr;
-                }
-                for (int r = 0; r < 3; ++r) {  // V <- V J
-                    const double vrp = v[r][p], vrq = v[r][q];
-                    v[r][p] = c * vrp - s * vrq;
-                    v[r][q] = s * vrp + c * vrq;
-                }
-            }
-    }
-    int order[3] = {0, 1, 2};
-    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] < a[y][y]; });
-    for (int i = 0; i < 3; ++i) w[i] = a[order[i]][order[i]];
-    for (int r = 0; r < 3; ++r) v0[r] = v[r][order[0]];
 }
 
 }  // namespace
@@ -244,7 +208,7 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
             for (std::uint32_t j = 0; j < m; ++j)
                 for (int a = 0; a < 3; ++a) mean[a] += d[j][a];
             for (int a = 0; a < 3; ++a) mean[a] /= m;
-            double c[3][3] = {};
+            std::array<Vec3d, 3> c{};
             for (std::uint32_t j = 0; j < m; ++j) {
                 const double x = d[j][0] - mean[0], y = d[j][1] - mean[1], z = d[j][2] - mean[2];
                 c[0][0] += x * x;
@@ -257,8 +221,9 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
             c[1][0] = c[0][1];
             c[2][0] = c[0][2];
             c[2][1] = c[1][2];
-            double w[3], v[3];
-            symmetric_eigen(c, w, v);
+            const SymmetricEigen eigen = symmetric_eigen(c);
+            const Vec3d& w = eigen.values;
+            const Vec3d& v = eigen.vectors[0];
             if (!(w[2] > 0.0) || w[1] <= 1e-10 * w[2]) continue;  // coincident or collinear
             const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
             if (!(len > 0.0) || !std::isfinite(len)) continue;

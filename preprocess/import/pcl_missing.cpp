@@ -1,6 +1,5 @@
 // Built instead of pcl_backend.cpp when PCL is absent (PRT_WITH_PCL=OFF or not found).
 #include "pcl_backend.h"
-#include "prt/error.h"
 
 namespace prt::pre::import {
 
@@ -9,9 +8,7 @@ bool have_pcl() {
 }
 
 PointCloud read_pcd(const std::filesystem::path& path, Report&, bool) {
-    throw Error(path.string() +
-                ": PCD import needs PCL, and this build of prt-import has no PCL "
-                "(rebuild with PRT_WITH_PCL=ON)");
+    throw_missing_library(path, "PCD import", "PCL", "rebuild with PRT_WITH_PCL=ON");
 }
 
 }  // namespace prt::pre::import

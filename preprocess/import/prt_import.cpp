@@ -205,7 +205,7 @@ int main(int argc, char** argv) {
         "prt-import",
         "Imports a scan (PLY, XYZ, PCD, pool), merged scans (--poses) or a mesh (PLY, OBJ, "
         "OFF, STL) into a pool file",
-        {.input = "", .output = "Pool file to write (written atomically)", .stats = ""});
+        prt::tool::PoolStep::generator_help("Pool file to write (written atomically)"));
     return step.run(
         argc, argv, [&](CLI::App& app) { cli.declare(app); },
         [&](prt::tool::PoolStep& s) { import_step(s, cli); });

@@ -12,6 +12,18 @@
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 
+namespace prt::iso {
+
+// --stats-json: the statistics whose keys are their member names; stats_json() adds the others.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BuildStats, points, skipped, radius_median, radii_clamped, active_leaves,
+                                   passive_leaves, min_level_splits, balance_splits, closure_leaves,
+                                   uncrossed_leaves, unsupported_corners, unsupported_leaves, leaves, nodes,
+                                   depth, corners, corner_slots, far_corners, seconds_radii, seconds_tree,
+                                   seconds_passive, seconds_balance, seconds_corners, seconds_closure,
+                                   seconds_encode)
+
+}  // namespace prt::iso
+
 namespace {
 
 constexpr const char* k_description =
@@ -104,40 +116,16 @@ Bake choose_colors(prt::tool::PoolStep& step, const std::string& point_colors,
 }
 
 nlohmann::json stats_json(const prt::iso::BuildStats& st) {
+    nlohmann::json j = st;
     nlohmann::json per_level = nlohmann::json::array();
     for (std::uint32_t l = 0; l <= prt::pool::k_max_iso_level; ++l)
         per_level.push_back(st.leaves_per_level[l]);
-    const double leaves = st.leaves > 0 ? double(st.leaves) : 1.0;
-    return {{"points", st.points},
-            {"skipped", st.skipped},
-            {"radius_median", st.radius_median},
-            {"radii_clamped", st.radii_clamped},
-            {"active_leaves", st.active_leaves},
-            {"passive_leaves", st.passive_leaves},
-            {"min_level_splits", st.min_level_splits},
-            {"balance_splits", st.balance_splits},
-            {"closure_leaves", st.closure_leaves},
-            {"uncrossed_leaves", st.uncrossed_leaves},
-            {"unsupported_corners", st.unsupported_corners},
-            {"unsupported_leaves", st.unsupported_leaves},
-            {"leaves", st.leaves},
-            {"leaves_per_level", per_level},
-            {"nodes", st.nodes},
-            {"depth", st.depth},
-            {"corners", st.corners},
-            {"corner_slots", st.corner_slots},
-            {"far_corners", st.far_corners},
-            {"mean_neighbours", double(st.mean_neighbours_x100) / 100.0},
-            {"iso_bytes", st.bytes},
-            {"iso_bytes_per_leaf", double(st.bytes) / leaves},
-            {"seconds_radii", st.seconds_radii},
-            {"seconds_tree", st.seconds_tree},
-            {"seconds_passive", st.seconds_passive},
-            {"seconds_balance", st.seconds_balance},
-            {"seconds_corners", st.seconds_corners},
-            {"seconds_closure", st.seconds_closure},
-            {"seconds_encode", st.seconds_encode},
-            {"seconds_build", st.seconds_total}};
+    j["leaves_per_level"] = per_level;
+    j["mean_neighbours"] = double(st.mean_neighbours_x100) / 100.0;
+    j["iso_bytes"] = st.bytes;
+    j["iso_bytes_per_leaf"] = double(st.bytes) / (st.leaves > 0 ? double(st.leaves) : 1.0);
+    j["seconds_build"] = st.seconds_total;
+    return j;
 }
 
 void report(const prt::tool::PoolStep& step, const prt::iso::BuildStats& st, const prt::pool::IsoInfo& info,

@@ -45,12 +45,10 @@ using Pools = prt::tool::ScenePools;
 
 /// The scene's pools: a pool placed twice is mapped at its first placement.
 Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
-    Pools pools = prt::tool::scene_pools(sc);
-    for (std::size_t m = 0; m < sc.models.size(); ++m)
-        if (pools.placed_before[m])
-            step.note("prt-lightmap: pool %s placed more than once: its first placement is mapped",
-                      pools.paths[pools.of_model[m]].string().c_str());
-    return pools;
+    return prt::tool::scene_pools(sc, [&](const std::filesystem::path& p) {
+        step.note("prt-lightmap: pool %s placed more than once: its first placement is mapped",
+                  p.string().c_str());
+    });
 }
 
 /// Traces each pool's samples and builds its light-map octree (thesis 5.3); the RenderScene maps

@@ -6,6 +6,16 @@
 #include "mls_pool.h"
 #include "prt/pool_step.h"
 
+namespace prt::mls {
+
+// --stats-json: the statistics whose keys are their member names; stats_json() adds the others.
+NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BuildStats, points, skipped, splats, nodes, leaves, empty_leaves, refs,
+                                   depth, sah_leaves, sah_cost, shrunk_leaves, culled_leaves, shrink_splits,
+                                   refs_removed, volume_before, volume_after, interval_boxes, collapsed,
+                                   seconds_sah, seconds_shrink)
+
+}  // namespace prt::mls
+
 namespace {
 
 constexpr const char* k_description =
@@ -52,28 +62,10 @@ void report(const prt::tool::PoolStep& step, const prt::mls::BuildOptions& opt,
 }
 
 nlohmann::json stats_json(const prt::mls::BuildStats& st) {
-    return {{"points", st.points},
-            {"skipped", st.skipped},
-            {"splats", st.splats},
-            {"nodes", st.nodes},
-            {"leaves", st.leaves},
-            {"empty_leaves", st.empty_leaves},
-            {"refs", st.refs},
-            {"depth", st.depth},
-            {"refs_per_leaf", st.mean_refs_per_leaf()},
-            {"sah_leaves", st.sah_leaves},
-            {"sah_cost", st.sah_cost},
-            {"shrunk_leaves", st.shrunk_leaves},
-            {"culled_leaves", st.culled_leaves},
-            {"shrink_splits", st.shrink_splits},
-            {"refs_removed", st.refs_removed},
-            {"volume_before", st.volume_before},
-            {"volume_after", st.volume_after},
-            {"interval_boxes", st.interval_boxes},
-            {"collapsed", st.collapsed},
-            {"seconds_sah", st.seconds_sah},
-            {"seconds_shrink", st.seconds_shrink},
-            {"seconds_build", st.seconds_total}};
+    nlohmann::json j = st;
+    j["refs_per_leaf"] = st.mean_refs_per_leaf();
+    j["seconds_build"] = st.seconds_total;
+    return j;
 }
 
 void mls_step(prt::tool::PoolStep& step, prt::mls::BuildOptions opt) {

@@ -94,9 +94,7 @@ void patches_step(prt::tool::PoolStep& step, const Options& o) {
 
 int main(int argc, char** argv) {
     Options o;
-    prt::tool::PoolStep step(
-        "prt-patches", k_description,
-        {.input = "", .output = "Pool file to write (replaced atomically)", .stats = ""});
+    prt::tool::PoolStep step("prt-patches", k_description, prt::tool::PoolStep::generator_help());
     return step.run(
         argc, argv,
         [&](CLI::App& app) {

@@ -62,12 +62,10 @@ using Pools = prt::tool::ScenePools;
 
 /// The scene's pools: a pool placed twice gets one map (local frame) from both placements.
 Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
-    Pools pools = prt::tool::scene_pools(sc);
-    for (std::size_t m = 0; m < sc.models.size(); ++m)
-        if (pools.placed_before[m])
-            step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
-                      step.input_path().c_str(), pools.paths[pools.of_model[m]].string().c_str());
-    return pools;
+    return prt::tool::scene_pools(sc, [&](const std::filesystem::path& p) {
+        step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
+                  step.input_path().c_str(), p.string().c_str());
+    });
 }
 
 /// Shoots the photons; the RenderScene maps the pools rewritten later: it lives only in here.

@@ -226,6 +226,17 @@ public:
             report(out, false);
             return;
         }
+        split_node(out, s, node, level, cell, b, e,
+                   [&](std::uint32_t child, const std::uint32_t child_cell[3], std::size_t cb,
+                       std::size_t ce) { build(out, s, child, level + 1, child_cell, cb, ce); });
+    }
+
+    /// Splits node `node` of `out` (at `level`, over splat lists [b, e) of `s`): allocates its 8
+    /// children, makes it internal and calls `child(index, cell, begin, end)` on each child in
+    /// order (depth first), the child's list on top of the stack.
+    template <class Child>
+    void split_node(LocalTree& out, Scratch& s, std::uint32_t node, std::uint32_t level,
+                    const std::uint32_t cell[3], std::size_t b, std::size_t e, Child&& child) {
         std::size_t cb[8], ce[8];
         split_lists(s, b, e, level, cell, cb, ce);
         const std::size_t first = out.nodes.size();
@@ -236,7 +247,7 @@ public:
         for (unsigned c = 0; c < 8; ++c) {
             const std::uint32_t cc[3] = {2 * cell[0] + (c & 1u), 2 * cell[1] + (c >> 1 & 1u),
                                          2 * cell[2] + (c >> 2 & 1u)};
-            build(out, s, static_cast<std::uint32_t>(first + c), level + 1, cc, cb[c], ce[c]);
+            child(static_cast<std::uint32_t>(first + c), cc, cb[c], ce[c]);
         }
         s.stack.resize(mark);
     }
@@ -269,20 +280,12 @@ public:
             m_tasks.push_back(std::move(task));
             return;
         }
-        std::size_t cb[8], ce[8];
-        split_lists(s, b, e, level, cell, cb, ce);
-        const std::size_t first = m_top.nodes.size();
-        m_top.nodes.resize(first + 8);
-        m_top.nodes[node] = make_node(NodeType::internal, static_cast<std::uint32_t>(first));
         m_top.depth = std::max(m_top.depth, level);
-        report(m_top, false);
-        const std::size_t mark = cb[0];
-        for (unsigned c = 0; c < 8; ++c) {
-            const std::uint32_t cc[3] = {2 * cell[0] + (c & 1u), 2 * cell[1] + (c >> 1 & 1u),
-                                         2 * cell[2] + (c >> 2 & 1u)};
-            build_top(s, static_cast<std::uint32_t>(first + c), level + 1, cc, cb[c], ce[c], task_threshold);
-        }
-        s.stack.resize(mark);
+        split_node(
+            m_top, s, node, level, cell, b, e,
+            [&](std::uint32_t child, const std::uint32_t child_cell[3], std::size_t cb, std::size_t ce) {
+                build_top(s, child, level + 1, child_cell, cb, ce, task_threshold);
+            });
     }
 
     SplatOctree run(unsigned threads, OctreeStats& stats) {

@@ -58,14 +58,10 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
     });
     progress.finish();
 
-    pool::PoolWriter& writer = step.writer();
-    bool dropped_octree = false;
-    for (const pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
-                                      pool::SectionType::leaf_info, pool::SectionType::splats}) {
-        dropped_octree |= writer.has(t);
-        writer.remove(t);
-    }
-    writer.add_array(pool::SectionType::radii, std::move(radii));
+    const bool dropped_octree =
+        step.drop_sections({pool::SectionType::octree_info, pool::SectionType::octree_nodes,
+                            pool::SectionType::leaf_info, pool::SectionType::splats});
+    step.writer().add_array(pool::SectionType::radii, std::move(radii));
     const nlohmann::json parameters = {
         {"k", params.k}, {"clamp_factor", params.clamp_factor}, {"clamp_scope", scope}};
     const std::uint64_t bytes = step.write(parameters);

@@ -368,9 +368,7 @@ void sample_step(prt::tool::PoolStep& step, const Cli& cli, const prt::synth::Sy
 
 int main(int argc, char** argv) {
     Cli cli;
-    prt::tool::PoolStep step(
-        "prt-synth", k_description,
-        {.input = "", .output = "Pool file to write (replaced atomically)", .stats = ""});
+    prt::tool::PoolStep step("prt-synth", k_description, prt::tool::PoolStep::generator_help());
     return step.run(
         argc, argv, [&](CLI::App& app) { cli.declare(app); },
         [&](prt::tool::PoolStep& s) {

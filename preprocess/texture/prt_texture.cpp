@@ -98,14 +98,10 @@ void texture_step(tool::PoolStep& step, Options o) {
         blend, o.threads);
     const double bake_seconds = tool::now_seconds() - bake_start;
 
-    pool::PoolWriter& writer = step.writer();
-    bool dropped_iso = false;
-    for (const pool::SectionType t : {pool::SectionType::iso_info, pool::SectionType::iso_nodes,
-                                      pool::SectionType::iso_leaves_q8, pool::SectionType::iso_leaves_f32}) {
-        dropped_iso |= writer.has(t);
-        writer.remove(t);
-    }
-    writer.add_array(pool::SectionType::colors, std::move(colors));
+    const bool dropped_iso =
+        step.drop_sections({pool::SectionType::iso_info, pool::SectionType::iso_nodes,
+                            pool::SectionType::iso_leaves_q8, pool::SectionType::iso_leaves_f32});
+    step.writer().add_array(pool::SectionType::colors, std::move(colors));
     const nlohmann::json parameters = {{"image", absolute_string(o.image_x)},
                                        {"image_y", absolute_string(o.image_y)},
                                        {"image_z", absolute_string(o.image_z)},

@@ -1,10 +1,9 @@
 #include "player_options.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
-
-#include "prt/tool.h"
 
 namespace prt::player {
 
@@ -313,6 +312,23 @@ void apply_camera(const CameraOverrides& o, rt::RenderScene& rs, bool framed, bo
     }
     if (!rule.empty()) tool::note(quiet, "%s: --up auto: %s", tool, rule.c_str());
     if (framed) rs.place_default_light();
+}
+
+int run_tool(int argc, char** argv, const std::string& name, const std::string& description,
+             const std::function<void(CLI::App&)>& setup,
+             const std::function<void(const tool::CommonOptions&)>& body) {
+    bool usage_error = false;
+    const int code = tool::run(
+        argc, argv, name, description, [&](CLI::App& app, tool::CommonOptions&) { setup(app); },
+        [&](const tool::CommonOptions& common) {
+            try {
+                body(common);
+            } catch (const CameraUsageError& e) {
+                std::fprintf(stderr, "%s: error: %s (see --help)\n", name.c_str(), e.what());
+                usage_error = true;
+            }
+        });
+    return usage_error ? k_exit_usage_error : code;
 }
 
 }  // namespace prt::player

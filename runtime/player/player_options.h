@@ -3,12 +3,14 @@
 
 #include <CLI/CLI.hpp>
 #include <cstdint>
+#include <functional>
 #include <string>
 
 #include "prt/core/scene_view.h"
 #include "prt/error.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
+#include "prt/tool.h"
 
 namespace prt::player {
 
@@ -91,5 +93,12 @@ rt::DVec3 parse_vec3(const std::string& text, const std::string& option);
 /// the first model). Throws CameraUsageError when the eye equals the look-at point or the up is
 /// along the view. `tool` prefixes the note saying which rule chose an automatic up.
 void apply_camera(const CameraOverrides& c, rt::RenderScene& rs, bool framed, bool quiet, const char* tool);
+
+/// prt::tool::run for prt-play and prt-bench: a CameraUsageError the body throws (camera options
+/// that contradict the scene) prints "NAME: error: MESSAGE (see --help)" and exits 2 like other
+/// usage errors.
+int run_tool(int argc, char** argv, const std::string& name, const std::string& description,
+             const std::function<void(CLI::App&)>& setup,
+             const std::function<void(const tool::CommonOptions&)>& body);
 
 }  // namespace prt::player

@@ -176,8 +176,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
 
 int main(int argc, char** argv) {
     Options o;
-    bool usage_error = false;  // camera options that contradict the scene: exit 2 like other usage errors
-    const int code = prt::tool::run(
+    return prt::player::run_tool(
         argc, argv, "prt-play",
         "PointRT player: ray traces (or path traces) pools on the CPU or a GPU, in a window or headless: "
         "splats (thesis ch. 2-3, 5), Implicit Surface Octrees (ch. 4), the MLS surface (Wald-Seidel 2005) "
@@ -186,7 +185,7 @@ int main(int argc, char** argv) {
         "--scene, the "
         "scene's camera, lights, materials and settings are used and the pool (if given) replaces the "
         "scene's models.",
-        [&](CLI::App& app, prt::tool::CommonOptions&) {
+        [&](CLI::App& app) {
             app.add_option(
                    "pool", o.pool,
                    "Pool file with a surface's sections (prt-octree, prt-iso, prt-mls or prt-patches)")
@@ -231,13 +230,5 @@ int main(int argc, char** argv) {
             prt::player::add_render_options(app, o.render);
             prt::player::add_sampling_options(app, o.render);
         },
-        [&](const prt::tool::CommonOptions& common) {
-            try {
-                run(o, common);
-            } catch (const prt::player::CameraUsageError& e) {
-                std::fprintf(stderr, "prt-play: error: %s (see --help)\n", e.what());
-                usage_error = true;
-            }
-        });
-    return usage_error ? prt::k_exit_usage_error : code;
+        [&](const prt::tool::CommonOptions& common) { run(o, common); });
 }

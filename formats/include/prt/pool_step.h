@@ -10,6 +10,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdint>
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -62,6 +63,12 @@ public:
                 .stats = std::move(stats)};
     }
 
+    /// Help of a step that makes a pool from other input (an importer, a generator): no INPUT
+    /// pool and no --stats-json, only -o with `output` as its help.
+    static Help generator_help(std::string output = "Pool file to write (replaced atomically)") {
+        return {.input = "", .output = std::move(output), .stats = ""};
+    }
+
     PoolStep(std::string tool, std::string description, Help help);
     PoolStep(std::string tool, std::string description)
         : PoolStep(std::move(tool), std::move(description), Help{}) {}
@@ -93,6 +100,9 @@ public:
     const pool::PoolFile& input();
     /// The writer of OUTPUT; INPUT's sections are carried over on first use when the step has one.
     pool::PoolWriter& writer();
+    /// Removes `types` from writer() (sections that what the step writes makes stale); returns
+    /// whether any of them was there, for the step's note.
+    bool drop_sections(std::initializer_list<pool::SectionType> types);
     /// Throws "OUTPUT: cannot write: folder F does not exist" (to fail before a long build).
     void check_output_folder() const;
     /// Appends the provenance record {tool, version, `parameters`} and writes OUTPUT atomically

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "prt/formats/scene.h"
@@ -17,7 +18,10 @@ struct ScenePools {
     std::vector<bool> placed_before;           ///< per model: its pool was placed by an earlier model
 };
 
-/// Groups the models of `sc` by pool file (std::filesystem::weakly_canonical paths).
-ScenePools scene_pools(const scene::Scene& sc);
+/// Groups the models of `sc` by pool file (std::filesystem::weakly_canonical paths); calls
+/// `placed_again` (when given) with the pool of each model whose pool an earlier model placed, in
+/// model order (for the step's note on what it does with such a pool).
+ScenePools scene_pools(const scene::Scene& sc,
+                       const std::function<void(const std::filesystem::path&)>& placed_again = {});
 
 }  // namespace prt::tool

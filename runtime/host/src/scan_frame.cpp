@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <limits>
 
+#include "prt/symmetric_eigen.h"
+
 namespace prt::rt {
 
 namespace {
@@ -27,46 +29,6 @@ struct Rng {
     std::size_t below(std::size_t n) { return static_cast<std::size_t>(next() % n); }
 };
 
-/// Eigen-decomposition of a symmetric 3x3 matrix by cyclic Jacobi rotations (Golub and Van Loan,
-/// 8.5): eigenvalues ascending, vectors[i] the unit eigenvector of values[i].
-void eigen_symmetric(std::array<DVec3, 3> a, DVec3& values, std::array<DVec3, 3>& vectors) {
-    std::array<DVec3, 3> v{{{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}};
-    for (int sweep = 0; sweep < 50; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        if (off < 1e-30 * (a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2]) || off == 0) break;
-        for (int p = 0; p < 2; ++p) {
-            for (int q = p + 1; q < 3; ++q) {
-                if (a[p][q] == 0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
-                const double t =
-                    (theta >= 0 ? 1.0 : -1.0) / (std::fabs(theta) + std::sqrt(theta * theta + 1));
-                const double c = 1 / std::sqrt(t * t + 1), s = t * c;
-                for (int k = 0; k < 3; ++k) {  // A <- J^T A J, columns then rows
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
-    std::array<int, 3> order{0, 1, 2};
-    std::sort(order.begin(), order.end(), [&](int i, int j) { return a[i][i] < a[j][j]; });
-    for (int i = 0; i < 3; ++i) {
-        values[i] = a[order[i]][order[i]];
-        vectors[i] = normalized(DVec3{v[0][order[i]], v[1][order[i]], v[2][order[i]]});
-    }
-}
-
 /// Centroid and covariance eigen-decomposition of the points `idx` of `p`.
 void fit_plane(const std::vector<DVec3>& p, const std::vector<std::size_t>& idx, DVec3& centroid,
                DVec3& values, std::array<DVec3, 3>& vectors) {
@@ -80,7 +42,9 @@ void fit_plane(const std::vector<DVec3>& p, const std::vector<std::size_t>& idx,
             for (int k = 0; k < 3; ++k) c[r][k] += d[r] * d[k];
     }
     for (auto& row : c) row = mul(row, 1.0 / static_cast<double>(std::max<std::size_t>(idx.size(), 1)));
-    eigen_symmetric(c, values, vectors);
+    const SymmetricEigen e = symmetric_eigen(c);
+    values = e.values;
+    for (int i = 0; i < 3; ++i) vectors[i] = normalized(e.vectors[i]);
 }
 
 /// The nearest-rank percentile q of `v` (reordered).
