@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "prt/error.h"
+#include "ray_reference.h"
 
 namespace prt::bench {
 
@@ -155,19 +156,9 @@ bool MeshReference::intersect(const D3& o, const D3& d, double t_max, MeshHit& h
             for (std::uint32_t i = n.first; i < n.first + n.count; ++i) {
                 // Moller-Trumbore, two-sided
                 const auto& t = m_tris[i];
-                const D3 &a = m_vertices[t[0]], &b = m_vertices[t[1]], &c = m_vertices[t[2]];
-                const D3 e1 = sub(b, a), e2 = sub(c, a);
-                const D3 p = cross(d, e2);
-                const double det = dot(e1, p);
-                if (det == 0) continue;
-                const double inv_det = 1.0 / det;
-                const D3 s = sub(o, a);
-                const double u = dot(s, p) * inv_det;
-                if (u < 0 || u > 1) continue;
-                const D3 q = cross(s, e1);
-                const double v = dot(d, q) * inv_det;
-                if (v < 0 || u + v > 1) continue;
-                const double th = dot(e2, q) * inv_det;
+                double th = 0, u = 0, v = 0;
+                if (!ray_triangle(o, d, m_vertices[t[0]], m_vertices[t[1]], m_vertices[t[2]], 0, th, u, v))
+                    continue;
                 if (th > 0 && th < best) best = th, best_tri = i, best_u = u, best_v = v, found = true;
             }
             continue;

@@ -54,6 +54,7 @@
 #include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 #include "prt/vec3.h"
+#include "ray_reference.h"
 #include "surface_probe.h"
 
 namespace {
@@ -123,17 +124,7 @@ View make_view(const Options& o, const D3& origin, const D3& lo, const D3& hi) {
 bool box_interval(const D3& o, const D3& d, const D3& lo, const D3& hi, double& t0, double& t1) {
     t0 = 0;
     t1 = std::numeric_limits<double>::infinity();
-    for (int a = 0; a < 3; ++a) {
-        if (d[a] == 0) {
-            if (o[a] < lo[a] || o[a] > hi[a]) return false;
-            continue;
-        }
-        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-    }
-    return t0 <= t1;
+    return bench::clip_to_box(o, d, lo, hi, t0, t1);
 }
 
 // ---- Ground truth: patches (independent tessellation + long double Newton) -------------------

@@ -13,20 +13,18 @@
 #include <vector>
 
 #include "point_cloud.h"
+#include "runtime/tool_fixture.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace prt;
 
-class PoolStepTest : public ::testing::Test {
+class PoolStepTest : public prt::test::FolderTest {
 protected:
+    PoolStepTest() : FolderTest("prt_pool_step_") {}
     void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir =
-            fs::temp_directory_path() / ("prt_pool_step_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
+        FolderTest::SetUp();
         // A 10-point pool with positions and normals.
         pre::PointCloud c;
         for (int i = 0; i < 10; ++i) {
@@ -38,8 +36,6 @@ protected:
         w.add_provenance("pool_step_test", "0", R"({"made": "here"})");
         w.write(path("in.pool"));
     }
-    void TearDown() override { fs::remove_all(m_dir); }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
 
     /// Runs a step that adds a radii section of `radius` (or throws `error` when non-empty).
     int run_step(std::vector<std::string> args, tool::PoolStep::Help help = {}, const std::string& error = {},
@@ -62,8 +58,6 @@ protected:
                 s.write_stats({{"points", positions.size()}});
             });
     }
-
-    fs::path m_dir;
 };
 
 TEST_F(PoolStepTest, CarriesOverAddsItsSectionAndProvenance) {

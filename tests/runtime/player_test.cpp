@@ -4,12 +4,14 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "prt/runtime/backend.h"
 #include "prt/runtime/image.h"
 #include "test_scene.h"
+#include "tool_fixture.h"
 #include "tool_run.h"
 
 namespace prt::test {
@@ -17,27 +19,32 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class PlayerTest : public ::testing::Test {
+class PlayerTest : public FolderTest {
 protected:
+    PlayerTest() : FolderTest("prt_player_test_") {}
     void SetUp() override {
-        m_dir = fs::path(::testing::TempDir()) / ("prt_player_test_" + std::to_string(::getpid()));
-        fs::create_directories(m_dir);
+        FolderTest::SetUp();
         const auto ball = make_pool(
             make_model(sphere_points({10, 20, 30}, 1.0, 4000, false, {250, 60, 40, 255}), {10, 20, 30}));
-        pool::PoolWriter w;
-        w.carry_over(*ball);  // views into `ball`: it must outlive write()
-        w.write(m_dir / "ball.pool");
+        write_pool(*ball, m_dir / "ball.pool");
     }
-    void TearDown() override { fs::remove_all(m_dir); }
-    fs::path m_dir;
+    /// prt-play --headless on `pool` (in the folder) with `args`, writing `out` (in the folder).
+    ToolRun play(const std::string& pool, const std::string& args, const std::string& out) const {
+        return run_tool("prt-play",
+                        (m_dir / pool).string() + " --headless " + args + " --out " + (m_dir / out).string(),
+                        m_dir);
+    }
 };
+
+/// A failure of exit code 1 with one line on stderr that holds each of `words`.
+void expect_one_line_error(const ToolRun& r, std::initializer_list<const char*> words) {
+    EXPECT_EQ(r.code, 1);
+    expect_one_line(r.err, words);
+}
 
 TEST_F(PlayerTest, RendersAPoolAloneToPpm) {
     const fs::path out = m_dir / "ball.ppm";
-    const ToolRun r = run_tool("prt-play",
-                               (m_dir / "ball.pool").string() +
-                                   " --headless --backend cpu --width 40 --height 30 --out " + out.string(),
-                               m_dir);
+    const ToolRun r = play("ball.pool", "--backend cpu --width 40 --height 30", "ball.ppm");
     ASSERT_EQ(r.code, 0) << r.err;
     const rt::Image img = rt::read_ppm(out);
     EXPECT_EQ(img.width, 40u);
@@ -50,13 +57,8 @@ TEST_F(PlayerTest, RendersAPoolAloneToPpm) {
 }
 
 TEST_F(PlayerTest, QuietAndFramesAndPfm) {
-    const fs::path out = m_dir / "f_%02d.pfm";
     const ToolRun r =
-        run_tool("prt-play",
-                 (m_dir / "ball.pool").string() +
-                     " --headless --quiet --backend cpu --width 16 --height 16 --frames 3 --orbit 30 --out " +
-                     out.string(),
-                 m_dir);
+        play("ball.pool", "--quiet --backend cpu --width 16 --height 16 --frames 3 --orbit 30", "f_%02d.pfm");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_TRUE(r.err.empty()) << "--quiet must silence stderr: " << r.err;
     for (int f = 0; f < 3; ++f) {
@@ -71,19 +73,10 @@ TEST_F(PlayerTest, QuietAndFramesAndPfm) {
 TEST_F(PlayerTest, CudaWithoutDeviceFailsWithOneLine) {
     const rt::BackendAvailability a = rt::backend_availability();
     if (a.cuda_device) GTEST_SKIP() << "a CUDA device exists here: nothing to refuse";
-    const ToolRun r = run_tool(
-        "prt-play",
-        (m_dir / "ball.pool").string() + " --headless --backend cuda --out " + (m_dir / "x.ppm").string(),
-        m_dir);
-    EXPECT_EQ(r.code, 1);
-    EXPECT_EQ(lines(r.err), 1) << r.err;
-    EXPECT_NE(r.err.find("cuda"), std::string::npos) << r.err;
+    expect_one_line_error(play("ball.pool", "--backend cuda", "x.ppm"), {"cuda"});
     EXPECT_FALSE(fs::exists(m_dir / "x.ppm"));
     // auto falls back to the CPU.
-    const ToolRun ok = run_tool("prt-play",
-                                (m_dir / "ball.pool").string() +
-                                    " --headless -q --width 8 --height 8 --out " + (m_dir / "y.ppm").string(),
-                                m_dir);
+    const ToolRun ok = play("ball.pool", "-q --width 8 --height 8", "y.ppm");
     EXPECT_EQ(ok.code, 0) << ok.err;
 }
 
@@ -96,19 +89,9 @@ TEST_F(PlayerTest, ErrorsNameTheFileAndTheProblem) {
                    pool::SectionType::leaf_info, pool::SectionType::splats})
         w.remove(t);
     w.write(m_dir / "points.pool");
-    const ToolRun r = run_tool(
-        "prt-play",
-        (m_dir / "points.pool").string() + " --headless --backend cpu --out " + (m_dir / "z.ppm").string(),
-        m_dir);
-    EXPECT_EQ(r.code, 1);
-    EXPECT_EQ(lines(r.err), 1) << r.err;
-    EXPECT_NE(r.err.find("points.pool"), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("octree"), std::string::npos) << r.err;
+    expect_one_line_error(play("points.pool", "--backend cpu", "z.ppm"), {"points.pool", "octree"});
     // An output format this build cannot write.
-    const ToolRun bad = run_tool("prt-play",
-                                 (m_dir / "ball.pool").string() + " --headless --backend cpu --out " +
-                                     (m_dir / "z.unknownext").string(),
-                                 m_dir);
+    const ToolRun bad = play("ball.pool", "--backend cpu", "z.unknownext");
     EXPECT_NE(bad.code, 0);
     EXPECT_EQ(lines(bad.err), 1) << bad.err;
     // No input at all is a usage error.
@@ -268,7 +251,8 @@ TEST_F(PlayerTest, BenchRefusesASurfaceTheSyntheticRoomLacks) {
     const fs::path json = m_dir / "iso.json";
     const ToolRun r = run_tool("prt-bench",
                                "--synthetic 3000 --width 8 --height 8 --frames 1 --warmup 0 --backend cpu "
-                               "--surface iso --quiet --json " + json.string(),
+                               "--surface iso --quiet --json " +
+                                   json.string(),
                                m_dir);
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("synthetic room: no ISO sections (run prt-iso)"), std::string::npos) << r.err;

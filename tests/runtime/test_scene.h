@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -280,6 +281,14 @@ inline std::shared_ptr<const pool::PoolFile> make_pool(const TestModel& m, bool 
     w.add_array(pool::SectionType::leaf_info, m.octree.leaf_info);
     w.add_array(pool::SectionType::splats, m.octree.splats);
     return std::make_shared<const pool::PoolFile>(pool::PoolFile::from_bytes(w.serialize(), "test model"));
+}
+
+/// Writes a copy of pool `p` (e.g. make_pool's) to `path`; PoolWriter::carry_over keeps views into
+/// `p`, which outlives the write here.
+inline void write_pool(const pool::PoolFile& p, const std::filesystem::path& path) {
+    pool::PoolWriter w;
+    w.carry_over(p);
+    w.write(path);
 }
 
 }  // namespace prt::test

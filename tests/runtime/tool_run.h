@@ -2,11 +2,13 @@
 // stderr (the end-to-end tests of prt-play and prt-bench).
 #pragma once
 
+#include <gtest/gtest.h>
 #include <sys/wait.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 
@@ -40,6 +42,12 @@ inline int lines(const std::string& s) {
     int n = 0;
     for (char c : s) n += c == '\n';
     return n;
+}
+
+/// `err` (a tool's stderr) is one line holding each of `words`.
+inline void expect_one_line(const std::string& err, std::initializer_list<const char*> words) {
+    EXPECT_EQ(lines(err), 1) << err;
+    for (const char* w : words) EXPECT_NE(err.find(w), std::string::npos) << w << ": " << err;
 }
 
 /// Whether `program` is on the PATH.

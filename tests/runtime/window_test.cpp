@@ -11,6 +11,7 @@
 
 #include "prt/runtime/image.h"
 #include "test_scene.h"
+#include "tool_fixture.h"
 #include "tool_run.h"
 
 namespace prt::test {
@@ -18,22 +19,18 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class WindowTest : public ::testing::Test {
+class WindowTest : public FolderTest {
 protected:
+    WindowTest() : FolderTest("prt_window_test_") {}
     void SetUp() override {
-        m_dir = fs::path(::testing::TempDir()) / ("prt_window_test_" + std::to_string(::getpid()));
-        fs::create_directories(m_dir);
+        FolderTest::SetUp();
         // A red ball in front of a grey wall: shading, a shadow and a silhouette to compare.
         std::vector<TestPoint> pts = sphere_points({0, 0, 0}, 1.0, 6000, false, {250, 60, 40, 255});
         const auto wall = rect_points({-3, -3, -1.5}, {6, 0, 0}, {0, 6, 0}, {0, 0, 1}, 90);
         pts.insert(pts.end(), wall.begin(), wall.end());
         const auto pool = make_pool(make_model(pts, {0, 0, 0}));
-        pool::PoolWriter w;
-        w.carry_over(*pool);  // views into `pool`: it must outlive write()
-        w.write(m_dir / "ball.pool");
+        write_pool(*pool, m_dir / "ball.pool");
     }
-    void TearDown() override { fs::remove_all(m_dir); }
-    fs::path m_dir;
 };
 
 int channel(std::uint32_t p, int c) {

@@ -7,11 +7,13 @@
 #include <array>
 #include <bit>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "import.h"
@@ -54,6 +56,31 @@ protected:
 
     fs::path m_dir;
 };
+
+/// TempDirTest for an optional reader: each test skips where this build lacks it (`available`
+/// false; `what` names it in the message).
+class OptionalReaderTest : public TempDirTest {
+protected:
+    OptionalReaderTest(bool available, std::string what) : m_available(available), m_what(std::move(what)) {}
+    void SetUp() override {
+        TempDirTest::SetUp();
+        if (!m_available) GTEST_SKIP() << "this build has no " << m_what;
+    }
+
+    bool m_available;
+    std::string m_what;
+};
+
+/// Points as XYZ text, one "x y z" line each, with every digit a double holds.
+inline std::string xyz_text(const std::vector<std::array<double, 3>>& pts) {
+    std::string s;
+    char buf[128];
+    for (const auto& p : pts) {
+        std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
+        s += buf;
+    }
+    return s;
+}
 
 /// Appends the bytes of a value, little or big endian.
 template <class T>

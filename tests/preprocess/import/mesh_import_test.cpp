@@ -13,12 +13,9 @@ using namespace prt_import_test;
 using prt::pre::import::Options;
 using prt::pre::import::Report;
 
-class MeshTest : public TempDirTest {
+class MeshTest : public OptionalReaderTest {
 protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        if (!prt::pre::import::have_openmesh()) GTEST_SKIP() << "this build has no OpenMesh";
-    }
+    MeshTest() : OptionalReaderTest(prt::pre::import::have_openmesh(), "OpenMesh") {}
 };
 
 // A square pyramid: base corners (+-1, +-1, 0), apex (0, 0, 1); faces wound outward.

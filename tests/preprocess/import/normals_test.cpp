@@ -29,16 +29,6 @@ std::vector<std::array<double, 3>> fibonacci_sphere(int n, std::array<double, 3>
     return pts;
 }
 
-std::string xyz_text(const std::vector<std::array<double, 3>>& pts) {
-    std::string s;
-    char buf[96];
-    for (const auto& p : pts) {
-        std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
-        s += buf;
-    }
-    return s;
-}
-
 struct SphereCheck {
     double outward = 0;     // fraction with n . (p - c) > 0
     double max_angle = 0;   // degrees, to the true normal up to sign

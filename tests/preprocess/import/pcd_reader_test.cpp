@@ -12,12 +12,9 @@ namespace {
 using namespace prt_import_test;
 using prt::pre::import::Report;
 
-class PcdTest : public TempDirTest {
+class PcdTest : public OptionalReaderTest {
 protected:
-    void SetUp() override {
-        TempDirTest::SetUp();
-        if (!prt::pre::import::have_pcl()) GTEST_SKIP() << "this build has no PCL";
-    }
+    PcdTest() : OptionalReaderTest(prt::pre::import::have_pcl(), "PCL") {}
 };
 
 std::string pcd_header(const std::string& fields, const std::string& size, const std::string& type,

@@ -33,16 +33,6 @@ Vec3 quat_rotate(double w, double x, double y, double z, const Vec3& v) {
             -tw * z + tz * w - tx * y + ty * x};
 }
 
-std::string xyz_text(const std::vector<Vec3>& pts) {
-    std::string s;
-    char buf[128];
-    for (const auto& p : pts) {
-        std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
-        s += buf;
-    }
-    return s;
-}
-
 using Poses = TempDirTest;
 
 /// Reading the pose list `file` (whose text is `text`) fails with one line, "<file>: ...", containing

@@ -5,8 +5,6 @@
 // leaves searched, trilinear evaluations), and, for prt-synth pools, the accuracy against the
 // analytic shape (distance of the hit from the surface, normal angle). Not a test:
 // scripts/bench-iso.sh runs it.
-#include <time.h>
-
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -19,6 +17,7 @@
 #include <vector>
 
 #include "analytic.h"
+#include "cpu_seconds.h"
 #include "iso_pool.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
@@ -28,11 +27,7 @@ namespace {
 
 using prt::core::Vec3;
 
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
+using prt::test::cpu_seconds;
 
 struct Frame {
     std::vector<prt::core::IsoHit> hits;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "analytic.h"
+#include "d3_math.h"
 #include "iso_build.h"
 #include "iso_pool.h"
 #include "prt/core/iso.h"
@@ -21,20 +22,11 @@
 
 namespace prt::iso_test {
 
-using D3 = std::array<double, 3>;
+using test::D3;
+using test::d3;
+using test::dot3;
+using test::norm3;
 
-inline D3 d3(const pool::Float3& f) {
-    return {f.x, f.y, f.z};
-}
-inline D3 d3(const core::Vec3& v) {
-    return {v.x, v.y, v.z};
-}
-inline double dot3(const D3& a, const D3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-inline double norm3(const D3& a) {
-    return std::sqrt(dot3(a, a));
-}
 inline D3 sub3(const D3& a, const D3& b) {
     return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
 }

@@ -13,6 +13,7 @@
 
 #include "iso_test_util.h"
 #include "point_cloud.h"
+#include "preprocess/cloud_pool.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
 #include "runtime/tool_fixture.h"
@@ -36,11 +37,7 @@ protected:
             c.colors.push_back(s.colors[i]);
             if (radii) c.radii.push_back(0.05f);
         }
-        pool::PoolWriter w;
-        pre::write_point_sections(c, w);
-        w.add_provenance("test", "0", "{}");
-        w.write(path(name));
-        return path(name);
+        return prt::test::write_cloud_pool(c, path(name));
     }
 };
 

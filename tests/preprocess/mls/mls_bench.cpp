@@ -4,8 +4,6 @@
 // steps, cells, surface intersections, splats), and accuracy: against the reference settings
 // (mls_trace.h reference_params, double sums) and, for prt-synth pools, against the analytic shape.
 // Not a test: scripts/bench-mls.sh runs it.
-#include <time.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,6 +14,7 @@
 #include <vector>
 
 #include "analytic.h"
+#include "cpu_seconds.h"
 #include "mls_pool.h"
 #include "mls_trace.h"
 #include "prt/formats/pool.h"
@@ -26,13 +25,7 @@ namespace {
 
 using prt::core::Vec3;
 
-/// CPU seconds of the whole process (all threads): on a machine shared with other jobs this is
-/// steadier than wall time, which also counts the time the benchmark waits for a core.
-double cpu_seconds() {
-    timespec ts{};
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
-}
+using prt::test::cpu_seconds;
 
 std::vector<unsigned> parse_list(const std::string& s) {
     std::vector<unsigned> out;

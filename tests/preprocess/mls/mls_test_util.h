@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "d3_math.h"
 #include "mls_build.h"
 #include "mls_pool.h"
 #include "prt/core/mls.h"
@@ -18,20 +19,10 @@
 
 namespace prt::mls_test {
 
-using D3 = std::array<double, 3>;
-
-inline D3 d3(const pool::Float3& f) {
-    return {f.x, f.y, f.z};
-}
-inline D3 d3(const core::Vec3& v) {
-    return {v.x, v.y, v.z};
-}
-inline double dot3(const D3& a, const D3& b) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-inline double norm3(const D3& a) {
-    return std::sqrt(dot3(a, a));
-}
+using test::D3;
+using test::d3;
+using test::dot3;
+using test::norm3;
 
 /// Points with normals and splat radii (the inputs of build_mls).
 struct PointSet {

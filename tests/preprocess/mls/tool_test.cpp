@@ -12,6 +12,7 @@
 
 #include "mls_test_util.h"
 #include "point_cloud.h"
+#include "preprocess/cloud_pool.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/surface_pools.h"
 #include "runtime/tool_fixture.h"
@@ -33,11 +34,7 @@ protected:
             c.normals.push_back(s.normals[i]);
             if (radii) c.radii.push_back(s.radii[i]);
         }
-        pool::PoolWriter w;
-        pre::write_point_sections(c, w);
-        w.add_provenance("test", "0", "{}");
-        w.write(path(name));
-        return path(name);
+        return prt::test::write_cloud_pool(c, path(name));
     }
 };
 
@@ -71,10 +68,7 @@ TEST_F(MlsTool, WritesAValidPoolWithStatistics) {
 TEST_F(MlsTool, MissingRadiiIsAOneLineError) {
     const std::string in = sphere_pool("noradii.pool", false);
     EXPECT_EQ(run(in + " -o " + path("out.pool")), 1);
-    EXPECT_NE(m_stderr.find("noradii.pool"), std::string::npos) << m_stderr;
-    EXPECT_NE(m_stderr.find("radii"), std::string::npos) << m_stderr;
-    EXPECT_NE(m_stderr.find("prt-radii"), std::string::npos) << m_stderr;
-    EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
+    prt::test::expect_one_line(m_stderr, {"noradii.pool", "radii", "prt-radii"});
     EXPECT_FALSE(fs::exists(path("out.pool")));
     EXPECT_EQ(run(path("nothing.pool") + " -o " + path("out.pool")), 1);
     EXPECT_NE(m_stderr.find("nothing.pool"), std::string::npos) << m_stderr;

@@ -13,6 +13,7 @@
 #include "patch_file.h"
 #include "patch_test_util.h"
 #include "prt/core/patch.h"
+#include "ray_reference.h"
 
 namespace {
 
@@ -127,38 +128,18 @@ private:
 
     static bool box_hit(const V3& o, const V3& d, const V3& lo, const V3& hi, double t_max) {
         double t0 = 0, t1 = t_max;
-        for (int a = 0; a < 3; ++a) {
-            if (d[a] == 0) {
-                if (o[a] < lo[a] || o[a] > hi[a]) return false;
-                continue;
-            }
-            double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
-            if (ta > tb) std::swap(ta, tb);
-            t0 = std::max(t0, ta);
-            t1 = std::min(t1, tb);
-        }
-        return t0 <= t1;
+        return prt::bench::clip_to_box(o, d, lo, hi, t0, t1);
     }
 
     /// Moeller-Trumbore, both faces, t > 0.
     static void triangle(const V3& o, const V3& d, const V3& a, const V3& b, const V3& c, int patch,
                          Hit& best) {
-        const V3 e1 = sub(b, a), e2 = sub(c, a);
-        const V3 p = cross3(d, e2);
-        const double det = dot3(e1, p);
-        if (std::fabs(det) < 1e-300) return;
-        const double inv = 1.0 / det;
-        const V3 s = sub(o, a);
-        const double u = dot3(s, p) * inv;
-        if (u < 0 || u > 1) return;
-        const V3 q = cross3(s, e1);
-        const double v = dot3(d, q) * inv;
-        if (v < 0 || u + v > 1) return;
-        const double t = dot3(e2, q) * inv;
+        double t = 0, u = 0, v = 0;
+        if (!prt::bench::ray_triangle(o, d, a, b, c, 1e-300, t, u, v)) return;
         if (t > 0 && t < best.t) {
             best.t = t;
             best.patch = patch;
-            best.normal = unit3(cross3(e1, e2));
+            best.normal = unit3(cross3(sub(b, a), sub(c, a)));
         }
     }
 

@@ -31,6 +31,7 @@
 #include "octree_build.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
+#include "runtime/tool_fixture.h"
 #include "synth.h"
 
 namespace {
@@ -441,32 +442,9 @@ TEST(Cull, RefusesWhatItCannotCull) {
 
 // ---- The tool ------------------------------------------------------------------------------------
 
-class CullTool : public ::testing::Test {
+class CullTool : public prt::test::ToolTest {
 protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        m_dir =
-            fs::temp_directory_path() / ("prt_cull_test_" + std::to_string(::getpid()) + "_" + info->name());
-        fs::remove_all(m_dir);
-        fs::create_directories(m_dir);
-        if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-cull"))
-            GTEST_SKIP() << "prt-cull is not built in " << PRT_BIN_DIR;
-    }
-    void TearDown() override { fs::remove_all(m_dir); }
-
-    int run(const std::string& args) {
-        const std::string cmd = (fs::path(PRT_BIN_DIR) / "prt-cull").string() + " " + args + " >" +
-                                (m_dir / "out.txt").string() + " 2>" + (m_dir / "err.txt").string();
-        const int status = std::system(cmd.c_str());
-        std::ifstream e(m_dir / "err.txt"), o(m_dir / "out.txt");
-        std::stringstream se, so;
-        se << e.rdbuf();
-        so << o.rdbuf();
-        m_stderr = se.str();
-        m_stdout = so.str();
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    }
-    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    CullTool() : ToolTest("prt-cull", "prt_cull_test_") {}
 
     /// Writes the sphere model's point sections and (optionally) its octree as a pool.
     void write_model(const std::string& name, bool octree) {
@@ -477,9 +455,6 @@ protected:
         w.add_provenance("cull_test", "0", "{}");
         w.write(path(name));
     }
-
-    fs::path m_dir;
-    std::string m_stderr, m_stdout;
 };
 
 TEST_F(CullTool, HelpDocumentsEveryOptionWithItsDefault) {
@@ -547,10 +522,7 @@ TEST_F(CullTool, WritesAValidCulledPoolCarryingTheRestOver) {
 TEST_F(CullTool, FailsCleanly) {
     write_model("points.pool", false);
     EXPECT_EQ(run(path("points.pool") + " -o " + path("x.pool") + " --backend cpu"), 1);
-    EXPECT_NE(m_stderr.find("prt-cull: error: "), std::string::npos) << m_stderr;
-    EXPECT_NE(m_stderr.find("points.pool"), std::string::npos) << m_stderr;
-    EXPECT_NE(m_stderr.find("prt-octree"), std::string::npos) << m_stderr;
-    EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
+    prt::test::expect_one_line(m_stderr, {"prt-cull: error: ", "points.pool", "prt-octree"});
     EXPECT_FALSE(fs::exists(path("x.pool")));
     EXPECT_EQ(run(path("missing.pool") + " -o " + path("x.pool")), 1);
     EXPECT_EQ(run(path("points.pool") + " -o " + path("x.pool") + " --grid 0"), 2);

@@ -436,8 +436,7 @@ TEST(Scan, InvalidOptionsThrow) {
 // ---- The command line ---------------------------------------------------------------------------
 
 TEST(PrtSynthScanTool, WritesSensorsScanIdsAndProvenance) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
+    PRT_NEED_SYNTH();
     ToolDir dir("prt_synth_scan_test_");
     const fs::path out = dir.path() / "scan.pool";
     ToolRun r = dir.run(
@@ -511,21 +510,16 @@ TEST(PrtSynthScanTool, WritesSensorsScanIdsAndProvenance) {
 }
 
 TEST(PrtSynthScanTool, HelpDocumentsEveryScanOption) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    const std::string help = prt::synth_test::synth_help();
-    ASSERT_FALSE(help.empty());
-    for (const char* option :
-         {"--scan ", "--scanner ", "--scanners", "--scan-axis", "--sample-step", "--line-step",
-          "--blind-cone", "--max-incidence", "--dropout", "--range-noise ", "--range-noise-per-range",
-          "--outliers", "--uniform-outliers", "--intensity-noise", "--scan-normals", "0.025 (room: 0.2)",
-          "4 x --sample-step"})
-        EXPECT_NE(help.find(option), std::string::npos) << option;
+    PRT_NEED_SYNTH();
+    prt::synth_test::expect_help_names({"--scan ", "--scanner ", "--scanners", "--scan-axis", "--sample-step",
+                                        "--line-step", "--blind-cone", "--max-incidence", "--dropout",
+                                        "--range-noise ", "--range-noise-per-range", "--outliers",
+                                        "--uniform-outliers", "--intensity-noise", "--scan-normals",
+                                        "0.025 (room: 0.2)", "4 x --sample-step"});
 }
 
 TEST(PrtSynthScanTool, BadOptionsFailWithOneLine) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
+    PRT_NEED_SYNTH();
     ToolDir dir("prt_synth_scan_test_");
     const fs::path out = dir.path() / "bad.pool";
     const std::string o = " -o '" + out.string() + "'";

@@ -498,8 +498,7 @@ std::size_t line_count(const std::string& s) {
 }  // namespace
 
 TEST(PrtSynthTool, WritesAPool) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
+    PRT_NEED_SYNTH();
     ToolDir dir("prt_synth_test_");
     const fs::path out = dir.path() / "t.pool";
     ToolRun r =
@@ -529,21 +528,16 @@ TEST(PrtSynthTool, WritesAPool) {
 }
 
 TEST(PrtSynthTool, HelpDocumentsEveryOption) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
-    const std::string help = prt::synth_test::synth_help();
-    ASSERT_FALSE(help.empty());
-    for (const char* option :
-         {"--output", "--points", "--radius", "--major", "--minor", "--edge", "--size", "--noise", "--scale",
-          "--offset", "--seed", "--sampling", "--colors", "--threads", "--quiet"})
-        EXPECT_NE(help.find(option), std::string::npos) << option;
+    PRT_NEED_SYNTH();
+    const std::string help = prt::synth_test::expect_help_names(
+        {"--output", "--points", "--radius", "--major", "--minor", "--edge", "--size", "--noise", "--scale",
+         "--offset", "--seed", "--sampling", "--colors", "--threads", "--quiet"});
     for (const char* shape : {"sphere", "torus", "cube", "plane", "room"})
         EXPECT_NE(help.find(std::string("  ") + shape), std::string::npos) << shape;
 }
 
 TEST(PrtSynthTool, BadInputFailsWithoutOutput) {
-    if (!fs::exists(fs::path(PRT_BIN_DIR) / "prt-synth"))
-        GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR;
+    PRT_NEED_SYNTH();
     ToolDir dir("prt_synth_test_");
     const fs::path out = dir.path() / "bad.pool";
     const std::string o = " -o '" + out.string() + "'";

@@ -13,10 +13,16 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 #include <string>
 
 #include "analytic.h"
+
+/// Skips the test where prt-synth is not built (the end-to-end tests run it).
+#define PRT_NEED_SYNTH()                                                            \
+    if (!std::filesystem::exists(std::filesystem::path(PRT_BIN_DIR) / "prt-synth")) \
+    GTEST_SKIP() << "prt-synth not built in " << PRT_BIN_DIR
 
 namespace prt::synth_test {
 
@@ -110,6 +116,14 @@ inline std::string synth_help() {
     char buf[4096];
     for (std::size_t k; (k = std::fread(buf, 1, sizeof buf, p)) > 0;) help.append(buf, k);
     EXPECT_EQ(::pclose(p), 0);
+    return help;
+}
+
+/// prt-synth's --help names each of `options` (a missing help text fails too); returns the text.
+inline std::string expect_help_names(std::initializer_list<const char*> options) {
+    const std::string help = synth_help();
+    EXPECT_FALSE(help.empty());
+    for (const char* option : options) EXPECT_NE(help.find(option), std::string::npos) << option;
     return help;
 }
 

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "point_cloud.h"
+#include "preprocess/cloud_pool.h"
 #include "prt/formats/pool.h"
 #include "prt/runtime/image.h"
 #include "runtime/tool_fixture.h"
@@ -35,11 +36,7 @@ protected:
                 c.colors.push_back({128, 128, 128, 200});
                 c.radii.push_back(0.08f);
             }
-        pool::PoolWriter w;
-        pre::write_point_sections(c, w);
-        w.add_provenance("test", "0", "{}");
-        w.write(path(name));
-        return path(name);
+        return prt::test::write_cloud_pool(c, path(name));
     }
     /// An 8 x 8 PFM (linear floats): quadrants top-left red, top-right green, bottom-left blue,
     /// bottom-right white.

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "prt/core/octree.h"
+#include "ray_reference.h"
 #include "test_scene.h"
 
 namespace prt::test {
@@ -34,17 +35,7 @@ bool slab(const D3& O, const D3& D, const double lo[3], const double hi[3], doub
           double& ta, double& tb) {
     ta = t_lo;
     tb = t_hi;
-    for (int a = 0; a < 3; ++a) {
-        if (D[a] == 0.0) {
-            if (O[a] < lo[a] || O[a] > hi[a]) return false;
-            continue;
-        }
-        double t0 = (lo[a] - O[a]) / D[a], t1 = (hi[a] - O[a]) / D[a];
-        if (t0 > t1) std::swap(t0, t1);
-        ta = std::max(ta, t0);
-        tb = std::min(tb, t1);
-    }
-    return ta <= tb;
+    return prt::bench::clip_to_box(O, D, lo, hi, ta, tb);
 }
 
 /// Checks a walk against the reference; returns the number of visited leaves.
