@@ -38,14 +38,14 @@ bool finite_box(const float lo[3], const float hi[3]) {
 
 std::uint32_t check_node_tree(const PoolFile& pool, const SectionEntry* entry,
                               std::span<const std::uint32_t> nodes, std::uint32_t leaf_count,
-                              std::uint32_t max_level, bool leaves_at_max_level) {
+                              std::uint32_t max_level, bool leaves_at_max_level, const std::string& where) {
     // In index order from node 0: children must come after their parent, so a node's level is known
     // (and it is marked reachable) by the time it is checked; a second parent marks a node twice.
     const std::size_t count = nodes.size();
     std::vector<std::uint8_t> level(count, 0), seen(count, 0);
     std::vector<std::uint8_t> leaf_seen(leaf_count, 0);
     const auto fail_at = [&](std::size_t i, const std::string& what) {
-        pool.fail(entry, "node " + std::to_string(i) + ": " + what);
+        pool.fail(entry, where + "node " + std::to_string(i) + ": " + what);
     };
     seen[0] = 1;
     std::uint32_t deepest = 0;
@@ -84,9 +84,9 @@ std::uint32_t check_node_tree(const PoolFile& pool, const SectionEntry* entry,
         }
     }
     if (reached != count)
-        pool.fail(entry, std::to_string(count - reached) + " nodes not reachable from the root");
+        pool.fail(entry, where + std::to_string(count - reached) + " nodes not reachable from the root");
     for (std::uint32_t l = 0; l < leaf_count; ++l)
-        if (!leaf_seen[l]) pool.fail(entry, "leaf " + std::to_string(l) + " is in no node");
+        if (!leaf_seen[l]) pool.fail(entry, where + "leaf " + std::to_string(l) + " is in no node");
     return deepest;
 }
 

@@ -39,10 +39,10 @@ bool finite_box(const float lo[3], const float hi[3]);
 /// type 3, no internal node at `max_level` or deeper, every filled leaf addressing a distinct leaf
 /// below `leaf_count` and every leaf addressed; with `leaves_at_max_level`, every filled leaf at
 /// `max_level` (<= 255). `nodes` must not be empty. Returns the deepest filled leaf's level (0 when
-/// there is none). Errors name `entry`, the nodes section.
+/// there is none). Errors name `entry`, the nodes section, then `where` (e.g. "brick 17: ").
 std::uint32_t check_node_tree(const PoolFile& pool, const SectionEntry* entry,
                               std::span<const std::uint32_t> nodes, std::uint32_t leaf_count,
-                              std::uint32_t max_level, bool leaves_at_max_level);
+                              std::uint32_t max_level, bool leaves_at_max_level, const std::string& where = "");
 
 /// POOL.md Validation step 4, the splat octree: the four sections together, counts as octree_info
 /// says, internal nodes pointing forward to eight children in range, filled leaves addressing
