@@ -23,70 +23,43 @@ std::string brick_label(std::uint32_t b) {
 }
 
 /// The top tree: a proper tree from node 0 with internal, empty and brick nodes only, each brick
-/// addressed once by the node its entry names, at that node's level and cube.
+/// addressed once (check_node_tree with bricks as its leaves) by the node its entry names, at that
+/// node's level and cube.
 void check_top_tree(const PoolFile& pool, const BrickSections& s) {
-    const SectionEntry* en = pool.find(SectionType::brick_top_nodes);
     const SectionEntry* et = pool.find(SectionType::brick_table);
+    detail::check_node_tree(pool, pool.find(SectionType::brick_top_nodes), s.top_nodes,
+                            static_cast<std::uint32_t>(s.table.size()),
+                            std::min<std::uint32_t>(s.info.depth, 30), false, "", NodeType::brick);
+    // the tree is proper: levels and cells in one pass, children after their parent
     const std::size_t count = s.top_nodes.size();
-    std::vector<std::uint8_t> seen(count, 0), level(count, 0);
-    std::vector<std::uint32_t> cell(3 * count, 0);
-    std::vector<std::uint8_t> brick_seen(s.table.size(), 0);
-    const auto fail_at = [&](std::size_t i, const std::string& what) {
-        pool.fail(en, "node " + std::to_string(i) + ": " + what);
-    };
-    seen[0] = 1;
-    std::size_t reached = 1;
-    for (std::size_t i = 0; i < count; ++i) {
-        if (!seen[i]) continue;
+    std::vector<std::uint32_t> level(count, 0), cell(3 * count, 0);
+    for (std::uint32_t i = 0; i < count; ++i) {
         const std::uint32_t a = node_address(s.top_nodes[i]);
-        switch (node_type(s.top_nodes[i])) {
-            case NodeType::internal:
-                if (level[i] >= s.info.depth || level[i] >= 30)
-                    fail_at(i, "an internal node at level " + std::to_string(level[i]) + " (depth " +
-                                   std::to_string(s.info.depth) + ")");
-                if (a <= i || std::uint64_t(a) + 8 > count)
-                    fail_at(i, "children at " + std::to_string(a) + " not after it or out of range");
-                for (std::uint32_t c = 0; c < 8; ++c) {
-                    if (seen[a + c]) fail_at(i, "child " + std::to_string(a + c) + " has two parents");
-                    seen[a + c] = 1;
-                    level[a + c] = static_cast<std::uint8_t>(level[i] + 1);
-                    for (int ax = 0; ax < 3; ++ax)
-                        cell[3 * (a + c) + ax] = 2 * cell[3 * i + ax] + ((c >> ax) & 1);
-                }
-                reached += 8;
-                break;
-            case NodeType::brick: {
-                if (a >= s.table.size())
-                    fail_at(i, "brick " + std::to_string(a) + " out of range (" +
-                                   std::to_string(s.table.size()) + " bricks)");
-                if (brick_seen[a]++) fail_at(i, "brick " + std::to_string(a) + " addressed twice");
-                const BrickEntry& e = s.table[a];
-                if (e.top_node != i)
-                    pool.fail(et, brick_label(a) + "top node " + std::to_string(e.top_node) + " but node " +
-                                      std::to_string(i) + " addresses it");
-                if (e.level != level[i])
-                    pool.fail(et, brick_label(a) + "level " + std::to_string(e.level) +
-                                      " but its node is at level " + std::to_string(level[i]));
-                const double size = double(s.info.root_size) / double(std::uint64_t(1) << level[i]);
-                const double tol = 1e-5 * size;
-                bool cube_ok = std::fabs(double(e.cube_size) - size) <= tol;
+        if (node_type(s.top_nodes[i]) == NodeType::internal) {
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                level[a + c] = level[i] + 1;
                 for (int ax = 0; ax < 3; ++ax)
-                    cube_ok = cube_ok && std::fabs(double(e.cube_min[ax]) -
-                                                   (double(s.info.root_min[ax]) + size * cell[3 * i + ax])) <=
-                                             tol + 1e-6 * std::fabs(double(e.cube_min[ax]));
-                if (!cube_ok) pool.fail(et, brick_label(a) + "cube is not its top node's cube");
-                break;
+                    cell[3 * (a + c) + ax] = 2 * cell[3 * i + ax] + ((c >> ax) & 1);
             }
-            case NodeType::empty_leaf:
-                break;
-            default:
-                fail_at(i, "a filled leaf in the top tree (leaves belong to bricks)");
+            continue;
         }
+        if (node_type(s.top_nodes[i]) != NodeType::brick) continue;
+        const BrickEntry& e = s.table[a];
+        if (e.top_node != i)
+            pool.fail(et, brick_label(a) + "top node " + std::to_string(e.top_node) + " but node " +
+                              std::to_string(i) + " addresses it");
+        if (e.level != level[i])
+            pool.fail(et, brick_label(a) + "level " + std::to_string(e.level) + " but its node is at level " +
+                              std::to_string(level[i]));
+        const double size = double(s.info.root_size) / double(std::uint64_t(1) << level[i]);
+        const double tol = 1e-5 * size;
+        bool cube_ok = std::fabs(double(e.cube_size) - size) <= tol;
+        for (int ax = 0; ax < 3; ++ax) {
+            const double want = double(s.info.root_min[ax]) + size * cell[3 * i + ax];
+            cube_ok = cube_ok && std::fabs(double(e.cube_min[ax]) - want) <= tol + 1e-6 * std::fabs(want);
+        }
+        if (!cube_ok) pool.fail(et, brick_label(a) + "cube is not its top node's cube");
     }
-    if (reached != count)
-        pool.fail(en, std::to_string(count - reached) + " nodes not reachable from the root");
-    for (std::uint32_t b = 0; b < s.table.size(); ++b)
-        if (!brick_seen[b]) pool.fail(et, brick_label(b) + "addressed by no top node");
 }
 
 /// Payload ranges aligned, inside brick_data, of their counts' size, not overlapping; counts adding up.

@@ -3,16 +3,13 @@
 // brick reached by an independent walk of both trees; LOD discs cover their subtrees; corrupted
 // and inconsistent pools are refused naming the brick; prt-bricks writes nothing on bad input.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -23,6 +20,7 @@
 #include "prt/formats/brick_sections.h"
 #include "prt/formats/octree_sections.h"
 #include "prt/formats/pool.h"
+#include "runtime/tool_run.h"
 
 namespace {
 
@@ -332,6 +330,34 @@ TEST_F(Bricks, BadBrickNodesAreRefusedNamingTheBrick) {
               std::string::npos);
 }
 
+TEST_F(Bricks, TopTreeMustAddressEveryBrickOnce) {
+    const pool::BrickSections s = pool::validate_bricks(*s_bricked);
+    const auto with_top = [&](const std::function<void(std::vector<std::uint32_t>&)>& change) {
+        std::vector<std::uint32_t> top(s.top_nodes.begin(), s.top_nodes.end());
+        change(top);
+        pool::PoolWriter w;
+        w.carry_over(*s_bricked);
+        w.add_array(SectionType::brick_top_nodes, std::move(top));
+        return PoolFile::from_bytes(w.serialize(), "bad.pool");
+    };
+    const std::uint32_t t1 = s.table[1].top_node;
+    // brick 1's node now addresses brick 0 too: brick 0 twice, brick 1 by none
+    const PoolFile twice = with_top([&](auto& top) { top[t1] = pool::make_node(NodeType::brick, 0); });
+    const std::string e = error_of([&] { pool::validate_brick_index(twice); });
+    EXPECT_NE(e.find("section brick_top_nodes: node " + std::to_string(t1) + ": brick 0 addressed twice"),
+              std::string::npos)
+        << e;
+    // a filled leaf in the top tree
+    const PoolFile leaf = with_top([&](auto& top) { top[t1] = pool::make_node(NodeType::filled_leaf, 0); });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(leaf); }).find("invalid node type 1"),
+              std::string::npos);
+    // an entry naming another top node
+    const PoolFile swapped = modified(
+        *s_bricked, [](auto&, auto& table, auto&) { std::swap(table[0].top_node, table[1].top_node); });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(swapped); }).find("brick 0: top node"),
+              std::string::npos);
+}
+
 // ---- the tool ------------------------------------------------------------------------------------
 
 class BricksTool : public ::testing::Test {
@@ -344,14 +370,9 @@ protected:
     }
     void TearDown() override { fs::remove_all(m_dir); }
     int run(const std::string& args) {
-        const std::string cmd = (fs::path(PRT_BIN_DIR) / "prt-bricks").string() + " " + args + " 2>" +
-                                (m_dir / "err.txt").string() + " >/dev/null";
-        const int status = std::system(cmd.c_str());
-        std::ifstream in(m_dir / "err.txt");
-        std::stringstream ss;
-        ss << in.rdbuf();
-        m_stderr = ss.str();
-        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        const test::ToolRun r = test::run_tool("prt-bricks", args, m_dir);
+        m_stderr = r.err;
+        return r.code;
     }
     std::string path(const std::string& name) const { return (m_dir / name).string(); }
     void write(const std::string& name, const std::vector<std::byte>& bytes) {
