@@ -241,6 +241,10 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
                 qsize = std::max(qsize, hi[ax] - double(h.quant_min[ax]));
             }
             h.quant_size = round_up(qsize);
+            if (!std::isfinite(h.quant_size) || !std::isfinite(h.quant_min[0]) ||
+                !std::isfinite(h.quant_min[1]) || !std::isfinite(h.quant_min[2]) ||
+                !std::isfinite(max_radius))
+                throw Error("brick " + std::to_string(b) + ": a splat position or radius is not finite");
             h.node_count = e.node_count;
             h.leaf_count = e.leaf_count;
             h.splat_count = e.splat_count;

@@ -175,7 +175,9 @@ PRT_BRICK_HD inline constexpr std::uint64_t brick_payload_size(std::uint32_t nod
 /// Error of the decoded value: at most half a quantum (size / 131070) plus float rounding.
 PRT_BRICK_HD inline std::uint16_t encode_coordinate(float x, float lo, float size) {
     const double t = (double(x) - double(lo)) / double(size) * double(k_position_max_code);
-    const double r = t < 0 ? 0.0 : (t > double(k_position_max_code) ? double(k_position_max_code) : t + 0.5);
+    // !(t > 0) also catches NaN
+    const double r =
+        !(t > 0) ? 0.0 : (t > double(k_position_max_code) ? double(k_position_max_code) : t + 0.5);
     return static_cast<std::uint16_t>(r);
 }
 PRT_BRICK_HD inline float decode_coordinate(std::uint16_t q, float lo, float size) {
