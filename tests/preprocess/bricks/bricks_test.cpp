@@ -32,18 +32,8 @@ using pool::SectionType;
 
 constexpr double k_pi = 3.14159265358979323846;
 
-/// A pool with points (sphere of radius 2, colours from the position) and their float octree.
-std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16) {
-    const test::SplatSet s = test::sphere_points(n, 5, 2.0);
-    pre::PointCloud cloud;
-    for (std::size_t i = 0; i < s.positions.size(); ++i) {
-        const pool::Float3& p = s.positions[i];
-        cloud.positions.push_back({10.0 + p.x, -3.0 + p.y, p.z});
-        cloud.colors.push_back(
-            {std::uint8_t(64 + 40 * p.x), std::uint8_t(128 + 60 * p.y), std::uint8_t(i % 256), 255});
-        cloud.radii.push_back(float(3.0 / std::sqrt(double(n))) * float(1 + i % 3));
-    }
-    cloud.normals = s.normals;
+/// A pool with `cloud`'s points (radii given) and their float octree.
+std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, std::uint32_t max_leaf = 16) {
     pool::PoolWriter w;
     pre::write_point_sections(cloud, w);
     const PoolFile points = PoolFile::from_bytes(w.serialize(), "points");
@@ -56,6 +46,21 @@ std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf =
     pre::add_octree_sections(std::move(octree), w);
     w.add_provenance("bricks_test", "0", "{}");
     return w.serialize();
+}
+
+/// A pool with points (sphere of radius 2, colours from the position) and their float octree.
+std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16) {
+    const test::SplatSet s = test::sphere_points(n, 5, 2.0);
+    pre::PointCloud cloud;
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        const pool::Float3& p = s.positions[i];
+        cloud.positions.push_back({10.0 + p.x, -3.0 + p.y, p.z});
+        cloud.colors.push_back(
+            {std::uint8_t(64 + 40 * p.x), std::uint8_t(128 + 60 * p.y), std::uint8_t(i % 256), 255});
+        cloud.radii.push_back(float(3.0 / std::sqrt(double(n))) * float(1 + i % 3));
+    }
+    cloud.normals = s.normals;
+    return octree_pool_bytes(cloud, max_leaf);
 }
 
 /// The pool with bricks added (float sections kept, so the tests can compare).
@@ -237,6 +242,39 @@ TEST(BricksCut, ExtremeBrickSizes) {
     EXPECT_EQ(ba.info.brick_count, 1u);
     EXPECT_EQ(ba.info.top_node_count, 1u);
     EXPECT_EQ(ba.table[0].node_count, pool::splat_octree(in, "t").info.node_count);
+}
+
+TEST(BricksRealData, KittenScanBricksWithinTheCodecBounds) {
+    const fs::path file = fs::path(PRT_SHARED_DATA_DIR) / "points/cgal_kitten/kitten.xyz";
+    if (!fs::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+    pre::PointCloud cloud;
+    std::ifstream in(file);
+    double x, y, z, nx, ny, nz;
+    std::vector<pool::Float3> local;
+    while (in >> x >> y >> z >> nx >> ny >> nz) {
+        cloud.positions.push_back({x, y, z});
+        cloud.normals.push_back({float(nx), float(ny), float(nz)});
+        local.push_back({float(x), float(y), float(z)});
+    }
+    ASSERT_EQ(cloud.size(), 5210u);
+    // radii: distance to the 8th nearest neighbour (thesis 3.1), brute force
+    for (const double r : test::brute_force_knn(local, 8)) cloud.radii.push_back(float(r));
+    const PoolFile octree = PoolFile::from_bytes(octree_pool_bytes(cloud, 48), "kitten");
+    pre::BrickStats stats;
+    const PoolFile bricked = PoolFile::from_bytes(bricked_bytes(octree, 2048, &stats), "kitten bricks");
+    const pool::BrickSections b = pool::validate_bricks(bricked);
+    EXPECT_GT(b.info.brick_count, 4u);
+    EXPECT_EQ(b.info.splat_count, pool::splat_octree(octree, "t").splats.size());
+    const double normal_bound = 3.0 * (std::sqrt(2.0) / 2.0 / 511.0) * 180.0 / k_pi + 1e-4;
+    EXPECT_LE(stats.error.normal_max_deg, normal_bound);
+    EXPECT_EQ(stats.error.radius_shrink_max, 0.0);
+    EXPECT_LE(stats.error.radius_growth_max, std::exp2(1.0 / 128.0) - 1.0 + 1e-5);
+    EXPECT_LE(stats.error.position_quanta_max, 0.6);
+    std::printf(
+        "kitten: %u bricks, %llu splats; position max %.5f radii, normal max %.3f deg, radius growth max "
+        "%.4f\n",
+        b.info.brick_count, static_cast<unsigned long long>(stats.splats), stats.error.position_max,
+        stats.error.normal_max_deg, stats.error.radius_growth_max);
 }
 
 // ---- bad input ------------------------------------------------------------------------------------
