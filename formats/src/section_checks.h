@@ -36,13 +36,16 @@ bool finite_box(const float lo[3], const float hi[3]);
 
 /// Checks node words in the splat octree's encoding (pool_layout.h) for a proper tree from node 0:
 /// every child group after its parent and inside the array, every node reached exactly once, no
-/// type 3, no internal node at `max_level` or deeper, every filled leaf addressing a distinct leaf
-/// below `leaf_count` and every leaf addressed; with `leaves_at_max_level`, every filled leaf at
-/// `max_level` (<= 255). `nodes` must not be empty. Returns the deepest filled leaf's level (0 when
-/// there is none). Errors name `entry`, the nodes section.
+/// type but internal, empty and `leaf_type`, no internal node at `max_level` or deeper, every filled leaf
+/// addressing a distinct leaf below `leaf_count` and every leaf addressed; with `leaves_at_max_level`, every
+/// filled leaf at `max_level` (<= 255). `nodes` must not be empty. Returns the deepest filled leaf's level (0
+/// when there is none). Errors name `entry`, the nodes section, then `where` (e.g. "brick 17: "). `leaf_type`
+/// is the type whose address indexes the leaves: NodeType::brick for the top tree of a bricked pool
+/// (brick_top_nodes), whose "leaves" are bricks and which holds no filled leaf.
 std::uint32_t check_node_tree(const PoolFile& pool, const SectionEntry* entry,
                               std::span<const std::uint32_t> nodes, std::uint32_t leaf_count,
-                              std::uint32_t max_level, bool leaves_at_max_level);
+                              std::uint32_t max_level, bool leaves_at_max_level,
+                              const std::string& where = "", NodeType leaf_type = NodeType::filled_leaf);
 
 /// POOL.md Validation step 4, the splat octree: the four sections together, counts as octree_info
 /// says, internal nodes pointing forward to eight children in range, filled leaves addressing

@@ -16,6 +16,7 @@
 #include "patch_file.h"
 #include "point_cloud.h"
 #include "prt/error.h"
+#include "prt/formats/brick_sections.h"
 #include "prt/formats/gi_sections.h"
 #include "prt/formats/iso_sections.h"
 #include "prt/formats/mls_sections.h"
@@ -184,6 +185,7 @@ void validate_on_demand(const pool::PoolFile& file, Result& r, const std::string
     if (pool::has_iso(file)) attempt([&] { (void)pool::validate_iso(file); });
     if (pool::has_mls(file)) attempt([&] { (void)pool::validate_mls(file); });
     if (pool::has_patches(file)) attempt([&] { (void)pool::validate_patches(file); });
+    if (pool::has_bricks(file)) attempt([&] { (void)pool::validate_bricks(file); });
     attempt([&] { (void)pool::validate_caustics(file); });
     attempt([&] { (void)pool::validate_light_map(file); });
 }

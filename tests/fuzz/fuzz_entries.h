@@ -41,7 +41,7 @@ enum class Target {
     ply_mesh,  ///< the same for a .ply with faces (precheck by our PLY reader, then OpenMesh's)
     scene,     ///< formats: parse_scene, then to_json/parse_scene round trip
     pool,      ///< formats: PoolFile::from_bytes (full validation), then every section read and
-               ///< every on-demand validator (validate_iso, _mls, _patches, _caustics, _light_map)
+               ///< every on-demand validator (validate_iso, _mls, _patches, _bricks, _caustics, _light_map)
                ///< whose sections are present (message: also the first such rejection)
     patches,   ///< preprocess/patches: parse_patches with content detection (.bpt or Newell),
                ///< read_patch_file on input.bpt (the .bpt parser), parse_patches as Newell

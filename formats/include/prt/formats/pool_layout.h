@@ -35,7 +35,8 @@ inline constexpr std::uint32_t k_max_sections = 4096;
 /// Section types. Ranges are reserved per pipeline step so a newcomer can find the owner:
 ///   1-15 points (prt-import, prt-synth, prt-radii), 16-31 splat octree (prt-octree, prt-cull),
 ///   32-47 ISO (prt-iso), 48-63 MLS kd-tree (prt-mls), 64-79 caustics (prt-photons),
-///   80-95 light map (prt-lightmap), 96-111 textures (prt-texture), 112-127 patches (prt-patches).
+///   80-95 light map (prt-lightmap), 96-111 textures (prt-texture), 112-127 patches (prt-patches),
+///   128-143 bricks and level of detail (prt-bricks).
 enum class SectionType : std::uint32_t {
     provenance = 1,    ///< UTF-8 JSON array of {tool, version, parameters, time}; element = 1 byte
     model_info = 2,    ///< one ModelInfo
@@ -74,6 +75,12 @@ enum class SectionType : std::uint32_t {
     patch_control_points = 113, ///< 16 control points per patch
     patch_bvh = 114,            ///< BVH nodes over patch bounding boxes, depth first with skips
     patch_subpatch_boxes = 115, ///< fixed-depth subpatch tree boxes per patch
+    // 128-143: bricks and level of detail (prt-bricks, issue 17); layouts in brick_layout.h
+    brick_info = 128,       ///< one BrickInfo
+    brick_top_nodes = 129,  ///< uint32 node words of the resident top tree; NodeType::brick -> brick
+    brick_table = 130,      ///< BrickEntry per brick: cube, payload range, counts, checksum
+    brick_data = 131,       ///< bytes: each brick's header, nodes, leaf_info, compressed splats
+    lod_splats = 132,       ///< LodSplat per top node: the representative disc of its subtree
 };
 
 // Name, version, element size and writer of each type: the section table (section_table.h).
@@ -166,9 +173,10 @@ enum ModelFlags : std::uint32_t {
 //                   c = x | (y << 1) | (z << 2) where x,y,z in {0,1} pick the upper half per axis
 //   filled leaf  -> address = index into leaf_info; its splats are splats[leaf_info[a], leaf_info[a+1])
 //   empty leaf   -> address = 0
+//   brick        -> address = index into brick_table (only in brick_top_nodes, brick_layout.h)
 // Node 0 is the root; nodes are stored breadth first (level by level).
 
-enum class NodeType : std::uint32_t { internal = 0, filled_leaf = 1, empty_leaf = 2 };
+enum class NodeType : std::uint32_t { internal = 0, filled_leaf = 1, empty_leaf = 2, brick = 3 };
 inline constexpr std::uint32_t k_node_address_bits = 30;
 inline constexpr std::uint32_t k_node_address_max = (1u << k_node_address_bits) - 1;
 

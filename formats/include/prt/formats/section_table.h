@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <iterator>
 
+#include "prt/formats/brick_layout.h"
 #include "prt/formats/gi_layout.h"
 #include "prt/formats/iso_layout.h"
 #include "prt/formats/mls_layout.h"
@@ -68,6 +69,12 @@ inline constexpr SectionTypeInfo k_section_types[] = {
     {SectionType::patch_control_points, "patch_control_points", 1, sizeof(PatchControlNet), false, "prt-patches"},
     {SectionType::patch_bvh,            "patch_bvh",            1, sizeof(PatchBvhNode),    false, "prt-patches"},
     {SectionType::patch_subpatch_boxes, "patch_subpatch_boxes", 1, sizeof(SubpatchNode),    false, "prt-patches"},
+    // 128-143: bricks and level of detail
+    {SectionType::brick_info,      "brick_info",      1, sizeof(BrickInfo),     false, "prt-bricks"},
+    {SectionType::brick_top_nodes, "brick_top_nodes", 1, sizeof(std::uint32_t), false, "prt-bricks"},
+    {SectionType::brick_table,     "brick_table",     1, sizeof(BrickEntry),    false, "prt-bricks"},
+    {SectionType::brick_data,      "brick_data",      1, 1,                     false, "prt-bricks"},
+    {SectionType::lod_splats,      "lod_splats",      1, sizeof(LodSplat),      false, "prt-bricks"},
 };
 // clang-format on
 

@@ -1,0 +1,64 @@
+// PointRT pool file: the brick sections (types 128-132, brick_layout.h, written by prt-bricks,
+// issue 17) of an opened pool, validated into typed views (formats/POOL.md, "Bricks and level of
+// detail"). validate_brick_index checks everything but the bricks' payloads (what a streaming reader
+// keeps resident); validate_brick checks one brick's payload alone, as read or uploaded. Host only.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "prt/formats/brick_layout.h"
+#include "prt/formats/pool.h"
+
+namespace prt::pool {
+
+/// The brick sections of a pool: views into the mapped file, valid while the PoolFile lives.
+struct BrickSections {
+    BrickInfo info{};
+    std::span<const std::uint32_t> top_nodes;  ///< info.top_node_count node words, node 0 the root
+    std::span<const BrickEntry> table;         ///< info.brick_count entries
+    std::span<const std::byte> data;           ///< brick_data: every brick's payload
+    std::span<const LodSplat> lod;             ///< one per top node (parallel to top_nodes)
+
+    /// The payload bytes of brick `b` (entry's offset and size; checked by validate_brick_index).
+    std::span<const std::byte> payload(std::uint32_t b) const {
+        return data.subspan(static_cast<std::size_t>(table[b].offset),
+                            static_cast<std::size_t>(table[b].size));
+    }
+};
+
+/// Typed views into one brick payload (layout in brick_layout.h); the payload must be validated.
+struct BrickView {
+    const BrickHeader* header = nullptr;
+    std::span<const std::uint32_t> nodes;      ///< the brick's subtree, node 0 its root
+    std::span<const std::uint32_t> leaf_info;  ///< leaf_count + 1 begin indices into splats
+    std::span<const CompressedSplat> splats;   ///< splat_count compressed splats
+};
+BrickView brick_view(std::span<const std::byte> payload);
+
+/// Whether the pool holds any of the brick sections (128-132).
+bool has_bricks(const PoolFile& pool);
+
+/// Validates the brick sections except the bricks' payloads: all five present together, exactly
+/// one BrickInfo with a finite root cube, counts as brick_info says (a pool claiming more bricks
+/// than its table holds is refused), the top tree a proper tree from node 0 (children after their
+/// parent, every node reached once, no filled leaf, at most brick_info.depth levels) whose brick
+/// nodes address every brick exactly once, each entry naming that node, its level and cube; the
+/// table's payloads 64-byte aligned, inside brick_data and not overlapping, of the size their counts
+/// give; splat counts adding up to brick_info's; LOD discs finite. Throws prt::Error
+/// "FILE: section NAME: [brick I: ]what is wrong".
+BrickSections validate_brick_index(const PoolFile& pool);
+
+/// Validates one brick alone (streaming: a brick read or uploaded by itself): `payload` holds the
+/// entry's `size` bytes; its XXH3-64 checksum, header counts equal to the entry's, a finite positive
+/// quantization cube, the radius exponent in range, its nodes a proper tree of at most
+/// info.depth - entry.level levels whose filled leaves address leaf_info exactly once, leaf_info
+/// monotone and covering the splats exactly, every octahedral code in range. Throws prt::Error
+/// "FILE: section brick_data: brick I: what is wrong".
+void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntry& entry, std::uint32_t index,
+                    std::span<const std::byte> payload);
+
+/// validate_brick_index, then validate_brick on every brick.
+BrickSections validate_bricks(const PoolFile& pool);
+
+}  // namespace prt::pool

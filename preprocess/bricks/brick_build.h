@@ -1,0 +1,69 @@
+// PointRT preprocess: the brick builder (issue 17). Cuts a splat octree (prt-octree, prt-cull) into
+// a small resident top tree and bricks (subtrees of at most N splats, replicas counted), compresses
+// each brick's splats to 12 bytes (codec in formats/include/prt/formats/brick_layout.h) and computes
+// a level-of-detail disc per top node. Produces exactly the pool sections brick_info,
+// brick_top_nodes, brick_table, brick_data, lod_splats.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "prt/formats/brick_layout.h"
+#include "prt/formats/octree_sections.h"
+#include "prt/formats/pool.h"
+
+namespace prt::pre {
+
+struct BrickParams {
+    /// N: a node whose subtree holds at most N stored splats (replicas counted) becomes a brick,
+    /// cutting greedily from the root. 131072 (12 B each: 1.5 MiB of splats per brick) is the
+    /// middle of the issue's 64k-512k range; an upload of that size is well above the PCIe latency
+    /// knee, and a 100M-splat model gets about 800 bricks.
+    std::uint32_t brick_splats = 131072;
+    unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
+    /// Progress of the encoding, called from the calling thread with (bricks done, bricks); may be empty.
+    std::function<void(std::uint64_t, std::uint64_t)> progress;
+};
+
+/// The codec's error over every stored splat, measured against the float splats while encoding.
+struct CodecError {
+    std::uint64_t splats = 0;
+    double position_max = 0, position_sum = 0;  ///< |decoded - float centre| / float radius
+    double position_quanta_max = 0;             ///< largest per-axis error in quanta of its brick's cube
+    double normal_max_deg = 0, normal_sum_deg = 0;
+    double radius_growth_max = 0, radius_growth_sum = 0;  ///< decoded / float radius - 1 (>= 0)
+    double radius_shrink_max = 0;                         ///< 1 - decoded / float where smaller: 0
+    std::uint32_t color_max = 0;                          ///< largest channel error, 0..255
+    std::uint64_t radii_raised = 0;  ///< radii below the brick's smallest code (grew more than one step)
+    void merge(const CodecError& o);
+};
+
+struct BrickStats {
+    std::uint32_t bricks = 0, top_nodes = 0, top_depth = 0;
+    std::uint32_t min_brick_splats = 0, max_brick_splats = 0;
+    std::uint64_t splats = 0, data_bytes = 0;
+    CodecError error;
+    double seconds = 0;
+};
+
+/// The brick sections, ready to be added to a pool (add_brick_sections()).
+struct BrickedOctree {
+    pool::BrickInfo info{};
+    std::vector<std::uint32_t> top_nodes;
+    std::vector<pool::BrickEntry> table;
+    std::vector<std::byte> data;
+    std::vector<pool::LodSplat> lod;
+};
+
+/// Builds the bricks of `octree`; `colors` (per point, may be empty: white) gives the splats'
+/// colours through Splat::point. Throws prt::Error on an octree the format cannot hold (a splat
+/// count above 2^32 - 1 in one brick, a radius the codec cannot represent).
+BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                           const BrickParams& params, BrickStats* stats = nullptr);
+
+/// Adds (replacing) the five brick sections to a writer.
+void add_brick_sections(BrickedOctree bricks, pool::PoolWriter& writer);
+
+}  // namespace prt::pre

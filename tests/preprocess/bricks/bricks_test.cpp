@@ -1,0 +1,466 @@
+// The brick builder (preprocess/bricks, issue 17) and the brick validation (brick_sections.h):
+// a bricked pool validates; every float splat is found, decoded within the codec's bounds, in the
+// brick reached by an independent walk of both trees; LOD discs cover their subtrees; corrupted
+// and inconsistent pools are refused naming the brick; prt-bricks writes nothing on bad input.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "brick_build.h"
+#include "octree_build.h"
+#include "point_cloud.h"
+#include "preprocess/splat/splat_test_data.h"
+#include "prt/formats/brick_sections.h"
+#include "prt/formats/octree_sections.h"
+#include "prt/formats/pool.h"
+#include "runtime/tool_run.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace prt;
+using pool::NodeType;
+using pool::PoolFile;
+using pool::SectionType;
+
+constexpr double k_pi = 3.14159265358979323846;
+
+/// A pool with `cloud`'s points (radii given) and their float octree.
+std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, std::uint32_t max_leaf = 16) {
+    pool::PoolWriter w;
+    pre::write_point_sections(cloud, w);
+    const PoolFile points = PoolFile::from_bytes(w.serialize(), "points");
+    pre::OctreeParams params;
+    params.max_leaf_splats = max_leaf;
+    params.threads = 2;
+    pre::SplatOctree octree = pre::build_octree(points.array<pool::Float3>(SectionType::positions),
+                                                points.array<pool::Float3>(SectionType::normals),
+                                                points.array<float>(SectionType::radii), params);
+    pre::add_octree_sections(std::move(octree), w);
+    w.add_provenance("bricks_test", "0", "{}");
+    return w.serialize();
+}
+
+/// A pool with points (sphere of radius 2, colours from the position) and their float octree.
+std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16) {
+    const test::SplatSet s = test::sphere_points(n, 5, 2.0);
+    pre::PointCloud cloud;
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        const pool::Float3& p = s.positions[i];
+        cloud.positions.push_back({10.0 + p.x, -3.0 + p.y, p.z});
+        cloud.colors.push_back(
+            {std::uint8_t(64 + 40 * p.x), std::uint8_t(128 + 60 * p.y), std::uint8_t(i % 256), 255});
+        cloud.radii.push_back(float(3.0 / std::sqrt(double(n))) * float(1 + i % 3));
+    }
+    cloud.normals = s.normals;
+    return octree_pool_bytes(cloud, max_leaf);
+}
+
+/// The pool with bricks added (float sections kept, so the tests can compare).
+std::vector<std::byte> bricked_bytes(const PoolFile& in, std::uint32_t brick_splats,
+                                     pre::BrickStats* stats = nullptr) {
+    pre::BrickParams params;
+    params.brick_splats = brick_splats;
+    params.threads = 2;
+    pre::BrickedOctree b = pre::build_bricks(pool::splat_octree(in, "test"),
+                                             in.array<pool::Rgba8>(SectionType::colors), params, stats);
+    pool::PoolWriter w;
+    w.carry_over(in);
+    pre::add_brick_sections(std::move(b), w);
+    return w.serialize();
+}
+
+class Bricks : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        s_octree = new PoolFile(PoolFile::from_bytes(octree_pool_bytes(6000), "octree"));
+        s_bricked = new PoolFile(PoolFile::from_bytes(bricked_bytes(*s_octree, 700, &s_stats), "bricked"));
+    }
+    static void TearDownTestSuite() {
+        delete s_bricked;
+        delete s_octree;
+    }
+    static PoolFile* s_octree;
+    static PoolFile* s_bricked;
+    static pre::BrickStats s_stats;
+};
+PoolFile* Bricks::s_octree = nullptr;
+PoolFile* Bricks::s_bricked = nullptr;
+pre::BrickStats Bricks::s_stats;
+
+TEST_F(Bricks, BrickedPoolValidates) {
+    const pool::BrickSections b = pool::validate_bricks(*s_bricked);
+    const pool::SplatOctreeSections f = pool::splat_octree(*s_octree, "test");
+    EXPECT_GT(b.info.brick_count, 8u);  // the cut made many bricks, so the top tree is not trivial
+    EXPECT_EQ(b.info.splat_count, f.splats.size());
+    std::uint64_t sum = 0;
+    for (const pool::BrickEntry& e : b.table) {
+        sum += e.splat_count;
+        EXPECT_EQ(e.offset % 64, 0u);
+        // at most N splats, unless the brick is a single leaf
+        if (e.splat_count > 700) {
+            EXPECT_EQ(e.node_count, 1u);
+        }
+    }
+    EXPECT_EQ(sum, f.splats.size());
+    EXPECT_EQ(b.info.flags & pool::k_bricks_colors, pool::k_bricks_colors);
+    // 12 B per splat plus nodes and leaf ranges: well under the float layout's 32 B
+    EXPECT_LT(double(b.data.size()) / double(f.splats.size()), 16.0);
+}
+
+/// Child index paths of every filled leaf of a node tree, with the leaf's address.
+void leaf_paths(std::span<const std::uint32_t> nodes, std::uint32_t i, std::vector<std::uint8_t>& path,
+                const std::function<void(const std::vector<std::uint8_t>&, std::uint32_t)>& f) {
+    const std::uint32_t w = nodes[i];
+    if (pool::node_type(w) == NodeType::filled_leaf) f(path, pool::node_address(w));
+    if (pool::node_type(w) != NodeType::internal) return;
+    for (std::uint8_t c = 0; c < 8; ++c) {
+        path.push_back(c);
+        leaf_paths(nodes, pool::node_address(w) + c, path, f);
+        path.pop_back();
+    }
+}
+
+TEST_F(Bricks, EveryFloatSplatIsInTheBrickCoveringItsLeafDecodedWithinBounds) {
+    const pool::BrickSections b = pool::validate_bricks(*s_bricked);
+    const pool::SplatOctreeSections f = pool::splat_octree(*s_octree, "test");
+    const auto colors = s_octree->array<pool::Rgba8>(SectionType::colors);
+    const double normal_bound = 3.0 * (std::sqrt(2.0) / 2.0 / 511.0) * 180.0 / k_pi + 1e-4;
+    std::uint64_t found = 0;
+    std::vector<std::uint8_t> path;
+    leaf_paths(f.nodes, 0, path, [&](const std::vector<std::uint8_t>& p, std::uint32_t leaf) {
+        // down the top tree to a brick
+        std::uint32_t t = 0;
+        std::size_t k = 0;
+        while (pool::node_type(b.top_nodes[t]) == NodeType::internal) {
+            ASSERT_LT(k, p.size());
+            t = pool::node_address(b.top_nodes[t]) + p[k++];
+        }
+        ASSERT_EQ(pool::node_type(b.top_nodes[t]), NodeType::brick)
+            << "leaf " << leaf << " under a non-brick";
+        const std::uint32_t bi = pool::node_address(b.top_nodes[t]);
+        EXPECT_EQ(b.table[bi].level, k);
+        const pool::BrickView v = pool::brick_view(b.payload(bi));
+        // down the brick's own nodes along the rest of the path
+        std::uint32_t n = 0;
+        for (; k < p.size(); ++k) {
+            ASSERT_EQ(pool::node_type(v.nodes[n]), NodeType::internal);
+            n = pool::node_address(v.nodes[n]) + p[k];
+        }
+        ASSERT_EQ(pool::node_type(v.nodes[n]), NodeType::filled_leaf);
+        const std::uint32_t l = pool::node_address(v.nodes[n]);
+        const std::uint32_t fb = f.leaf_info[leaf], fe = f.leaf_info[leaf + 1];
+        ASSERT_EQ(v.leaf_info[l + 1] - v.leaf_info[l], fe - fb);
+        const pool::BrickHeader& h = *v.header;
+        const double quantum = double(h.quant_size) / 65535.0;
+        const double slack =
+            4e-7 * (std::fabs(h.quant_min[0]) + std::fabs(h.quant_min[1]) + h.quant_size + 16);
+        for (std::uint32_t i = 0; i < fe - fb; ++i) {
+            const pool::Splat& s = f.splats[fb + i];
+            const pool::DecodedSplat d = pool::decode_splat(v.splats[v.leaf_info[l] + i], h);
+            EXPECT_LE(std::fabs(d.position.x - s.position.x), 0.5 * quantum + slack);
+            EXPECT_LE(std::fabs(d.position.y - s.position.y), 0.5 * quantum + slack);
+            EXPECT_LE(std::fabs(d.position.z - s.position.z), 0.5 * quantum + slack);
+            EXPECT_GE(d.radius, s.radius);
+            EXPECT_LE(d.radius, s.radius * std::exp2(1.0 / 128.0) * (1 + 4e-6));
+            const double dot = double(d.normal.x) * s.normal.x + double(d.normal.y) * s.normal.y +
+                               double(d.normal.z) * s.normal.z;
+            EXPECT_LE(std::acos(std::min(1.0, dot)) * 180.0 / k_pi, normal_bound);
+            const pool::Rgba8 c = colors[s.point];
+            EXPECT_LE(std::abs(int(d.color.r) - c.r), 4);
+            EXPECT_LE(std::abs(int(d.color.g) - c.g), 2);
+            EXPECT_LE(std::abs(int(d.color.b) - c.b), 4);
+            ++found;
+        }
+    });
+    EXPECT_EQ(found, f.splats.size());
+    // the builder's own measurement agrees with the bounds
+    EXPECT_EQ(s_stats.error.splats, f.splats.size());
+    EXPECT_LE(s_stats.error.normal_max_deg, normal_bound);
+    EXPECT_EQ(s_stats.error.radius_shrink_max, 0.0);
+}
+
+TEST_F(Bricks, LodDiscsCoverTheirSubtrees) {
+    const pool::BrickSections b = pool::validate_bricks(*s_bricked);
+    const pool::SplatOctreeSections f = pool::splat_octree(*s_octree, "test");
+    std::uint32_t checked = 0;
+    // walk the top tree and the float tree together; returns the float splat indices below
+    std::function<std::vector<std::uint32_t>(std::uint32_t, std::uint32_t)> walk = [&](std::uint32_t t,
+                                                                                       std::uint32_t s) {
+        std::vector<std::uint32_t> below;
+        if (pool::node_type(b.top_nodes[t]) == NodeType::internal) {
+            EXPECT_EQ(pool::node_type(f.nodes[s]), NodeType::internal);
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                const auto sub =
+                    walk(pool::node_address(b.top_nodes[t]) + c, pool::node_address(f.nodes[s]) + c);
+                below.insert(below.end(), sub.begin(), sub.end());
+            }
+        } else if (pool::node_type(b.top_nodes[t]) == NodeType::brick) {
+            std::vector<std::uint8_t> path;
+            leaf_paths(f.nodes, s, path, [&](const std::vector<std::uint8_t>&, std::uint32_t leaf) {
+                for (std::uint32_t i = f.leaf_info[leaf]; i < f.leaf_info[leaf + 1]; ++i) below.push_back(i);
+            });
+        }
+        const pool::LodSplat& d = b.lod[t];
+        if (below.empty()) {
+            EXPECT_EQ(d.radius, 0.0f);
+            return below;
+        }
+        EXPECT_NEAR(double(d.normal.x) * d.normal.x + double(d.normal.y) * d.normal.y +
+                        double(d.normal.z) * d.normal.z,
+                    1.0, 1e-5);
+        for (const std::uint32_t i : below) {
+            const pool::Splat& sp = f.splats[i];
+            const double dx = double(sp.position.x) - d.position.x, dy = double(sp.position.y) - d.position.y,
+                         dz = double(sp.position.z) - d.position.z;
+            EXPECT_LE(std::sqrt(dx * dx + dy * dy + dz * dz) + sp.radius, double(d.radius) * (1 + 1e-9))
+                << "top node " << t << " splat " << i;
+        }
+        ++checked;
+        return below;
+    };
+    walk(0, 0);
+    EXPECT_GT(checked, b.info.brick_count);  // bricks and inner nodes
+}
+
+TEST(BricksCut, ExtremeBrickSizes) {
+    const PoolFile in = PoolFile::from_bytes(octree_pool_bytes(1500), "octree");
+    // N = 1: every filled leaf is a brick of its own (more than N splats there)
+    const PoolFile one = PoolFile::from_bytes(bricked_bytes(in, 1), "one");
+    const pool::BrickSections b1 = pool::validate_bricks(one);
+    EXPECT_EQ(b1.info.brick_count, pool::splat_octree(in, "t").info.filled_leaves);
+    // N huge: the root is the one brick
+    const PoolFile all = PoolFile::from_bytes(bricked_bytes(in, 0xFFFFFFFFu), "all");
+    const pool::BrickSections ba = pool::validate_bricks(all);
+    EXPECT_EQ(ba.info.brick_count, 1u);
+    EXPECT_EQ(ba.info.top_node_count, 1u);
+    EXPECT_EQ(ba.table[0].node_count, pool::splat_octree(in, "t").info.node_count);
+}
+
+TEST(BricksRealData, KittenScanBricksWithinTheCodecBounds) {
+    const fs::path file = fs::path(PRT_SHARED_DATA_DIR) / "points/cgal_kitten/kitten.xyz";
+    if (!fs::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+    pre::PointCloud cloud;
+    std::ifstream in(file);
+    double x, y, z, nx, ny, nz;
+    std::vector<pool::Float3> local;
+    while (in >> x >> y >> z >> nx >> ny >> nz) {
+        cloud.positions.push_back({x, y, z});
+        cloud.normals.push_back({float(nx), float(ny), float(nz)});
+        local.push_back({float(x), float(y), float(z)});
+    }
+    ASSERT_EQ(cloud.size(), 5210u);
+    // radii: distance to the 8th nearest neighbour (thesis 3.1), brute force
+    for (const double r : test::brute_force_knn(local, 8)) cloud.radii.push_back(float(r));
+    const PoolFile octree = PoolFile::from_bytes(octree_pool_bytes(cloud, 48), "kitten");
+    pre::BrickStats stats;
+    const PoolFile bricked = PoolFile::from_bytes(bricked_bytes(octree, 2048, &stats), "kitten bricks");
+    const pool::BrickSections b = pool::validate_bricks(bricked);
+    EXPECT_GT(b.info.brick_count, 4u);
+    EXPECT_EQ(b.info.splat_count, pool::splat_octree(octree, "t").splats.size());
+    const double normal_bound = 3.0 * (std::sqrt(2.0) / 2.0 / 511.0) * 180.0 / k_pi + 1e-4;
+    EXPECT_LE(stats.error.normal_max_deg, normal_bound);
+    EXPECT_EQ(stats.error.radius_shrink_max, 0.0);
+    EXPECT_LE(stats.error.radius_growth_max, std::exp2(1.0 / 128.0) - 1.0 + 1e-5);
+    EXPECT_LE(stats.error.position_quanta_max, 0.6);
+    std::printf(
+        "kitten: %u bricks, %llu splats; position max %.5f radii, normal max %.3f deg, radius growth max "
+        "%.4f\n",
+        b.info.brick_count, static_cast<unsigned long long>(stats.splats), stats.error.position_max,
+        stats.error.normal_max_deg, stats.error.radius_growth_max);
+}
+
+// ---- bad input ------------------------------------------------------------------------------------
+
+/// `good` with some brick sections replaced by modified copies (checksums recomputed by the writer).
+PoolFile modified(const PoolFile& good,
+                  const std::function<void(pool::BrickInfo&, std::vector<pool::BrickEntry>&,
+                                           std::vector<std::byte>&)>& change) {
+    const pool::BrickSections s = pool::validate_bricks(good);
+    pool::BrickInfo info = s.info;
+    std::vector<pool::BrickEntry> table(s.table.begin(), s.table.end());
+    std::vector<std::byte> data(s.data.begin(), s.data.end());
+    change(info, table, data);
+    pool::PoolWriter w;
+    w.carry_over(good);
+    w.add_array(SectionType::brick_info, std::vector<pool::BrickInfo>{info});
+    w.add_array(SectionType::brick_table, std::move(table));
+    w.add_array(SectionType::brick_data, std::move(data));
+    return PoolFile::from_bytes(w.serialize(), "bad.pool");
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST_F(Bricks, CorruptedBrickIsRefusedNamingIt) {
+    const std::uint32_t victim = 3;
+    const PoolFile bad = modified(*s_bricked, [&](auto&, auto& table, auto& data) {
+        data[table[victim].offset + table[victim].size - 5] ^= std::byte{0x10};  // one splat byte
+    });
+    const std::string e = error_of([&] { pool::validate_bricks(bad); });
+    EXPECT_EQ(e, "bad.pool: section brick_data: brick 3: checksum mismatch");
+    // the other bricks still validate alone (streaming reads them one by one)
+    const pool::BrickSections s = pool::validate_brick_index(bad);
+    for (std::uint32_t b = 0; b < s.table.size(); ++b)
+        if (b != victim) {
+            EXPECT_NO_THROW(pool::validate_brick(bad, s.info, s.table[b], b, s.payload(b)));
+        }
+    // a brick read alone with a wrong length
+    EXPECT_NE(error_of([&] {
+                  pool::validate_brick(bad, s.info, s.table[1], 1, s.payload(1).first(40));
+              }).find("brick 1: 40 bytes but its entry says"),
+              std::string::npos);
+}
+
+TEST_F(Bricks, MoreBricksClaimedThanHeldIsRefused) {
+    const PoolFile bad = modified(*s_bricked, [](auto& info, auto&, auto&) { info.brick_count += 1; });
+    const std::string e = error_of([&] { pool::validate_brick_index(bad); });
+    EXPECT_NE(e.find("section brick_table: "), std::string::npos) << e;
+    EXPECT_NE(e.find("bricks but brick_info says"), std::string::npos) << e;
+}
+
+TEST_F(Bricks, OverlappingOrMisplacedPayloadsAreRefused) {
+    const PoolFile overlap = modified(*s_bricked, [](auto&, auto& table, auto&) {
+        table[2].offset = table[1].offset;  // same size class not needed: any overlap is refused
+    });
+    const std::string e = error_of([&] { pool::validate_brick_index(overlap); });
+    EXPECT_NE(e.find("overlaps"), std::string::npos) << e;
+    const PoolFile unaligned = modified(*s_bricked, [](auto&, auto& table, auto&) { table[4].offset += 4; });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(unaligned); }).find("brick 4: offset"),
+              std::string::npos);
+    const PoolFile outside = modified(
+        *s_bricked, [](auto&, auto& table, auto& data) { table[0].offset = (data.size() + 64) / 64 * 64; });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(outside); }).find("brick 0: payload"),
+              std::string::npos);
+    const PoolFile counts =
+        modified(*s_bricked, [](auto&, auto& table, auto&) { table[5].splat_count += 1; });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(counts); }).find("brick 5: size"), std::string::npos);
+}
+
+TEST_F(Bricks, BadBrickNodesAreRefusedNamingTheBrick) {
+    // a child address out of the brick's range, checksum made consistent so the structure is checked
+    const pool::BrickSections s = pool::validate_bricks(*s_bricked);
+    std::uint32_t victim = 0;
+    while (victim < s.table.size() && s.table[victim].node_count < 9) ++victim;
+    ASSERT_LT(victim, s.table.size());
+    const PoolFile bad = modified(*s_bricked, [&](auto&, auto& table, auto& data) {
+        std::byte* base = data.data() + table[victim].offset;
+        const std::uint32_t word = pool::make_node(NodeType::internal, table[victim].node_count + 5);
+        std::memcpy(base + pool::brick_nodes_offset(), &word, 4);
+        table[victim].checksum = pool::checksum({base, std::size_t(table[victim].size)});
+    });
+    EXPECT_NE(error_of([&] {
+                  pool::validate_bricks(bad);
+              }).find("section brick_data: brick " + std::to_string(victim) + ": node 0:"),
+              std::string::npos);
+}
+
+TEST_F(Bricks, TopTreeMustAddressEveryBrickOnce) {
+    const pool::BrickSections s = pool::validate_bricks(*s_bricked);
+    const auto with_top = [&](const std::function<void(std::vector<std::uint32_t>&)>& change) {
+        std::vector<std::uint32_t> top(s.top_nodes.begin(), s.top_nodes.end());
+        change(top);
+        pool::PoolWriter w;
+        w.carry_over(*s_bricked);
+        w.add_array(SectionType::brick_top_nodes, std::move(top));
+        return PoolFile::from_bytes(w.serialize(), "bad.pool");
+    };
+    const std::uint32_t t1 = s.table[1].top_node;
+    // brick 1's node now addresses brick 0 too: brick 0 twice, brick 1 by none
+    const PoolFile twice = with_top([&](auto& top) { top[t1] = pool::make_node(NodeType::brick, 0); });
+    const std::string e = error_of([&] { pool::validate_brick_index(twice); });
+    EXPECT_NE(e.find("section brick_top_nodes: node " + std::to_string(t1) + ": brick 0 addressed twice"),
+              std::string::npos)
+        << e;
+    // a filled leaf in the top tree
+    const PoolFile leaf = with_top([&](auto& top) { top[t1] = pool::make_node(NodeType::filled_leaf, 0); });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(leaf); }).find("invalid node type 1"),
+              std::string::npos);
+    // an entry naming another top node
+    const PoolFile swapped = modified(
+        *s_bricked, [](auto&, auto& table, auto&) { std::swap(table[0].top_node, table[1].top_node); });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(swapped); }).find("brick 0: top node"),
+              std::string::npos);
+}
+
+// ---- the tool ------------------------------------------------------------------------------------
+
+class BricksTool : public ::testing::Test {
+protected:
+    void SetUp() override {
+        m_dir = fs::temp_directory_path() / ("prt_bricks_tool_" + std::to_string(::getpid()) + "_" +
+                                             ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::remove_all(m_dir);
+        fs::create_directories(m_dir);
+    }
+    void TearDown() override { fs::remove_all(m_dir); }
+    int run(const std::string& args) {
+        const test::ToolRun r = test::run_tool("prt-bricks", args, m_dir);
+        m_stderr = r.err;
+        return r.code;
+    }
+    std::string path(const std::string& name) const { return (m_dir / name).string(); }
+    void write(const std::string& name, const std::vector<std::byte>& bytes) {
+        std::ofstream out(path(name), std::ios::binary);
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    }
+    fs::path m_dir;
+    std::string m_stderr;
+};
+
+TEST_F(BricksTool, WritesAValidBrickedPool) {
+    write("in.pool", octree_pool_bytes(3000));
+    ASSERT_EQ(run(path("in.pool") + " -o " + path("out.pool") + " --brick-splats 500 --quiet --stats-json " +
+                  path("s.json")),
+              0)
+        << m_stderr;
+    const PoolFile out = PoolFile::open(path("out.pool"));
+    const pool::BrickSections b = pool::validate_bricks(out);
+    EXPECT_EQ(b.info.brick_splat_limit, 500u);
+    EXPECT_FALSE(out.has(SectionType::splats));  // float sections removed by default
+    EXPECT_FALSE(out.has(SectionType::octree_nodes));
+    EXPECT_TRUE(out.has(SectionType::colors));
+    EXPECT_TRUE(fs::exists(path("s.json")));
+    ASSERT_EQ(run(path("in.pool") + " -o " + path("keep.pool") + " --keep-float --quiet"), 0) << m_stderr;
+    const PoolFile keep = PoolFile::open(path("keep.pool"));
+    EXPECT_TRUE(keep.has(SectionType::splats));
+    EXPECT_EQ(pool::validate_bricks(keep).info.flags & pool::k_bricks_float_kept, pool::k_bricks_float_kept);
+}
+
+TEST_F(BricksTool, BadInputWritesNothing) {
+    // no octree
+    pool::PoolWriter w;
+    pre::PointCloud cloud;
+    cloud.positions = {{0, 0, 0}, {1, 0, 0}};
+    pre::write_point_sections(cloud, w);
+    w.write(path("points.pool"));
+    EXPECT_EQ(run(path("points.pool") + " -o " + path("out.pool")), 1);
+    EXPECT_NE(m_stderr.find("no octree"), std::string::npos) << m_stderr;
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+    // a corrupted input pool
+    std::vector<std::byte> bytes = octree_pool_bytes(500);
+    const std::uint64_t splats_at = PoolFile::from_bytes(bytes, "x").find(SectionType::splats)->offset;
+    bytes[splats_at + 100] ^= std::byte{1};
+    write("bad.pool", bytes);
+    EXPECT_EQ(run(path("bad.pool") + " -o " + path("out.pool")), 1);
+    EXPECT_NE(m_stderr.find("bad.pool"), std::string::npos) << m_stderr;
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+    // a usage error
+    EXPECT_EQ(run(path("points.pool") + " -o " + path("out.pool") + " --brick-splats 0"), 2);
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+}
+
+}  // namespace
