@@ -117,6 +117,7 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
                       {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},
                       {"truncated", last.truncated},
                       {"sanitized", last.sanitized},
+                      {"brick_fallbacks", last.fallbacks},
                       {"timer", backend.name() == "cuda" ? "cuda events" : "host clock"},
                       {"wall_median_ms", player::median(wall_ms)},
                       {"gpu_share", last.gpu_share},

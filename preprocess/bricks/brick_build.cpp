@@ -346,7 +346,8 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
     info.top_node_count = std::uint32_t(top_count);
     info.brick_splat_limit = limit;
     info.flags = (colors.empty() ? 0u : pool::k_bricks_colors) |
-                 ((oi.flags & pool::k_octree_culled) ? pool::k_bricks_culled : 0u);
+                 ((oi.flags & pool::k_octree_culled) ? pool::k_bricks_culled : 0u) |
+                 ((oi.flags & pool::k_octree_replicated) ? pool::k_bricks_replicated : 0u);
     info.unique_splats = oi.unique_splats;
     BrickStats stats;
     stats.bricks = info.brick_count;

@@ -48,6 +48,9 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
         "--iso-float", o.iso_float,
         "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
         "pool has both");
+    app.add_flag("--bricks", o.bricks,
+                 "Splats: trace a pool's bricks (prt-bricks, issue 17) even when it kept its float octree "
+                 "(--keep-float); a pool with bricks only always traces them (default: off)");
     app.add_option("--iso-samples", o.iso_samples,
                    "ISO: sample intervals per leaf edge of ray length (thesis 4.5; 0: the default, 4)")
         ->check(CLI::Range(0.0f, 64.0f));
@@ -86,6 +89,7 @@ rt::LoadOptions load_options(const RenderOverrides& o) {
     rt::LoadOptions l;
     l.surface = o.surface;
     l.iso_float = o.iso_float;
+    l.bricks = o.bricks;
     scene::PointColors pc{};
     if (!o.point_colors.empty() && scene::parse_point_colors(o.point_colors, pc)) l.point_colors = pc;
     return l;

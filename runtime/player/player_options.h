@@ -25,13 +25,14 @@ struct RenderOverrides {
     std::uint32_t max_steps = 1u << 16;
     std::uint32_t leaf_culling = 2;  ///< core::LeafCulling
     // Surfaces (issue 9's accuracy knobs); 0 / -1 keep the core's defaults.
-    std::string surface;         ///< rt::LoadOptions::surface ("" keeps the scene's)
-    std::string point_colors;    ///< rt::LoadOptions::point_colors ("" keeps the materials')
-    bool iso_float = false;      ///< rt::LoadOptions::iso_float
-    float iso_samples = 0;       ///< core::IsoParams::samples
-    int iso_refine = -1;         ///< core::IsoParams::refine_steps
-    std::uint32_t mls_samples = 0;  ///< core::MlsParams::samples (k)
-    int mls_refine = -1;            ///< core::MlsParams::refine_steps
+    std::string surface;                 ///< rt::LoadOptions::surface ("" keeps the scene's)
+    std::string point_colors;            ///< rt::LoadOptions::point_colors ("" keeps the materials')
+    bool iso_float = false;              ///< rt::LoadOptions::iso_float
+    bool bricks = false;                 ///< rt::LoadOptions::bricks
+    float iso_samples = 0;               ///< core::IsoParams::samples
+    int iso_refine = -1;                 ///< core::IsoParams::refine_steps
+    std::uint32_t mls_samples = 0;       ///< core::MlsParams::samples (k)
+    int mls_refine = -1;                 ///< core::MlsParams::refine_steps
     std::uint32_t patch_iterations = 0;  ///< core::PatchTraceParams::max_iterations
     // seed 002, 7: path tracing and samples per pixel; 0 keeps the scene's.
     bool path_tracing = false;

@@ -38,6 +38,7 @@ enum Counter : std::uint32_t {
     k_c_sanitized,
     k_c_dropped,
     k_c_culled,
+    k_c_fallbacks,
     k_counter_count
 };
 
@@ -49,7 +50,8 @@ __device__ void flush_counters(const core::RayCounters& c, unsigned long long* o
     if (threadIdx.x < k_counter_count) block_sum[threadIdx.x] = 0;
     __syncthreads();
     const unsigned int v[k_counter_count] = {c.primary,   c.secondary, c.shadow,  c.leaves, c.splat_tests,
-                                             c.truncated, c.sanitized, c.dropped, c.culled};
+                                             c.truncated, c.sanitized, c.dropped, c.culled,
+                                             c.fallbacks};
     const bool lane0 = (threadIdx.x & 31u) == 0;
 #pragma unroll
     for (std::uint32_t i = 0; i < k_counter_count; ++i) {
@@ -354,6 +356,7 @@ public:
         stats.sanitized = counters[k_c_sanitized];
         stats.dropped = counters[k_c_dropped];
         stats.culled = counters[k_c_culled];
+        stats.fallbacks = counters[k_c_fallbacks];
         stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return stats;
     }

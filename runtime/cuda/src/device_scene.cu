@@ -80,6 +80,15 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(o.leaf_info, o.leaf_info ? (std::size_t{o.filled_leaves} + 1) * 4 : 0);
     f(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat));
     f(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds));
+    // Bricks (issue 17), in core: every brick uploaded, so the resident table and the request
+    // flags are dropped (null: every brick at data + offset). Streaming replaces both.
+    core::BrickView& b = mv.bricks;
+    f(b.top_nodes, std::size_t{b.top_node_count} * 4);
+    f(b.table, std::size_t{b.brick_count} * sizeof(pool::BrickEntry));
+    f(b.data, static_cast<std::size_t>(b.data_bytes));
+    f(b.lod, std::size_t{b.top_node_count} * sizeof(pool::LodSplat));
+    f(b.resident, 0);
+    f(b.requests, 0);
     core::IsoView& iso = mv.iso;
     f(iso.tree.nodes, std::size_t{iso.tree.node_count} * 4);
     f(iso.leaves_q8, std::size_t{iso.leaf_count} * sizeof(pool::IsoLeafQ8));

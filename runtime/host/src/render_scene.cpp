@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "prt/error.h"
+#include "prt/formats/brick_sections.h"
 #include "prt/formats/octree_sections.h"
 #include "prt/runtime/gi_pool.h"
 #include "prt/runtime/leaf_bounds.h"
@@ -48,9 +49,13 @@ Placement placement(const scene::Transform& t, const pool::ModelInfo& info) {
     return p;
 }
 
-bool has_splats(const pool::PoolFile& pf) {
+bool has_float_splats(const pool::PoolFile& pf) {
     return pf.has(pool::SectionType::octree_info) || pf.has(pool::SectionType::octree_nodes) ||
            pf.has(pool::SectionType::splats);
+}
+/// Splats: the float octree (16-19) or bricks (128-132, prt-bricks), or both.
+bool has_splats(const pool::PoolFile& pf) {
+    return has_float_splats(pf) || pool::has_bricks(pf);
 }
 
 /// The surface a model is traced as: the one asked for, or without one ("auto") the first the pool
@@ -69,8 +74,9 @@ core::SurfaceKind choose_surface(const pool::PoolFile& pf, std::optional<core::S
     } else if (has_mls(pf)) {
         k = core::SurfaceKind::mls;
     } else {
-        pf.fail(nullptr, "no surface to render: no octree (prt-octree), ISO (prt-iso), MLS (prt-mls) or patch "
-                         "(prt-patches) sections");
+        pf.fail(nullptr,
+                "no surface to render: no octree (prt-octree), ISO (prt-iso), MLS (prt-mls) or patch "
+                "(prt-patches) sections");
     }
     if (asked)
         warnings.push_back("model '" + model + "': the pool has no splat octree: rendering its " +
@@ -91,6 +97,22 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
     o.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves of LoadedModel
     lm.bytes = s.nodes.size_bytes() + s.leaf_info.size_bytes() + s.splats.size_bytes() +
                lm.leaf_bounds.size() * sizeof(core::LeafBounds);
+}
+
+/// The brick sections (issue 17, prt-bricks) of a pool into the model's brick view, every brick
+/// resident (in core; streaming later changes only the view's resident table). The sections and
+/// every brick's payload are validated (pool::validate_bricks). Bricks carry their splats' colours
+/// and no source point: per-point colors, intensities and material ids do not apply (said once).
+void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::string>& warnings) {
+    const pool::BrickSections s = pool::validate_bricks(pf);
+    lm.view.bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
+                                           reinterpret_cast<const unsigned char*>(s.data.data()),
+                                           s.data.size(), s.lod.data());
+    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.data.size_bytes() + s.lod.size_bytes();
+    if (pf.has(pool::SectionType::material_ids) || pf.has(pool::SectionType::intensities))
+        warnings.push_back("model '" + lm.name +
+                           "': tracing bricks, which carry only RGB565 colours: the pool's material ids and "
+                           "intensities are not used (the model's material shades every splat)");
 }
 
 /// SCENE.md point_colors: the per-point colors a model shades with (ModelView::colors). The pool's
@@ -264,6 +286,7 @@ void RenderScene::apply_load_options(const LoadOptions& options) {
         m_surface_override = k;
     }
     m_iso_float = options.iso_float;
+    m_bricks = options.bricks;
     m_point_colors_override = options.point_colors;
 }
 
@@ -585,31 +608,40 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             m_surface_auto ? std::nullopt : std::optional{m_surface_override.value_or(sm.surface)};
         v.surface = choose_surface(pf, asked, lm.name, m_warnings);
         switch (v.surface) {
-        case core::SurfaceKind::splats: load_splats(pf, lm); break;
-        case core::SurfaceKind::iso: {
-            v.iso = load_iso_view(pf, !m_iso_float);
-            if (v.iso.use_q8)  // upload only the leaves traced
-                v.iso.leaves_f32 = nullptr;
-            else
-                v.iso.leaves_q8 = nullptr;
-            const std::size_t leaf = v.iso.use_q8 ? sizeof(pool::IsoLeafQ8) : sizeof(pool::IsoLeafF32);
-            lm.bytes = std::size_t{v.iso.tree.node_count} * 4 + std::size_t{v.iso.leaf_count} * leaf;
-            break;
-        }
-        case core::SurfaceKind::mls:
-            v.mls = load_mls_view(pf);
-            lm.bytes = std::size_t{v.mls.node_count} * sizeof(pool::MlsNode) + std::size_t{v.mls.ref_count} * 4 +
-                       std::size_t{v.mls.splat_count} * sizeof(pool::MlsSplat);
-            break;
-        case core::SurfaceKind::patches:
-            v.patches = load_patch_view(pf);
-            lm.bytes = std::size_t{v.patches.patch_count} * sizeof(pool::PatchControlNet) +
-                       std::size_t{v.patches.bvh_node_count} * sizeof(pool::PatchBvhNode) +
-                       std::size_t{v.patches.patch_count} * v.patches.subpatch_nodes * sizeof(pool::SubpatchNode);
-            break;
+            case core::SurfaceKind::splats:
+                // The float octree when the pool has one (unless bricks are asked for), else bricks.
+                if (pool::has_bricks(pf) && (m_bricks || !has_float_splats(pf)))
+                    load_bricks(pf, lm, m_warnings);
+                else
+                    load_splats(pf, lm);
+                break;
+            case core::SurfaceKind::iso: {
+                v.iso = load_iso_view(pf, !m_iso_float);
+                if (v.iso.use_q8)  // upload only the leaves traced
+                    v.iso.leaves_f32 = nullptr;
+                else
+                    v.iso.leaves_q8 = nullptr;
+                const std::size_t leaf = v.iso.use_q8 ? sizeof(pool::IsoLeafQ8) : sizeof(pool::IsoLeafF32);
+                lm.bytes = std::size_t{v.iso.tree.node_count} * 4 + std::size_t{v.iso.leaf_count} * leaf;
+                break;
+            }
+            case core::SurfaceKind::mls:
+                v.mls = load_mls_view(pf);
+                lm.bytes = std::size_t{v.mls.node_count} * sizeof(pool::MlsNode) +
+                           std::size_t{v.mls.ref_count} * 4 +
+                           std::size_t{v.mls.splat_count} * sizeof(pool::MlsSplat);
+                break;
+            case core::SurfaceKind::patches:
+                v.patches = load_patch_view(pf);
+                lm.bytes = std::size_t{v.patches.patch_count} * sizeof(pool::PatchControlNet) +
+                           std::size_t{v.patches.bvh_node_count} * sizeof(pool::PatchBvhNode) +
+                           std::size_t{v.patches.patch_count} * v.patches.subpatch_nodes *
+                               sizeof(pool::SubpatchNode);
+                break;
         }
         v.point_count = static_cast<std::uint32_t>(info.point_count);
-        if (!material_ids.empty()) {
+        const bool bricked = v.bricks.top_nodes != nullptr;
+        if (!material_ids.empty() && !bricked) {
             if (material_ids.size() == info.point_count)
                 v.material_ids = material_ids.data();
             else
@@ -618,7 +650,7 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
         }
         v.material =
             std::min<std::uint32_t>(sm.material, static_cast<std::uint32_t>(m_scene.materials.size() - 1));
-        shade_points(pf, lm, m_scene.materials, m_warnings, m_notes);
+        if (!bricked) shade_points(pf, lm, m_scene.materials, m_warnings, m_notes);
         lm.bytes += (v.colors ? std::size_t{v.point_count} * sizeof(pool::Rgba8) : 0) +
                     (v.material_ids ? material_ids.size_bytes() : 0);
         // thesis 5.3-5.4: precomputed global illumination, when the scene asks for it.
@@ -626,13 +658,13 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
                                  const char* missing) {
             if (!wanted) return;
             if (!present) {
-                m_warnings.push_back("model '" + lm.name + "': render." + option + " is on but " + pf.label() +
-                                     " has no " + missing);
+                m_warnings.push_back("model '" + lm.name + "': render." + option + " is on but " +
+                                     pf.label() + " has no " + missing);
                 return;
             }
             view = load(pf);
-            lm.bytes +=
-                std::size_t{view.tree.node_count} * 4 + std::size_t{view.tree.leaf_count} * sizeof(pool::GiLeaf);
+            lm.bytes += std::size_t{view.tree.node_count} * 4 +
+                        std::size_t{view.tree.leaf_count} * sizeof(pool::GiLeaf);
         };
         load_gi(m_scene.render.caustics, "caustics", has_caustics(pf), load_caustic_view, v.caustics,
                 "caustic octree (run prt-photons on the scene)");

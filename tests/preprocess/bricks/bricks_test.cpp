@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "brick_build.h"
+#include "bricks_test_data.h"
 #include "octree_build.h"
 #include "point_cloud.h"
 #include "preprocess/splat/splat_test_data.h"
@@ -29,53 +30,10 @@ using namespace prt;
 using pool::NodeType;
 using pool::PoolFile;
 using pool::SectionType;
+using test::bricked_bytes;
+using test::octree_pool_bytes;
 
 constexpr double k_pi = 3.14159265358979323846;
-
-/// A pool with `cloud`'s points (radii given) and their float octree.
-std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, std::uint32_t max_leaf = 16) {
-    pool::PoolWriter w;
-    pre::write_point_sections(cloud, w);
-    const PoolFile points = PoolFile::from_bytes(w.serialize(), "points");
-    pre::OctreeParams params;
-    params.max_leaf_splats = max_leaf;
-    params.threads = 2;
-    pre::SplatOctree octree = pre::build_octree(points.array<pool::Float3>(SectionType::positions),
-                                                points.array<pool::Float3>(SectionType::normals),
-                                                points.array<float>(SectionType::radii), params);
-    pre::add_octree_sections(std::move(octree), w);
-    w.add_provenance("bricks_test", "0", "{}");
-    return w.serialize();
-}
-
-/// A pool with points (sphere of radius 2, colours from the position) and their float octree.
-std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16) {
-    const test::SplatSet s = test::sphere_points(n, 5, 2.0);
-    pre::PointCloud cloud;
-    for (std::size_t i = 0; i < s.positions.size(); ++i) {
-        const pool::Float3& p = s.positions[i];
-        cloud.positions.push_back({10.0 + p.x, -3.0 + p.y, p.z});
-        cloud.colors.push_back(
-            {std::uint8_t(64 + 40 * p.x), std::uint8_t(128 + 60 * p.y), std::uint8_t(i % 256), 255});
-        cloud.radii.push_back(float(3.0 / std::sqrt(double(n))) * float(1 + i % 3));
-    }
-    cloud.normals = s.normals;
-    return octree_pool_bytes(cloud, max_leaf);
-}
-
-/// The pool with bricks added (float sections kept, so the tests can compare).
-std::vector<std::byte> bricked_bytes(const PoolFile& in, std::uint32_t brick_splats,
-                                     pre::BrickStats* stats = nullptr) {
-    pre::BrickParams params;
-    params.brick_splats = brick_splats;
-    params.threads = 2;
-    pre::BrickedOctree b = pre::build_bricks(pool::splat_octree(in, "test"),
-                                             in.array<pool::Rgba8>(SectionType::colors), params, stats);
-    pool::PoolWriter w;
-    w.carry_over(in);
-    pre::add_brick_sections(std::move(b), w);
-    return w.serialize();
-}
 
 class Bricks : public ::testing::Test {
 protected:

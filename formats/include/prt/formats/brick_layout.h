@@ -84,6 +84,7 @@ enum BrickFlags : std::uint32_t {
     k_bricks_colors = 1u << 0,      ///< splat colours come from the model's colors (else white)
     k_bricks_float_kept = 1u << 1,  ///< the float octree sections (16-19) were kept beside the bricks
     k_bricks_culled = 1u << 2,      ///< the source octree was culled (prt-cull)
+    k_bricks_replicated = 1u << 3,  ///< the source octree was replicated (prt-octree; else --no-replicate)
 };
 
 /// One brick (section brick_table, 64 bytes).

@@ -32,6 +32,7 @@ struct RayCounters {
     std::uint32_t sanitized = 0;  ///< non-finite pixels replaced by black
     std::uint32_t dropped = 0;    ///< secondary rays dropped because the ray stack was full
     std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds (splat.h)
+    std::uint32_t fallbacks = 0;  ///< non-resident bricks met, their LOD disc used (bricks.h)
 };
 
 /// Adds the ray counters of b to a: RayCounters, or any type with the same fields (the host's
@@ -47,6 +48,7 @@ PRT_HD PRT_INLINE void add_ray_counters(A& a, const B& b) {
     a.sanitized += b.sanitized;
     a.dropped += b.dropped;
     a.culled += b.culled;
+    a.fallbacks += b.fallbacks;
 }
 
 PRT_HD PRT_INLINE RayCounters& operator+=(RayCounters& a, const RayCounters& b) {
@@ -65,6 +67,7 @@ PRT_HD PRT_INLINE void add_work(RayCounters& c, std::uint32_t leaves, std::uint3
 }
 PRT_HD PRT_INLINE void add_stats(RayCounters& c, const WalkStats& w) {
     add_work(c, w.leaves, w.splat_tests, w.truncated, w.culled);
+    c.fallbacks += w.fallbacks;
 }
 PRT_HD PRT_INLINE void add_stats(RayCounters& c, const IsoStats& st) {
     add_work(c, st.leaves, st.evaluations, st.truncated, 0);
@@ -243,8 +246,12 @@ PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::splats>, const SceneVi
     const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
     WalkStats ws;
     SplatSample h{};
-    const bool hit = closest_hit_splats(q.mv.octree, q.mv.colors, q.o, q.d, q.inside, t_max, blend,
-                                        s.params.max_steps, h, ws, s.params.leaf_culling);
+    // A bricked pool (issue 17) traces its bricks; the same blending, colours from the splats.
+    const bool hit =
+        q.mv.bricks.top_nodes != nullptr
+            ? closest_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, t_max, blend, s.params.max_steps, h, ws)
+            : closest_hit_splats(q.mv.octree, q.mv.colors, q.o, q.d, q.inside, t_max, blend,
+                                 s.params.max_steps, h, ws, s.params.leaf_culling);
     add_stats(c, ws);
     if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
     return hit;
@@ -252,8 +259,11 @@ PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::splats>, const SceneVi
 PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneView& s, const ModelRay& q,
                                    RayCounters& c) {
     WalkStats ws;
-    const bool hit = any_hit_splats(q.mv.octree, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
-                                    s.params.leaf_culling);
+    const bool hit =
+        q.mv.bricks.top_nodes != nullptr
+            ? any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws)
+            : any_hit_splats(q.mv.octree, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                             s.params.leaf_culling);
     add_stats(c, ws);
     return hit;
 }

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 
+#include "prt/core/bricks.h"
 #include "prt/core/gi.h"
 #include "prt/core/iso.h"
 #include "prt/core/math.h"
@@ -73,7 +74,7 @@ struct RenderParams {
     float exposure = 1.0f;
     float gamma = 2.2f;
     ToneMap tone_map = ToneMap::clamp;
-    float blend_window = 1.0f;           ///< thesis 3.3: blending interval, in radii of the nearest splat
+    float blend_window = 1.0f;  ///< thesis 3.3: blending interval, in radii of the nearest splat
     /// thesis 3.5; on by default since issue 15 (prt-fidelity, the ten bunny scans: depth error 0.28
     /// -> 0.18 spacings, false hits at silhouettes 0.70 % -> 0.43 %; the synthetic sphere's p99 hit
     /// error 3.7e-5 -> 2.3e-5 of the diagonal)
@@ -93,9 +94,9 @@ struct RenderParams {
     std::uint32_t frame = 0;
     /// Intersection settings of the other surfaces (the accuracy knobs of issue 9). The renderer
     /// overrides their `faces` per ray (closest_hit_scene: the seamless rule of thesis 3.6).
-    IsoParams iso;            ///< thesis 4.5: samples per leaf edge, refinement steps, seams
-    MlsParams mls;            ///< WS05 3.2: samples per cell interval (k), refinement steps
-    PatchTraceParams patch;   ///< seed 002, 3: Newton iteration cap, tolerance, domain margins
+    IsoParams iso;           ///< thesis 4.5: samples per leaf edge, refinement steps, seams
+    MlsParams mls;           ///< WS05 3.2: samples per cell interval (k), refinement steps
+    PatchTraceParams patch;  ///< seed 002, 3: Newton iteration cap, tolerance, domain margins
 };
 
 /// Which representation of a model rays meet: the scene file's own enum (prt/formats/scene_layout.h).
@@ -106,10 +107,11 @@ using scene::SurfaceKind;
 /// `surface` is set; the others stay empty.
 struct ModelView {
     SurfaceKind surface = SurfaceKind::splats;
-    OctreeView octree;  ///< splats
-    IsoView iso;        ///< iso
-    MlsView mls;        ///< mls
-    PatchView patches;  ///< patches
+    OctreeView octree;       ///< splats
+    BrickView bricks;        ///< splats of a bricked pool (issue 17): traced instead of `octree` when set
+    IsoView iso;             ///< iso
+    MlsView mls;             ///< mls
+    PatchView patches;       ///< patches
     CausticView caustics;    ///< prt-photons' caustic octree (thesis 5.4), or empty
     LightMapView light_map;  ///< prt-lightmap's diffuse light map (thesis 5.3), or empty
     const pool::Rgba8* colors = nullptr;          ///< per point, or null

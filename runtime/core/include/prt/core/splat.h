@@ -33,6 +33,7 @@ struct WalkStats {
     std::uint32_t splat_tests = 0;
     std::uint32_t truncated = 0;  ///< walks ended by the step bound
     std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds, splats unread
+    std::uint32_t fallbacks = 0;  ///< bricks met that were not resident: their LOD disc used (bricks.h)
 };
 
 /// Which LeafBounds tests may skip a filled leaf (RenderParams::leaf_culling).
@@ -119,6 +120,25 @@ struct BlendOptions {
     bool deep = false;    ///< thesis 3.5: blend across following leaves too
 };
 
+/// Where a leaf's splats come from (the template argument `Src` of the functions below): the float
+/// splats of an octree view with the pool's per-point colors (OctreeSplats), or a brick's compressed
+/// splats decoded on the fly (bricks.h). load(i) gives splat i as a pool::Splat whose `point` field
+/// is what color() and point_id() take: the source point index here, a packed colour in a brick.
+struct OctreeSplats {
+    const pool::Splat* splats;
+    const pool::Rgba8* colors;  ///< per point, or null (white)
+    PRT_HD PRT_INLINE pool::Splat load(std::uint32_t i) const { return load_splat(splats + i); }
+    /// The display-encoded colour in [0,1] of a splat's `point` field.
+    PRT_HD PRT_INLINE Vec3 color(std::uint32_t point) const {
+        if (colors == nullptr) return Vec3{1.0f, 1.0f, 1.0f};
+        const pool::Rgba8 c = colors[point];
+        constexpr float k = 1.0f / 255.0f;
+        return Vec3{c.r * k, c.g * k, c.b * k};
+    }
+    /// The source point of a splat's `point` field (material ids), 0xffffffff for none.
+    PRT_HD PRT_INLINE std::uint32_t point_id(std::uint32_t point) const { return point; }
+};
+
 namespace detail {
 struct BlendAccumulator {
     float w = 0.0f, wt = 0.0f;
@@ -126,15 +146,9 @@ struct BlendAccumulator {
     Vec3 wc{0, 0, 0};
 };
 
-PRT_HD PRT_INLINE Vec3 point_color(const pool::Rgba8* colors, std::uint32_t point) {
-    if (colors == nullptr) return Vec3{1.0f, 1.0f, 1.0f};
-    const pool::Rgba8 c = colors[point];
-    constexpr float k = 1.0f / 255.0f;
-    return Vec3{c.r * k, c.g * k, c.b * k};
-}
-
-PRT_HD PRT_INLINE void blend_one(const pool::Splat& s, const pool::Rgba8* colors, Vec3 o, Vec3 d, bool inside,
-                                 float lo, float hi, BlendAccumulator& acc, WalkStats& stats) {
+template <class Src>
+PRT_HD PRT_INLINE void blend_one(const Src& src, const pool::Splat& s, Vec3 o, Vec3 d, bool inside, float lo,
+                                 float hi, BlendAccumulator& acc, WalkStats& stats) {
     float t, xr;
     PRT_COUNT(stats.splat_tests);
     if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) return;
@@ -142,24 +156,99 @@ PRT_HD PRT_INLINE void blend_one(const pool::Splat& s, const pool::Rgba8* colors
     acc.w += w;
     acc.wt += w * t;
     acc.wn += vec3(s.normal) * w;
-    acc.wc += point_color(colors, s.point) * w;
+    acc.wc += src.color(s.point) * w;
 }
 
 /// Blends the hits of splats [begin, end) with t in [lo, hi]; of the first 32 splats only those
 /// whose bit is set in `mask` can hit (pass 1 found the others missing).
-PRT_HD PRT_INLINE void blend_leaf(const OctreeView& v, const pool::Rgba8* colors, std::uint32_t begin,
-                                  std::uint32_t end, std::uint32_t mask, Vec3 o, Vec3 d, bool inside,
-                                  float lo, float hi, BlendAccumulator& acc, WalkStats& stats) {
+template <class Src>
+PRT_HD PRT_INLINE void blend_leaf(const Src& src, std::uint32_t begin, std::uint32_t end, std::uint32_t mask,
+                                  Vec3 o, Vec3 d, bool inside, float lo, float hi, BlendAccumulator& acc,
+                                  WalkStats& stats) {
     const std::uint32_t n = end - begin;
     if (n < 32u) mask &= (1u << n) - 1u;
     while (mask != 0) {  // bounded: one bit cleared per iteration
         const std::uint32_t bit = count_trailing_zeros(mask);
         mask &= mask - 1u;
-        blend_one(load_splat(v.splats + begin + bit), colors, o, d, inside, lo, hi, acc, stats);
+        blend_one(src, src.load(begin + bit), o, d, inside, lo, hi, acc, stats);
     }
     for (std::uint32_t i = begin + 32u; i < end; ++i) {
-        blend_one(load_splat(v.splats + i), colors, o, d, inside, lo, hi, acc, stats);
+        blend_one(src, src.load(i), o, d, inside, lo, hi, acc, stats);
     }
+}
+
+/// The state of one closest-hit search (thesis 3.3): the nearest accepted hit so far, the blending
+/// window it opened and the blend of the hits inside it.
+struct NearestHit {
+    bool found = false;
+    float t_near = k_inf, window_end = k_inf;
+    std::uint32_t near_point = 0;  ///< the nearest splat's `point` field (Src::color, Src::point_id)
+    Vec3 near_normal{0, 0, 1};
+    BlendAccumulator acc;
+};
+
+/// One leaf's splats [begin, end) with hits accepted in [lo, hi]. Pass 1 (first leaf with hits
+/// only): the nearest accepted hit fixes the surface and the blending window; the hits of the
+/// leaf's first 32 splats are remembered in a bit mask so pass 2 revisits only those (and every
+/// splat past the 32nd). Pass 2: blend the accepted hits inside the window (thesis 3.3, eq. 3.1).
+/// Returns whether the search is over (a hit found and no deep blending, thesis 3.5).
+template <class Src>
+PRT_HD PRT_INLINE bool closest_in_leaf(const Src& src, std::uint32_t begin, std::uint32_t end, Vec3 o, Vec3 d,
+                                       bool inside, float inv_dlen, float lo, float hi,
+                                       const BlendOptions& blend, NearestHit& h, WalkStats& stats) {
+    std::uint32_t mask = 0xffffffffu;
+    if (!h.found) {
+        mask = 0;
+        for (std::uint32_t i = begin; i < end; ++i) {
+            const pool::Splat s = src.load(i);
+            float t, xr;
+            PRT_COUNT(stats.splat_tests);
+            if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) continue;
+            if (i - begin < 32u) mask |= 1u << (i - begin);
+            if (t < h.t_near || !h.found) {
+                h.t_near = t;
+                h.window_end = t + blend.window * s.radius * inv_dlen;
+                h.near_point = s.point;
+                h.near_normal = vec3(s.normal);
+                h.found = true;
+            }
+        }
+        if (!h.found) return false;
+    }
+    blend_leaf(src, begin, end, mask, o, d, inside, fmaxf(lo, h.t_near), fminf(hi, h.window_end), h.acc,
+               stats);
+    return !blend.deep;
+}
+
+/// Whether one of splats [begin, end) is hit with t in [lo, hi] (shadow rays).
+template <class Src>
+PRT_HD PRT_INLINE bool any_in_leaf(const Src& src, std::uint32_t begin, std::uint32_t end, Vec3 o, Vec3 d,
+                                   bool inside, float lo, float hi, WalkStats& stats) {
+    for (std::uint32_t i = begin; i < end; ++i) {
+        float t, xr;
+        PRT_COUNT(stats.splat_tests);
+        if (intersect_splat(src.load(i), o, d, inside, lo, hi, t, xr)) return true;
+    }
+    return false;
+}
+
+/// The blended sample of a finished search; false when nothing was hit.
+template <class Src>
+PRT_HD PRT_INLINE bool finish_nearest(const Src& src, const NearestHit& h, SplatSample& out) {
+    if (!h.found) return false;
+    if (h.acc.w > 0.0f) {
+        const float inv = 1.0f / h.acc.w;
+        out.t = h.acc.wt * inv;
+        out.normal = normalize_or(h.acc.wn, normalize(h.near_normal));
+        out.color = h.acc.wc * inv;
+    } else {
+        out.t = h.t_near;
+        out.normal = normalize(h.near_normal);
+        out.color = src.color(h.near_point);
+    }
+    if (!(out.t >= h.t_near)) out.t = h.t_near;  // blended t never moves in front of the nearest hit
+    out.point = src.point_id(h.near_point);
+    return true;
 }
 }  // namespace detail
 
@@ -222,6 +311,30 @@ PRT_HD PRT_INLINE LeafStep next_leaf(const OctreeView& v, OctreeWalk& walk, Octr
     return LeafStep::done;
 }
 
+/// The closest-hit search over one octree walk (thesis 2.2.1, 3.3): each leaf with splats to read,
+/// with hits accepted in its own t range (`own_range`: a replicated tree holds every disk in every
+/// leaf it overlaps) or from t = 0 (a tree without replicas keeps each disk in one leaf only), up to
+/// t_max. Returns whether the search is over (closest_in_leaf); false when the walk ended.
+template <class Src>
+PRT_HD PRT_INLINE bool closest_in_walk(const OctreeView& v, OctreeWalk& walk, const Src& src,
+                                       const LeafBounds* bounds, std::uint32_t culling, Vec3 o, Vec3 d,
+                                       float inv_dlen, bool inside, bool own_range, float t_max,
+                                       const BlendOptions& blend, detail::NearestHit& h, WalkStats& stats) {
+    OctreeLeaf leaf;
+    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
+        std::uint32_t begin = 0, end = 0;
+        float lo = 0.0f, hi = 0.0f;
+        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(
+            v, walk, leaf, bounds, culling, o, d, inv_dlen, inside, own_range, true, t_max,
+            h.found ? h.t_near : 0.0f, h.found ? h.window_end : k_inf, h.found ? h.window_end : k_inf, begin,
+            end, lo, hi, stats);
+        if (step == LeafStep::done) return false;
+        if (step == LeafStep::skip) continue;
+        if (detail::closest_in_leaf(src, begin, end, o, d, inside, inv_dlen, lo, hi, blend, h, stats))
+            return true;
+    }
+}
+
 /// Closest hit of a ray with a model's splats (model local frame; d need not be unit). Hits are
 /// searched in t in [0, t_max). `colors` may be null. Returns false on a miss. `culling`
 /// (LeafCulling) says which of the view's LeafBounds tests may skip a filled leaf.
@@ -234,66 +347,12 @@ PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* co
     const bool replicated = (v.flags & pool::k_octree_replicated) != 0;
     const float inv_dlen = 1.0f / length(d);
     const LeafBounds* bounds = culling != k_cull_none ? v.leaf_bounds : nullptr;
-    bool found = false;
-    float t_near = k_inf, window_end = k_inf;
-    std::uint32_t near_point = 0;
-    Vec3 near_normal{0, 0, 1};
-    detail::BlendAccumulator acc;
-    OctreeLeaf leaf;
-    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
-        // The next leaf with splats to read, and the t range [lo, hi] its hits are accepted in: a
-        // replicated tree holds every disk in every leaf it overlaps, so only this leaf's t range
-        // (own_range); a tree without replicas keeps each disk in one leaf only: from t = 0.
-        std::uint32_t begin = 0, end = 0;
-        float lo = 0.0f, hi = 0.0f;
-        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(
-            v, walk, leaf, bounds, culling, o, d, inv_dlen, inside, replicated, true, t_max,
-            found ? t_near : 0.0f, found ? window_end : k_inf, found ? window_end : k_inf, begin, end, lo, hi,
-            stats);
-        if (step == LeafStep::done) break;
-        if (step == LeafStep::skip) continue;
-        // Pass 1 (first leaf with hits only): the nearest accepted hit fixes the surface and the
-        // blending window; the hits of the leaf's first 32 splats are remembered in a bit mask so
-        // pass 2 revisits only those (and every splat past the 32nd).
-        std::uint32_t mask = 0xffffffffu;
-        if (!found) {
-            mask = 0;
-            for (std::uint32_t i = begin; i < end; ++i) {
-                const pool::Splat s = load_splat(v.splats + i);
-                float t, xr;
-                PRT_COUNT(stats.splat_tests);
-                if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) continue;
-                if (i - begin < 32u) mask |= 1u << (i - begin);
-                if (t < t_near || !found) {
-                    t_near = t;
-                    window_end = t + blend.window * s.radius * inv_dlen;
-                    near_point = s.point;
-                    near_normal = vec3(s.normal);
-                    found = true;
-                }
-            }
-            if (!found) continue;
-        }
-        // Pass 2: blend the accepted hits inside the window (thesis 3.3, eq. 3.1).
-        detail::blend_leaf(v, colors, begin, end, mask, o, d, inside, fmaxf(lo, t_near),
-                           fminf(hi, window_end), acc, stats);
-        if (!blend.deep) break;
-    }
+    const OctreeSplats src{v.splats, colors};
+    detail::NearestHit h;
+    closest_in_walk(v, walk, src, bounds, culling, o, d, inv_dlen, inside, replicated, t_max, blend, h,
+                    stats);
     if (walk.truncated) ++stats.truncated;
-    if (!found) return false;
-    if (acc.w > 0.0f) {
-        const float inv = 1.0f / acc.w;
-        out.t = acc.wt * inv;
-        out.normal = normalize_or(acc.wn, normalize(near_normal));
-        out.color = acc.wc * inv;
-    } else {
-        out.t = t_near;
-        out.normal = normalize(near_normal);
-        out.color = detail::point_color(colors, near_point);
-    }
-    if (!(out.t >= t_near)) out.t = t_near;  // blended t never moves in front of the nearest hit
-    out.point = near_point;
-    return true;
+    return detail::finish_nearest(src, h, out);
 }
 
 /// Any hit of a ray with a model's splats in t in [0, t_max) (shadow rays, thesis 5.2). `culling`
@@ -321,11 +380,8 @@ PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool insi
                                                                k_inf, begin, end, leaf_lo, leaf_hi, stats);
         if (step == LeafStep::done) break;
         if (step == LeafStep::skip) continue;
-        for (std::uint32_t i = begin; i < end; ++i) {
-            float t, xr;
-            PRT_COUNT(stats.splat_tests);
-            if (intersect_splat(load_splat(v.splats + i), o, d, inside, 0.0f, hi, t, xr)) return true;
-        }
+        if (detail::any_in_leaf(OctreeSplats{v.splats, nullptr}, begin, end, o, d, inside, 0.0f, hi, stats))
+            return true;
     }
     if (walk.truncated) ++stats.truncated;
     return false;

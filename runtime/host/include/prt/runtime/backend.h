@@ -24,8 +24,9 @@ struct FrameStats {
     std::uint64_t primary = 0, secondary = 0, shadow = 0;
     std::uint64_t leaves = 0, splat_tests = 0;
     std::uint64_t truncated = 0, sanitized = 0, dropped = 0;
-    std::uint64_t culled = 0;  ///< filled leaves passed unread by their bounds (core LeafBounds)
-    double gpu_share = 0;      ///< hybrid: fraction of rows the GPU rendered
+    std::uint64_t culled = 0;     ///< filled leaves passed unread by their bounds (core LeafBounds)
+    std::uint64_t fallbacks = 0;  ///< non-resident bricks met, their LOD disc used (core bricks.h)
+    double gpu_share = 0;         ///< hybrid: fraction of rows the GPU rendered
 
     std::uint64_t rays() const { return primary + secondary + shadow; }
     FrameStats& operator+=(const FrameStats& o);

@@ -48,6 +48,9 @@ struct LoadOptions {
     std::string surface;
     /// ISO: trace the float leaves (160 B) instead of the quantized ones (56 B) when a pool has both.
     bool iso_float = false;
+    /// Splats: trace the bricks (prt-bricks) of a pool that also kept its float octree
+    /// (--keep-float); a pool with bricks only always traces them.
+    bool bricks = false;
     /// Replaces every material's point_colors (SCENE.md; prt-play --point-colors) when set.
     std::optional<scene::PointColors> point_colors;
 };
@@ -154,6 +157,7 @@ private:
     bool m_surface_auto = false;                           ///< LoadOptions::surface "auto"
     std::optional<scene::SurfaceKind> m_surface_override;  ///< LoadOptions::surface naming a kind
     bool m_iso_float = false;
+    bool m_bricks = false;
     core::RenderParams m_params;
     DVec3 m_origin{0, 0, 0};
     DVec3 m_world_min{0, 0, 0}, m_world_max{0, 0, 0};
