@@ -204,6 +204,9 @@ void run(Options o, const tool::CommonOptions& common) {
         splats += m.view.octree.splat_count;
         points += m.view.point_count;
         leaves += m.view.octree.filled_leaves;
+        const core::BrickView& b = m.view.bricks;  // a bricked pool (issue 17): its bricks' counts
+        for (std::uint32_t i = 0; b.top_nodes != nullptr && i < b.brick_count; ++i)
+            splats += b.table[i].splat_count, leaves += b.table[i].leaf_count;
     }
     report["model"] = {
         {"points", points}, {"splats", splats}, {"filled_leaves", leaves}, {"bytes", rs.bytes()}};

@@ -50,8 +50,7 @@ __device__ void flush_counters(const core::RayCounters& c, unsigned long long* o
     if (threadIdx.x < k_counter_count) block_sum[threadIdx.x] = 0;
     __syncthreads();
     const unsigned int v[k_counter_count] = {c.primary,   c.secondary, c.shadow,  c.leaves, c.splat_tests,
-                                             c.truncated, c.sanitized, c.dropped, c.culled,
-                                             c.fallbacks};
+                                             c.truncated, c.sanitized, c.dropped, c.culled, c.fallbacks};
     const bool lane0 = (threadIdx.x & 31u) == 0;
 #pragma unroll
     for (std::uint32_t i = 0; i < k_counter_count; ++i) {
@@ -127,13 +126,15 @@ Megakernel megakernel() {
 }
 
 /// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
-/// launch: splats at 4 blocks per SM, patches at 2, the general kernel at 4. The tuning variants of
+/// launch: splats at 4 blocks per SM, patches at 2, the general kernel and bricked splats (issue 17:
+/// their own kernel, so the float splat kernel does not carry the brick walk) at 4. The tuning variants of
 /// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4: runtime/README.md) only with the CMake option
-/// PRT_CUDA_TUNING_KERNELS, so a default build compiles 6 megakernels instead of 20.
+/// PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 22.
 const Megakernel k_megakernels[] = {
-    megakernel<core::k_mask_splats, 4>(),   // splats only, the default occupancy
-    megakernel<core::k_mask_patches, 2>(),  // patches only, the default occupancy
-    megakernel<core::k_mask_all, 4>(),      // every surface, sampling
+    megakernel<core::k_mask_splats, 4>(),                        // splats only, the default occupancy
+    megakernel<core::k_mask_patches, 2>(),                       // patches only, the default occupancy
+    megakernel<core::k_mask_all, 4>(),                           // every surface, sampling
+    megakernel<core::k_mask_splats | core::k_mask_bricks, 4>(),  // bricked splats (issue 17)
 #if PRT_CUDA_TUNING_KERNELS
     megakernel<core::k_mask_splats, 1>(),  megakernel<core::k_mask_splats, 2>(),
     megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats, 5>(),
@@ -152,7 +153,8 @@ const Megakernel k_megakernels[] = {
 /// prt::Error (one line) when this build lacks the variant.
 const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int asked) {
     const std::uint32_t mask =
-        sampling || (surface_mask != core::k_mask_patches && surface_mask != core::k_mask_splats)
+        sampling || (surface_mask != core::k_mask_patches && surface_mask != core::k_mask_splats &&
+                     surface_mask != (core::k_mask_splats | core::k_mask_bricks))
             ? std::uint32_t{core::k_mask_all}
             : surface_mask;
     if (asked < 1 || asked > 6) asked = 0;

@@ -87,6 +87,10 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(b.table, std::size_t{b.brick_count} * sizeof(pool::BrickEntry));
     f(b.data, static_cast<std::size_t>(b.data_bytes));
     f(b.lod, std::size_t{b.top_node_count} * sizeof(pool::LodSplat));
+    // (leaf_bounds' size is read from the host's leaf_bounds_first: that one goes after it)
+    const std::size_t brick_leaves = b.leaf_bounds_first ? b.leaf_bounds_first[b.brick_count] : 0;
+    f(b.leaf_bounds, brick_leaves * sizeof(core::LeafBounds));
+    f(b.leaf_bounds_first, b.leaf_bounds_first ? (std::size_t{b.brick_count} + 1) * 4 : 0);
     f(b.resident, 0);
     f(b.requests, 0);
     core::IsoView& iso = mv.iso;

@@ -116,4 +116,26 @@ std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsig
     return out;
 }
 
+std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
+                                                      std::vector<std::uint32_t>& first, unsigned threads) {
+    first.assign(std::size_t{v.brick_count} + 1, 0);
+    for (std::uint32_t b = 0; b < v.brick_count; ++b) first[b + 1] = first[b] + v.table[b].leaf_count;
+    std::vector<core::LeafBounds> out(first.back());
+    parallel_chunks(v.brick_count, 1, resolve_threads(threads),
+                    [&](std::size_t b0, std::size_t b1, unsigned) {
+                        std::vector<pool::Splat> decoded;
+                        for (std::size_t b = b0; b < b1; ++b) {
+                            core::BrickSplats src;
+                            core::OctreeView brick;
+                            if (!core::open_brick(v, static_cast<std::uint32_t>(b), src, brick)) continue;
+                            decoded.resize(brick.splat_count);
+                            for (std::uint32_t i = 0; i < brick.splat_count; ++i) decoded[i] = src.load(i);
+                            brick.splats = decoded.data();
+                            const std::vector<core::LeafBounds> leaves = build_leaf_bounds(brick, 1);
+                            std::copy(leaves.begin(), leaves.end(), out.begin() + first[b]);
+                        }
+                    });
+    return out;
+}
+
 }  // namespace prt::rt

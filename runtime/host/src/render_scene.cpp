@@ -108,7 +108,12 @@ void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::str
     lm.view.bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
                                            reinterpret_cast<const unsigned char*>(s.data.data()),
                                            s.data.size(), s.lod.data());
-    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.data.size_bytes() + s.lod.size_bytes();
+    // Leaf bounds over the decoded splats, so rays pass leaves unread as on the float path.
+    lm.leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);
+    lm.view.bricks.leaf_bounds = lm.leaf_bounds.data();  // vectors' buffers survive LoadedModel's moves
+    lm.view.bricks.leaf_bounds_first = lm.brick_leaf_first.data();
+    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.data.size_bytes() + s.lod.size_bytes() +
+               lm.leaf_bounds.size() * sizeof(core::LeafBounds) + lm.brick_leaf_first.size() * 4;
     if (pf.has(pool::SectionType::material_ids) || pf.has(pool::SectionType::intensities))
         warnings.push_back("model '" + lm.name +
                            "': tracing bricks, which carry only RGB565 colours: the pool's material ids and "

@@ -54,6 +54,8 @@ struct Views {
     std::vector<core::LeafBounds> bounds;
     const pool::Rgba8* colors = nullptr;
     core::BrickView bricks;
+    std::vector<core::LeafBounds> brick_bounds;
+    std::vector<std::uint32_t> brick_first;
     pool::BrickSections sections;
     Vec3 centre;  ///< the sphere's centre, local frame
     float max_radius = 0;
@@ -72,6 +74,9 @@ std::unique_ptr<Views> make_views(std::vector<std::byte> bytes) {
     v->bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
                                       reinterpret_cast<const unsigned char*>(s.data.data()), s.data.size(),
                                       s.lod.data());
+    v->brick_bounds = rt::build_brick_leaf_bounds(v->bricks, v->brick_first, 2);
+    v->bricks.leaf_bounds = v->brick_bounds.data();
+    v->bricks.leaf_bounds_first = v->brick_first.data();
     const pool::ModelInfo& mi = v->pool->model_info();
     v->centre = Vec3{float(k_centre[0] - mi.origin[0]), float(k_centre[1] - mi.origin[1]),
                      float(k_centre[2] - mi.origin[2])};
@@ -118,12 +123,12 @@ std::vector<Pixel> render_float(const Views& v, const Grid& g) {
 }
 
 std::vector<Pixel> render_bricks(const core::BrickView& b, const Views& v, const Grid& g,
-                                 core::WalkStats& stats) {
+                                 core::WalkStats& stats, std::uint32_t culling = core::k_cull_slabs) {
     std::vector<Pixel> out(g.size * g.size);
     for (std::uint32_t i = 0; i < out.size(); ++i) {
         float rho;
         out[i].hit = core::closest_hit_bricks(b, g.origin(v, i, rho), g.d, false, core::k_inf, k_blend,
-                                              1u << 16, out[i].s, stats);
+                                              1u << 16, out[i].s, stats, culling);
     }
     return out;
 }
@@ -204,6 +209,17 @@ TEST_F(BrickTrace, ImageEqualsTheFloatOctreesWithinTheCodecError) {
         EXPECT_EQ(st.fallbacks, 0u) << "every brick is resident";
         EXPECT_EQ(st.truncated, 0u);
         expect_same_image(*v, g, ref, img);
+        // Leaf bounds pass leaves unread without changing the image.
+        core::WalkStats all_st;
+        const std::vector<Pixel> unculled = render_bricks(v->bricks, *v, g, all_st, core::k_cull_none);
+        EXPECT_GT(st.culled, 0u);
+        EXPECT_LT(st.splat_tests, all_st.splat_tests);
+        for (std::uint32_t i = 0; i < img.size(); ++i) {
+            ASSERT_EQ(img[i].hit, unculled[i].hit) << i;
+            if (img[i].hit) {
+                EXPECT_EQ(img[i].s.t, unculled[i].s.t) << i;
+            }
+        }
     }
     EXPECT_EQ(s_huge->bricks.brick_count, 1u);
     EXPECT_GT(s_one->bricks.brick_count, 10 * s_views->bricks.brick_count);

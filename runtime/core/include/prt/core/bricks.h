@@ -41,6 +41,11 @@ struct BrickView {
     const unsigned char* const* resident = nullptr;
     /// Per brick, or null: set to 1 when a ray fell back to the brick's LOD disc (streaming requests).
     std::uint32_t* requests = nullptr;
+    /// Per filled leaf of every brick, or null: LeafBounds (octree.h) over the decoded splats, so
+    /// rays pass leaves unread as on the float path; brick b's at leaf_bounds + leaf_bounds_first[b].
+    /// Derived on the host at load (rt::build_brick_leaf_bounds), not in the pool.
+    const LeafBounds* leaf_bounds = nullptr;
+    const std::uint32_t* leaf_bounds_first = nullptr;
     Vec3 root_min{0, 0, 0};  ///< root cube of the whole tree, model local frame
     float root_size = 1.0f;
     float inv_root_size = 1.0f;
@@ -151,6 +156,20 @@ PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkSt
 #endif
 }
 
+/// Opens resident brick b: its splat source and octree view (with its leaf bounds when the view
+/// has them). False when b is out of range or not resident.
+PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSplats& src, OctreeView& brick) {
+    if (b >= v.brick_count) return false;
+    const unsigned char* payload = brick_payload(v, b);
+    if (payload == nullptr) return false;
+    src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
+    src.splats = reinterpret_cast<const pool::CompressedSplat*>(
+        payload + pool::brick_splats_offset(src.header.node_count, src.header.leaf_count));
+    brick = brick_octree(v.table[b], src.header, payload);
+    if (v.leaf_bounds != nullptr) brick.leaf_bounds = v.leaf_bounds + v.leaf_bounds_first[b];
+    return true;
+}
+
 /// One brick leaf of the top tree, the way both searches meet it: calls `resident(src, inner_view)`
 /// for a resident brick, or `fallback(lod)` for a brick that is not (after noting the fallback; a
 /// brick whose disc is empty is passed). Returns what the call returned (true: stop).
@@ -158,17 +177,26 @@ template <class Resident, class Fallback>
 PRT_HD PRT_INLINE bool visit_brick(const BrickView& v, std::uint32_t b, std::uint32_t top_node,
                                    WalkStats& stats, Resident&& resident, Fallback&& fallback) {
     if (b >= v.brick_count) return false;
-    const unsigned char* payload = brick_payload(v, b);
-    if (payload == nullptr) {
-        note_fallback(v, b, stats);
-        LodSplats lod;
-        return lod_disc(v, top_node, lod) && fallback(lod);
-    }
     BrickSplats src;
-    src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
-    src.splats = reinterpret_cast<const pool::CompressedSplat*>(
-        payload + pool::brick_splats_offset(src.header.node_count, src.header.leaf_count));
-    return resident(src, brick_octree(v.table[b], src.header, payload));
+    OctreeView brick;
+    if (open_brick(v, b, src, brick)) return resident(src, brick);
+    note_fallback(v, b, stats);
+    LodSplats lod;
+    return lod_disc(v, top_node, lod) && fallback(lod);
+}
+
+/// The inner walk of a resident brick over the outer leaf's t range [t0, t1], with the steps the
+/// outer walk has left: search(inner walk, leaf bounds or null) does the leaf work and says whether
+/// the search is over. A truncated inner walk ends the outer one.
+template <class Search>
+PRT_HD PRT_INLINE bool walk_brick(const OctreeView& brick, const OctreeLeaf& leaf, Vec3 o, Vec3 d,
+                                  OctreeWalk& walk, std::uint32_t culling, Search&& search) {
+    OctreeWalk inner;
+    if (!walk_begin(brick, o, d, leaf.t0, leaf.t1, walk.steps_left, inner)) return false;
+    const bool over = search(inner, culling != k_cull_none ? brick.leaf_bounds : nullptr);
+    walk.steps_left = inner.steps_left;
+    if (inner.truncated) walk.truncated = true, walk.active = false;
+    return over;
 }
 
 /// Closest hit of a ray with a bricked model's splats (model local frame; d need not be unit), as
@@ -176,7 +204,7 @@ PRT_HD PRT_INLINE bool visit_brick(const BrickView& v, std::uint32_t b, std::uin
 /// false on a miss. `max_steps` bounds the leaves of both levels together.
 PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool inside, float t_max,
                                       const BlendOptions& blend, std::uint32_t max_steps, SplatSample& out,
-                                      WalkStats& stats) {
+                                      WalkStats& stats, std::uint32_t culling = k_cull_slabs) {
     const OctreeView top = brick_top_octree(v);
     OctreeWalk walk;
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
@@ -192,13 +220,11 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
         const bool stop = visit_brick(
             v, node_addr(leaf.node), walk.path[leaf.level], stats,
             [&](const BrickSplats& src, const OctreeView& brick) {
-                OctreeWalk inner;
-                if (!walk_begin(brick, o, d, leaf.t0, leaf.t1, walk.steps_left, inner)) return false;
-                const bool over = closest_in_walk(brick, inner, src, nullptr, k_cull_none, o, d, inv_dlen,
-                                                  inside, replicated, t_max, blend, h, stats);
-                walk.steps_left = inner.steps_left;
-                if (inner.truncated) walk.truncated = true, walk.active = false;
-                return over || inner.truncated;
+                return walk_brick(
+                    brick, leaf, o, d, walk, culling, [&](OctreeWalk& inner, const LeafBounds* bounds) {
+                        return closest_in_walk(brick, inner, src, bounds, culling, o, d, inv_dlen, inside,
+                                               replicated, t_max, blend, h, stats);
+                    });
             },
             [&](const LodSplats& lod) {
                 return detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f,
@@ -210,13 +236,18 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
     return detail::finish_nearest(Rgb565Splats{}, h, out);
 }
 
-/// Any hit of a ray with a bricked model's splats in t in [0, t_max) (shadow rays, thesis 5.2).
+/// Any hit of a ray with a bricked model's splats in t in [0, t_max) (shadow rays, thesis 5.2), as
+/// any_hit_splats does it over the float octree.
 PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool inside, float t_max,
-                                  std::uint32_t max_steps, WalkStats& stats) {
+                                  std::uint32_t max_steps, WalkStats& stats,
+                                  std::uint32_t culling = k_cull_slabs) {
     const OctreeView top = brick_top_octree(v);
     OctreeWalk walk;
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
     const float hi = nextafterf(t_max, 0.0f);
+    const float inv_dlen = 1.0f / length(d);
+    const bool own_range =
+        (v.flags & pool::k_bricks_replicated) != 0 && (v.flags & pool::k_bricks_culled) == 0;
     OctreeLeaf leaf;
     bool hit = false;
     while (!hit && walk_next(top, walk, leaf)) {  // bounded by max_steps
@@ -225,20 +256,11 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
         hit = visit_brick(
             v, node_addr(leaf.node), walk.path[leaf.level], stats,
             [&](const BrickSplats& src, const OctreeView& brick) {
-                OctreeWalk inner;
-                if (!walk_begin(brick, o, d, leaf.t0, leaf.t1, walk.steps_left, inner)) return false;
-                bool found = false;
-                OctreeLeaf l;
-                while (!found && walk_next(brick, inner, l)) {  // bounded by max_steps
-                    PRT_COUNT(stats.leaves);
-                    std::uint32_t begin, end;
-                    leaf_splats(brick, l.node, begin, end);
-                    // An occluder anywhere on [0, t_max) counts, whichever leaf finds it.
-                    found = detail::any_in_leaf(src, begin, end, o, d, inside, 0.0f, hi, stats);
-                }
-                walk.steps_left = inner.steps_left;
-                if (inner.truncated) walk.truncated = true, walk.active = false;
-                return found;
+                return walk_brick(brick, leaf, o, d, walk, culling,
+                                  [&](OctreeWalk& inner, const LeafBounds* bounds) {
+                                      return any_in_walk(brick, inner, src, bounds, culling, o, d, inv_dlen,
+                                                         inside, own_range, hi, stats);
+                                  });
             },
             [&](const LodSplats& lod) {
                 return detail::any_in_leaf(lod, 0, 1, o, d, inside, 0.0f, fminf(leaf.t1, hi), stats);

@@ -148,14 +148,20 @@ enum KernelMask : std::uint32_t {
     k_mask_mls = 1u << static_cast<std::uint32_t>(SurfaceKind::mls),
     k_mask_patches = 1u << static_cast<std::uint32_t>(SurfaceKind::patches),
     k_mask_sampling = 1u << scene::k_surface_kind_count,  ///< spp > 1 or path tracing
-    k_mask_all = (k_mask_sampling << 1) - 1,
+    /// Splats of bricked pools (bricks.h; issue 17): their own bit, so a kernel for float splats
+    /// does not carry the brick walk's registers.
+    k_mask_bricks = k_mask_sampling << 1,
+    k_mask_all = (k_mask_bricks << 1) - 1,
 };
 
 /// The mask a scene needs.
 PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
     std::uint32_t m = (s.params.spp > 1 || s.params.path_tracing != 0) ? k_mask_sampling : 0u;
-    for (std::uint32_t i = 0; i < s.model_count; ++i)
+    for (std::uint32_t i = 0; i < s.model_count; ++i) {
         m |= 1u << static_cast<std::uint32_t>(s.models[i].surface);
+        if (s.models[i].surface == SurfaceKind::splats && s.models[i].bricks.top_nodes != nullptr)
+            m |= k_mask_bricks;
+    }
     return m;
 }
 
@@ -164,6 +170,10 @@ PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
 template <SurfaceKind S>
 struct SurfaceTag {
     static constexpr SurfaceKind kind = S;
+};
+/// Splats of a bricked pool (ModelView::bricks set): a surface of its own for the dispatch.
+struct BricksTag {
+    static constexpr SurfaceKind kind = SurfaceKind::splats;
 };
 
 /// Ray r in model `model`'s local frame (to_model_frame), as every surface query takes it.
@@ -246,12 +256,8 @@ PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::splats>, const SceneVi
     const BlendOptions blend{s.params.blend_window, s.params.deep_blending != 0};
     WalkStats ws;
     SplatSample h{};
-    // A bricked pool (issue 17) traces its bricks; the same blending, colours from the splats.
-    const bool hit =
-        q.mv.bricks.top_nodes != nullptr
-            ? closest_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, t_max, blend, s.params.max_steps, h, ws)
-            : closest_hit_splats(q.mv.octree, q.mv.colors, q.o, q.d, q.inside, t_max, blend,
-                                 s.params.max_steps, h, ws, s.params.leaf_culling);
+    const bool hit = closest_hit_splats(q.mv.octree, q.mv.colors, q.o, q.d, q.inside, t_max, blend,
+                                        s.params.max_steps, h, ws, s.params.leaf_culling);
     add_stats(c, ws);
     if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
     return hit;
@@ -259,26 +265,47 @@ PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::splats>, const SceneVi
 PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneView& s, const ModelRay& q,
                                    RayCounters& c) {
     WalkStats ws;
-    const bool hit =
-        q.mv.bricks.top_nodes != nullptr
-            ? any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws)
-            : any_hit_splats(q.mv.octree, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
-                             s.params.leaf_culling);
+    const bool hit = any_hit_splats(q.mv.octree, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                                    s.params.leaf_culling);
+    add_stats(c, ws);
+    return hit;
+}
+
+// Bricked splats (issue 17, bricks.h): the same blending; colours from the splats, no source point.
+PRT_HD PRT_INLINE bool closest_on(BricksTag, const SceneView& s, const ModelRay& q, float t_max,
+                                  ModelHit& out, RayCounters& c) {
+    WalkStats ws;
+    SplatSample h{};
+    const bool hit = closest_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, t_max,
+                                        BlendOptions{s.params.blend_window, s.params.deep_blending != 0},
+                                        s.params.max_steps, h, ws, s.params.leaf_culling);
+    add_stats(c, ws);
+    if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
+    return hit;
+}
+PRT_HD PRT_INLINE bool occluded_on(BricksTag, const SceneView& s, const ModelRay& q, RayCounters& c) {
+    WalkStats ws;
+    const bool hit = any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                                    s.params.leaf_culling);
     add_stats(c, ws);
     return hit;
 }
 
 /// The one surface dispatch: visit(SurfaceTag<kind>{}) for a model's surface kind, among the
-/// kinds K carries; splats take whatever is not ISO, MLS or patches (a kernel is launched only for
-/// scenes whose surfaces it carries: scene_mask()). False for a surface K does not carry.
+/// kinds K carries; splats take whatever is not ISO, MLS or patches, as BricksTag when the model's
+/// pool is bricked and K carries k_mask_bricks (a kernel is launched only for scenes whose surfaces
+/// it carries: scene_mask()). False for a surface K does not carry.
 template <std::uint32_t K, class Visit>
-PRT_HD PRT_INLINE bool dispatch_surface(SurfaceKind kind, Visit&& visit) {
+PRT_HD PRT_INLINE bool dispatch_surface(const ModelView& mv, Visit&& visit) {
+    const SurfaceKind kind = mv.surface;
     if constexpr ((K & k_mask_iso) != 0)
         if (kind == SurfaceKind::iso) return visit(SurfaceTag<SurfaceKind::iso>{});
     if constexpr ((K & k_mask_mls) != 0)
         if (kind == SurfaceKind::mls) return visit(SurfaceTag<SurfaceKind::mls>{});
     if constexpr ((K & k_mask_patches) != 0)
         if (kind == SurfaceKind::patches) return visit(SurfaceTag<SurfaceKind::patches>{});
+    if constexpr ((K & k_mask_bricks) != 0)
+        if (kind == SurfaceKind::splats && mv.bricks.top_nodes != nullptr) return visit(BricksTag{});
     if constexpr ((K & k_mask_splats) != 0) return visit(SurfaceTag<SurfaceKind::splats>{});
     return false;
 }
@@ -293,7 +320,7 @@ PRT_HD PRT_INLINE bool for_each_surface(const SceneView& s, const Ray& r, Visit&
         const ModelView& mv = s.models[m];
         ModelRay q{mv, m, r, Vec3{}, Vec3{}, ray_inside(r)};
         to_model_frame(mv, r, q.o, q.d);
-        if (dispatch_surface<K>(mv.surface, [&](auto surface) { return visit(surface, q); })) return true;
+        if (dispatch_surface<K>(mv, [&](auto surface) { return visit(surface, q); })) return true;
     }
     return false;
 }

@@ -355,6 +355,26 @@ PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* co
     return detail::finish_nearest(src, h, out);
 }
 
+/// The any-hit search over one octree walk: each leaf with splats to read (passed by its bounds
+/// only inside its own t range when `own_range`), any hit on [0, hi] counts. Returns whether one
+/// was found.
+template <class Src>
+PRT_HD PRT_INLINE bool any_in_walk(const OctreeView& v, OctreeWalk& walk, const Src& src,
+                                   const LeafBounds* bounds, std::uint32_t culling, Vec3 o, Vec3 d,
+                                   float inv_dlen, bool inside, bool own_range, float hi, WalkStats& stats) {
+    OctreeLeaf leaf;
+    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
+        std::uint32_t begin = 0, end = 0;
+        float leaf_lo, leaf_hi;
+        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(v, walk, leaf, bounds, culling, o, d, inv_dlen,
+                                                               inside, own_range, own_range, hi, 0.0f, k_inf,
+                                                               k_inf, begin, end, leaf_lo, leaf_hi, stats);
+        if (step == LeafStep::done) return false;
+        if (step == LeafStep::skip) continue;
+        if (detail::any_in_leaf(src, begin, end, o, d, inside, 0.0f, hi, stats)) return true;
+    }
+}
+
 /// Any hit of a ray with a model's splats in t in [0, t_max) (shadow rays, thesis 5.2). `culling`
 /// as for closest_hit_splats.
 PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool inside, float t_max,
@@ -362,7 +382,6 @@ PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool insi
                                   std::uint32_t culling = k_cull_slabs) {
     OctreeWalk walk;
     if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
-    OctreeLeaf leaf;
     // An occluder anywhere on [0, t_max) counts, whichever leaf finds it.
     const float hi = nextafterf(t_max, 0.0f);
     const LeafBounds* bounds = culling != k_cull_none ? v.leaf_bounds : nullptr;
@@ -372,19 +391,10 @@ PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool insi
     // Culled trees (prt-cull) lack some replicas, so there the whole [0, t_max) range is kept.
     const bool own_range =
         (v.flags & pool::k_octree_replicated) != 0 && (v.flags & pool::k_octree_culled) == 0;
-    for (;;) {  // bounded: every pass takes at least one walk step, and walks are bounded
-        std::uint32_t begin = 0, end = 0;
-        float leaf_lo, leaf_hi;
-        const LeafStep step = next_leaf<PRT_BATCHED_WALK != 0>(v, walk, leaf, bounds, culling, o, d, inv_dlen,
-                                                               inside, own_range, own_range, hi, 0.0f, k_inf,
-                                                               k_inf, begin, end, leaf_lo, leaf_hi, stats);
-        if (step == LeafStep::done) break;
-        if (step == LeafStep::skip) continue;
-        if (detail::any_in_leaf(OctreeSplats{v.splats, nullptr}, begin, end, o, d, inside, 0.0f, hi, stats))
-            return true;
-    }
+    const bool hit = any_in_walk(v, walk, OctreeSplats{v.splats, nullptr}, bounds, culling, o, d, inv_dlen,
+                                 inside, own_range, hi, stats);
     if (walk.truncated) ++stats.truncated;
-    return false;
+    return hit;
 }
 
 }  // namespace prt::core

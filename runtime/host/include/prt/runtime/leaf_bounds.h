@@ -5,6 +5,7 @@
 
 #include <vector>
 
+#include "prt/core/bricks.h"
 #include "prt/core/octree.h"
 
 namespace prt::rt {
@@ -17,5 +18,12 @@ namespace prt::rt {
 /// non-finite data turns the leaf's tests off. Uses up to `threads` threads (0: all hardware
 /// threads).
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads = 0);
+
+/// The same for every filled leaf of every brick of a bricked pool (issue 17), over each brick's
+/// decoded splats (the ones the core intersects), splat ranges relative to the brick; brick b's
+/// leaves start at `first[b]` (brick_count + 1 entries, set here). Every brick must be resident.
+std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
+                                                      std::vector<std::uint32_t>& first,
+                                                      unsigned threads = 0);
 
 }  // namespace prt::rt

@@ -34,6 +34,8 @@ struct LoadedModel {
     core::ModelView view;  ///< pointers into the mapped pool (and leaf_bounds below)
     /// Per filled leaf: bounds that let rays pass it unread (derived at load, not in the pool).
     std::vector<core::LeafBounds> leaf_bounds;
+    /// Bricked pools: brick b's first leaf in leaf_bounds (core::BrickView::leaf_bounds_first).
+    std::vector<std::uint32_t> brick_leaf_first;
     /// Per point: the colors the view shades with when they are not the pool's own (SCENE.md
     /// point_colors: intensities as grey levels, or a mix by material); empty otherwise.
     std::vector<pool::Rgba8> shading_colors;
