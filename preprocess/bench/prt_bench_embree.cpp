@@ -181,8 +181,8 @@ public:
         hit.model = dm.model;
         const bool colors =
             mv.colors != nullptr && m_view.material_count > 0 && m_view.materials[mat].use_point_colors != 0;
-        hit.base_color =
-            colors ? core::srgb_to_linear(core::detail::point_color(mv.colors, point)) : core::Vec3{1, 1, 1};
+        hit.base_color = colors ? core::srgb_to_linear(core::OctreeSplats{nullptr, mv.colors}.color(point))
+                                : core::Vec3{1, 1, 1};
         return true;
     }
 

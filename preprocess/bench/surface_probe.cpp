@@ -32,6 +32,10 @@ SurfaceProbe::SurfaceProbe(std::shared_ptr<const pool::PoolFile> pool, const std
             scene::Scene sc;
             m_scene = std::make_unique<rt::RenderScene>(rt::RenderScene::from_pools(sc, {m_pool}));
             const core::ModelView& mv = m_scene->models().at(0).view;
+            if (mv.bricks.top_nodes != nullptr)  // issue 17: measuring bricks is later work
+                throw Error(p.label() +
+                            ": a bricked pool without its float octree: not measured yet (build it "
+                            "with prt-bricks --keep-float to measure the float splats)");
             m_octree = &mv.octree;
             m_colors = mv.colors;
             m_bytes = m_scene->bytes();
