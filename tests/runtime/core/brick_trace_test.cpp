@@ -180,28 +180,25 @@ void expect_same_image(const Views& v, const Grid& g, const std::vector<Pixel>& 
 class BrickTrace : public ::testing::Test {
 protected:
     static void SetUpTestSuite() {
-        const PoolFile octree = PoolFile::from_bytes(sphere_pool(20000), "octree");
-        s_views = make_views(test::bricked_bytes(octree, 2000)).release();
-        s_one = make_views(test::bricked_bytes(octree, 1)).release();
-        s_huge = make_views(test::bricked_bytes(octree, 1u << 30)).release();
+        s_octree = new PoolFile(PoolFile::from_bytes(sphere_pool(12000), "octree"));
+        s_views = make_views(test::bricked_bytes(*s_octree, 1500)).release();
     }
     static void TearDownTestSuite() {
         delete s_views;
-        delete s_one;
-        delete s_huge;
+        delete s_octree;
     }
-    static Views* s_views;  ///< N = 2000: a few dozen bricks
-    static Views* s_one;    ///< N = 1: every filled leaf a brick
-    static Views* s_huge;   ///< one brick holding the whole tree
+    static PoolFile* s_octree;
+    static Views* s_views;  ///< N = 1500: a few dozen bricks
 };
+PoolFile* BrickTrace::s_octree = nullptr;
 Views* BrickTrace::s_views = nullptr;
-Views* BrickTrace::s_one = nullptr;
-Views* BrickTrace::s_huge = nullptr;
 
 TEST_F(BrickTrace, ImageEqualsTheFloatOctreesWithinTheCodecError) {
     const Grid g(128);
     const std::vector<Pixel> ref = render_float(*s_views, g);
-    for (const Views* v : {s_views, s_one, s_huge}) {
+    const auto one = make_views(test::bricked_bytes(*s_octree, 1));          // every filled leaf a brick
+    const auto huge = make_views(test::bricked_bytes(*s_octree, 1u << 30));  // one brick, the whole tree
+    for (const Views* v : {s_views, one.get(), huge.get()}) {
         SCOPED_TRACE(::testing::Message() << v->bricks.brick_count << " bricks");
         ASSERT_GT(v->bricks.brick_count, 0u);
         core::WalkStats st;
@@ -221,8 +218,8 @@ TEST_F(BrickTrace, ImageEqualsTheFloatOctreesWithinTheCodecError) {
             }
         }
     }
-    EXPECT_EQ(s_huge->bricks.brick_count, 1u);
-    EXPECT_GT(s_one->bricks.brick_count, 10 * s_views->bricks.brick_count);
+    EXPECT_EQ(huge->bricks.brick_count, 1u);
+    EXPECT_GT(one->bricks.brick_count, 10 * s_views->bricks.brick_count);
     EXPECT_GT(s_views->bricks.brick_count, 8u);
 }
 
