@@ -89,6 +89,25 @@ std::vector<GpuScene> scenes() {
         auto pf = std::make_shared<const pool::PoolFile>(pool::PoolFile::from_bytes(w.serialize(), "glass"));
         out.push_back({"glass sphere over a plane (refraction, TIR)", rt::RenderScene::from_pools(sc, {pf})});
     }
+    {
+        // issue 17: the first scene's pool bricked (prt-bricks --keep-float; small bricks, so rays
+        // cross many) and traced through its bricks: the bricked-splat kernels (core bricks.h).
+        TempDir dir("prt-gpu-bricks");
+        write_pool(*out[0].rs.models().at(0).pool, dir.path / "plain.pool");
+        const std::string args = (dir.path / "plain.pool").string() + " -o " +
+                                 (dir.path / "bricked.pool").string() +
+                                 " --keep-float --brick-splats 4000 -q";
+        const ToolRun r = run_tool("prt-bricks", args, dir.path);
+        if (r.code == 0) {
+            rt::LoadOptions lo;
+            lo.bricks = true;
+            auto pf = std::make_shared<const pool::PoolFile>(pool::PoolFile::open(dir.path / "bricked.pool"));
+            out.push_back(
+                {"sphere on a plane, bricked", rt::RenderScene::from_pools(out[0].rs.scene(), {pf}, lo)});
+        } else {
+            ADD_FAILURE() << "prt-bricks: " << r.err;
+        }
+    }
     return out;
 }
 
