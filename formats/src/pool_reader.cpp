@@ -30,6 +30,7 @@ PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
     m_label = std::move(o.m_label);
     m_file = std::move(o.m_file);
     m_owned = std::move(o.m_owned);
+    m_options = o.m_options;
     m_size = o.m_size;
     m_data = m_file.data() ? reinterpret_cast<const std::byte*>(m_file.data())
                            : (m_owned.empty() ? nullptr : m_owned.data());
@@ -40,8 +41,9 @@ PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
 
 PoolFile::~PoolFile() = default;
 
-PoolFile PoolFile::open(const std::filesystem::path& path) {
+PoolFile PoolFile::open(const std::filesystem::path& path, const OpenOptions& options) {
     PoolFile pool;
+    pool.m_options = options;
     pool.m_label = path.string();
     pool.m_file = MappedFile::open(path, MappedFile::Access::random);
     pool.m_size = pool.m_file.size();
@@ -53,8 +55,9 @@ PoolFile PoolFile::open(const std::filesystem::path& path) {
     return pool;
 }
 
-PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label) {
+PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label, const OpenOptions& options) {
     PoolFile pool;
+    pool.m_options = options;
     pool.m_label = label;
     pool.m_owned = std::move(bytes);
     pool.m_data = pool.m_owned.data();
@@ -163,7 +166,10 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
             if (e.version == 0) fail(&e, "version 0 is invalid");
             check_element_size(e, known->element_size);
         }
-        if (checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
+        // Streaming: brick payloads are checked brick by brick as they are read (OpenOptions).
+        const bool deferred =
+            m_options.defer_brick_payloads && e.type == static_cast<std::uint32_t>(SectionType::brick_data);
+        if (!deferred && checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
         ranges.emplace_back(e.offset, e.size);
     }
     std::sort(ranges.begin(), ranges.end());

@@ -283,6 +283,35 @@ TEST_F(Bricks, CorruptedBrickIsRefusedNamingIt) {
               std::string::npos);
 }
 
+TEST_F(Bricks, StreamingOpenDefersTheBrickChecksumsToEachBrick) {
+    // A pool file with one byte of brick 3 flipped, the way a disk would corrupt it (the section's
+    // checksum is stale). A normal open refuses the whole pool; a streaming open defers brick_data's
+    // checksum, so the pool opens and only brick 3 is refused when it is read.
+    const std::uint32_t victim = 3;
+    const pool::BrickSections good = pool::validate_bricks(*s_bricked);
+    std::vector<std::byte> bytes(s_bricked->file_bytes().begin(), s_bricked->file_bytes().end());
+    const std::uint64_t at = s_bricked->find(SectionType::brick_data)->offset + good.table[victim].offset +
+                             good.table[victim].size - 5;
+    bytes[at] ^= std::byte{0x10};
+    EXPECT_NE(error_of([&] { PoolFile::from_bytes(bytes, "disk.pool"); })
+                  .find("disk.pool: section brick_data: bad checksum (file corrupted)"),
+              std::string::npos);
+    pool::OpenOptions streaming;
+    streaming.defer_brick_payloads = true;
+    const PoolFile pool = PoolFile::from_bytes(bytes, "disk.pool", streaming);
+    const pool::BrickSections s = pool::validate_brick_index(pool);
+    for (std::uint32_t b = 0; b < s.table.size(); ++b) {
+        const std::string e = error_of([&] { pool::validate_brick(pool, s.info, s.table[b], b, s.payload(b)); });
+        EXPECT_EQ(e, b == victim ? "disk.pool: section brick_data: brick 3: checksum mismatch" : "") << b;
+    }
+    // Deferring skips brick_data only: a flipped byte in any other section is still refused at open.
+    std::vector<std::byte> top(s_bricked->file_bytes().begin(), s_bricked->file_bytes().end());
+    top[s_bricked->find(SectionType::brick_top_nodes)->offset] ^= std::byte{0x01};
+    EXPECT_NE(error_of([&] { PoolFile::from_bytes(top, "disk.pool", streaming); })
+                  .find("section brick_top_nodes: bad checksum"),
+              std::string::npos);
+}
+
 TEST_F(Bricks, MoreBricksClaimedThanHeldIsRefused) {
     const PoolFile bad = modified(*s_bricked, [](auto& info, auto&, auto&) { info.brick_count += 1; });
     const std::string e = error_of([&] { pool::validate_brick_index(bad); });

@@ -17,6 +17,15 @@
 
 namespace prt::pool {
 
+/// How a pool is opened.
+struct OpenOptions {
+    /// Streaming (issue 17): leave the brick_data section's whole-payload checksum unchecked at
+    /// open, since computing it reads every brick of a pool that may be far larger than memory.
+    /// Every other check runs as usual; each brick carries its own XXH3-64 in brick_table and is
+    /// checked alone when it is read or uploaded (validate_brick in prt/formats/brick_sections.h).
+    bool defer_brick_payloads = false;
+};
+
 /// A validated, read-only, memory-mapped pool file. Opening checks everything POOL.md lists
 /// (magic, versions, sizes, bounds, overlaps, checksums, counts, cross-references, the splat
 /// octree) and throws prt::Error with one line "FILE: section NAME: what is wrong" on the first
@@ -25,9 +34,12 @@ namespace prt::pool {
 /// prt/formats/*_sections.h). Move-only; views stay valid while the PoolFile lives.
 class PoolFile {
 public:
-    static PoolFile open(const std::filesystem::path& path);
+    static PoolFile open(const std::filesystem::path& path, const OpenOptions& options = {});
     /// Validates an in-memory image (used by open() and by the fuzz target); `label` names it in errors.
-    static PoolFile from_bytes(std::vector<std::byte> bytes, const std::string& label);
+    static PoolFile from_bytes(std::vector<std::byte> bytes, const std::string& label,
+                               const OpenOptions& options = {});
+    /// The options the pool was opened with (brick payloads deferred: check each brick alone).
+    const OpenOptions& options() const { return m_options; }
 
     PoolFile(PoolFile&&) noexcept;
     PoolFile& operator=(PoolFile&&) noexcept;
@@ -37,6 +49,8 @@ public:
     const PoolHeader& header() const;
     std::span<const SectionEntry> sections() const;
     std::uint64_t file_size() const { return m_size; }
+    /// The whole file image (header, table, payloads).
+    std::span<const std::byte> file_bytes() const { return {m_data, static_cast<std::size_t>(m_size)}; }
 
     /// The entry of a section type, or nullptr when absent.
     const SectionEntry* find(SectionType type) const;
@@ -83,6 +97,7 @@ private:
     std::uint64_t m_size = 0;
     MappedFile m_file;                 // the file when mapped
     std::vector<std::byte> m_owned;    // storage when built from bytes
+    OpenOptions m_options;
 };
 
 /// Builds a pool in memory and writes it atomically. Sections are either owned buffers or views
