@@ -85,243 +85,272 @@ void CodecError::merge(const CodecError& o) {
     radii_raised += o.radii_raised;
 }
 
-BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
-                           const BrickParams& params, BrickStats* stats_out) {
-    const double start = tool::now_seconds();
-    const std::span<const std::uint32_t> nodes = octree.nodes;
-    const std::span<const std::uint32_t> leaf_info = octree.leaf_info;
-    const std::span<const pool::Splat> splats = octree.splats;
-    const std::size_t n = nodes.size();
-    if (n == 0) throw Error("the octree has no nodes");
-    const std::uint32_t limit = std::max<std::uint32_t>(params.brick_splats, 1);
+namespace {
 
-    // 1. subtree sizes: stored splats, nodes, filled leaves
-    std::vector<std::uint64_t> sub_splats(n, 0);
-    std::vector<std::uint32_t> sub_nodes(n, 1), sub_leaves(n, 0);
-    for (std::size_t i = n; i-- > 0;) {
+/// Phase 1: per node, the stored splats, nodes and filled leaves of its subtree.
+struct Subtrees {
+    std::vector<std::uint64_t> splats;
+    std::vector<std::uint32_t> nodes, leaves;
+};
+
+Subtrees subtree_sizes(std::span<const std::uint32_t> nodes, std::span<const std::uint32_t> leaf_info) {
+    const std::size_t n = nodes.size();
+    Subtrees sub{std::vector<std::uint64_t>(n, 0), std::vector<std::uint32_t>(n, 1),
+                 std::vector<std::uint32_t>(n, 0)};
+    for (std::size_t i = n; i-- > 0;) {  // children are stored after their parent
         const std::uint32_t a = pool::node_address(nodes[i]);
         switch (pool::node_type(nodes[i])) {
             case NodeType::internal:
                 for (std::uint32_t c = 0; c < 8; ++c) {
-                    sub_splats[i] += sub_splats[a + c];
-                    sub_nodes[i] += sub_nodes[a + c];
-                    sub_leaves[i] += sub_leaves[a + c];
+                    sub.splats[i] += sub.splats[a + c];
+                    sub.nodes[i] += sub.nodes[a + c];
+                    sub.leaves[i] += sub.leaves[a + c];
                 }
                 break;
             case NodeType::filled_leaf:
-                sub_splats[i] = leaf_info[a + 1] - leaf_info[a];
-                sub_leaves[i] = 1;
+                sub.splats[i] = leaf_info[a + 1] - leaf_info[a];
+                sub.leaves[i] = 1;
                 break;
             default:
                 break;
         }
     }
+    return sub;
+}
 
-    // 2. the top tree, breadth first: top node t stands for source node src[t]
-    BrickedOctree out;
+/// Phase 2's result: top node t stands for source node src[t] at `level[t]`, integer cell
+/// cell[3t..3t+2]; brick b is top node brick_top[b].
+struct TopCut {
     std::vector<std::uint32_t> src{0}, level{0}, cell{0, 0, 0};
-    std::vector<std::uint32_t> brick_top;  // top node of each brick
-    for (std::size_t t = 0; t < src.size(); ++t) {
-        const std::uint32_t s = src[t];
+    std::vector<std::uint32_t> brick_top;
+};
+
+/// Phase 2: the top tree, breadth first from the root, into `top_nodes`.
+TopCut cut_top_tree(std::span<const std::uint32_t> nodes, const Subtrees& sub, std::uint32_t limit,
+                    std::vector<std::uint32_t>& top_nodes) {
+    TopCut cut;
+    for (std::size_t t = 0; t < cut.src.size(); ++t) {
+        const std::uint32_t s = cut.src[t];
         const NodeType type = pool::node_type(nodes[s]);
         if (type == NodeType::empty_leaf) {
-            out.top_nodes.push_back(pool::make_node(NodeType::empty_leaf, 0));
-        } else if (type == NodeType::filled_leaf || sub_splats[s] <= limit) {
-            if (sub_splats[s] > 0xFFFFFFFFull)
-                throw Error("a leaf holds " + std::to_string(sub_splats[s]) +
+            top_nodes.push_back(pool::make_node(NodeType::empty_leaf, 0));
+        } else if (type == NodeType::filled_leaf || sub.splats[s] <= limit) {
+            if (sub.splats[s] > 0xFFFFFFFFull)
+                throw Error("a leaf holds " + std::to_string(sub.splats[s]) +
                             " splats; a brick holds at most 2^32 - 1");
-            out.top_nodes.push_back(pool::make_node(NodeType::brick, std::uint32_t(brick_top.size())));
-            brick_top.push_back(std::uint32_t(t));
+            top_nodes.push_back(pool::make_node(NodeType::brick, std::uint32_t(cut.brick_top.size())));
+            cut.brick_top.push_back(std::uint32_t(t));
         } else {
-            const std::uint32_t first = std::uint32_t(src.size());
+            const std::uint32_t first = std::uint32_t(cut.src.size());
             if (std::uint64_t(first) + 8 > pool::k_node_address_max)
                 throw Error("the top tree exceeds 2^30 nodes");
-            out.top_nodes.push_back(pool::make_node(NodeType::internal, first));
+            top_nodes.push_back(pool::make_node(NodeType::internal, first));
             const std::uint32_t a = pool::node_address(nodes[s]);
             for (std::uint32_t c = 0; c < 8; ++c) {
-                src.push_back(a + c);
-                level.push_back(level[t] + 1);
-                for (int ax = 0; ax < 3; ++ax) cell.push_back(2 * cell[3 * t + ax] + ((c >> ax) & 1));
+                cut.src.push_back(a + c);
+                cut.level.push_back(cut.level[t] + 1);
+                for (int ax = 0; ax < 3; ++ax) cut.cell.push_back(2 * cut.cell[3 * t + ax] + ((c >> ax) & 1));
             }
         }
     }
-    const std::size_t top_count = out.top_nodes.size();
-    const std::size_t bricks = brick_top.size();
+    return cut;
+}
 
-    // 3. payload offsets, then the bricks in parallel
-    const pool::OctreeInfo& oi = octree.info;
-    out.table.resize(bricks);
+/// Phase 3a: each brick's entry (cube, counts, 64-byte aligned payload offset); sizes out.data.
+void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeInfo& oi, BrickedOctree& out) {
+    out.table.resize(cut.brick_top.size());
     std::uint64_t offset = 0;
-    for (std::size_t b = 0; b < bricks; ++b) {
-        const std::uint32_t t = brick_top[b];
-        const std::uint32_t s = src[t];
+    for (std::size_t b = 0; b < cut.brick_top.size(); ++b) {
+        const std::uint32_t t = cut.brick_top[b];
+        const std::uint32_t s = cut.src[t];
         pool::BrickEntry& e = out.table[b];
-        const double size = double(oi.root_size) / double(std::uint64_t(1) << level[t]);
+        const double size = double(oi.root_size) / double(std::uint64_t(1) << cut.level[t]);
         for (int ax = 0; ax < 3; ++ax)
-            e.cube_min[ax] = float(double(oi.root_min[ax]) + size * cell[3 * t + ax]);
+            e.cube_min[ax] = float(double(oi.root_min[ax]) + size * cut.cell[3 * t + ax]);
         e.cube_size = float(size);
         e.offset = offset;
-        e.node_count = sub_nodes[s];
-        e.leaf_count = sub_leaves[s];
-        e.splat_count = std::uint32_t(sub_splats[s]);
+        e.node_count = sub.nodes[s];
+        e.leaf_count = sub.leaves[s];
+        e.splat_count = std::uint32_t(sub.splats[s]);
         e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count);
         e.top_node = t;
-        e.level = level[t];
+        e.level = cut.level[t];
         offset += (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
     }
     out.data.assign(offset, std::byte{0});
+}
 
-    // copies of each point among the stored splats: a replica weighs 1 / copies in the LOD sums
-    std::uint32_t max_point = 0;
-    for (const pool::Splat& sp : splats) max_point = std::max(max_point, sp.point);
-    std::vector<std::uint32_t> copies(splats.empty() ? 0 : std::size_t(max_point) + 1, 0);
-    for (const pool::Splat& sp : splats) ++copies[sp.point];
-    const auto color_of = [&](const pool::Splat& sp) {
-        return sp.point < colors.size() ? colors[sp.point] : pool::Rgba8{255, 255, 255, 255};
+/// Adds one splat's codec error (decoded `d` against the float splat `sp` of colour `col`).
+void measure(CodecError& err, const pool::Splat& sp, const pool::DecodedSplat& d, pool::Rgba8 col,
+             double quantum, double step) {
+    const double r = sp.radius;
+    const double dp[3] = {double(d.position.x) - sp.position.x, double(d.position.y) - sp.position.y,
+                          double(d.position.z) - sp.position.z};
+    const double pe = std::sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]) / r;
+    err.position_max = std::max(err.position_max, pe);
+    err.position_sum += pe;
+    for (double x : dp) err.position_quanta_max = std::max(err.position_quanta_max, std::fabs(x) / quantum);
+    const double nl = std::sqrt(double(sp.normal.x) * sp.normal.x + double(sp.normal.y) * sp.normal.y +
+                                double(sp.normal.z) * sp.normal.z);
+    const double dot = (double(d.normal.x) * sp.normal.x + double(d.normal.y) * sp.normal.y +
+                        double(d.normal.z) * sp.normal.z) /
+                       nl;
+    const double angle = std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / k_pi;
+    err.normal_max_deg = std::max(err.normal_max_deg, angle);
+    err.normal_sum_deg += angle;
+    const double growth = double(d.radius) / r - 1.0;
+    if (growth >= 0) {
+        err.radius_growth_max = std::max(err.radius_growth_max, growth);
+        err.radius_growth_sum += growth;
+    } else {
+        err.radius_shrink_max = std::max(err.radius_shrink_max, -growth);
+    }
+    if (double(d.radius) > r * step) ++err.radii_raised;
+    err.color_max = std::max({err.color_max, std::uint32_t(std::abs(int(d.color.r) - int(col.r))),
+                              std::uint32_t(std::abs(int(d.color.g) - int(col.g))),
+                              std::uint32_t(std::abs(int(d.color.b) - int(col.b)))});
+    ++err.splats;
+}
+
+/// The brick header for splats `brick_splats` of entry `e`: the quantization cube is the brick
+/// cube grown to hold every centre (replicas reach outside), the radius exponent from the largest.
+pool::BrickHeader brick_header(std::size_t b, const pool::BrickEntry& e,
+                               const std::vector<const pool::Splat*>& brick_splats) {
+    double lo[3], hi[3];
+    for (int ax = 0; ax < 3; ++ax) lo[ax] = e.cube_min[ax], hi[ax] = double(e.cube_min[ax]) + e.cube_size;
+    float max_radius = 0;
+    for (const pool::Splat* sp : brick_splats) {
+        const float p[3] = {sp->position.x, sp->position.y, sp->position.z};
+        for (int ax = 0; ax < 3; ++ax)
+            lo[ax] = std::min(lo[ax], double(p[ax])), hi[ax] = std::max(hi[ax], double(p[ax]));
+        max_radius = std::max(max_radius, sp->radius);
+    }
+    pool::BrickHeader h{};
+    double qsize = 0;
+    for (int ax = 0; ax < 3; ++ax) {
+        h.quant_min[ax] = round_down(lo[ax]);
+        qsize = std::max(qsize, hi[ax] - double(h.quant_min[ax]));
+    }
+    h.quant_size = round_up(qsize);
+    if (!std::isfinite(h.quant_size) || !std::isfinite(h.quant_min[0]) || !std::isfinite(h.quant_min[1]) ||
+        !std::isfinite(h.quant_min[2]) || !std::isfinite(max_radius))
+        throw Error("brick " + std::to_string(b) + ": a splat position or radius is not finite");
+    h.node_count = e.node_count;
+    h.leaf_count = e.leaf_count;
+    h.splat_count = e.splat_count;
+    h.radius_log2_min = pool::radius_log2_min_for(max_radius, h.quant_size);
+    return h;
+}
+
+/// Phase 3b: writes bricks' payloads, checksums and LOD discs (one worker's scratch).
+class BrickEncoder {
+public:
+    /// One worker's reusable buffers.
+    struct Scratch {
+        std::vector<std::uint32_t> src, nodes, leaf_info;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;  // (source leaf, local node)
+        std::vector<const pool::Splat*> splats;
     };
 
-    std::vector<LodSum> sums(top_count);
-    out.lod.assign(top_count, pool::LodSplat{});
-    const unsigned threads = resolve_threads(params.threads);
-    std::vector<CodecError> errors(threads);
-    std::atomic<std::uint64_t> done{0};
-    parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
-        std::vector<std::uint32_t> local_src, local_nodes;
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;  // (source leaf, local node)
-        std::vector<const pool::Splat*> brick_splats;
-        for (std::size_t b = begin; b < end; ++b) {
-            pool::BrickEntry& e = out.table[b];
-            // the subtree, breadth first from 0
-            local_src.assign(1, src[e.top_node]);
-            local_nodes.clear();
-            leaves.clear();
-            for (std::size_t i = 0; i < local_src.size(); ++i) {
-                const std::uint32_t w = nodes[local_src[i]];
-                const std::uint32_t a = pool::node_address(w);
-                switch (pool::node_type(w)) {
-                    case NodeType::internal:
-                        local_nodes.push_back(
-                            pool::make_node(NodeType::internal, std::uint32_t(local_src.size())));
-                        for (std::uint32_t c = 0; c < 8; ++c) local_src.push_back(a + c);
-                        break;
-                    case NodeType::filled_leaf:
-                        leaves.emplace_back(a, std::uint32_t(i));
-                        local_nodes.push_back(0);  // set below
-                        break;
-                    default:
-                        local_nodes.push_back(pool::make_node(NodeType::empty_leaf, 0));
-                        break;
-                }
-            }
-            std::sort(leaves.begin(), leaves.end());
-            std::byte* base = out.data.data() + e.offset;
-            std::vector<std::uint32_t> local_leaf_info(leaves.size() + 1, 0);
-            brick_splats.clear();
-            for (std::size_t l = 0; l < leaves.size(); ++l) {
-                local_nodes[leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
-                const std::uint32_t sb = leaf_info[leaves[l].first], se = leaf_info[leaves[l].first + 1];
-                for (std::uint32_t k = sb; k < se; ++k) brick_splats.push_back(&splats[k]);
-                local_leaf_info[l + 1] = std::uint32_t(brick_splats.size());
-            }
-            // quantization cube: the brick cube grown to hold every centre (replicas reach outside)
-            double lo[3], hi[3];
-            for (int ax = 0; ax < 3; ++ax)
-                lo[ax] = e.cube_min[ax], hi[ax] = double(e.cube_min[ax]) + e.cube_size;
-            float max_radius = 0;
-            for (const pool::Splat* sp : brick_splats) {
-                const float p[3] = {sp->position.x, sp->position.y, sp->position.z};
-                for (int ax = 0; ax < 3; ++ax)
-                    lo[ax] = std::min(lo[ax], double(p[ax])), hi[ax] = std::max(hi[ax], double(p[ax]));
-                max_radius = std::max(max_radius, sp->radius);
-            }
-            pool::BrickHeader h{};
-            double qsize = 0;
-            for (int ax = 0; ax < 3; ++ax) {
-                h.quant_min[ax] = round_down(lo[ax]);
-                qsize = std::max(qsize, hi[ax] - double(h.quant_min[ax]));
-            }
-            h.quant_size = round_up(qsize);
-            if (!std::isfinite(h.quant_size) || !std::isfinite(h.quant_min[0]) ||
-                !std::isfinite(h.quant_min[1]) || !std::isfinite(h.quant_min[2]) ||
-                !std::isfinite(max_radius))
-                throw Error("brick " + std::to_string(b) + ": a splat position or radius is not finite");
-            h.node_count = e.node_count;
-            h.leaf_count = e.leaf_count;
-            h.splat_count = e.splat_count;
-            h.radius_log2_min = pool::radius_log2_min_for(max_radius, h.quant_size);
-            std::memcpy(base, &h, sizeof h);
-            std::memcpy(base + pool::brick_nodes_offset(), local_nodes.data(), 4 * local_nodes.size());
-            std::memcpy(base + pool::brick_leaf_info_offset(h.node_count), local_leaf_info.data(),
-                        4 * local_leaf_info.size());
-            auto* out_splats = reinterpret_cast<pool::CompressedSplat*>(
-                base + pool::brick_splats_offset(h.node_count, h.leaf_count));
-            // encode and measure; LOD sums
-            CodecError& err = errors[worker];
-            const double quantum = double(h.quant_size) / pool::k_position_max_code;
-            const double step = std::exp2(1.0 / pool::k_radius_steps_per_octave) * (1.0 + 1e-6);
-            LodSum sum;
-            for (std::size_t k = 0; k < brick_splats.size(); ++k) {
-                const pool::Splat& sp = *brick_splats[k];
-                const pool::Rgba8 col = color_of(sp);
-                if (!pool::encode_splat(sp.position, sp.radius, sp.normal, col, h, &out_splats[k]))
-                    throw Error("brick " + std::to_string(b) + ": radius " + std::to_string(sp.radius) +
-                                " not representable (internal error)");
-                const pool::DecodedSplat d = pool::decode_splat(out_splats[k], h);
-                const double r = sp.radius;
-                const double dp[3] = {double(d.position.x) - sp.position.x,
-                                      double(d.position.y) - sp.position.y,
-                                      double(d.position.z) - sp.position.z};
-                const double pe = std::sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]) / r;
-                err.position_max = std::max(err.position_max, pe);
-                err.position_sum += pe;
-                for (double x : dp)
-                    err.position_quanta_max = std::max(err.position_quanta_max, std::fabs(x) / quantum);
-                const double nl =
-                    std::sqrt(double(sp.normal.x) * sp.normal.x + double(sp.normal.y) * sp.normal.y +
-                              double(sp.normal.z) * sp.normal.z);
-                const double dot = (double(d.normal.x) * sp.normal.x + double(d.normal.y) * sp.normal.y +
-                                    double(d.normal.z) * sp.normal.z) /
-                                   nl;
-                const double angle = std::acos(std::clamp(dot, -1.0, 1.0)) * 180.0 / k_pi;
-                err.normal_max_deg = std::max(err.normal_max_deg, angle);
-                err.normal_sum_deg += angle;
-                const double growth = double(d.radius) / r - 1.0;
-                if (growth >= 0) {
-                    err.radius_growth_max = std::max(err.radius_growth_max, growth);
-                    err.radius_growth_sum += growth;
-                } else {
-                    err.radius_shrink_max = std::max(err.radius_shrink_max, -growth);
-                }
-                if (double(d.radius) > r * step) ++err.radii_raised;
-                err.color_max = std::max({err.color_max, std::uint32_t(std::abs(int(d.color.r) - int(col.r))),
-                                          std::uint32_t(std::abs(int(d.color.g) - int(col.g))),
-                                          std::uint32_t(std::abs(int(d.color.b) - int(col.b)))});
-                ++err.splats;
-                const double w = std::max(k_pi * r * r, 1e-300) / copies[sp.point];
-                sum.w += w;
-                const double p[3] = {sp.position.x, sp.position.y, sp.position.z};
-                const double nn[3] = {sp.normal.x, sp.normal.y, sp.normal.z};
-                const double c[3] = {double(col.r), double(col.g), double(col.b)};
-                for (int ax = 0; ax < 3; ++ax)
-                    sum.p[ax] += w * p[ax], sum.n[ax] += w * nn[ax], sum.c[ax] += w * c[ax];
-            }
-            e.checksum = pool::checksum({base, static_cast<std::size_t>(e.size)});
-            // the brick's LOD disc: its sphere holds every splat's disc
-            pool::LodSplat disc = lod_from_sum(sum);
-            double cover = 0;
-            for (const pool::Splat* sp : brick_splats)
-                cover = std::max(cover, distance(sp->position, disc.position) + sp->radius);
-            disc.radius = round_up(cover);
-            out.lod[e.top_node] = disc;
-            sums[e.top_node] = sum;
-            const std::uint64_t now = done.fetch_add(1) + 1;
-            if (worker == 0 && params.progress) params.progress(now, bricks);
-        }
-    });
-    if (params.progress) params.progress(bricks, bricks);
+    BrickEncoder(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                 const TopCut& cut, BrickedOctree& out)
+        : m_octree(octree), m_colors(colors), m_cut(cut), m_out(out) {
+        // copies of each point among the stored splats: a replica weighs 1 / copies in the LOD sums
+        std::uint32_t max_point = 0;
+        for (const pool::Splat& sp : octree.splats) max_point = std::max(max_point, sp.point);
+        m_copies.assign(octree.splats.empty() ? 0 : std::size_t(max_point) + 1, 0);
+        for (const pool::Splat& sp : octree.splats) ++m_copies[sp.point];
+    }
 
-    // 4. LOD discs of the internal top nodes, children first (they come after their parent)
-    for (std::size_t t = top_count; t-- > 0;) {
+    /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
+    /// its splats encoded and measured; returns its LOD sums (its disc is written to out.lod).
+    LodSum encode(std::size_t b, CodecError& err, Scratch& scratch) const {
+        pool::BrickEntry& e = m_out.table[b];
+        gather(e, scratch);
+        std::byte* base = m_out.data.data() + e.offset;
+        const pool::BrickHeader h = brick_header(b, e, scratch.splats);
+        std::memcpy(base, &h, sizeof h);
+        std::memcpy(base + pool::brick_nodes_offset(), scratch.nodes.data(), 4 * scratch.nodes.size());
+        std::memcpy(base + pool::brick_leaf_info_offset(h.node_count), scratch.leaf_info.data(),
+                    4 * scratch.leaf_info.size());
+        auto* out_splats = reinterpret_cast<pool::CompressedSplat*>(
+            base + pool::brick_splats_offset(h.node_count, h.leaf_count));
+        const double quantum = double(h.quant_size) / pool::k_position_max_code;
+        const double step = std::exp2(1.0 / pool::k_radius_steps_per_octave) * (1.0 + 1e-6);
+        LodSum sum;
+        for (std::size_t k = 0; k < scratch.splats.size(); ++k) {
+            const pool::Splat& sp = *scratch.splats[k];
+            const pool::Rgba8 col =
+                sp.point < m_colors.size() ? m_colors[sp.point] : pool::Rgba8{255, 255, 255, 255};
+            if (!pool::encode_splat(sp.position, sp.radius, sp.normal, col, h, &out_splats[k]))
+                throw Error("brick " + std::to_string(b) + ": radius " + std::to_string(sp.radius) +
+                            " not representable (internal error)");
+            measure(err, sp, pool::decode_splat(out_splats[k], h), col, quantum, step);
+            const double r = sp.radius;
+            const double w = std::max(k_pi * r * r, 1e-300) / m_copies[sp.point];
+            sum.w += w;
+            const double p[3] = {sp.position.x, sp.position.y, sp.position.z};
+            const double nn[3] = {sp.normal.x, sp.normal.y, sp.normal.z};
+            const double c[3] = {double(col.r), double(col.g), double(col.b)};
+            for (int ax = 0; ax < 3; ++ax)
+                sum.p[ax] += w * p[ax], sum.n[ax] += w * nn[ax], sum.c[ax] += w * c[ax];
+        }
+        e.checksum = pool::checksum({base, static_cast<std::size_t>(e.size)});
+        // the brick's LOD disc: its sphere holds every splat's disc
+        pool::LodSplat disc = lod_from_sum(sum);
+        double cover = 0;
+        for (const pool::Splat* sp : scratch.splats)
+            cover = std::max(cover, distance(sp->position, disc.position) + sp->radius);
+        disc.radius = round_up(cover);
+        m_out.lod[e.top_node] = disc;
+        return sum;
+    }
+
+private:
+    /// The brick's nodes (breadth first from 0), leaf ranges and splats into `s`.
+    void gather(const pool::BrickEntry& e, Scratch& s) const {
+        s.src.assign(1, m_cut.src[e.top_node]);
+        s.nodes.clear();
+        s.leaves.clear();
+        for (std::size_t i = 0; i < s.src.size(); ++i) {
+            const std::uint32_t w = m_octree.nodes[s.src[i]];
+            const std::uint32_t a = pool::node_address(w);
+            switch (pool::node_type(w)) {
+                case NodeType::internal:
+                    s.nodes.push_back(pool::make_node(NodeType::internal, std::uint32_t(s.src.size())));
+                    for (std::uint32_t c = 0; c < 8; ++c) s.src.push_back(a + c);
+                    break;
+                case NodeType::filled_leaf:
+                    s.leaves.emplace_back(a, std::uint32_t(i));
+                    s.nodes.push_back(0);  // set below
+                    break;
+                default:
+                    s.nodes.push_back(pool::make_node(NodeType::empty_leaf, 0));
+                    break;
+            }
+        }
+        std::sort(s.leaves.begin(), s.leaves.end());
+        s.leaf_info.assign(s.leaves.size() + 1, 0);
+        s.splats.clear();
+        for (std::size_t l = 0; l < s.leaves.size(); ++l) {
+            s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
+            const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
+                                se = m_octree.leaf_info[s.leaves[l].first + 1];
+            for (std::uint32_t k = sb; k < se; ++k) s.splats.push_back(&m_octree.splats[k]);
+            s.leaf_info[l + 1] = std::uint32_t(s.splats.size());
+        }
+    }
+
+    const pool::SplatOctreeSections& m_octree;
+    std::span<const pool::Rgba8> m_colors;
+    const TopCut& m_cut;
+    BrickedOctree& m_out;
+    std::vector<std::uint32_t> m_copies;
+};
+
+/// Phase 4: LOD discs of the internal top nodes, children first (they come after their parent).
+void internal_lods(BrickedOctree& out, std::vector<LodSum>& sums) {
+    for (std::size_t t = out.top_nodes.size(); t-- > 0;) {
         const std::uint32_t w = out.top_nodes[t];
         if (pool::node_type(w) != NodeType::internal) continue;
         const std::uint32_t a = pool::node_address(w);
@@ -337,23 +366,27 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
         out.lod[t] = disc;
         sums[t] = sum;
     }
+}
 
+/// BrickInfo from the octree's and the table's facts, and the build's statistics.
+BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCut& cut, std::uint32_t limit,
+                     bool colors) {
     pool::BrickInfo& info = out.info;
     for (int ax = 0; ax < 3; ++ax) info.root_min[ax] = oi.root_min[ax];
     info.root_size = oi.root_size;
     info.depth = oi.depth;
-    info.brick_count = std::uint32_t(bricks);
-    info.top_node_count = std::uint32_t(top_count);
+    info.brick_count = std::uint32_t(out.table.size());
+    info.top_node_count = std::uint32_t(out.top_nodes.size());
     info.brick_splat_limit = limit;
-    info.flags = (colors.empty() ? 0u : pool::k_bricks_colors) |
+    info.flags = (colors ? pool::k_bricks_colors : 0u) |
                  ((oi.flags & pool::k_octree_culled) ? pool::k_bricks_culled : 0u) |
                  ((oi.flags & pool::k_octree_replicated) ? pool::k_bricks_replicated : 0u);
     info.unique_splats = oi.unique_splats;
     BrickStats stats;
     stats.bricks = info.brick_count;
     stats.top_nodes = info.top_node_count;
-    stats.top_depth = *std::max_element(level.begin(), level.end());
-    stats.min_brick_splats = bricks ? 0xFFFFFFFFu : 0;
+    stats.top_depth = *std::max_element(cut.level.begin(), cut.level.end());
+    stats.min_brick_splats = out.table.empty() ? 0 : 0xFFFFFFFFu;
     for (const pool::BrickEntry& e : out.table) {
         info.splat_count += e.splat_count;
         info.max_brick_splats = std::max(info.max_brick_splats, e.splat_count);
@@ -362,6 +395,38 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
     stats.max_brick_splats = info.max_brick_splats;
     stats.splats = info.splat_count;
     stats.data_bytes = out.data.size();
+    return stats;
+}
+
+}  // namespace
+
+BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                           const BrickParams& params, BrickStats* stats_out) {
+    const double start = tool::now_seconds();
+    if (octree.nodes.empty()) throw Error("the octree has no nodes");
+    const std::uint32_t limit = std::max<std::uint32_t>(params.brick_splats, 1);
+    BrickedOctree out;
+    const Subtrees sub = subtree_sizes(octree.nodes, octree.leaf_info);        // 1
+    const TopCut cut = cut_top_tree(octree.nodes, sub, limit, out.top_nodes);  // 2
+    lay_out_bricks(cut, sub, octree.info, out);                                // 3a
+    const std::size_t bricks = cut.brick_top.size();
+    std::vector<LodSum> sums(out.top_nodes.size());
+    out.lod.assign(out.top_nodes.size(), pool::LodSplat{});
+    const unsigned threads = resolve_threads(params.threads);
+    std::vector<CodecError> errors(threads);
+    std::atomic<std::uint64_t> done{0};
+    const BrickEncoder encoder(octree, colors, cut, out);
+    parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {  // 3b
+        BrickEncoder::Scratch scratch;
+        for (std::size_t b = begin; b < end; ++b) {
+            sums[out.table[b].top_node] = encoder.encode(b, errors[worker], scratch);
+            const std::uint64_t now = done.fetch_add(1) + 1;
+            if (worker == 0 && params.progress) params.progress(now, bricks);
+        }
+    });
+    if (params.progress) params.progress(bricks, bricks);
+    internal_lods(out, sums);  // 4
+    BrickStats stats = fill_info(out, octree.info, cut, limit, !colors.empty());
     for (const CodecError& e : errors) stats.error.merge(e);
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
