@@ -317,7 +317,11 @@ RenderScene RenderScene::load(const scene::Scene& sc, const std::filesystem::pat
             throw Error((sc.file.empty() ? std::string("scene") : sc.file.string()) + ": model '" + m.name +
                         "' has no pool (run prt-bake to build it from " + m.source.string() + ")");
         }
-        pools.push_back(std::make_shared<const pool::PoolFile>(pool::PoolFile::open(m.pool)));
+        // Brick payloads are checked brick by brick when loaded (load_bricks: validate_bricks), so
+        // the open does not checksum the whole brick_data section first; every other check runs.
+        pool::OpenOptions open;
+        open.defer_brick_payloads = true;
+        pools.push_back(std::make_shared<const pool::PoolFile>(pool::PoolFile::open(m.pool, open)));
     }
     r.build(std::move(pools));
     return r;
