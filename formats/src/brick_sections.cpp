@@ -67,7 +67,7 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
     const SectionEntry* et = pool.find(SectionType::brick_table);
     const SectionEntry* ei = pool.find(SectionType::brick_info);
     const std::uint64_t data_size = s.data.size();
-    std::uint64_t splats = 0;
+    std::uint64_t splats = 0, encoded = 0;
     std::uint32_t max_splats = 0;
     for (std::uint32_t b = 0; b < s.table.size(); ++b) {
         const BrickEntry& e = s.table[b];
@@ -78,11 +78,15 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
                               std::to_string(e.size) + ") outside brick_data (" + std::to_string(data_size) +
                               " bytes)");
         if (e.node_count == 0) pool.fail(et, brick_label(b) + "no nodes (the root is missing)");
-        if (e.size != brick_payload_size(e.node_count, e.leaf_count, e.splat_count))
+        if (e.encoded_count > e.splat_count || (e.encoded_count == 0) != (e.splat_count == 0))
+            pool.fail(et, brick_label(b) + std::to_string(e.encoded_count) + " encoded splats for " +
+                              std::to_string(e.splat_count) + " references");
+        const std::uint64_t want = brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
+        if (e.size != want)
             pool.fail(et, brick_label(b) + "size " + std::to_string(e.size) + " does not match its counts (" +
-                              std::to_string(brick_payload_size(e.node_count, e.leaf_count, e.splat_count)) +
-                              " bytes)");
+                              std::to_string(want) + " bytes)");
         splats += e.splat_count;
+        encoded += e.encoded_count;
         max_splats = std::max(max_splats, e.splat_count);
     }
     std::vector<std::uint32_t> order(s.table.size());
@@ -98,6 +102,9 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
     if (splats != s.info.splat_count)
         pool.fail(ei, "bricks hold " + std::to_string(splats) + " splats but brick_info says " +
                           std::to_string(s.info.splat_count));
+    if (encoded != s.info.encoded_splats)
+        pool.fail(ei, "bricks hold " + std::to_string(encoded) + " encoded splats but brick_info says " +
+                          std::to_string(s.info.encoded_splats));
     if (max_splats != s.info.max_brick_splats)
         pool.fail(ei, "largest brick holds " + std::to_string(max_splats) + " splats but brick_info says " +
                           std::to_string(s.info.max_brick_splats));
@@ -117,9 +124,11 @@ BrickView brick_view(std::span<const std::byte> payload) {
     v.leaf_info = {
         reinterpret_cast<const std::uint32_t*>(payload.data() + brick_leaf_info_offset(h.node_count)),
         std::size_t(h.leaf_count) + 1};
-    v.splats = {reinterpret_cast<const CompressedSplat*>(payload.data() +
-                                                         brick_splats_offset(h.node_count, h.leaf_count)),
-                h.splat_count};
+    v.refs = payload.data() + brick_refs_offset(h.node_count, h.leaf_count);
+    v.ref_bytes = brick_ref_bytes(h.encoded_count);
+    v.splats = {reinterpret_cast<const CompressedSplat*>(
+                    payload.data() + brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count)),
+                h.encoded_count};
     return v;
 }
 
@@ -147,6 +156,9 @@ BrickSections validate_brick_index(const PoolFile& pool) {
                         "discs", "brick_info top_node_count");
     if (s.top_nodes.empty())
         pool.fail(pool.find(SectionType::brick_top_nodes), "no nodes (the root is missing)");
+    if ((s.info.flags & k_bricks_indexed) == 0)
+        pool.fail(ei, "bricks of an older prt-bricks (a splat copied into every leaf, no splat index): "
+                      "run prt-bricks again");
     if (!(s.info.root_size > 0) || !std::isfinite(s.info.root_size) || !std::isfinite(s.info.root_min[0]) ||
         !std::isfinite(s.info.root_min[1]) || !std::isfinite(s.info.root_min[2]))
         pool.fail(ei, "root cube not finite with a positive size");
@@ -170,13 +182,15 @@ void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntr
     if (payload.size() != entry.size)
         fail(std::to_string(payload.size()) + " bytes but its entry says " + std::to_string(entry.size));
     if (payload.size() < sizeof(BrickHeader) || entry.node_count == 0 ||
-        payload.size() != brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count))
+        entry.encoded_count > entry.splat_count ||
+        payload.size() != brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count,
+                                             entry.encoded_count))
         fail("payload size " + std::to_string(payload.size()) + " does not match its entry's counts");
     if (checksum(payload) != entry.checksum) fail("checksum mismatch");
     const BrickView v = brick_view(payload);
     const BrickHeader& h = *v.header;
     if (h.node_count != entry.node_count || h.leaf_count != entry.leaf_count ||
-        h.splat_count != entry.splat_count)
+        h.splat_count != entry.splat_count || h.encoded_count != entry.encoded_count)
         fail("header counts differ from its entry's");
     if (!(h.quant_size > 0) || !std::isfinite(h.quant_size) || !std::isfinite(h.quant_min[0]) ||
         !std::isfinite(h.quant_min[1]) || !std::isfinite(h.quant_min[2]))
@@ -190,7 +204,17 @@ void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntr
     for (std::size_t i = 0; i + 1 < v.leaf_info.size(); ++i)
         if (v.leaf_info[i] > v.leaf_info[i + 1]) fail("leaf " + std::to_string(i) + ": begin after end");
     if (v.leaf_info.front() != 0 || v.leaf_info.back() != h.splat_count)
-        fail("leaf ranges do not cover the splats exactly");
+        fail("leaf ranges do not cover the references exactly");
+    std::vector<bool> referenced(h.encoded_count, false);
+    for (std::size_t i = 0; i < h.splat_count; ++i) {
+        const std::uint32_t k = v.ref(i);
+        if (k >= h.encoded_count)
+            fail("reference " + std::to_string(i) + " names splat " + std::to_string(k) + " of " +
+                 std::to_string(h.encoded_count));
+        referenced[k] = true;
+    }
+    if (const auto it = std::find(referenced.begin(), referenced.end(), false); it != referenced.end())
+        fail("splat " + std::to_string(it - referenced.begin()) + " is referenced by no leaf");
     for (std::size_t i = 0; i < v.splats.size(); ++i) {
         const std::uint32_t nr = v.splats[i].nr;
         if ((nr & 1023u) > k_oct_max_code || ((nr >> 10) & 1023u) > k_oct_max_code)

@@ -185,7 +185,9 @@ const ModelInfo& PoolFile::validate_counts() const {
     const SectionEntry* info_entry = find(SectionType::model_info);
     if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
     const ModelInfo& info = detail::single<ModelInfo>(*this, SectionType::model_info);
-    if (info.point_count > 0 && !find(SectionType::positions))
+    // A bricked pool may drop its per-point sections (prt-bricks without --keep-points: the bricks
+    // hold the splats); point_count still says how many points the model was built from.
+    if (info.point_count > 0 && !find(SectionType::positions) && !find(SectionType::brick_info))
         fail(nullptr, "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
     if (!detail::finite_box(info.bounds_min, info.bounds_max) || !std::isfinite(info.origin[0]) ||
         !std::isfinite(info.origin[1]) || !std::isfinite(info.origin[2]))

@@ -4,10 +4,12 @@
 // 1. Subtree sizes bottom-up over the octree's node array (children are stored after their parent).
 // 2. The top tree, breadth first from the root: an empty leaf stays empty; a node holding at most N
 //    splats (or a filled leaf, whatever it holds) becomes a brick; any other node stays internal.
-// 3. Payload offsets from the subtree counts (each brick 64-byte aligned), then every brick in
-//    parallel: its subtree renumbered breadth first from 0, its filled leaves in the source's leaf
-//    order, its splats encoded (and the codec's error measured against the float splats), its
-//    checksum and its LOD disc.
+// 3. Every brick's splats gathered in parallel: its subtree renumbered breadth first from 0, its
+//    filled leaves in the source's leaf order, each distinct splat once (a point's replicas in
+//    several leaves of the brick become references to one encoded splat); payload offsets from
+//    those counts (each brick 64-byte aligned); then every brick in parallel again: its splats
+//    encoded (and the codec's error measured against the float splats), its references, checksum
+//    and LOD disc.
 // 4. LOD discs of the top tree's internal nodes, bottom-up from their children's discs.
 #include "brick_build.h"
 
@@ -16,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <unordered_map>
 
 #include "prt/error.h"
 #include "prt/parallel.h"
@@ -157,7 +160,9 @@ TopCut cut_top_tree(std::span<const std::uint32_t> nodes, const Subtrees& sub, s
 }
 
 /// Phase 3a: each brick's entry (cube, counts, 64-byte aligned payload offset); sizes out.data.
-void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeInfo& oi, BrickedOctree& out) {
+/// `encoded[b]`: brick b's distinct splats (BrickEncoder::count).
+void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeInfo& oi,
+                    const std::vector<std::uint32_t>& encoded, BrickedOctree& out) {
     out.table.resize(cut.brick_top.size());
     std::uint64_t offset = 0;
     for (std::size_t b = 0; b < cut.brick_top.size(); ++b) {
@@ -172,7 +177,8 @@ void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeIn
         e.node_count = sub.nodes[s];
         e.leaf_count = sub.leaves[s];
         e.splat_count = std::uint32_t(sub.splats[s]);
-        e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count);
+        e.encoded_count = encoded[b];
+        e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
         e.top_node = t;
         e.level = cut.level[t];
         offset += (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
@@ -212,8 +218,8 @@ void measure(CodecError& err, const pool::Splat& sp, const pool::DecodedSplat& d
     ++err.splats;
 }
 
-/// The brick header for splats `brick_splats` of entry `e`: the quantization cube is the brick
-/// cube grown to hold every centre (replicas reach outside), the radius exponent from the largest.
+/// The brick header for the distinct splats `brick_splats` of entry `e`: the quantization cube is the
+/// brick cube grown to hold every centre (replicas reach outside), the radius exponent from the largest.
 pool::BrickHeader brick_header(std::size_t b, const pool::BrickEntry& e,
                                const std::vector<const pool::Splat*>& brick_splats) {
     double lo[3], hi[3];
@@ -238,6 +244,7 @@ pool::BrickHeader brick_header(std::size_t b, const pool::BrickEntry& e,
     h.node_count = e.node_count;
     h.leaf_count = e.leaf_count;
     h.splat_count = e.splat_count;
+    h.encoded_count = e.encoded_count;
     h.radius_log2_min = pool::radius_log2_min_for(max_radius, h.quant_size);
     return h;
 }
@@ -249,7 +256,10 @@ public:
     struct Scratch {
         std::vector<std::uint32_t> src, nodes, leaf_info;
         std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;  // (source leaf, local node)
-        std::vector<const pool::Splat*> splats;
+        std::vector<const pool::Splat*> splats;   // per reference, in leaf order
+        std::vector<std::uint32_t> refs;          // per reference: index into `encoded`
+        std::vector<const pool::Splat*> encoded;  // the distinct splats, in order of first reference
+        std::unordered_map<std::uint32_t, std::uint32_t> first;  // point -> its first encoded index
     };
 
     BrickEncoder(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
@@ -262,30 +272,51 @@ public:
         for (const pool::Splat& sp : octree.splats) ++m_copies[sp.point];
     }
 
+    /// The distinct splats of brick b (the one whose top node is `top_node`).
+    std::uint32_t count(std::uint32_t top_node, Scratch& scratch) const {
+        gather(top_node, scratch);
+        return std::uint32_t(scratch.encoded.size());
+    }
+
     /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
-    /// its splats encoded and measured; returns its LOD sums (its disc is written to out.lod).
+    /// its distinct splats encoded and measured, its references; returns its LOD sums (its disc is
+    /// written to out.lod).
     LodSum encode(std::size_t b, CodecError& err, Scratch& scratch) const {
         pool::BrickEntry& e = m_out.table[b];
-        gather(e, scratch);
+        gather(e.top_node, scratch);
+        if (scratch.encoded.size() != e.encoded_count || scratch.splats.size() != e.splat_count)
+            throw Error("brick " + std::to_string(b) + ": counts changed between passes (internal error)");
         std::byte* base = m_out.data.data() + e.offset;
-        const pool::BrickHeader h = brick_header(b, e, scratch.splats);
+        const pool::BrickHeader h = brick_header(b, e, scratch.encoded);
         std::memcpy(base, &h, sizeof h);
         std::memcpy(base + pool::brick_nodes_offset(), scratch.nodes.data(), 4 * scratch.nodes.size());
         std::memcpy(base + pool::brick_leaf_info_offset(h.node_count), scratch.leaf_info.data(),
                     4 * scratch.leaf_info.size());
+        std::byte* refs = base + pool::brick_refs_offset(h.node_count, h.leaf_count);
+        for (std::size_t k = 0; k < scratch.refs.size(); ++k) {
+            if (pool::brick_ref_bytes(h.encoded_count) == 2) {
+                const auto r = static_cast<std::uint16_t>(scratch.refs[k]);
+                std::memcpy(refs + 2 * k, &r, 2);
+            } else {
+                std::memcpy(refs + 4 * k, &scratch.refs[k], 4);
+            }
+        }
         auto* out_splats = reinterpret_cast<pool::CompressedSplat*>(
-            base + pool::brick_splats_offset(h.node_count, h.leaf_count));
+            base + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
         const double quantum = double(h.quant_size) / pool::k_position_max_code;
         const double step = std::exp2(1.0 / pool::k_radius_steps_per_octave) * (1.0 + 1e-6);
-        LodSum sum;
-        for (std::size_t k = 0; k < scratch.splats.size(); ++k) {
-            const pool::Splat& sp = *scratch.splats[k];
-            const pool::Rgba8 col =
-                sp.point < m_colors.size() ? m_colors[sp.point] : pool::Rgba8{255, 255, 255, 255};
+        for (std::size_t k = 0; k < scratch.encoded.size(); ++k) {
+            const pool::Splat& sp = *scratch.encoded[k];
+            const pool::Rgba8 col = color(sp);
             if (!pool::encode_splat(sp.position, sp.radius, sp.normal, col, h, &out_splats[k]))
                 throw Error("brick " + std::to_string(b) + ": radius " + std::to_string(sp.radius) +
                             " not representable (internal error)");
             measure(err, sp, pool::decode_splat(out_splats[k], h), col, quantum, step);
+        }
+        LodSum sum;  // over every reference, each weighted 1 / the point's copies
+        for (const pool::Splat* ref : scratch.splats) {
+            const pool::Splat& sp = *ref;
+            const pool::Rgba8 col = color(sp);
             const double r = sp.radius;
             const double w = std::max(k_pi * r * r, 1e-300) / m_copies[sp.point];
             sum.w += w;
@@ -299,7 +330,7 @@ public:
         // the brick's LOD disc: its sphere holds every splat's disc
         pool::LodSplat disc = lod_from_sum(sum);
         double cover = 0;
-        for (const pool::Splat* sp : scratch.splats)
+        for (const pool::Splat* sp : scratch.encoded)
             cover = std::max(cover, distance(sp->position, disc.position) + sp->radius);
         disc.radius = round_up(cover);
         m_out.lod[e.top_node] = disc;
@@ -307,9 +338,19 @@ public:
     }
 
 private:
-    /// The brick's nodes (breadth first from 0), leaf ranges and splats into `s`.
-    void gather(const pool::BrickEntry& e, Scratch& s) const {
-        s.src.assign(1, m_cut.src[e.top_node]);
+    pool::Rgba8 color(const pool::Splat& sp) const {
+        return sp.point < m_colors.size() ? m_colors[sp.point] : pool::Rgba8{255, 255, 255, 255};
+    }
+
+    /// Two references hold the same splat: the same point with the same float disc (replicas are
+    /// copies; a disc that differs is encoded again).
+    static bool same_splat(const pool::Splat& a, const pool::Splat& b) {
+        return a.point == b.point && std::memcmp(&a, &b, sizeof(pool::Splat)) == 0;
+    }
+
+    /// The brick's nodes (breadth first from 0), leaf ranges, references and distinct splats into `s`.
+    void gather(std::uint32_t top_node, Scratch& s) const {
+        s.src.assign(1, m_cut.src[top_node]);
         s.nodes.clear();
         s.leaves.clear();
         for (std::size_t i = 0; i < s.src.size(); ++i) {
@@ -332,11 +373,24 @@ private:
         std::sort(s.leaves.begin(), s.leaves.end());
         s.leaf_info.assign(s.leaves.size() + 1, 0);
         s.splats.clear();
+        s.refs.clear();
+        s.encoded.clear();
+        s.first.clear();
         for (std::size_t l = 0; l < s.leaves.size(); ++l) {
             s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
             const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
                                 se = m_octree.leaf_info[s.leaves[l].first + 1];
-            for (std::uint32_t k = sb; k < se; ++k) s.splats.push_back(&m_octree.splats[k]);
+            for (std::uint32_t k = sb; k < se; ++k) {
+                const pool::Splat& sp = m_octree.splats[k];
+                s.splats.push_back(&sp);
+                const auto [it, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
+                if (fresh || !same_splat(*s.encoded[it->second], sp)) {
+                    s.refs.push_back(std::uint32_t(s.encoded.size()));
+                    s.encoded.push_back(&sp);
+                } else {
+                    s.refs.push_back(it->second);
+                }
+            }
             s.leaf_info[l + 1] = std::uint32_t(s.splats.size());
         }
     }
@@ -378,7 +432,7 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCu
     info.brick_count = std::uint32_t(out.table.size());
     info.top_node_count = std::uint32_t(out.top_nodes.size());
     info.brick_splat_limit = limit;
-    info.flags = (colors ? pool::k_bricks_colors : 0u) |
+    info.flags = pool::k_bricks_indexed | (colors ? pool::k_bricks_colors : 0u) |
                  ((oi.flags & pool::k_octree_culled) ? pool::k_bricks_culled : 0u) |
                  ((oi.flags & pool::k_octree_replicated) ? pool::k_bricks_replicated : 0u);
     info.unique_splats = oi.unique_splats;
@@ -389,11 +443,13 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCu
     stats.min_brick_splats = out.table.empty() ? 0 : 0xFFFFFFFFu;
     for (const pool::BrickEntry& e : out.table) {
         info.splat_count += e.splat_count;
+        info.encoded_splats += e.encoded_count;
         info.max_brick_splats = std::max(info.max_brick_splats, e.splat_count);
         stats.min_brick_splats = std::min(stats.min_brick_splats, e.splat_count);
     }
     stats.max_brick_splats = info.max_brick_splats;
     stats.splats = info.splat_count;
+    stats.encoded = info.encoded_splats;
     stats.data_bytes = out.data.size();
     return stats;
 }
@@ -408,14 +464,19 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
     BrickedOctree out;
     const Subtrees sub = subtree_sizes(octree.nodes, octree.leaf_info);        // 1
     const TopCut cut = cut_top_tree(octree.nodes, sub, limit, out.top_nodes);  // 2
-    lay_out_bricks(cut, sub, octree.info, out);                                // 3a
     const std::size_t bricks = cut.brick_top.size();
+    const unsigned threads = resolve_threads(params.threads);
+    const BrickEncoder encoder(octree, colors, cut, out);
+    std::vector<std::uint32_t> encoded(bricks);
+    parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {  // 3a
+        BrickEncoder::Scratch scratch;
+        for (std::size_t b = begin; b < end; ++b) encoded[b] = encoder.count(cut.brick_top[b], scratch);
+    });
+    lay_out_bricks(cut, sub, octree.info, encoded, out);
     std::vector<LodSum> sums(out.top_nodes.size());
     out.lod.assign(out.top_nodes.size(), pool::LodSplat{});
-    const unsigned threads = resolve_threads(params.threads);
     std::vector<CodecError> errors(threads);
     std::atomic<std::uint64_t> done{0};
-    const BrickEncoder encoder(octree, colors, cut, out);
     parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {  // 3b
         BrickEncoder::Scratch scratch;
         for (std::size_t b = begin; b < end; ++b) {

@@ -44,6 +44,7 @@ struct BrickStats {
     std::uint32_t bricks = 0, top_nodes = 0, top_depth = 0;
     std::uint32_t min_brick_splats = 0, max_brick_splats = 0;
     std::uint64_t splats = 0, data_bytes = 0;
+    std::uint64_t encoded = 0;  ///< compressed splats (each splat once per brick)
     CodecError error;
     double seconds = 0;
 };

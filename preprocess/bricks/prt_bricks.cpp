@@ -15,12 +15,21 @@ constexpr const char* k_description =
     "Cuts INPUT's splat octree (prt-octree, prt-cull) into a small resident top tree and bricks: "
     "greedily from the root, a node whose subtree holds at most --brick-splats stored splats "
     "(replicas counted) becomes a brick, stored contiguously (64-byte aligned) with its own nodes, "
-    "leaf ranges and splats compressed to 12 bytes (16-bit positions in the brick's cube, octahedral "
-    "normals, radii rounded up on a log scale, RGB565 colours) and its own checksum, so it can be read, "
-    "checked and uploaded alone. Every top node gets a level-of-detail disc covering its splats. The "
-    "float octree sections (octree_info, octree_nodes, leaf_info, splats) are removed unless "
-    "--keep-float; the other sections are carried over. Material ids and intensities are not carried "
-    "into bricks. Reports the codec's error against the float splats.";
+    "leaf ranges, splats compressed to 12 bytes (16-bit positions in the brick's cube, octahedral "
+    "normals, radii rounded up on a log scale, RGB565 colours), each stored once per brick however many "
+    "of its leaves hold it (leaves reference splats by 16-bit index), and its own checksum, so it can be "
+    "read, checked and uploaded alone. Every top node gets a level-of-detail disc covering its splats. "
+    "The float octree sections (octree_info, octree_nodes, leaf_info, splats) are removed unless "
+    "--keep-float, the per-point sections (positions, normals, colors, radii, material_ids, "
+    "intensities, scan_ids) unless --keep-points: a streaming pool needs neither, tools that read "
+    "points (prt-iso, prt-mls, prt-fidelity) do. Other sections are carried over. Material ids and "
+    "intensities are not carried into bricks. Reports the codec's error against the float splats.";
+
+constexpr prt::pool::SectionType k_point_sections[] = {
+    prt::pool::SectionType::positions,    prt::pool::SectionType::normals,
+    prt::pool::SectionType::colors,       prt::pool::SectionType::radii,
+    prt::pool::SectionType::material_ids, prt::pool::SectionType::intensities,
+    prt::pool::SectionType::scan_ids};
 
 using ull = unsigned long long;
 
@@ -39,7 +48,7 @@ nlohmann::json error_json(const prt::pre::CodecError& e) {
             {"color_error_max", e.color_max}};
 }
 
-void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool keep_float) {
+void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool keep_float, bool keep_points) {
     using namespace prt;
     const pool::PoolFile& in = step.input();
     if (!pool::has_splat_octree(in)) throw Error(step.input_path() + ": no octree: run prt-octree first");
@@ -69,21 +78,33 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
         for (const pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
                                           pool::SectionType::leaf_info, pool::SectionType::splats})
             writer.remove(t);
-    const nlohmann::json parameters = {{"brick_splats", params.brick_splats}, {"keep_float", keep_float}};
+    std::uint64_t point_bytes = 0;
+    if (!keep_points)
+        for (const pool::SectionType t : k_point_sections)
+            if (const pool::SectionEntry* e = in.find(t)) point_bytes += e->size, writer.remove(t);
+    const nlohmann::json parameters = {
+        {"brick_splats", params.brick_splats}, {"keep_float", keep_float}, {"keep_points", keep_points}};
     const std::uint64_t bytes = step.write(parameters);
 
     const pre::CodecError& e = stats.error;
     const double n = e.splats ? double(e.splats) : 1.0;
     const double mib = 1.0 / (1024.0 * 1024.0);
-    step.note("prt-bricks: %u bricks (%u to %u splats), top tree %u nodes (depth %u); %llu splats",
-              stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.top_nodes, stats.top_depth,
-              ull(stats.splats));
+    const std::uint64_t points = octree.info.unique_splats;
+    const double per_point = 1.0 / double(points ? points : 1);
     step.note(
-        "prt-bricks: splats %.1f -> %.1f MiB (%.2f B per splat with nodes and leaf ranges); pool %.1f -> "
-        "%.1f MiB",
+        "prt-bricks: %u bricks (%u to %u splat references), top tree %u nodes (depth %u); %llu references "
+        "to %llu encoded splats (%.2f and %.2f per point)",
+        stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.top_nodes, stats.top_depth,
+        ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point, double(stats.encoded) * per_point);
+    step.note(
+        "prt-bricks: splats %.1f -> %.1f MiB (%.2f B per point with nodes, leaf ranges and references); "
+        "pool %.1f -> %.1f MiB (%.2f B per point)%s",
         double(octree.splats.size_bytes() + octree.leaf_info.size_bytes() + octree.nodes.size_bytes()) * mib,
-        double(stats.data_bytes) * mib, double(stats.data_bytes) / n, double(in.file_size()) * mib,
-        double(bytes) * mib);
+        double(stats.data_bytes) * mib, double(stats.data_bytes) * per_point, double(in.file_size()) * mib,
+        double(bytes) * mib, double(bytes) * per_point,
+        point_bytes ? (", per-point sections dropped (" + std::to_string(point_bytes / 1048576) +
+                       " MiB; --keep-points keeps them)").c_str()
+                    : "");
     step.note(
         "prt-bricks: codec error: position max %.4f mean %.4f splat radii (max %.3f quanta), normal max %.3f "
         "mean %.3f deg, radius growth max %.4f mean %.4f (%llu raised to the smallest code), colour max %u",
@@ -99,10 +120,15 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
                       {"min_brick_splats", stats.min_brick_splats},
                       {"max_brick_splats", stats.max_brick_splats},
                       {"splats", stats.splats},
+                      {"encoded_splats", stats.encoded},
+                      {"points", points},
+                      {"point_section_bytes_dropped", point_bytes},
+                      {"pool_bytes_per_point", double(bytes) * per_point},
                       {"float_octree_bytes", octree.splats.size_bytes() + octree.leaf_info.size_bytes() +
                                                  octree.nodes.size_bytes()},
                       {"brick_data_bytes", stats.data_bytes},
                       {"bytes_per_splat", double(stats.data_bytes) / n},
+                      {"brick_bytes_per_point", double(stats.data_bytes) * per_point},
                       {"pool_bytes_before", in.file_size()},
                       {"pool_bytes_after", bytes},
                       {"codec_error", error_json(e)},
@@ -114,7 +140,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
 
 int main(int argc, char** argv) {
     prt::pre::BrickParams params;
-    bool keep_float = false;
+    bool keep_float = false, keep_points = false;
     prt::tool::PoolStep step("prt-bricks", k_description,
                              {.input = "Input pool file with a splat octree (prt-octree, prt-cull)"});
     return step.run(
@@ -130,7 +156,11 @@ int main(int argc, char** argv) {
                 "--keep-float", keep_float,
                 "Keep the float octree sections (octree_info, octree_nodes, leaf_info, splats) beside "
                 "the bricks (default: removed)");
+            app.add_flag("--keep-points", keep_points,
+                         "Keep the per-point sections (positions, normals, colors, radii, material_ids, "
+                         "intensities, scan_ids) beside the bricks, for tools that read points (default: "
+                         "removed)");
             prt::tool::PoolStep::add_threads(app, params.threads);
         },
-        [&](prt::tool::PoolStep& s) { bricks_step(s, params, keep_float); });
+        [&](prt::tool::PoolStep& s) { bricks_step(s, params, keep_float, keep_points); });
 }

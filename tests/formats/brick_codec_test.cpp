@@ -204,10 +204,16 @@ TEST(BrickCodec, SplatRoundTripOnTheBrickBoundary) {
 }
 
 TEST(BrickCodec, PayloadLayout) {
-    // header 32 B, then 4 B per node, 4 B per leaf_info entry (leaves + 1), 12 B per splat
-    EXPECT_EQ(brick_payload_size(1, 0, 0), 32u + 4u + 4u);
-    EXPECT_EQ(brick_payload_size(9, 5, 100), 32u + 36u + 24u + 1200u);
-    EXPECT_EQ(brick_splats_offset(9, 5) % 4, 0u);
+    // header 48 B, then 4 B per node, 4 B per leaf_info entry (leaves + 1), a 2-byte reference per
+    // leaf splat (4-byte when a brick encodes more than 65536 splats), padded to 4, 12 B per
+    // encoded splat
+    EXPECT_EQ(brick_payload_size(1, 0, 0, 0), 48u + 4u + 4u);
+    EXPECT_EQ(brick_payload_size(9, 5, 100, 40), 48u + 36u + 24u + 200u + 480u);
+    EXPECT_EQ(brick_payload_size(9, 5, 101, 40), 48u + 36u + 24u + 204u + 480u);  // 202 padded to 204
+    EXPECT_EQ(brick_splats_offset(9, 5, 101, 40) % 4, 0u);
+    EXPECT_EQ(brick_ref_bytes(65536), 2u);
+    EXPECT_EQ(brick_ref_bytes(65537), 4u);
+    EXPECT_EQ(brick_payload_size(1, 1, 70000, 65537), 48u + 4u + 8u + 280000u + 12u * 65537u);
     EXPECT_EQ(sizeof(CompressedSplat), 12u);
 }
 

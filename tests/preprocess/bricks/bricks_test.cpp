@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <set>
+#include <tuple>
 #include <string>
 #include <vector>
 
@@ -69,8 +71,23 @@ TEST_F(Bricks, BrickedPoolValidates) {
     }
     EXPECT_EQ(sum, f.splats.size());
     EXPECT_EQ(b.info.flags & pool::k_bricks_colors, pool::k_bricks_colors);
-    // 12 B per splat plus nodes and leaf ranges: well under the float layout's 32 B
-    EXPECT_LT(double(b.data.size()) / double(f.splats.size()), 16.0);
+    EXPECT_EQ(b.info.flags & pool::k_bricks_indexed, pool::k_bricks_indexed);
+    // each point once per brick that holds it: the encoded splats are the distinct (brick, point)
+    // pairs, counted here from the float leaves independently of the builder
+    std::uint64_t distinct = 0;
+    for (std::uint32_t bi = 0; bi < b.table.size(); ++bi) {
+        const pool::BrickView v = pool::brick_view(b.payload(bi));
+        EXPECT_EQ(v.ref_bytes, 2u);
+        std::set<std::tuple<std::uint16_t, std::uint16_t, std::uint16_t, std::uint32_t>> seen;
+        for (const pool::CompressedSplat& c : v.splats) seen.insert({c.q[0], c.q[1], c.q[2], c.nr});
+        distinct += seen.size();  // no two encoded splats of a brick alike
+        EXPECT_EQ(seen.size(), v.splats.size());
+    }
+    EXPECT_EQ(distinct, b.info.encoded_splats);
+    EXPECT_LT(b.info.encoded_splats, b.info.splat_count);  // replicas share their encoded splat
+    // 12 B per distinct splat, 2 B per reference, nodes and leaf ranges: well under the float
+    // layout's 32 B per reference
+    EXPECT_LT(double(b.data.size()) / double(f.splats.size()), 12.0);
 }
 
 /// Child index paths of every filled leaf of a node tree, with the leaf's address.
@@ -122,7 +139,7 @@ TEST_F(Bricks, EveryFloatSplatIsInTheBrickCoveringItsLeafDecodedWithinBounds) {
             4e-7 * (std::fabs(h.quant_min[0]) + std::fabs(h.quant_min[1]) + h.quant_size + 16);
         for (std::uint32_t i = 0; i < fe - fb; ++i) {
             const pool::Splat& s = f.splats[fb + i];
-            const pool::DecodedSplat d = pool::decode_splat(v.splats[v.leaf_info[l] + i], h);
+            const pool::DecodedSplat d = pool::decode_splat(v.splats[v.ref(v.leaf_info[l] + i)], h);
             EXPECT_LE(std::fabs(d.position.x - s.position.x), 0.5 * quantum + slack);
             EXPECT_LE(std::fabs(d.position.y - s.position.y), 0.5 * quantum + slack);
             EXPECT_LE(std::fabs(d.position.z - s.position.z), 0.5 * quantum + slack);
@@ -139,8 +156,8 @@ TEST_F(Bricks, EveryFloatSplatIsInTheBrickCoveringItsLeafDecodedWithinBounds) {
         }
     });
     EXPECT_EQ(found, f.splats.size());
-    // the builder's own measurement agrees with the bounds
-    EXPECT_EQ(s_stats.error.splats, f.splats.size());
+    // the builder's own measurement (over each encoded splat) agrees with the bounds
+    EXPECT_EQ(s_stats.error.splats, s_stats.encoded);
     EXPECT_LE(s_stats.error.normal_max_deg, normal_bound);
     EXPECT_EQ(s_stats.error.radius_shrink_max, 0.0);
 }
@@ -333,8 +350,37 @@ TEST_F(Bricks, OverlappingOrMisplacedPayloadsAreRefused) {
     EXPECT_NE(error_of([&] { pool::validate_brick_index(outside); }).find("brick 0: payload"),
               std::string::npos);
     const PoolFile counts =
-        modified(*s_bricked, [](auto&, auto& table, auto&) { table[5].splat_count += 1; });
+        modified(*s_bricked, [](auto&, auto& table, auto&) { table[5].splat_count += 2; });
     EXPECT_NE(error_of([&] { pool::validate_brick_index(counts); }).find("brick 5: size"), std::string::npos);
+}
+
+TEST_F(Bricks, BadReferencesAndOldLayoutsAreRefused) {
+    const pool::BrickSections s = pool::validate_bricks(*s_bricked);
+    const std::uint32_t victim = 2;
+    const auto with_ref = [&](std::uint32_t i, std::uint16_t value) {
+        return modified(*s_bricked, [&](auto&, auto& table, auto& data) {
+            std::byte* base = data.data() + table[victim].offset;
+            const pool::BrickHeader& h = *reinterpret_cast<const pool::BrickHeader*>(base);
+            std::memcpy(base + pool::brick_refs_offset(h.node_count, h.leaf_count) + 2 * i, &value, 2);
+            table[victim].checksum = pool::checksum({base, std::size_t(table[victim].size)});
+        });
+    };
+    const std::uint32_t encoded = s.table[victim].encoded_count;
+    ASSERT_LT(encoded, 65535u);
+    const std::string outside = error_of([&] { pool::validate_bricks(with_ref(7, std::uint16_t(encoded))); });
+    EXPECT_NE(outside.find("brick 2: reference 7 names splat " + std::to_string(encoded)), std::string::npos)
+        << outside;
+    // pointing every reference of the brick at splat 0 leaves the others unreferenced
+    const PoolFile orphans = modified(*s_bricked, [&](auto&, auto& table, auto& data) {
+        std::byte* base = data.data() + table[victim].offset;
+        const pool::BrickHeader& h = *reinterpret_cast<const pool::BrickHeader*>(base);
+        std::memset(base + pool::brick_refs_offset(h.node_count, h.leaf_count), 0, 2 * h.splat_count);
+        table[victim].checksum = pool::checksum({base, std::size_t(table[victim].size)});
+    });
+    EXPECT_NE(error_of([&] { pool::validate_bricks(orphans); }).find("brick 2: splat 1 is referenced by no leaf"),
+              std::string::npos);
+    const PoolFile old = modified(*s_bricked, [](auto& info, auto&, auto&) { info.flags &= ~pool::k_bricks_indexed; });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(old); }).find("run prt-bricks again"), std::string::npos);
 }
 
 TEST_F(Bricks, BadBrickNodesAreRefusedNamingTheBrick) {
@@ -419,11 +465,17 @@ TEST_F(BricksTool, WritesAValidBrickedPool) {
     EXPECT_EQ(b.info.brick_splat_limit, 500u);
     EXPECT_FALSE(out.has(SectionType::splats));  // float sections removed by default
     EXPECT_FALSE(out.has(SectionType::octree_nodes));
-    EXPECT_TRUE(out.has(SectionType::colors));
+    // per-point sections removed by default (the bricks carry the colours); the point count stays
+    EXPECT_FALSE(out.has(SectionType::colors));
+    EXPECT_FALSE(out.has(SectionType::positions));
+    EXPECT_EQ(out.model_info().point_count, 3000u);
     EXPECT_TRUE(fs::exists(path("s.json")));
-    ASSERT_EQ(run(path("in.pool") + " -o " + path("keep.pool") + " --keep-float --quiet"), 0) << m_stderr;
+    ASSERT_EQ(run(path("in.pool") + " -o " + path("keep.pool") + " --keep-float --keep-points --quiet"), 0)
+        << m_stderr;
     const PoolFile keep = PoolFile::open(path("keep.pool"));
     EXPECT_TRUE(keep.has(SectionType::splats));
+    EXPECT_TRUE(keep.has(SectionType::colors));
+    EXPECT_TRUE(keep.has(SectionType::positions));
     EXPECT_EQ(pool::validate_bricks(keep).info.flags & pool::k_bricks_float_kept, pool::k_bricks_float_kept);
 }
 

@@ -9,11 +9,16 @@
 //   brick_table (130)      BrickEntry[brick_count] (64 B): cube, payload offset/size, counts,
 //                          level, top node, XXH3-64 of the payload
 //   brick_data (131)       bytes; brick b at brick_table[b].offset (a multiple of 64):
-//                            BrickHeader (32 B)   quantization cube, counts, radius exponent
+//                            BrickHeader (48 B)   quantization cube, counts, radius exponent
 //                            uint32 nodes[node_count]        the brick's subtree, addresses
 //                                                            relative to the brick (node 0 = root)
-//                            uint32 leaf_info[leaf_count + 1] begin indices into the brick's splats
-//                            CompressedSplat splats[splat_count]   12 B each, leaf-contiguous
+//                            uint32 leaf_info[leaf_count + 1] begin indices into the references
+//                            refs[splat_count]    per leaf, in leaf order: the index of each of its
+//                                                 splats among the brick's encoded splats; uint16
+//                                                 when encoded_count <= 65536, else uint32;
+//                                                 zero-padded to a multiple of 4 bytes
+//                            CompressedSplat splats[encoded_count]   12 B each: each splat once,
+//                                                 however many leaves of the brick hold it
 //   lod_splats (132)       LodSplat[top node count] (32 B), parallel to brick_top_nodes: the
 //                          representative disc of top node i (radius 0 for an empty leaf)
 //
@@ -71,13 +76,13 @@ struct BrickInfo {
     std::uint32_t flags;              ///< 36: BrickFlags
     std::uint64_t splat_count;        ///< 40: splats in all bricks (replicas included)
     std::uint64_t unique_splats;      ///< 48: as OctreeInfo::unique_splats
-    std::uint32_t reserved[2];        ///< 56: 0
+    std::uint64_t encoded_splats;     ///< 56: compressed splats in all bricks (each once per brick)
 };
 static_assert(sizeof(BrickInfo) == 64);
 static_assert(offsetof(BrickInfo, depth) == 16);
 static_assert(offsetof(BrickInfo, flags) == 36);
 static_assert(offsetof(BrickInfo, splat_count) == 40);
-static_assert(offsetof(BrickInfo, reserved) == 56);
+static_assert(offsetof(BrickInfo, encoded_splats) == 56);
 
 /// BrickInfo::flags bits.
 enum BrickFlags : std::uint32_t {
@@ -85,6 +90,9 @@ enum BrickFlags : std::uint32_t {
     k_bricks_float_kept = 1u << 1,  ///< the float octree sections (16-19) were kept beside the bricks
     k_bricks_culled = 1u << 2,      ///< the source octree was culled (prt-cull)
     k_bricks_replicated = 1u << 3,  ///< the source octree was replicated (prt-octree; else --no-replicate)
+    /// Leaves reference their splats by index (the layout above). Required: bricks written before
+    /// the index (a splat copied into every leaf) are refused, prt-bricks writes them again.
+    k_bricks_indexed = 1u << 4,
 };
 
 /// One brick (section brick_table, 64 bytes).
@@ -95,10 +103,10 @@ struct BrickEntry {
     std::uint64_t size;         ///< 24: payload bytes (brick_payload_size), padding excluded
     std::uint32_t node_count;   ///< 32: nodes of the brick's subtree
     std::uint32_t leaf_count;   ///< 36: filled leaves
-    std::uint32_t splat_count;  ///< 40: splats (replicas included)
+    std::uint32_t splat_count;  ///< 40: splat references of its leaves (replicas included)
     std::uint32_t top_node;     ///< 44: the brick_top_nodes node that addresses this brick
     std::uint32_t level;        ///< 48: level of the brick's root (root of the whole tree = 0)
-    std::uint32_t reserved;     ///< 52: 0
+    std::uint32_t encoded_count;  ///< 52: compressed splats (each splat once)
     std::uint64_t checksum;     ///< 56: XXH3-64 of the payload's `size` bytes
 };
 static_assert(sizeof(BrickEntry) == 64);
@@ -107,17 +115,20 @@ static_assert(offsetof(BrickEntry, node_count) == 32);
 static_assert(offsetof(BrickEntry, level) == 48);
 static_assert(offsetof(BrickEntry, checksum) == 56);
 
-/// The first 32 bytes of a brick payload: what decoding needs, so a brick decodes alone.
+/// The first 48 bytes of a brick payload: what decoding needs, so a brick decodes alone.
 struct BrickHeader {
     float quant_min[3];            ///< 0: quantization cube: the brick cube grown to hold every
     float quant_size;              ///< 12:   splat centre (replicas reach outside the cube)
     std::uint32_t node_count;      ///< 16: = BrickEntry::node_count
     std::uint32_t leaf_count;      ///< 20: = BrickEntry::leaf_count
-    std::uint32_t splat_count;     ///< 24: = BrickEntry::splat_count
+    std::uint32_t splat_count;     ///< 24: = BrickEntry::splat_count (references)
     std::int32_t radius_log2_min;  ///< 28: exponent of radius code 1 (relative to quant_size)
+    std::uint32_t encoded_count;   ///< 32: = BrickEntry::encoded_count
+    std::uint32_t reserved[3];     ///< 36: 0
 };
-static_assert(sizeof(BrickHeader) == 32);
+static_assert(sizeof(BrickHeader) == 48);
 static_assert(offsetof(BrickHeader, radius_log2_min) == 28);
+static_assert(offsetof(BrickHeader, encoded_count) == 32);
 
 /// A compressed splat (12 bytes; bit layout in the file comment).
 struct CompressedSplat {
@@ -158,15 +169,28 @@ PRT_BRICK_HD inline constexpr std::uint64_t brick_nodes_offset() {
 PRT_BRICK_HD inline constexpr std::uint64_t brick_leaf_info_offset(std::uint32_t node_count) {
     return sizeof(BrickHeader) + 4ull * node_count;
 }
-PRT_BRICK_HD inline constexpr std::uint64_t brick_splats_offset(std::uint32_t node_count,
-                                                                std::uint32_t leaf_count) {
+/// Bytes of one splat reference in a brick of `encoded_count` compressed splats: 2 or 4.
+PRT_BRICK_HD inline constexpr std::uint32_t brick_ref_bytes(std::uint32_t encoded_count) {
+    return encoded_count <= 65536u ? 2u : 4u;
+}
+PRT_BRICK_HD inline constexpr std::uint64_t brick_refs_offset(std::uint32_t node_count,
+                                                              std::uint32_t leaf_count) {
     return brick_leaf_info_offset(node_count) + 4ull * (std::uint64_t(leaf_count) + 1);
+}
+PRT_BRICK_HD inline constexpr std::uint64_t brick_splats_offset(std::uint32_t node_count, std::uint32_t leaf_count,
+                                                                std::uint32_t splat_count,
+                                                                std::uint32_t encoded_count) {
+    return (brick_refs_offset(node_count, leaf_count) +
+            std::uint64_t(brick_ref_bytes(encoded_count)) * splat_count + 3) /
+           4 * 4;
 }
 /// Bytes of a brick payload with these counts (before padding to k_brick_alignment).
 PRT_BRICK_HD inline constexpr std::uint64_t brick_payload_size(std::uint32_t node_count,
                                                                std::uint32_t leaf_count,
-                                                               std::uint32_t splat_count) {
-    return brick_splats_offset(node_count, leaf_count) + sizeof(CompressedSplat) * std::uint64_t(splat_count);
+                                                               std::uint32_t splat_count,
+                                                               std::uint32_t encoded_count) {
+    return brick_splats_offset(node_count, leaf_count, splat_count, encoded_count) +
+           sizeof(CompressedSplat) * std::uint64_t(encoded_count);
 }
 
 // ---- Codec ----------------------------------------------------------------------------------------

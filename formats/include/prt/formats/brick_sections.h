@@ -31,8 +31,16 @@ struct BrickSections {
 struct BrickView {
     const BrickHeader* header = nullptr;
     std::span<const std::uint32_t> nodes;      ///< the brick's subtree, node 0 its root
-    std::span<const std::uint32_t> leaf_info;  ///< leaf_count + 1 begin indices into splats
-    std::span<const CompressedSplat> splats;   ///< splat_count compressed splats
+    std::span<const std::uint32_t> leaf_info;  ///< leaf_count + 1 begin indices into the references
+    const std::byte* refs = nullptr;           ///< splat_count references, ref_bytes each
+    std::uint32_t ref_bytes = 2;
+    std::span<const CompressedSplat> splats;   ///< encoded_count compressed splats
+
+    /// Reference i: the index among `splats` of the leaves' i-th splat.
+    std::uint32_t ref(std::size_t i) const {
+        if (ref_bytes == 2) return reinterpret_cast<const std::uint16_t*>(refs)[i];
+        return reinterpret_cast<const std::uint32_t*>(refs)[i];
+    }
 };
 BrickView brick_view(std::span<const std::byte> payload);
 
@@ -45,7 +53,8 @@ bool has_bricks(const PoolFile& pool);
 /// parent, every node reached once, no filled leaf, at most brick_info.depth levels) whose brick
 /// nodes address every brick exactly once, each entry naming that node, its level and cube; the
 /// table's payloads 64-byte aligned, inside brick_data and not overlapping, of the size their counts
-/// give; splat counts adding up to brick_info's; LOD discs finite. Throws prt::Error
+/// give; splat counts adding up to brick_info's; LOD discs finite; the index layout flag set (bricks
+/// of an older prt-bricks are refused: write them again). Throws prt::Error
 /// "FILE: section NAME: [brick I: ]what is wrong".
 BrickSections validate_brick_index(const PoolFile& pool);
 
@@ -53,7 +62,8 @@ BrickSections validate_brick_index(const PoolFile& pool);
 /// entry's `size` bytes; its XXH3-64 checksum, header counts equal to the entry's, a finite positive
 /// quantization cube, the radius exponent in range, its nodes a proper tree of at most
 /// info.depth - entry.level levels whose filled leaves address leaf_info exactly once, leaf_info
-/// monotone and covering the splats exactly, every octahedral code in range. Throws prt::Error
+/// monotone and covering the references exactly, every reference naming an encoded splat and every
+/// encoded splat referenced, every octahedral code in range. Throws prt::Error
 /// "FILE: section brick_data: brick I: what is wrong".
 void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntry& entry, std::uint32_t index,
                     std::span<const std::byte> payload);

@@ -85,13 +85,21 @@ struct Rgb565Splats {
     PRT_HD PRT_INLINE std::uint32_t point_id(std::uint32_t) const { return 0xffffffffu; }
 };
 
-/// A resident brick's compressed splats, decoded on load (brick_layout.h: decode_splat).
+/// A resident brick's compressed splats, decoded on load (brick_layout.h: decode_splat). Leaves
+/// index references (splat i of the leaves is encoded splat refs[i]: 16-bit, or 32-bit in a brick
+/// of more than 65536 encoded splats), so a splat held by several leaves is stored once.
 struct BrickSplats : Rgb565Splats {
     const pool::CompressedSplat* splats;
+    const void* refs;
     pool::BrickHeader header;
+    PRT_HD PRT_INLINE std::uint32_t ref(std::uint32_t i) const {
+        if (header.encoded_count <= 65536u) return static_cast<const std::uint16_t*>(refs)[i];
+        return static_cast<const std::uint32_t*>(refs)[i];
+    }
     PRT_HD PRT_INLINE pool::Splat load(std::uint32_t i) const {
-        const pool::DecodedSplat d = pool::decode_splat(splats[i], header);
-        return pool::Splat{d.position, d.radius, d.normal, splats[i].color};
+        const pool::CompressedSplat c = splats[ref(i)];
+        const pool::DecodedSplat d = pool::decode_splat(c, header);
+        return pool::Splat{d.position, d.radius, d.normal, c.color};
     }
 };
 
@@ -163,8 +171,10 @@ PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSpla
     const unsigned char* payload = brick_payload(v, b);
     if (payload == nullptr) return false;
     src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
+    const pool::BrickHeader& h = src.header;
+    src.refs = payload + pool::brick_refs_offset(h.node_count, h.leaf_count);
     src.splats = reinterpret_cast<const pool::CompressedSplat*>(
-        payload + pool::brick_splats_offset(src.header.node_count, src.header.leaf_count));
+        payload + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
     brick = brick_octree(v.table[b], src.header, payload);
     if (v.leaf_bounds != nullptr) brick.leaf_bounds = v.leaf_bounds + v.leaf_bounds_first[b];
     return true;
