@@ -223,6 +223,32 @@ TEST_F(BrickTrace, ImageEqualsTheFloatOctreesWithinTheCodecError) {
     EXPECT_GT(s_views->bricks.brick_count, 8u);
 }
 
+TEST_F(BrickTrace, OneWalkVisitsTheFloatOctreesLeaves) {
+    // Bricks are subtrees of the same octree and the walk crosses from brick to brick in one walk
+    // state (descend_bricked): a ray that meets nothing visits exactly the leaves the float walk
+    // visits, however the tree is cut into bricks (brick borders add no steps).
+    if (!PRT_COUNT_WORK) GTEST_SKIP() << "work counters compiled out (PRT_COUNT_WORK=0)";
+    const Grid g(96);
+    const auto one = make_views(test::bricked_bytes(*s_octree, 1));
+    std::size_t misses = 0;
+    for (const Views* v : {s_views, one.get()}) {
+        for (std::uint32_t i = 0; i < g.size * g.size; ++i) {
+            float rho;
+            const core::Vec3 o = g.origin(*v, i, rho);
+            core::WalkStats fs, bs;
+            core::SplatSample a, b;
+            const bool fh = core::closest_hit_splats(v->octree, v->colors, o, g.d, false, core::k_inf, k_blend,
+                                                     1u << 16, a, fs, core::k_cull_none);
+            const bool bh = core::closest_hit_bricks(v->bricks, o, g.d, false, core::k_inf, k_blend, 1u << 16, b,
+                                                     bs, core::k_cull_none);
+            if (fh || bh) continue;
+            ++misses;
+            ASSERT_EQ(bs.leaves, fs.leaves) << "ray " << i << ", " << v->bricks.brick_count << " bricks";
+        }
+    }
+    EXPECT_GT(misses, std::size_t(g.size) * g.size / 4);
+}
+
 TEST_F(BrickTrace, NonResidentBricksFallBackToTheirLodDiscsAndAreRequested) {
     const Views& v = *s_views;
     const Grid g(64);

@@ -1,13 +1,13 @@
 // PointRT core: tracing a bricked splat pool (issue 17; formats/POOL.md "Bricks and level of
-// detail"). Two levels of the same octree walk (octree.h, thesis 2.2):
-//
-//   outer: the resident top tree (brick_top_nodes, root cube of brick_info), where a brick node
-//          (NodeType::brick) is a leaf;
-//   inner: at a brick leaf, the brick's own subtree (node addresses relative to the brick, root
-//          cube = the BrickEntry cube), walked over the outer leaf's t range [t0, t1]; its filled
-//          leaves' compressed splats are decoded on the fly (brick_layout.h) and go through the
-//          float path's leaf code (splat.h: intersect_splat, thesis 3.3 blending, thesis 3.5 deep
-//          blending across leaves and bricks alike).
+// detail"). One octree walk (octree.h, thesis 2.2) over the whole tree, whose nodes live in two
+// places: the resident top tree (brick_top_nodes, root cube of brick_info), where a brick node
+// (NodeType::brick) addresses a brick, and each brick's own subtree (node addresses relative to the
+// brick, its root at the brick node's level and cube). The descent (descend_bricked) continues from
+// a brick node into the brick's node 0 and remembers the brick (BrickCursor); the walk's path above
+// the brick's level indexes the brick's nodes, so the walk steps from leaf to leaf across bricks as
+// across the float octree, with one walk state. Filled leaves' compressed splats are decoded on the
+// fly (brick_layout.h) and go through the float path's leaf code (splat.h: intersect_splat, thesis
+// 3.3 blending, thesis 3.5 deep blending across leaves and bricks alike).
 //
 // Which bricks are resident is the view's `resident` table (null: every brick, at data + offset),
 // so streaming changes only that table. A ray reaching a brick that is not resident intersects the
@@ -180,38 +180,117 @@ PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSpla
     return true;
 }
 
-/// One brick leaf of the top tree, the way both searches meet it: calls `resident(src, inner_view)`
-/// for a resident brick, or `fallback(lod)` for a brick that is not (after noting the fallback; a
-/// brick whose disc is empty is passed). Returns what the call returned (true: stop).
-template <class Resident, class Fallback>
-PRT_HD PRT_INLINE bool visit_brick(const BrickView& v, std::uint32_t b, std::uint32_t top_node,
-                                   WalkStats& stats, Resident&& resident, Fallback&& fallback) {
-    if (b >= v.brick_count) return false;
-    BrickSplats src;
-    OctreeView brick;
-    if (open_brick(v, b, src, brick)) return resident(src, brick);
-    note_fallback(v, b, stats);
-    LodSplats lod;
-    return lod_disc(v, top_node, lod) && fallback(lod);
+/// Where a walk through a bricked tree is (descend_bricked): in the top tree (level k_top_tree) or
+/// inside resident brick `brick`, whose root is at `level`: the walk's path entries below that level
+/// index the brick's nodes, the entry at it the top tree's brick node.
+struct BrickCursor {
+    static constexpr std::uint32_t k_top_tree = 0xffffffffu;
+    std::uint32_t level = k_top_tree;
+    std::uint32_t brick = 0;
+    const unsigned char* payload = nullptr;
+};
+
+/// thesis 2.2.2 over a bricked tree: descends from path[level] to the leaf holding `p`, entering a
+/// resident brick's subtree at its brick node (the cursor then names it) and leaving it when the
+/// walk's restart level is above the brick's root. Returns the leaf's node word: a filled or empty
+/// leaf (in the cursor's brick for a filled one), or a brick node when that brick is not resident.
+/// Corrupt addresses end in an empty leaf, as descend does.
+PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3& p, std::uint32_t* path,
+                                                std::uint32_t& level, BrickCursor& cur) {
+    std::uint32_t l = level;
+    if (l < cur.level) cur.level = BrickCursor::k_top_tree;  // the next cell is outside the brick
+    bool in_brick = cur.level != BrickCursor::k_top_tree;
+    const std::uint32_t* nodes = in_brick ? reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset())
+                                          : v.top_nodes;
+    std::uint32_t count = in_brick ? reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count
+                                   : v.top_node_count;
+    std::uint32_t node = load_node_word(nodes, in_brick && l == cur.level ? 0u : path[l]);
+    for (;;) {  // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick once
+        if (node_is_internal(node)) {
+            const std::uint32_t addr = node_addr(node);
+            if (l >= k_fixed_bits || addr >= count || count - addr < 8u) return level = l, k_empty_leaf_node;
+            const std::uint32_t shift = k_fixed_bits - 1u - l;
+            const std::uint32_t c =
+                ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
+            path[++l] = addr + c;
+            node = load_node_word(nodes, addr + c);
+        } else if (!in_brick && node_is_brick(node)) {
+            const std::uint32_t b = node_addr(node);
+            if (b >= v.brick_count) return level = l, k_empty_leaf_node;
+            const unsigned char* payload = brick_payload(v, b);
+            if (payload == nullptr) break;  // not resident: the brick node is the leaf
+            cur.level = l;
+            cur.brick = b;
+            cur.payload = payload;
+            in_brick = true;
+            nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
+            count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
+            node = load_node_word(nodes, 0);
+        } else {
+            break;
+        }
+    }
+    level = l;
+    return node;
 }
 
-/// The inner walk of a resident brick over the outer leaf's t range [t0, t1], with the steps the
-/// outer walk has left: search(inner walk, leaf bounds or null) does the leaf work and says whether
-/// the search is over. A truncated inner walk ends the outer one.
-template <class Search>
-PRT_HD PRT_INLINE bool walk_brick(const OctreeView& brick, const OctreeLeaf& leaf, Vec3 o, Vec3 d,
-                                  OctreeWalk& walk, std::uint32_t culling, Search&& search) {
-    OctreeWalk inner;
-    if (!walk_begin(brick, o, d, leaf.t0, leaf.t1, walk.steps_left, inner)) return false;
-    const bool over = search(inner, culling != k_cull_none ? brick.leaf_bounds : nullptr);
-    walk.steps_left = inner.steps_left;
-    if (inner.truncated) walk.truncated = true, walk.active = false;
-    return over;
+/// thesis 2.2.1 over a bricked tree: the next leaf along the walk (walk_next with descend_bricked).
+PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, BrickCursor& cur, OctreeLeaf& leaf) {
+    if (!w.active) return false;
+    if (w.steps_left == 0) {
+        w.active = false;
+        w.truncated = true;
+        return false;
+    }
+    --w.steps_left;
+    std::uint32_t level = w.restart;
+    const std::uint32_t node = descend_bricked(v, w.p, w.path, level, cur);
+    return walk_step_out(w, node, level, leaf);
+}
+
+/// The splat source of a resident brick's payload.
+PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
+    BrickSplats src;
+    src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
+    const pool::BrickHeader& h = src.header;
+    src.refs = payload + pool::brick_refs_offset(h.node_count, h.leaf_count);
+    src.splats = reinterpret_cast<const pool::CompressedSplat*>(
+        payload + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
+    return src;
+}
+
+/// The reference range [begin, end) of filled leaf `node` of the cursor's brick, or, with the
+/// view's leaf bounds and `culling`, false when its bounds rule out a hit in [lo, hi] (counted as
+/// culled) or it is empty; as next_leaf does it on the float path (splat.h).
+PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur, const pool::BrickHeader& h,
+                                        std::uint32_t node, std::uint32_t culling, Vec3 o, Vec3 d,
+                                        float inv_dlen, bool inside, float lo, float hi, std::uint32_t& begin,
+                                        std::uint32_t& end, WalkStats& stats) {
+    const std::uint32_t a = node_addr(node);
+    if (a >= h.leaf_count) return false;
+    if (culling != k_cull_none && v.leaf_bounds != nullptr) {
+        const LeafBounds b = load_leaf_bounds(v.leaf_bounds + v.leaf_bounds_first[cur.brick] + a);
+        begin = b.begin;
+        end = b.end;
+        if (begin >= end) return false;
+        if (!leaf_may_hit(b, o, d, inv_dlen, inside, lo, hi, culling)) {
+            PRT_COUNT(stats.culled);
+            return false;
+        }
+        return true;
+    }
+    const std::uint32_t* info =
+        reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_leaf_info_offset(h.node_count));
+    begin = info[a];
+    end = info[a + 1];
+    if (end > h.splat_count) end = h.splat_count;
+    return begin < end;
 }
 
 /// Closest hit of a ray with a bricked model's splats (model local frame; d need not be unit), as
-/// closest_hit_splats does it over the float octree: t in [0, t_max), the same blending. Returns
-/// false on a miss. `max_steps` bounds the leaves of both levels together.
+/// closest_hit_splats does it over the float octree: t in [0, t_max), the same blending, the same
+/// leaves visited. A brick that is not resident is met as one leaf: its LOD disc, hits accepted from
+/// the search's nearest hit (or 0) to the end of the brick's cell. Returns false on a miss.
 PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool inside, float t_max,
                                       const BlendOptions& blend, std::uint32_t max_steps, SplatSample& out,
                                       WalkStats& stats, std::uint32_t culling = k_cull_slabs) {
@@ -222,25 +301,31 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
     const bool replicated = (v.flags & pool::k_bricks_replicated) != 0;
     const float inv_dlen = 1.0f / length(d);
     detail::NearestHit h;
+    BrickCursor cur;
     OctreeLeaf leaf;
-    while (walk_next(top, walk, leaf)) {  // bounded by max_steps
+    while (walk_next_bricked(v, walk, cur, leaf)) {  // bounded by max_steps
         PRT_COUNT(stats.leaves);
         if (h.found && leaf.t0 > h.window_end) break;
-        if (!node_is_brick(leaf.node)) continue;  // empty leaf
-        const bool stop = visit_brick(
-            v, node_addr(leaf.node), walk.path[leaf.level], stats,
-            [&](const BrickSplats& src, const OctreeView& brick) {
-                return walk_brick(
-                    brick, leaf, o, d, walk, culling, [&](OctreeWalk& inner, const LeafBounds* bounds) {
-                        return closest_in_walk(brick, inner, src, bounds, culling, o, d, inv_dlen, inside,
-                                               replicated, t_max, blend, h, stats);
-                    });
-            },
-            [&](const LodSplats& lod) {
-                return detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f,
-                                               fminf(leaf.t1, t_max), blend, h, stats);
-            });
-        if (stop) break;
+        const float hi = fminf(leaf.t1, t_max);
+        if (node_is_brick(leaf.node)) {  // not resident
+            const std::uint32_t b = node_addr(leaf.node);
+            note_fallback(v, b, stats);
+            LodSplats lod;
+            if (lod_disc(v, walk.path[leaf.level], lod) &&
+                detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f, hi, blend,
+                                        h, stats))
+                break;
+            continue;
+        }
+        if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
+        const float lo = replicated ? leaf.t0 : 0.0f;
+        const BrickSplats src = brick_splats(cur.payload);
+        std::uint32_t begin = 0, end = 0;
+        if (!brick_leaf_range(v, cur, src.header, leaf.node, culling, o, d, inv_dlen, inside,
+                              fmaxf(lo, h.found ? h.t_near : 0.0f), fminf(hi, h.found ? h.window_end : k_inf),
+                              begin, end, stats))
+            continue;
+        if (detail::closest_in_leaf(src, begin, end, o, d, inside, inv_dlen, lo, hi, blend, h, stats)) break;
     }
     if (walk.truncated) ++stats.truncated;
     return detail::finish_nearest(Rgb565Splats{}, h, out);
@@ -256,28 +341,31 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
     const float hi = nextafterf(t_max, 0.0f);
     const float inv_dlen = 1.0f / length(d);
+    // as any_hit_splats: a fully replicated, unculled tree passes a leaf by its own t range
     const bool own_range =
         (v.flags & pool::k_bricks_replicated) != 0 && (v.flags & pool::k_bricks_culled) == 0;
+    BrickCursor cur;
     OctreeLeaf leaf;
-    bool hit = false;
-    while (!hit && walk_next(top, walk, leaf)) {  // bounded by max_steps
+    while (walk_next_bricked(v, walk, cur, leaf)) {  // bounded by max_steps
         PRT_COUNT(stats.leaves);
-        if (!node_is_brick(leaf.node)) continue;
-        hit = visit_brick(
-            v, node_addr(leaf.node), walk.path[leaf.level], stats,
-            [&](const BrickSplats& src, const OctreeView& brick) {
-                return walk_brick(brick, leaf, o, d, walk, culling,
-                                  [&](OctreeWalk& inner, const LeafBounds* bounds) {
-                                      return any_in_walk(brick, inner, src, bounds, culling, o, d, inv_dlen,
-                                                         inside, own_range, hi, stats);
-                                  });
-            },
-            [&](const LodSplats& lod) {
-                return detail::any_in_leaf(lod, 0, 1, o, d, inside, 0.0f, fminf(leaf.t1, hi), stats);
-            });
+        if (node_is_brick(leaf.node)) {  // not resident
+            note_fallback(v, node_addr(leaf.node), stats);
+            LodSplats lod;
+            if (lod_disc(v, walk.path[leaf.level], lod) &&
+                detail::any_in_leaf(lod, 0, 1, o, d, inside, 0.0f, fminf(leaf.t1, hi), stats))
+                return true;
+            continue;
+        }
+        if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
+        const BrickSplats src = brick_splats(cur.payload);
+        std::uint32_t begin = 0, end = 0;
+        if (!brick_leaf_range(v, cur, src.header, leaf.node, culling, o, d, inv_dlen, inside,
+                              own_range ? leaf.t0 : 0.0f, own_range ? fminf(leaf.t1, hi) : hi, begin, end, stats))
+            continue;
+        if (detail::any_in_leaf(src, begin, end, o, d, inside, 0.0f, hi, stats)) return true;
     }
     if (walk.truncated) ++stats.truncated;
-    return hit;
+    return false;
 }
 
 }  // namespace prt::core

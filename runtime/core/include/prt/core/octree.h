@@ -221,12 +221,15 @@ PRT_HD inline bool walk_begin(const OctreeView& v, Vec3 o_local, Vec3 d_local, f
 }
 
 /// Reads a node word (through the read-only data cache on the GPU).
-PRT_HD PRT_INLINE std::uint32_t load_node(const OctreeView& v, std::uint32_t index) {
+PRT_HD PRT_INLINE std::uint32_t load_node_word(const std::uint32_t* nodes, std::uint32_t index) {
 #if PRT_DEVICE_CODE
-    return __ldg(v.nodes + index);
+    return __ldg(nodes + index);
 #else
-    return v.nodes[index];
+    return nodes[index];
 #endif
+}
+PRT_HD PRT_INLINE std::uint32_t load_node(const OctreeView& v, std::uint32_t index) {
+    return load_node_word(v.nodes, index);
 }
 
 /// thesis 2.2.2: descends top-down to the leaf holding fixed-point point `p`, starting at the
@@ -262,20 +265,11 @@ PRT_HD PRT_INLINE std::uint32_t find_leaf(const OctreeView& v, const Fixed3& p, 
     return descend(v, p, path, level);
 }
 
-/// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
-/// root, passed t_max or used up its steps.
-PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
-    if (!w.active) return false;
-    if (w.steps_left == 0) {
-        w.active = false;
-        w.truncated = true;
-        return false;
-    }
-    --w.steps_left;
-    // Top-down descent (thesis 2.2.2), from the deepest node the previous leaf's path shares with
-    // this cell rather than from the root: the same leaf, found with fewer dependent reads.
-    std::uint32_t level = w.restart;
-    const std::uint32_t node = descend(v, w.p, w.path, level);
+/// thesis 2.2.1: the walk's step out of the leaf `node` found at `level` (the descent of walk_next):
+/// the leaf's cell and t range into `leaf`, then the point moved into the neighbour across the exit
+/// face. Returns true (the leaf is valid); the walk is left inactive when the ray leaves the root or
+/// passes t_end. Shared by walk_next and the bricked walk (bricks.h), which descend differently.
+PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uint32_t level, OctreeLeaf& leaf) {
     const std::uint32_t shift = k_fixed_bits - level;
     const Fixed3 cell{w.p.x >> shift, w.p.y >> shift, w.p.z >> shift};
     const float size = exp2_neg(level);
@@ -347,6 +341,23 @@ PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& lea
     w.restart = shared < level ? shared : level;
     w.t = t1;
     return true;
+}
+
+/// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
+/// root, passed t_max or used up its steps.
+PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+    if (!w.active) return false;
+    if (w.steps_left == 0) {
+        w.active = false;
+        w.truncated = true;
+        return false;
+    }
+    --w.steps_left;
+    // Top-down descent (thesis 2.2.2), from the deepest node the previous leaf's path shares with
+    // this cell rather than from the root: the same leaf, found with fewer dependent reads.
+    std::uint32_t level = w.restart;
+    const std::uint32_t node = descend(v, w.p, w.path, level);
+    return walk_step_out(w, node, level, leaf);
 }
 
 /// The splat index range [begin, end) of a filled leaf, clamped to the arrays (empty if invalid).
