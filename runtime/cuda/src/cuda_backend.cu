@@ -128,8 +128,8 @@ Megakernel megakernel() {
 /// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
 /// launch: splats at 4 blocks per SM, patches at 2, the general kernel and bricked splats (issue 17:
 /// their own kernel, so the float splat kernel does not carry the brick walk) at 4. The tuning variants of
-/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4: runtime/README.md) only with the CMake option
-/// PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 22.
+/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 3: runtime/README.md) only with
+/// the CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 26.
 const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_splats, 4>(),                        // splats only, the default occupancy
     megakernel<core::k_mask_patches, 2>(),                       // patches only, the default occupancy
@@ -140,6 +140,8 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats, 5>(),
     megakernel<core::k_mask_splats, 6>(),  megakernel<core::k_mask_patches, 1>(),
     megakernel<core::k_mask_patches, 4>(),
+    megakernel<core::k_mask_splats | core::k_mask_bricks, 2>(),
+    megakernel<core::k_mask_splats | core::k_mask_bricks, 3>(),
 #endif
 };
 
@@ -161,7 +163,7 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int
     int blocks = 4;  // the splat kernel's default, the general kernel's only occupancy
     if (mask == core::k_mask_patches)
         blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
-    else if (mask == core::k_mask_splats && asked != 0)
+    else if ((mask == core::k_mask_splats || mask == (core::k_mask_splats | core::k_mask_bricks)) && asked != 0)
         blocks = asked;
     for (const Megakernel& k : k_megakernels)
         if (k.mask == mask && k.min_blocks == blocks) return k;
