@@ -126,22 +126,25 @@ Megakernel megakernel() {
 }
 
 /// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
-/// launch: splats at 4 blocks per SM, patches at 2, the general kernel and bricked splats (issue 17:
-/// their own kernel, so the float splat kernel does not carry the brick walk) at 4. The tuning variants of
-/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 3: runtime/README.md) only with
-/// the CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 26.
+/// launch: splats at 4 blocks per SM, patches at 2, the general kernel at 4, bricked splats (issue 17:
+/// their own kernel, so the float splat kernel does not carry the brick walk) at 3 (H100, culled 1M
+/// sphere, Grays/s primary / shadow / reflect4: 1.297 / 1.774 / 1.757 at 3, 1.177 / 1.658 / 1.479
+/// at 4, 1.193 / 1.619 / 1.605 at 2; preprocess/bench/results/h100-2026-11-25-issue17-onewalk). The
+/// tuning variants of --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4:
+/// runtime/README.md) only with the CMake option PRT_CUDA_TUNING_KERNELS, so a default build
+/// compiles 8 megakernels instead of 26.
 const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_splats, 4>(),                        // splats only, the default occupancy
     megakernel<core::k_mask_patches, 2>(),                       // patches only, the default occupancy
     megakernel<core::k_mask_all, 4>(),                           // every surface, sampling
-    megakernel<core::k_mask_splats | core::k_mask_bricks, 4>(),  // bricked splats (issue 17)
+    megakernel<core::k_mask_splats | core::k_mask_bricks, 3>(),  // bricked splats (issue 17)
 #if PRT_CUDA_TUNING_KERNELS
     megakernel<core::k_mask_splats, 1>(),  megakernel<core::k_mask_splats, 2>(),
     megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats, 5>(),
     megakernel<core::k_mask_splats, 6>(),  megakernel<core::k_mask_patches, 1>(),
     megakernel<core::k_mask_patches, 4>(),
     megakernel<core::k_mask_splats | core::k_mask_bricks, 2>(),
-    megakernel<core::k_mask_splats | core::k_mask_bricks, 3>(),
+    megakernel<core::k_mask_splats | core::k_mask_bricks, 4>(),
 #endif
 };
 
@@ -163,7 +166,9 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int
     int blocks = 4;  // the splat kernel's default, the general kernel's only occupancy
     if (mask == core::k_mask_patches)
         blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
-    else if ((mask == core::k_mask_splats || mask == (core::k_mask_splats | core::k_mask_bricks)) && asked != 0)
+    else if (mask == (core::k_mask_splats | core::k_mask_bricks))
+        blocks = asked == 0 ? 3 : asked;  // variants 2, 3 and 4
+    else if (mask == core::k_mask_splats && asked != 0)
         blocks = asked;
     for (const Megakernel& k : k_megakernels)
         if (k.mask == mask && k.min_blocks == blocks) return k;
