@@ -41,6 +41,9 @@ struct BrickView {
     const unsigned char* const* resident = nullptr;
     /// Per brick, or null: set to 1 when a ray fell back to the brick's LOD disc (streaming requests).
     std::uint32_t* requests = nullptr;
+    /// Per brick, or null: set to 1 when a ray opened the resident brick (streaming: the bricks a
+    /// frame used are not evicted, the others leave least recently used first; rt::BrickStream).
+    std::uint32_t* used = nullptr;
     /// Per filled leaf of every brick, or null: LeafBounds (octree.h) over the decoded splats, so
     /// rays pass leaves unread as on the float path; brick b's at leaf_bounds + leaf_bounds_first[b].
     /// Derived on the host at load (rt::build_brick_leaf_bounds), not in the pool.
@@ -145,23 +148,30 @@ PRT_HD PRT_INLINE bool lod_disc(const BrickView& v, std::uint32_t node, LodSplat
     return true;
 }
 
-/// Counts a fallback to brick b's LOD disc and flags its request (streaming).
-PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkStats& stats) {
-    ++stats.fallbacks;
-    if (v.requests == nullptr) return;
+/// Sets flags[b] to 1 (streaming's request and use flags; many rays set the same flag: it is read
+/// first, so a flag already set costs no write).
+PRT_HD PRT_INLINE void flag_brick(std::uint32_t* flags, std::uint32_t b) {
 #if PRT_DEVICE_CODE
-    v.requests[b] = 1u;
+    if (flags[b] == 0u) flags[b] = 1u;
 #else
-    __atomic_store_n(v.requests + b, 1u, __ATOMIC_RELAXED);
+    if (__atomic_load_n(flags + b, __ATOMIC_RELAXED) == 0u) __atomic_store_n(flags + b, 1u, __ATOMIC_RELAXED);
 #endif
 }
 
+/// Counts a fallback to brick b's LOD disc and flags its request (streaming).
+PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkStats& stats) {
+    ++stats.fallbacks;
+    if (v.requests != nullptr) flag_brick(v.requests, b);
+}
+
 /// Opens resident brick b: its splat source and octree view (with its leaf bounds when the view
-/// has them). False when b is out of range or not resident.
+/// has them), flagging it used when the view has use flags. False when b is out of range or not
+/// resident.
 PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSplats& src, OctreeView& brick) {
     if (b >= v.brick_count) return false;
     const unsigned char* payload = brick_payload(v, b);
     if (payload == nullptr) return false;
+    if (v.used != nullptr) flag_brick(v.used, b);
     src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
     src.splats = reinterpret_cast<const pool::CompressedSplat*>(
         payload + pool::brick_splats_offset(src.header.node_count, src.header.leaf_count));
