@@ -213,7 +213,7 @@ struct BrickStream::Model {
 BrickStream::~BrickStream() = default;
 
 BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptions& options)
-    : m_scene(scene), m_options(options) {
+    : m_scene(scene), m_backend(backend), m_options(options) {
     m_fixed_bytes = scene.bytes();
     m_in_core_bytes = scene.bytes();
     std::vector<std::unique_ptr<Model>> models;
@@ -281,6 +281,12 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         if (!m->storage) m->storage = make_host_brick_storage(scene, m->index, m->arena);
     }
     m_models = std::move(models);
+}
+
+UploadStats BrickStream::set_scene(const core::SceneView& view) {
+    const UploadStats up = m_backend.set_scene(view);
+    for (auto& m : m_models) m->storage->reattach();
+    return up;
 }
 
 std::uint64_t BrickStream::arena_bytes() const {

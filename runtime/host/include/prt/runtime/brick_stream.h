@@ -59,6 +59,9 @@ public:
     /// After a frame: sets used[b] / requested[b] (brick_count entries each) to the frame's use and
     /// request flags, and clears the flags for the next frame.
     virtual void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) = 0;
+    /// After the backend's set_scene() ran again (BrickStream::set_scene): points the backend's
+    /// copy of the model at this storage again. Host storage: nothing to do.
+    virtual void reattach() {}
 };
 
 /// Host storage (the CPU backend reads the scene's views in place): the arena in
@@ -111,6 +114,9 @@ public:
     BrickStream(const BrickStream&) = delete;
     BrickStream& operator=(const BrickStream&) = delete;
 
+    /// Makes `view` (the scene's view(), e.g. with other materials) current on the backend again,
+    /// keeping the resident bricks. Returns the backend's set_scene() statistics.
+    UploadStats set_scene(const core::SceneView& view);
     /// The set_scene() statistics.
     const UploadStats& upload_stats() const { return m_upload; }
     bool streaming() const { return !m_models.empty(); }
@@ -130,6 +136,7 @@ public:
 private:
     struct Model;
     RenderScene& m_scene;
+    Backend& m_backend;
     StreamOptions m_options;
     UploadStats m_upload;
     std::uint64_t m_in_core_bytes = 0, m_minimum_bytes = 0, m_fixed_bytes = 0;
