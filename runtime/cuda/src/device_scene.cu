@@ -155,6 +155,9 @@ void DeviceScene::set_model_bricks(std::uint32_t i, const core::BrickView& brick
     m->models.at(i).bricks = bricks;
     PRT_CUDA_CHECK(
         cudaMemcpy(m->device_models + i, &m->models[i], sizeof(core::ModelView), cudaMemcpyHostToDevice));
+    // From pageable memory the copy may still be in flight when cudaMemcpy returns, and the
+    // renderer's streams do not wait for the default stream: wait here (rare: once per storage).
+    PRT_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
 std::uint64_t DeviceScene::device_bytes(const core::SceneView& host) {
