@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "brick_stream_fixture.h"
+#include "prt/core/render.h"
 #include "prt/cpu/cpu_backend.h"
 #include "prt/error.h"
 #include "tool_run.h"
@@ -219,6 +220,45 @@ TEST_F(BrickStreamTest, PrtBenchReportsStreaming) {
     EXPECT_TRUE(sc["streaming"]["converged"].get<bool>()) << sc.dump();
     EXPECT_GT(sc["streaming"]["bricks_uploaded"].get<std::uint64_t>(), 0u);
     EXPECT_EQ(sc["brick_fallbacks"].get<std::uint64_t>(), 0u) << "timed after converging";
+}
+
+/// FrameStats::fallbacks counts rays, not brick visits: with nothing resident and primary rays only,
+/// it equals the primary rays whose walk fell back at least once, counted here ray by ray with the
+/// core's walk (which also counts the visits: more than the rays).
+TEST_F(BrickStreamTest, FallbacksCountRaysNotBrickVisits) {
+    const Terms t = budget_terms();
+    rt::RenderScene rs = deferred();
+    rs.params().shadows = 0;
+    rs.params().reflections = 0;
+    rs.params().refractions = 0;
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 4});
+    ASSERT_TRUE(stream.streaming());
+    rt::Image img;
+    const rt::FrameStats fs = backend->render(request(rs), img);
+    ASSERT_EQ(fs.shadow + fs.secondary, 0u);
+    const core::SceneView view = rs.view();
+    core::BrickView bricks = view.models[0].bricks;  // nothing resident yet; no flags touched here
+    bricks.requests = nullptr;
+    bricks.used = nullptr;
+    const core::PinholeCamera cam = rs.camera();
+    const core::BlendOptions blend{rs.params().blend_window, rs.params().deep_blending != 0};
+    std::uint64_t rays = 0, visits = 0;
+    for (std::uint32_t y = 0; y < k_size; ++y)
+        for (std::uint32_t x = 0; x < k_size; ++x) {
+            const core::Ray r = core::primary_ray(cam, x, y, k_size, k_size);
+            core::Vec3 o, d;
+            core::to_model_frame(view.models[0], r, o, d);
+            core::WalkStats st;
+            core::SplatSample h{};
+            core::closest_hit_bricks(bricks, o, d, false, r.t_max, blend, rs.params().max_steps, h, st,
+                                     rs.params().leaf_culling);
+            rays += st.fallbacks > 0;
+            visits += st.fallbacks;
+        }
+    EXPECT_GT(rays, 0u);
+    EXPECT_EQ(fs.fallbacks, rays);
+    EXPECT_GT(visits, rays) << "some rays pass several bricks' discs: visits would count more";
 }
 
 }  // namespace
