@@ -17,6 +17,7 @@
 #include "prt/core/render.h"
 #include "prt/cpu/cpu_backend.h"
 #include "prt/error.h"
+#include "prt/runtime/image.h"
 #include "tool_run.h"
 
 namespace prt::test {
@@ -259,6 +260,36 @@ TEST_F(BrickStreamTest, FallbacksCountRaysNotBrickVisits) {
     EXPECT_GT(rays, 0u);
     EXPECT_EQ(fs.fallbacks, rays);
     EXPECT_GT(visits, rays) << "some rays pass several bricks' discs: visits would count more";
+}
+
+/// The window refines frame after frame: under xvfb-run, after 20 frames under a budget the
+/// displayed image is the in-core render (within the window test's tolerance: the texture path).
+TEST_F(BrickStreamTest, TheWindowRefinesToTheInCoreImage) {
+#ifndef PRT_TEST_HAVE_WINDOW
+    GTEST_SKIP() << "this build has no player window (configured without GLFW)";
+#endif
+    if (!on_path("xvfb-run"))
+        GTEST_SKIP() << "xvfb-run is not installed (Debian: apt-get install xvfb xauth): window test skipped";
+    const std::string view =
+        " --backend cpu --eye 12.0,-2.6,2.6 --look-at 11.0,-3,1.7 --fov 30 --width 48 --height 48";
+    const auto shot = s_dir / "shot.ppm", ref = s_dir / "ref.ppm";
+    const ToolRun win =
+        run_tool("prt-play",
+                 s_pool.string() + view + " --gpu-budget 1200K --upload-per-frame 64K --frames 20 " +
+                     "--screenshot " + shot.string(),
+                 s_dir, "xvfb-run -a -s '-screen 0 640x480x24'");
+    ASSERT_EQ(win.code, 0) << win.err;
+    EXPECT_NE(win.err.find("uploaded"), std::string::npos) << win.err;
+    const ToolRun head = run_tool("prt-play", s_pool.string() + view + " --out " + ref.string(), s_dir);
+    ASSERT_EQ(head.code, 0) << head.err;
+    const rt::Image a = rt::read_ppm(shot), b = rt::read_ppm(ref);
+    ASSERT_EQ(a.width, b.width);
+    ASSERT_EQ(a.height, b.height);
+    std::size_t off = 0;
+    for (std::size_t i = 0; i < a.rgba8.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            off += std::abs(int((a.rgba8[i] >> (8 * c)) & 255u) - int((b.rgba8[i] >> (8 * c)) & 255u)) > 2;
+    EXPECT_LE(off, a.rgba8.size() * 3 / 100) << "channels more than 2 levels apart: " << win.err;
 }
 
 }  // namespace
