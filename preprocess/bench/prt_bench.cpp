@@ -84,6 +84,8 @@ nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, r
                           {"bricks_uploaded", f.uploaded},
                           {"uploaded_bytes", f.uploaded_bytes},
                           {"upload_gb_per_s", f.gb_per_s()},
+                          {"check_ms", f.prepare_seconds * 1e3},
+                          {"copy_ms", f.copy_seconds * 1e3},
                           {"evicted", f.evicted},
                           {"fallback_rays", f.fallback_rays},
                           {"frame_ms", s.seconds * 1e3}});

@@ -176,11 +176,11 @@ std::unique_ptr<BrickStorage> make_host_brick_storage(RenderScene& scene, std::s
 std::string describe(const StreamFrame& f) {
     char buf[512];
     std::snprintf(buf, sizeof(buf),
-                  "resident %s (%u of %u bricks), uploaded %u bricks (%s, %.2f GB/s), evicted %u, %llu rays "
-                  "fell back",
+                  "resident %s (%u of %u bricks), uploaded %u bricks (%s, %.2f GB/s: checks %.1f ms, copies "
+                  "%.1f ms), evicted %u, %llu rays fell back",
                   format_bytes(f.resident_bytes).c_str(), f.resident_bricks, f.brick_count, f.uploaded,
-                  format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.evicted,
-                  static_cast<unsigned long long>(f.fallback_rays));
+                  format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
+                  f.copy_seconds * 1e3, f.evicted, static_cast<unsigned long long>(f.fallback_rays));
     return buf;
 }
 
@@ -368,6 +368,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
     }
     // Each brick checked by its own checksum and its leaf bounds computed from it alone (in
     // parallel), then copied into its block.
+    const auto prepare_start = std::chrono::steady_clock::now();
     parallel_chunks(uploads.size(), 1, resolve_threads(0), [&](std::size_t i0, std::size_t i1, unsigned) {
         for (std::size_t i = i0; i < i1; ++i) {
             Upload& u = uploads[i];
@@ -378,6 +379,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
                 e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
         }
     });
+    const auto copy_start = std::chrono::steady_clock::now();
     for (Upload& u : uploads) {
         Model& m = *u.model;
         const pool::BrickEntry& e = m.sections.table[u.brick];
@@ -393,9 +395,12 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         f.uploaded_bytes += e.size;
     }
     for (auto& m : m_models) m->storage->commit();
-    f.upload_seconds = uploads.empty()
-                           ? 0.0
-                           : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!uploads.empty()) {
+        const auto end = std::chrono::steady_clock::now();
+        f.upload_seconds = std::chrono::duration<double>(end - start).count();
+        f.prepare_seconds = std::chrono::duration<double>(copy_start - prepare_start).count();
+        f.copy_seconds = std::chrono::duration<double>(end - copy_start).count();
+    }
     f.resident_bytes = m_fixed_bytes;
     for (const auto& m : m_models) {
         f.resident_bytes += m->resident_bytes;
