@@ -123,21 +123,25 @@ private:
 /// First-fit allocation of 64-byte multiples in [0, size), free blocks merged with their neighbours.
 class ArenaAllocator {
 public:
-    explicit ArenaAllocator(std::uint64_t size) {
+    explicit ArenaAllocator(std::uint64_t size) : m_free_bytes(size) {
         if (size > 0) m_free.emplace(0, size);
     }
+    /// Free bytes in all (in blocks of any size).
+    std::uint64_t free_bytes() const { return m_free_bytes; }
     /// The offset of a free block of `bytes`, or nullopt.
     std::optional<std::uint64_t> allocate(std::uint64_t bytes) {
         for (auto it = m_free.begin(); it != m_free.end(); ++it) {
             if (it->second < bytes) continue;
             const std::uint64_t at = it->first, left = it->second - bytes;
             m_free.erase(it);
+            m_free_bytes -= bytes;
             if (left > 0) m_free.emplace(at + bytes, left);
             return at;
         }
         return std::nullopt;
     }
     void release(std::uint64_t at, std::uint64_t bytes) {
+        m_free_bytes += bytes;
         auto next = m_free.lower_bound(at);
         if (next != m_free.end() && next->first == at + bytes) {
             bytes += next->second;
@@ -155,6 +159,7 @@ public:
 
 private:
     std::map<std::uint64_t, std::uint64_t> m_free;  ///< offset -> bytes
+    std::uint64_t m_free_bytes = 0;
 };
 
 /// The block a brick takes: its payload, then its leaf bounds, each rounded up to 64 bytes.
@@ -343,13 +348,21 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         std::sort(victims.begin(), victims.end(), [&](std::uint32_t a, std::uint32_t b) {
             return m.last_used[a] != m.last_used[b] ? m.last_used[a] < m.last_used[b] : a < b;
         });
+        std::uint64_t victim_bytes = 0;  // what evicting every candidate left would free
+        for (const std::uint32_t v : victims) victim_bytes += block_bytes(m.sections.table[v]);
         std::size_t next_victim = 0, taken = 0;
         for (const std::uint32_t b : missing) {
             const std::uint64_t size = m.sections.table[b].size;
             if (!uploads.empty() && size > allowance) break;  // the rest wait for the next frames
             const std::uint64_t bytes = block_bytes(m.sections.table[b]);
             std::optional<std::uint64_t> at = m.allocator->allocate(bytes);
+            // Evict only when it can make room (fragmentation aside): never for nothing.
+            if (!at && m.allocator->free_bytes() + victim_bytes < bytes) {
+                f.stalled = true;
+                break;
+            }
             while (!at && next_victim < victims.size()) {
+                victim_bytes -= block_bytes(m.sections.table[victims[next_victim]]);
                 m.evict(victims[next_victim++]);
                 ++f.evicted;
                 at = m.allocator->allocate(bytes);
