@@ -20,6 +20,7 @@
 #include "player_options.h"
 #include "prt/atomic_file.h"
 #include "prt/runtime/backend.h"
+#include "prt/runtime/brick_stream.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
 #include "ray_profile.h"
@@ -60,16 +61,73 @@ nlohmann::json derived_kind(const rt::FrameStats& with, const rt::FrameStats& ba
             {"splat_tests_per_ray", per(with.splat_tests, base.splat_tests)}};
 }
 
+/// Streamed bricks (--gpu-budget): renders the view until no ray falls back to a brick's coarse
+/// level or nothing more can be uploaded (at most 100000 passes), one stderr line per pass; returns
+/// the refinement's numbers as JSON and prints them on one stdout line.
+nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, rt::BrickStream& stream,
+                      const rt::FrameRequest& req, rt::Image& image, const std::string& name) {
+    nlohmann::json passes = nlohmann::json::array();
+    std::uint64_t uploaded = 0, bytes = 0;
+    double upload_s = 0;
+    const double t0 = tool::now_seconds();
+    rt::StreamFrame f;
+    for (std::uint32_t pass = 0; pass < 100000; ++pass) {
+        const rt::FrameStats s = backend.render(req, image);
+        f = stream.after_frame(s);
+        tool::note(common.quiet, "prt-bench: %s: refining, pass %u: %s", name.c_str(), pass,
+                   rt::describe(f).c_str());
+        uploaded += f.uploaded;
+        bytes += f.uploaded_bytes;
+        upload_s += f.upload_seconds;
+        passes.push_back({{"resident_bytes", f.resident_bytes},
+                          {"resident_bricks", f.resident_bricks},
+                          {"bricks_uploaded", f.uploaded},
+                          {"uploaded_bytes", f.uploaded_bytes},
+                          {"upload_gb_per_s", f.gb_per_s()},
+                          {"check_ms", f.prepare_seconds * 1e3},
+                          {"copy_ms", f.copy_seconds * 1e3},
+                          {"evicted", f.evicted},
+                          {"fallback_rays", f.fallback_rays},
+                          {"frame_ms", s.seconds * 1e3}});
+        if (f.converged() || f.uploaded == 0) break;
+    }
+    const double secs = tool::now_seconds() - t0;
+    const double gbs = upload_s > 0 ? bytes / upload_s * 1e-9 : 0.0;
+    std::printf(
+        "%-10s streaming: %s after %zu pass(es), %.3f s: %llu bricks uploaded (%s, %.2f GB/s), %u of %u "
+        "bricks resident (%s)%s\n",
+        name.c_str(), f.converged() ? "converged" : "not converged", passes.size(), secs,
+        static_cast<unsigned long long>(uploaded), rt::format_bytes(bytes).c_str(), gbs, f.resident_bricks,
+        f.brick_count, rt::format_bytes(f.resident_bytes).c_str(),
+        f.converged() ? ""
+                      : (", the budget holds too few of the " + std::to_string(f.needed) +
+                         " bricks the view needs; timed frames use coarse levels")
+                            .c_str());
+    return {{"converged", f.converged()},
+            {"passes", passes.size()},
+            {"seconds", secs},
+            {"bricks_uploaded", uploaded},
+            {"uploaded_bytes", bytes},
+            {"upload_gb_per_s", gbs},
+            {"resident_bytes", f.resident_bytes},
+            {"resident_bricks", f.resident_bricks},
+            {"brick_count", f.brick_count},
+            {"needed_bricks", f.needed},
+            {"per_pass", passes}};
+}
+
 /// Times one scenario (`o.frames` frames after `o.warmup`): prints its row, appends its JSON to
-/// `report` and returns the last frame's counters.
+/// `report` and returns the last frame's counters. Streamed bricks refine first (refine()); the
+/// timed frames then go on streaming (after_frame after each).
 rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common, rt::Backend& backend,
-                             const rt::RenderScene& rs, const player::BenchScenario& sc,
-                             const std::vector<core::Material>& original, nlohmann::json& report) {
+                             rt::BrickStream& stream, const rt::RenderScene& rs,
+                             const player::BenchScenario& sc, const std::vector<core::Material>& original,
+                             nlohmann::json& report) {
     // Materials of the scenario (the mirror world of reflect4), uploaded before timing.
     const std::vector<core::Material> mats = player::scenario_materials(sc, original);
     core::SceneView view = rs.view();
     view.materials = mats.data();
-    backend.set_scene(view);
+    stream.set_scene(view);
     rt::FrameRequest req;
     req.camera = rs.camera();
     req.params = sc.params;
@@ -78,12 +136,15 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
     req.download = false;
     rt::Image image;
     image.resize(o.scene.width, o.scene.height);
-    for (std::uint32_t i = 0; i < o.warmup; ++i) backend.render(req, image);
+    nlohmann::json streaming;
+    if (stream.streaming()) streaming = refine(common, backend, stream, req, image, sc.name);
+    for (std::uint32_t i = 0; i < o.warmup; ++i) stream.after_frame(backend.render(req, image));
     std::vector<double> ms, wall_ms;
     rt::FrameStats last;
     tool::Progress progress("prt-bench: " + sc.name, o.frames, common.quiet);
     for (std::uint32_t i = 0; i < o.frames; ++i) {
         last = backend.render(req, image);
+        stream.after_frame(last);  // streamed bricks: uploads between frames are not timed
         // CUDA: kernel time from events; CPU and hybrid: the frame's wall time.
         ms.push_back(backend.name() == "cuda" ? last.device_ms : last.seconds * 1e3);
         wall_ms.push_back(last.seconds * 1e3);  // every backend: to compare cuda with hybrid
@@ -117,7 +178,8 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
                       {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},
                       {"truncated", last.truncated},
                       {"sanitized", last.sanitized},
-                      {"brick_fallbacks", last.fallbacks},
+                      {"brick_fallbacks", last.fallbacks},  // rays that used a brick's coarse level
+                      {"streaming", streaming},
                       {"timer", backend.name() == "cuda" ? "cuda events" : "host clock"},
                       {"wall_median_ms", player::median(wall_ms)},
                       {"gpu_share", last.gpu_share},
@@ -170,6 +232,7 @@ void profile_scenarios(const Options& o, const rt::RenderScene& rs,
 
 void run(Options o, const tool::CommonOptions& common) {
     o.scene.load = player::load_options(o.render);
+    o.scene.load.defer_bricks = true;  // rt::BrickStream loads them in core or streams them (--gpu-budget)
     rt::RenderScene rs = player::bench_scene(o.scene, common.quiet);
     // A pool alone is framed at the benchmark's image size; --eye, --look-at, --up, --fov override.
     const bool framed = !o.scene.pool.empty() && o.scene.scene.empty();
@@ -180,7 +243,9 @@ void run(Options o, const tool::CommonOptions& common) {
 
     auto backend = rt::make_backend(o.backend.name, player::backend_options(o.backend));
     const double t0 = tool::now_seconds();
-    const rt::UploadStats up = backend->set_scene(rs.view());
+    const rt::StreamOptions stream_options = player::stream_options(o.backend, *backend);
+    rt::BrickStream stream(rs, *backend, stream_options);
+    const rt::UploadStats up = stream.upload_stats();
     const double load_s = tool::now_seconds() - t0;
 
     const std::vector<player::BenchScenario> all = player::bench_scenarios(base);
@@ -214,6 +279,19 @@ void run(Options o, const tool::CommonOptions& common) {
                       {"upload_bytes", up.bytes},
                       {"upload_seconds", up.seconds},
                       {"upload_gb_per_s", up.gb_per_s()}};
+    report["streaming"] = {{"streamed", stream.streaming()},
+                           {"budget_bytes", stream_options.budget},
+                           {"in_core_bytes", stream.in_core_bytes()},
+                           {"always_resident_bytes", stream.streaming() ? stream.fixed_bytes() : rs.bytes()},
+                           {"arena_bytes", stream.arena_bytes()},
+                           {"bricks", stream.brick_count()}};
+    if (stream.streaming())
+        std::printf(
+            "prt-bench: streaming %u bricks under a budget of %s (always resident %s, bricks %s; in core "
+            "%s)\n",
+            stream.brick_count(), rt::format_bytes(stream_options.budget).c_str(),
+            rt::format_bytes(stream.fixed_bytes()).c_str(), rt::format_bytes(stream.arena_bytes()).c_str(),
+            rt::format_bytes(stream.in_core_bytes()).c_str());
     std::printf(
         "prt-bench: %s on %s, %ux%u, %llu points (%llu splats, %llu filled leaves), leaf culling %u, median "
         "of %u "
@@ -226,7 +304,8 @@ void run(Options o, const tool::CommonOptions& common) {
     std::vector<std::pair<std::string, rt::FrameStats>> done;
     for (const player::BenchScenario& sc : all) {
         if (o.scenarios.find(sc.name) == std::string::npos) continue;
-        done.emplace_back(sc.name, time_scenario(o, common, *backend, rs, sc, original, report["scenarios"]));
+        done.emplace_back(sc.name,
+                          time_scenario(o, common, *backend, stream, rs, sc, original, report["scenarios"]));
     }
     report_ray_kinds(done, report);
     if (o.profile) profile_scenarios(o, rs, all, original, report);

@@ -51,6 +51,9 @@ public:
         m_cpu->set_scene(scene);
         return m_gpu->set_scene(scene);
     }
+    // Both sides read the same bricks: the hybrid backend loads them in core.
+    bool can_stream() const override { return false; }
+    std::uint64_t default_memory_budget() const override { return m_gpu->default_memory_budget(); }
 
     FrameStats render(const FrameRequest& req, Image& image) override {
         const auto start = std::chrono::steady_clock::now();

@@ -113,6 +113,30 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
         ->check(CLI::Range(0, 6));
     app.add_flag("--default-carveout", b.default_carveout,
                  "CUDA: leave the L1 / shared-memory split to the driver instead of preferring L1");
+    app.add_option("--gpu-budget", b.gpu_budget,
+                   "Memory the scene may take (bytes, or with K/M/G/T: 512M, 1.5G; 'unlimited'): a bricked "
+                   "pool (prt-bricks) larger than this streams its bricks, least recently used ones "
+                   "evicted, rays reaching a missing brick using its coarse level of detail meanwhile. "
+                   "Default: the GPU's free memory minus 512 MiB on cuda; unlimited on cpu (the pool is "
+                   "read in place from the mapped file), where a budget streams into host memory");
+    app.add_option("--upload-per-frame", b.upload_per_frame,
+                   "Streaming: brick bytes uploaded at most after each frame, so frames stay short (at "
+                   "least one brick; K/M/G suffixes)")
+        ->default_val("256M");
+}
+
+rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& backend) {
+    rt::StreamOptions s;
+    if (b.gpu_budget.empty())
+        s.budget = backend.default_memory_budget();
+    else if (b.gpu_budget == "unlimited")
+        s.budget = 0;
+    else {
+        s.budget = rt::parse_byte_size(b.gpu_budget, "--gpu-budget");
+        if (s.budget == 0) throw Error("--gpu-budget: 0 bytes (give a size, or 'unlimited')");
+    }
+    s.upload_per_frame = rt::parse_byte_size(b.upload_per_frame, "--upload-per-frame");
+    return s;
 }
 
 void apply(const RenderOverrides& o, core::RenderParams& p) {

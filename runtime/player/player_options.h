@@ -9,6 +9,7 @@
 #include "prt/core/scene_view.h"
 #include "prt/error.h"
 #include "prt/runtime/backend.h"
+#include "prt/runtime/brick_stream.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
 
@@ -65,6 +66,9 @@ struct BackendChoice {
     unsigned threads = 0;
     int min_blocks = 0;             ///< cuda megakernel occupancy hint (0: default)
     bool default_carveout = false;  ///< cuda: leave the L1/shared split to the driver
+    /// Streamed bricks (rt::BrickStream): --gpu-budget ("": the backend's default), --upload-per-frame.
+    std::string gpu_budget;
+    std::string upload_per_frame = "256M";
 };
 
 /// Declares --tonemap, --exposure, --max-bounces, --no-shadows, ... on `app`.
@@ -79,6 +83,10 @@ void add_sampling_options(CLI::App& app, RenderOverrides& o);
 rt::LoadOptions load_options(const RenderOverrides& o);
 /// The backend options of a choice.
 rt::BackendOptions backend_options(const BackendChoice& b);
+/// The streaming settings of a choice on this backend: --gpu-budget (default: the backend's
+/// default_memory_budget(), CUDA: free memory minus a margin; CPU: unlimited) and
+/// --upload-per-frame. Throws prt::Error for a size that does not parse.
+rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& backend);
 
 /// Declares --eye, --look-at, --up and --fov on `app`: values are checked as they are parsed
 /// (three finite numbers, a non-zero up, 0 < fov < 180), and --eye against --look-at and --up once

@@ -10,6 +10,7 @@
 #include "player_options.h"
 #include "prt/formats/scene.h"
 #include "prt/runtime/backend.h"
+#include "prt/runtime/brick_stream.h"
 #include "prt/runtime/image.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
@@ -34,6 +35,7 @@ struct Options {
     std::filesystem::path screenshot;
     bool frames_given = false;  ///< --frames on the command line (the window then closes after them)
     bool no_interop = false;
+    bool converge = false;  ///< headless: render each view until no ray falls back to a brick's LOD
 };
 
 /// "frame_%04d.png" -> "frame_0007.png"; names without '%' are returned unchanged.
@@ -81,7 +83,8 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         std::string why;
         if (!rt::can_write_image(o.screenshot, &why)) throw Error(why);
     }
-    const rt::LoadOptions load = player::load_options(o.render);
+    rt::LoadOptions load = player::load_options(o.render);
+    load.defer_bricks = true;  // rt::BrickStream loads them in core or streams them (--gpu-budget)
     rt::RenderScene rs = o.scene.empty() ? rt::RenderScene::from_pool(o.pool, load)
                                          : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, load);
     scene::Camera& cam = rs.scene().camera;
@@ -95,7 +98,9 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     for (const std::string& n : rs.notes()) tool::note(common.quiet, "prt-play: %s", n.c_str());
     const double t_open = tool::now_seconds();
     auto backend = rt::make_backend(o.backend.name, player::backend_options(o.backend));
-    const rt::UploadStats up = backend->set_scene(rs.view());
+    auto stream =
+        std::make_unique<rt::BrickStream>(rs, *backend, player::stream_options(o.backend, *backend));
+    const rt::UploadStats up = stream->upload_stats();
     const double t_loaded = tool::now_seconds();
     tool::note(common.quiet, "prt-play: %zu model(s), %.1f MB of sections; backend %s on %s",
                rs.models().size(), rs.bytes() * 1e-6, backend->name().c_str(), backend->device().c_str());
@@ -108,6 +113,18 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         tool::note(common.quiet, "prt-play: load %.3f s (sections read in place from the mapped pool)",
                    t_loaded - t0);
     }
+    if (stream->streaming())
+        tool::note(
+            common.quiet,
+            "prt-play: streaming %u bricks: a budget of %s (always resident %s, bricks %s; in core the "
+            "scene takes %s)",
+            stream->brick_count(),
+            rt::format_bytes(player::stream_options(o.backend, *backend).budget).c_str(),
+            rt::format_bytes(stream->fixed_bytes()).c_str(), rt::format_bytes(stream->arena_bytes()).c_str(),
+            rt::format_bytes(stream->in_core_bytes()).c_str());
+    if (o.converge && !stream->streaming())
+        tool::note(common.quiet,
+                   "prt-play: --converge: every brick is resident (in core): one pass per frame");
 
     bool headless = o.headless || !o.out.empty();  // an output file means a headless run
 #ifndef PRT_HAVE_GLFW
@@ -122,7 +139,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         wo.frames = o.frames_given || !o.screenshot.empty() ? o.frames : 0;
         wo.screenshot = o.screenshot;
         wo.interop = !o.no_interop;
-        player::run_window(rs, backend, wo);
+        player::run_window(rs, backend, stream, wo);
         return;
 #endif
     }
@@ -140,7 +157,11 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     const bool still = path.empty() && o.orbit == 0.0f;
     const bool accumulate = still && !every_frame && (base.path_tracing != 0 || base.spp > 1);
     player::Accumulator acc;
-    tool::Progress progress("prt-play: rendering", o.frames, common.quiet || o.frames < 2);
+    // Streaming prints a line per pass, which a progress bar would garble.
+    tool::Progress progress("prt-play: rendering", o.frames,
+                            common.quiet || o.frames < 2 || stream->streaming());
+    std::uint64_t passes = 0, last_fallbacks = 0;
+    bool stalled = false;
     for (std::uint32_t f = 0; f < o.frames; ++f) {
         scene::Camera c =
             path.empty() ? player::orbit_camera(cam, f, o.orbit) : player::path_camera(cam, path, f);
@@ -150,7 +171,30 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         req.params.frame = f;
         req.width = c.width;
         req.height = c.height;
-        const rt::FrameStats s = backend->render(req, image);
+        // Streaming: each pass uploads the bricks its rays asked for; --converge renders the view
+        // again until no ray falls back to a brick's coarse level (then the image equals the in-core
+        // render), or until nothing more can be uploaded.
+        rt::FrameStats s;
+        for (std::uint32_t pass = 0;; ++pass) {
+            s = backend->render(req, image);
+            ++passes;
+            const rt::StreamFrame sf = stream->after_frame(s);
+            if (sf.streaming)
+                tool::note(common.quiet, "prt-play: frame %u%s: %s", f,
+                           o.converge ? (" pass " + std::to_string(pass)).c_str() : "",
+                           rt::describe(sf).c_str());
+            last_fallbacks = s.fallbacks;
+            if (!o.converge || !sf.streaming || sf.converged()) break;
+            if (sf.uploaded == 0) {
+                stalled = true;
+                tool::note(
+                    common.quiet,
+                    "prt-play: frame %u does not converge: the budget holds %u of the %u bricks the view "
+                    "needs (%llu rays use a coarse level; raise --gpu-budget)",
+                    f, sf.resident_bricks, sf.needed, static_cast<unsigned long long>(s.fallbacks));
+                break;
+            }
+        }
         total += s;
         if (accumulate) acc.add(image, base);
         if (every_frame || f + 1 == o.frames) rt::write_image(frame_name(out, f), image, req.params.exposure);
@@ -168,6 +212,16 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         static_cast<double>(total.shadow), static_cast<double>(total.secondary),
         secs > 0 ? total.rays() / secs * 1e-6 : 0.0);
     report_frame_issues(common.quiet, total);
+    if (stream->streaming()) {
+        tool::note(common.quiet, "prt-play: %llu pass(es) for %u frame(s)",
+                   static_cast<unsigned long long>(passes), o.frames);
+        if (last_fallbacks && !stalled)
+            tool::note(
+                common.quiet,
+                "prt-play: %llu rays of the last frame used a brick's coarse level (--converge refines "
+                "before writing)",
+                static_cast<unsigned long long>(last_fallbacks));
+    }
     tool::note(common.quiet, "prt-play: wrote %s",
                every_frame ? out.c_str() : frame_name(out, o.frames - 1).c_str());
 }
@@ -221,6 +275,11 @@ int main(int argc, char** argv) {
                 "--orbit", o.orbit,
                 "Headless: turn the camera about its up direction through its look-at point by this "
                 "many degrees per frame");
+            app.add_flag("--converge", o.converge,
+                         "Headless, streamed bricks (--gpu-budget): render each frame's view again until no "
+                         "ray falls back to a brick's coarse level of detail (the image then equals the "
+                         "in-core one), or until the budget can take no more of the bricks it needs (said "
+                         "in one line); off: one pass per frame, refining over the frames");
             app.add_option("--camera-path", o.camera_path,
                            "Headless: camera path file, one frame per line 'px py pz lx ly lz [fov]' (world "
                            "frame; frames cycle)")

@@ -343,7 +343,8 @@ void on_scroll(GLFWwindow* w, double, double dy) {
 
 }  // namespace
 
-void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, const WindowOptions& options) {
+void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
+                std::unique_ptr<rt::BrickStream>& stream, const WindowOptions& options) {
     glfwSetErrorCallback(on_glfw_error);
     if (!glfwInit()) throw Error("cannot initialise GLFW (" + g_glfw_error + "; no display? use --headless)");
     WindowGuard guard;  // destroyed last: after the display's GL objects
@@ -394,8 +395,10 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
         glfwPollEvents();
         if (ctx.switch_backend) {
             ctx.switch_backend = false;
+            stream.reset();  // its storage belongs to the old backend
             backend = rt::make_backend(ctx.backends[ctx.backend_index], backend_options(options.backend));
-            backend->set_scene(rs.view());
+            stream =
+                std::make_unique<rt::BrickStream>(rs, *backend, stream_options(options.backend, *backend));
             acc.reset();
         }
         int fw = 0, fh = 0;
@@ -416,6 +419,11 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
         req.params.frame = acc.frames();
         const rt::FrameStats s = display.render(*backend, req, image, fw, fh, sampled ? &acc : nullptr);
         ++shown;
+        // Streaming: the bricks this frame asked for are there for the next one (progressive).
+        const rt::StreamFrame sf = stream->after_frame(s);
+        if (sf.streaming && sf.uploaded > 0)
+            tool::note(options.quiet, "prt-play: frame %u: %s", shown, rt::describe(sf).c_str());
+        if (sf.streaming && sf.fallback_rays > 0) acc.reset();  // the image is still refining
         const bool last = frames > 0 && shown >= frames;
         if (last && !options.screenshot.empty()) {
             write_screenshot(options.screenshot, fw, fh);
@@ -427,13 +435,18 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend, cons
         const double ms = s.seconds * 1e3;
         smoothed_ms = smoothed_ms > 0 ? 0.9 * smoothed_ms + 0.1 * ms : ms;
         const core::RenderParams& p = rs.params();
-        char title[256];
+        char streaming[128] = "";
+        if (sf.streaming)
+            std::snprintf(streaming, sizeof(streaming), " - bricks %u/%u resident, %llu rays coarse",
+                          sf.resident_bricks, sf.brick_count,
+                          static_cast<unsigned long long>(sf.fallback_rays));
+        char title[384];
         std::snprintf(
             title, sizeof(title),
-            "prt-play - %s (%s) - %.2f ms (%.1f fps) - shadows %s, reflections %s, refractions %s%s",
+            "prt-play - %s (%s) - %.2f ms (%.1f fps) - shadows %s, reflections %s, refractions %s%s%s",
             backend->name().c_str(), display.path(), smoothed_ms, 1e3 / std::max(smoothed_ms, 1e-3),
             p.shadows ? "on" : "off", p.reflections ? "on" : "off", p.refractions ? "on" : "off",
-            p.deep_blending ? ", deep blending" : "");
+            p.deep_blending ? ", deep blending" : "", streaming);
         glfwSetWindowTitle(window, title);
         if (last) break;
     }

@@ -7,6 +7,7 @@
 
 #include "player_options.h"
 #include "prt/runtime/backend.h"
+#include "prt/runtime/brick_stream.h"
 #include "prt/runtime/render_scene.h"
 
 namespace prt::player {
@@ -31,6 +32,10 @@ struct WindowOptions {
 /// backend, frames reach the screen through CUDA-OpenGL interop (a pixel buffer the kernels write,
 /// then copied into the texture on the GPU) where the GL context runs on the CUDA device; otherwise
 /// (CPU and hybrid backends, or registration refused) as a texture upload of the rendered image.
-void run_window(rt::RenderScene& scene, std::unique_ptr<rt::Backend>& backend, const WindowOptions& options);
+/// Streamed bricks (`stream`, made for `backend`; remade when B switches backends) refine frame after
+/// frame: each frame uploads the bricks the previous one asked for; the title shows the resident
+/// bricks and the rays that used a coarse level.
+void run_window(rt::RenderScene& scene, std::unique_ptr<rt::Backend>& backend,
+                std::unique_ptr<rt::BrickStream>& stream, const WindowOptions& options);
 
 }  // namespace prt::player

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <vector>
 
+#include "cuda_brick_storage.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
 #include "prt/core/render.h"
@@ -311,6 +312,13 @@ public:
 
     std::string name() const override { return "cuda"; }
     std::string device() const override { return m_device; }
+
+    // Streamed bricks (issue 17, rt::BrickStream): a device arena and tables per bricked model.
+    std::unique_ptr<rt::BrickStorage> make_brick_storage(std::uint32_t model, const core::BrickView&,
+                                                         const rt::BrickArena& arena) override {
+        return make_cuda_brick_storage(m_device_scene, model, arena);
+    }
+    std::uint64_t default_memory_budget() const override { return cuda::default_memory_budget(); }
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
         const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};

@@ -81,18 +81,23 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat));
     f(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds));
     // Bricks (issue 17), in core: every brick uploaded, so the resident table and the request
-    // flags are dropped (null: every brick at data + offset). Streaming replaces both.
+    // flags are dropped (null: every brick at data + offset). Streamed bricks (a host resident
+    // table: rt::BrickStream): only the top tree, table and LOD discs here; brick data, leaf bounds
+    // and the per-brick tables are the brick storage's (cuda_brick_storage.cpp), which sets them.
     core::BrickView& b = mv.bricks;
+    const bool streamed = b.resident != nullptr;
     f(b.top_nodes, std::size_t{b.top_node_count} * 4);
     f(b.table, std::size_t{b.brick_count} * sizeof(pool::BrickEntry));
-    f(b.data, static_cast<std::size_t>(b.data_bytes));
+    f(b.data, streamed ? 0 : static_cast<std::size_t>(b.data_bytes));
     f(b.lod, std::size_t{b.top_node_count} * sizeof(pool::LodSplat));
     // (leaf_bounds' size is read from the host's leaf_bounds_first: that one goes after it)
-    const std::size_t brick_leaves = b.leaf_bounds_first ? b.leaf_bounds_first[b.brick_count] : 0;
+    const std::size_t brick_leaves =
+        b.leaf_bounds_first && !streamed ? b.leaf_bounds_first[b.brick_count] : 0;
     f(b.leaf_bounds, brick_leaves * sizeof(core::LeafBounds));
-    f(b.leaf_bounds_first, b.leaf_bounds_first ? (std::size_t{b.brick_count} + 1) * 4 : 0);
+    f(b.leaf_bounds_first, b.leaf_bounds_first && !streamed ? (std::size_t{b.brick_count} + 1) * 4 : 0);
     f(b.resident, 0);
     f(b.requests, 0);
+    f(b.used, 0);
     core::IsoView& iso = mv.iso;
     f(iso.tree.nodes, std::size_t{iso.tree.node_count} * 4);
     f(iso.leaves_q8, std::size_t{iso.leaf_count} * sizeof(pool::IsoLeafQ8));
@@ -131,6 +136,8 @@ std::string mib(std::uint64_t bytes) {
 struct DeviceScene::Impl {
     core::SceneView view;
     std::vector<DeviceBuffer<unsigned char>> arrays;
+    std::vector<core::ModelView> models;       ///< the device models (device pointers), host copy
+    core::ModelView* device_models = nullptr;  ///< view.models
 };
 
 DeviceScene::DeviceScene() : m(std::make_unique<Impl>()) {}
@@ -138,6 +145,19 @@ DeviceScene::~DeviceScene() = default;
 
 const core::SceneView& DeviceScene::view() const {
     return m->view;
+}
+
+const core::ModelView& DeviceScene::model(std::uint32_t i) const {
+    return m->models.at(i);
+}
+
+void DeviceScene::set_model_bricks(std::uint32_t i, const core::BrickView& bricks) {
+    m->models.at(i).bricks = bricks;
+    PRT_CUDA_CHECK(
+        cudaMemcpy(m->device_models + i, &m->models[i], sizeof(core::ModelView), cudaMemcpyHostToDevice));
+    // From pageable memory the copy may still be in flight when cudaMemcpy returns, and the
+    // renderer's streams do not wait for the default stream: wait here (rare: once per storage).
+    PRT_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
 std::uint64_t DeviceScene::device_bytes(const core::SceneView& host) {
@@ -158,6 +178,8 @@ rt::UploadStats DeviceScene::upload(const core::SceneView& host, cudaStream_t st
     const auto start = std::chrono::steady_clock::now();
     m->arrays.clear();
     m->view = core::SceneView{};
+    m->models.clear();
+    m->device_models = nullptr;
     // Issue 10: a pool larger than the GPU's free memory fails up front, with the figures.
     const std::uint64_t need = device_bytes(host);
     std::size_t free_bytes = 0, total_bytes = 0;
@@ -192,9 +214,11 @@ rt::UploadStats DeviceScene::upload(const core::SceneView& host, cudaStream_t st
     core::SceneView& s = m->view;
     s = host;
     visit_scene_arrays(s, put_as);
-    s.models =
-        static_cast<const core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
+    m->device_models =
+        static_cast<core::ModelView*>(put(models.data(), models.size() * sizeof(core::ModelView)));
+    s.models = m->device_models;
     up.finish();  // `models` (host) must outlive the copies
+    m->models = std::move(models);
     rt::UploadStats stats;
     stats.bytes = up.bytes();
     stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

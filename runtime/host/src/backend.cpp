@@ -1,6 +1,7 @@
 #include "prt/runtime/backend.h"
 
 #include "prt/core/render.h"
+#include "prt/runtime/brick_stream.h"
 
 namespace prt::rt {
 
@@ -15,6 +16,11 @@ FrameStats& FrameStats::operator+=(const FrameStats& o) {
 FrameStats& FrameStats::operator+=(const core::RayCounters& c) {
     core::add_ray_counters(*this, c);
     return *this;
+}
+
+std::unique_ptr<BrickStorage> Backend::make_brick_storage(std::uint32_t, const core::BrickView&,
+                                                          const BrickArena&) {
+    return nullptr;
 }
 
 }  // namespace prt::rt

@@ -100,20 +100,26 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
 }
 
 /// The brick sections (issue 17, prt-bricks) of a pool into the model's brick view, every brick
-/// resident (in core; streaming later changes only the view's resident table). The sections and
-/// every brick's payload are validated (pool::validate_bricks). Bricks carry their splats' colours
-/// and no source point: per-point colors, intensities and material ids do not apply (said once).
-void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::string>& warnings) {
-    const pool::BrickSections s = pool::validate_bricks(pf);
+/// resident (in core; streaming changes only the view's resident table, rt::BrickStream). The
+/// sections and every brick's payload are validated (pool::validate_bricks). With `defer`, only the
+/// index is (pool::validate_brick_index): payloads stay unread and the view has no leaf bounds.
+/// Bricks carry their splats' colours and no source point: per-point colors, intensities and
+/// material ids do not apply (said once).
+void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::string>& warnings, bool defer) {
+    const pool::BrickSections s = defer ? pool::validate_brick_index(pf) : pool::validate_bricks(pf);
     lm.view.bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
                                            reinterpret_cast<const unsigned char*>(s.data.data()),
                                            s.data.size(), s.lod.data());
-    // Leaf bounds over the decoded splats, so rays pass leaves unread as on the float path.
-    lm.leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);
-    lm.view.bricks.leaf_bounds = lm.leaf_bounds.data();  // vectors' buffers survive LoadedModel's moves
-    lm.view.bricks.leaf_bounds_first = lm.brick_leaf_first.data();
-    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.data.size_bytes() + s.lod.size_bytes() +
-               lm.leaf_bounds.size() * sizeof(core::LeafBounds) + lm.brick_leaf_first.size() * 4;
+    lm.bricks_deferred = defer;
+    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes();
+    if (!defer) {
+        // Leaf bounds over the decoded splats, so rays pass leaves unread as on the float path.
+        lm.leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);
+        lm.view.bricks.leaf_bounds = lm.leaf_bounds.data();  // vectors' buffers survive LoadedModel's moves
+        lm.view.bricks.leaf_bounds_first = lm.brick_leaf_first.data();
+        lm.bytes += s.data.size_bytes() + lm.leaf_bounds.size() * sizeof(core::LeafBounds) +
+                    lm.brick_leaf_first.size() * 4;
+    }
     if (pf.has(pool::SectionType::material_ids) || pf.has(pool::SectionType::intensities))
         warnings.push_back("model '" + lm.name +
                            "': tracing bricks, which carry only RGB565 colours: the pool's material ids and "
@@ -292,6 +298,7 @@ void RenderScene::apply_load_options(const LoadOptions& options) {
     }
     m_iso_float = options.iso_float;
     m_bricks = options.bricks;
+    m_defer_bricks = options.defer_bricks;
     m_point_colors_override = options.point_colors;
 }
 
@@ -620,7 +627,7 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             case core::SurfaceKind::splats:
                 // The float octree when the pool has one (unless bricks are asked for), else bricks.
                 if (pool::has_bricks(pf) && (m_bricks || !has_float_splats(pf)))
-                    load_bricks(pf, lm, m_warnings);
+                    load_bricks(pf, lm, m_warnings, m_defer_bricks);
                 else
                     load_splats(pf, lm);
                 break;
@@ -806,6 +813,30 @@ std::uint64_t RenderScene::bytes() const {
     std::uint64_t b = 0;
     for (const LoadedModel& m : m_models) b += m.bytes;
     return b;
+}
+
+bool RenderScene::has_deferred_bricks() const {
+    for (const LoadedModel& m : m_models)
+        if (m.bricks_deferred) return true;
+    return false;
+}
+
+void RenderScene::load_deferred_bricks() {
+    for (std::size_t i = 0; i < m_models.size(); ++i) {
+        LoadedModel& lm = m_models[i];
+        if (!lm.bricks_deferred) continue;
+        std::vector<std::string> warnings;              // said once already, at the deferred load
+        const std::uint64_t index_and_rest = lm.bytes;  // the index, and GI sections if any
+        load_bricks(*lm.pool, lm, warnings, false);
+        lm.bytes = index_and_rest + lm.view.bricks.data_bytes +
+                   lm.leaf_bounds.size() * sizeof(core::LeafBounds) + lm.brick_leaf_first.size() * 4;
+        m_model_views[i].bricks = lm.view.bricks;
+    }
+}
+
+void RenderScene::set_brick_view(std::size_t m, const core::BrickView& bricks) {
+    m_models.at(m).view.bricks = bricks;
+    m_model_views.at(m).bricks = bricks;
 }
 
 }  // namespace prt::rt

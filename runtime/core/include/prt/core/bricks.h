@@ -41,6 +41,9 @@ struct BrickView {
     const unsigned char* const* resident = nullptr;
     /// Per brick, or null: set to 1 when a ray fell back to the brick's LOD disc (streaming requests).
     std::uint32_t* requests = nullptr;
+    /// Per brick, or null: set to 1 when a ray opened the resident brick (streaming: the bricks a
+    /// frame used are not evicted, the others leave least recently used first; rt::BrickStream).
+    std::uint32_t* used = nullptr;
     /// Per filled leaf of every brick, or null: LeafBounds (octree.h) over the decoded splats, so
     /// rays pass leaves unread as on the float path; brick b's at leaf_bounds + leaf_bounds_first[b].
     /// Derived on the host at load (rt::build_brick_leaf_bounds), not in the pool.
@@ -153,28 +156,41 @@ PRT_HD PRT_INLINE bool lod_disc(const BrickView& v, std::uint32_t node, LodSplat
     return true;
 }
 
-/// Counts a fallback to brick b's LOD disc and flags its request (streaming).
-PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkStats& stats) {
-    ++stats.fallbacks;
-    if (v.requests == nullptr) return;
+/// Sets flags[b] to 1 (streaming's request and use flags; many rays set the same flag: it is read
+/// first, so a flag already set costs no write).
+PRT_HD PRT_INLINE void flag_brick(std::uint32_t* flags, std::uint32_t b) {
 #if PRT_DEVICE_CODE
-    v.requests[b] = 1u;
+    if (flags[b] == 0u) flags[b] = 1u;
 #else
-    __atomic_store_n(v.requests + b, 1u, __ATOMIC_RELAXED);
+    if (__atomic_load_n(flags + b, __ATOMIC_RELAXED) == 0u) __atomic_store_n(flags + b, 1u, __ATOMIC_RELAXED);
 #endif
 }
 
-/// Opens resident brick b: its splat source and octree view (with its leaf bounds when the view
-/// has them). False when b is out of range or not resident.
-PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSplats& src, OctreeView& brick) {
-    if (b >= v.brick_count) return false;
-    const unsigned char* payload = brick_payload(v, b);
-    if (payload == nullptr) return false;
+/// Counts a fallback to brick b's LOD disc and flags its request (streaming).
+PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkStats& stats) {
+    ++stats.fallbacks;
+    if (v.requests != nullptr) flag_brick(v.requests, b);
+}
+
+/// The splat source of a resident brick's payload.
+PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
+    BrickSplats src;
     src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
     const pool::BrickHeader& h = src.header;
     src.refs = payload + pool::brick_refs_offset(h.node_count, h.leaf_count);
     src.splats = reinterpret_cast<const pool::CompressedSplat*>(
         payload + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
+    return src;
+}
+
+/// Opens resident brick b alone (host tools: leaf bounds of a brick): its splat source and octree
+/// view (with its leaf bounds when the view has them). False when b is out of range or not
+/// resident. Tracing enters bricks through descend_bricked instead.
+PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSplats& src, OctreeView& brick) {
+    if (b >= v.brick_count) return false;
+    const unsigned char* payload = brick_payload(v, b);
+    if (payload == nullptr) return false;
+    src = brick_splats(payload);
     brick = brick_octree(v.table[b], src.header, payload);
     if (v.leaf_bounds != nullptr) brick.leaf_bounds = v.leaf_bounds + v.leaf_bounds_first[b];
     return true;
@@ -219,6 +235,7 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
             if (b >= v.brick_count) return level = l, k_empty_leaf_node;
             const unsigned char* payload = brick_payload(v, b);
             if (payload == nullptr) break;  // not resident: the brick node is the leaf
+            if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
             cur.level = l;
             cur.brick = b;
             cur.payload = payload;
@@ -246,17 +263,6 @@ PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, Bric
     std::uint32_t level = w.restart;
     const std::uint32_t node = descend_bricked(v, w.p, w.path, level, cur);
     return walk_step_out(w, node, level, leaf);
-}
-
-/// The splat source of a resident brick's payload.
-PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
-    BrickSplats src;
-    src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
-    const pool::BrickHeader& h = src.header;
-    src.refs = payload + pool::brick_refs_offset(h.node_count, h.leaf_count);
-    src.splats = reinterpret_cast<const pool::CompressedSplat*>(
-        payload + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
-    return src;
 }
 
 /// The reference range [begin, end) of filled leaf `node` of the cursor's brick, or, with the

@@ -32,7 +32,9 @@ struct RayCounters {
     std::uint32_t sanitized = 0;  ///< non-finite pixels replaced by black
     std::uint32_t dropped = 0;    ///< secondary rays dropped because the ray stack was full
     std::uint32_t culled = 0;     ///< filled leaves passed by their LeafBounds (splat.h)
-    std::uint32_t fallbacks = 0;  ///< non-resident bricks met, their LOD disc used (bricks.h)
+    /// Rays that met a non-resident brick and used its LOD disc (bricks.h; counted once per ray and
+    /// bricked model, however many bricks it fell back on)
+    std::uint32_t fallbacks = 0;
 };
 
 /// Adds the ray counters of b to a: RayCounters, or any type with the same fields (the host's
@@ -67,7 +69,7 @@ PRT_HD PRT_INLINE void add_work(RayCounters& c, std::uint32_t leaves, std::uint3
 }
 PRT_HD PRT_INLINE void add_stats(RayCounters& c, const WalkStats& w) {
     add_work(c, w.leaves, w.splat_tests, w.truncated, w.culled);
-    c.fallbacks += w.fallbacks;
+    c.fallbacks += w.fallbacks != 0 ? 1u : 0u;  // rays, not brick visits
 }
 PRT_HD PRT_INLINE void add_stats(RayCounters& c, const IsoStats& st) {
     add_work(c, st.leaves, st.evaluations, st.truncated, 0);

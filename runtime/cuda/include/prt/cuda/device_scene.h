@@ -26,6 +26,11 @@ public:
     rt::UploadStats upload(const core::SceneView& host, cudaStream_t stream);
     /// The scene with device pointers (valid until the next upload or destruction).
     const core::SceneView& view() const;
+    /// Model i as on the device (device pointers).
+    const core::ModelView& model(std::uint32_t i) const;
+    /// Replaces model i's brick view on the device (streamed bricks: the brick storage's arena,
+    /// resident table, leaf bounds and flags; device pointers). Synchronous.
+    void set_model_bricks(std::uint32_t i, const core::BrickView& bricks);
     /// Bytes the arrays of `host` take on the device.
     static std::uint64_t device_bytes(const core::SceneView& host);
 

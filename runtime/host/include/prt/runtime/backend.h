@@ -12,9 +12,13 @@
 
 namespace prt::core {
 struct RayCounters;
+struct BrickView;
 }  // namespace prt::core
 
 namespace prt::rt {
+
+class BrickStorage;
+struct BrickArena;
 
 /// Counters and timings of one rendered frame.
 struct FrameStats {
@@ -25,7 +29,7 @@ struct FrameStats {
     std::uint64_t leaves = 0, splat_tests = 0;
     std::uint64_t truncated = 0, sanitized = 0, dropped = 0;
     std::uint64_t culled = 0;     ///< filled leaves passed unread by their bounds (core LeafBounds)
-    std::uint64_t fallbacks = 0;  ///< non-resident bricks met, their LOD disc used (core bricks.h)
+    std::uint64_t fallbacks = 0;  ///< rays that fell back to a brick's LOD disc (core bricks.h, render.h)
     double gpu_share = 0;         ///< hybrid: fraction of rows the GPU rendered
 
     std::uint64_t rays() const { return primary + secondary + shadow; }
@@ -68,6 +72,16 @@ public:
     virtual UploadStats set_scene(const core::SceneView& scene) = 0;
     /// Renders the requested rows into `image` (already sized width x height).
     virtual FrameStats render(const FrameRequest& request, Image& image) = 0;
+    /// Streamed bricks (brick_stream.h): after set_scene(), this backend's storage for model m's
+    /// bricks (`host`: the model's host brick view). Null (the default): the backend reads the host
+    /// views in place, so host storage serves (CPU).
+    virtual std::unique_ptr<BrickStorage> make_brick_storage(std::uint32_t model, const core::BrickView& host,
+                                                             const BrickArena& arena);
+    /// The memory budget --gpu-budget defaults to: the device's free memory minus a margin; 0
+    /// (the default): unlimited, the scene is read in place from the mapped pools (CPU).
+    virtual std::uint64_t default_memory_budget() const { return 0; }
+    /// Whether bricks can be streamed on this backend (hybrid: no, it loads in core).
+    virtual bool can_stream() const { return true; }
 };
 
 /// Which backends this build has and this machine can run.
@@ -84,7 +98,8 @@ struct BackendOptions {
     unsigned cpu_threads = 0;          ///< 0: all hardware threads
     bool cuda_wavefront = false;       ///< several kernels per frame (thesis 2.4) instead of one
     bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
-    int cuda_min_blocks = 0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
+    int cuda_min_blocks =
+        0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
     bool cuda_max_l1 = true;  ///< prefer L1 over shared memory for the megakernel
 };
 

@@ -26,4 +26,10 @@ std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
                                                       std::vector<std::uint32_t>& first,
                                                       unsigned threads = 0);
 
+/// The same for one brick alone (streaming: computed when the brick is uploaded, from its payload
+/// only): entry.leaf_count bounds, splat ranges relative to the brick; equal to that brick's part of
+/// build_brick_leaf_bounds. `payload` must be a validated payload of this entry.
+std::vector<core::LeafBounds> build_one_brick_leaf_bounds(const pool::BrickEntry& entry,
+                                                          const unsigned char* payload);
+
 }  // namespace prt::rt

@@ -36,6 +36,10 @@ struct LoadedModel {
     std::vector<core::LeafBounds> leaf_bounds;
     /// Bricked pools: brick b's first leaf in leaf_bounds (core::BrickView::leaf_bounds_first).
     std::vector<std::uint32_t> brick_leaf_first;
+    /// Bricked pools loaded with LoadOptions::defer_bricks: only the index is validated (top tree,
+    /// table, LOD), the payloads are not read and view.bricks has no leaf bounds yet (streaming,
+    /// rt::BrickStream; or RenderScene::load_deferred_bricks for the in-core path).
+    bool bricks_deferred = false;
     /// Per point: the colors the view shades with when they are not the pool's own (SCENE.md
     /// point_colors: intensities as grey levels, or a mix by material); empty otherwise.
     std::vector<pool::Rgba8> shading_colors;
@@ -53,6 +57,9 @@ struct LoadOptions {
     /// Splats: trace the bricks (prt-bricks) of a pool that also kept its float octree
     /// (--keep-float); a pool with bricks only always traces them.
     bool bricks = false;
+    /// Bricked models: validate only the brick index (pool::validate_brick_index) and leave the
+    /// payloads unread, for rt::BrickStream to stream them or load them all (in core).
+    bool defer_bricks = false;
     /// Replaces every material's point_colors (SCENE.md; prt-play --point-colors) when set.
     std::optional<scene::PointColors> point_colors;
 };
@@ -98,8 +105,18 @@ public:
     DVec3 world_min() const { return m_world_min; }
     DVec3 world_max() const { return m_world_max; }
     const std::vector<LoadedModel>& models() const { return m_models; }
-    /// Bytes of all sections the renderer reads (what a GPU upload moves).
+    /// Bytes of all sections the renderer reads (what a GPU upload moves; deferred bricks: their
+    /// index only).
     std::uint64_t bytes() const;
+    /// Whether a model's bricks were deferred (LoadOptions::defer_bricks) and are not loaded yet.
+    bool has_deferred_bricks() const;
+    /// Loads every deferred brick as a load without defer_bricks does (each brick checked by its
+    /// checksum, leaf bounds over all bricks): the in-core path. Throws prt::Error naming the pool
+    /// and the brick when one is corrupted.
+    void load_deferred_bricks();
+    /// Replaces model m's brick view (streaming: resident table, use and request flags, leaf bounds
+    /// per slot) in the views view() returns; the arrays must outlive their use.
+    void set_brick_view(std::size_t m, const core::BrickView& bricks);
     /// Lights after area-light expansion (SCENE.md: samples x samples point lights each).
     const std::vector<core::PointLight>& lights() const { return m_lights; }
     /// Rebuilds the render-frame lights from scene().point_lights/area_lights (after editing them).
@@ -160,6 +177,7 @@ private:
     std::optional<scene::SurfaceKind> m_surface_override;  ///< LoadOptions::surface naming a kind
     bool m_iso_float = false;
     bool m_bricks = false;
+    bool m_defer_bricks = false;
     core::RenderParams m_params;
     DVec3 m_origin{0, 0, 0};
     DVec3 m_world_min{0, 0, 0}, m_world_max{0, 0, 0};

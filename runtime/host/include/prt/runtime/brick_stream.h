@@ -1,0 +1,149 @@
+// PointRT runtime (host): streaming a bricked pool's bricks (issue 17; formats/POOL.md "Bricks and
+// level of detail") under a memory budget, the same policy for every backend.
+//
+// Always resident: the top tree, the brick table, the LOD discs and four per-brick tables (the
+// resident table, each brick's first leaf bound, the use and request flags). The rest of the budget
+// is an arena of 64-byte granules; a resident brick takes one block of it: its payload (copied as
+// opaque bytes: table[b].offset, table[b].size) and its leaf bounds (computed at upload from that
+// brick alone). Rays that reach a brick that is not resident use its LOD disc and flag it (core
+// bricks.h note_fallback); rays that open a resident one flag it used. After each frame: the flags
+// are read, the requested bricks are checked by their own checksum (pool::validate_brick) and
+// uploaded, at most StreamOptions::upload_per_frame bytes per frame, each into the first free block
+// that fits (first fit, free blocks merged), evicting bricks the frame did not use, least recently
+// used first, until one fits; then the resident table is updated for the next frame. When the whole
+// scene fits the budget, every brick is loaded as without streaming (in core).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "prt/core/bricks.h"
+#include "prt/runtime/backend.h"
+#include "prt/runtime/render_scene.h"
+
+namespace prt::rt {
+
+/// "4096", "512K", "300M", "1.5G", "2T" (also "300MB", "300MiB"): bytes, suffixes binary (1024).
+/// Throws prt::Error naming `option` when the text is not a size.
+std::uint64_t parse_byte_size(const std::string& text, const std::string& option);
+/// A byte count for people: "812 B", "12.3 KiB", "1.50 GiB".
+std::string format_bytes(std::uint64_t bytes);
+
+/// The shape of one model's brick arena.
+struct BrickArena {
+    std::uint32_t brick_count = 0;
+    std::uint64_t bytes = 0;  ///< the arena (payloads and their leaf bounds), a multiple of 64
+    /// Bytes the arena and the per-brick tables take.
+    std::uint64_t total_bytes() const;
+};
+
+/// Where a backend keeps one bricked model's streamed bricks; BrickStream drives it between frames.
+/// Offsets are bytes from the arena's start (multiples of 64); leaf bounds are addressed as
+/// core::LeafBounds indices from the arena's start (BrickView::leaf_bounds = the arena).
+class BrickStorage {
+public:
+    static constexpr std::uint64_t k_not_resident = ~std::uint64_t{0};
+    virtual ~BrickStorage() = default;
+    /// Copies a validated payload to `offset` and its leaf bounds to `bounds_offset`; visible to
+    /// frames after commit().
+    virtual void upload(std::uint64_t offset, std::span<const unsigned char> payload,
+                        std::uint64_t bounds_offset, std::span<const core::LeafBounds> bounds) = 0;
+    /// Brick b's payload is now at `offset` (k_not_resident: not resident) and its first leaf bound
+    /// at index `first_bound`; applied at commit().
+    virtual void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) = 0;
+    /// Makes the uploads and resident changes visible to the next frame (waits for the copies).
+    virtual void commit() = 0;
+    /// After a frame: sets used[b] / requested[b] (brick_count entries each) to the frame's use and
+    /// request flags, and clears the flags for the next frame.
+    virtual void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) = 0;
+    /// After the backend's set_scene() ran again (BrickStream::set_scene): points the backend's
+    /// copy of the model at this storage again. Host storage: nothing to do.
+    virtual void reattach() {}
+};
+
+/// Host storage (the CPU backend reads the scene's views in place): the arena in
+/// host memory; sets model m's brick view in `scene` to its tables.
+std::unique_ptr<BrickStorage> make_host_brick_storage(RenderScene& scene, std::size_t model,
+                                                      const BrickArena& arena);
+
+/// Streaming settings.
+struct StreamOptions {
+    /// Bytes the scene may take on the device (CPU: in host memory); 0: unlimited (in core).
+    std::uint64_t budget = 0;
+    /// Payload bytes uploaded at most per frame (at least one brick is), so frames stay short.
+    std::uint64_t upload_per_frame = 256ull << 20;
+};
+
+/// What streaming did after one frame.
+struct StreamFrame {
+    bool streaming = false;            ///< false: in core (everything resident)
+    std::uint64_t resident_bytes = 0;  ///< always-resident part + resident payloads and their bounds
+    std::uint32_t resident_bricks = 0, brick_count = 0;
+    std::uint32_t needed = 0;    ///< bricks the frame's rays reached (resident or not)
+    std::uint32_t uploaded = 0;  ///< bricks uploaded after the frame
+    std::uint64_t uploaded_bytes = 0;
+    double upload_seconds = 0;   ///< checksums, leaf bounds and copies
+    double prepare_seconds = 0;  ///< of which checksums and leaf bounds (host threads)
+    double copy_seconds = 0;     ///< of which copies into the storage (and its commit)
+    std::uint32_t evicted = 0;
+    std::uint32_t missing = 0;        ///< bricks requested and still not resident after the uploads
+    std::uint64_t fallback_rays = 0;  ///< the frame's rays that used a LOD disc (FrameStats::fallbacks)
+    /// The frame used no LOD disc: its image equals the in-core render.
+    bool converged() const { return fallback_rays == 0; }
+    /// Requests remain and no room could be freed: the arena holds only bricks the frame used (the
+    /// budget holds fewer bricks than the view needs).
+    bool stalled = false;
+    double gb_per_s() const { return upload_seconds > 0 ? uploaded_bytes / upload_seconds * 1e-9 : 0.0; }
+};
+
+/// The per-frame line: "resident 1.2 MiB (12 of 300 bricks), uploaded 4 bricks (40 KiB, 0.8 GB/s:
+/// checks 0.1 ms, copies 0.0 ms), evicted 2, 130 rays fell back".
+std::string describe(const StreamFrame& f);
+
+class BrickStream {
+public:
+    /// Makes `scene` (loaded with LoadOptions::defer_bricks) current on `backend`: in core when the
+    /// whole scene fits options.budget (or the budget is 0, or the scene has no deferred bricks:
+    /// every brick checked and loaded as RenderScene::load does), else with the always-resident
+    /// part and an empty arena (BrickStorage from backend.make_brick_storage, else host storage).
+    /// Throws prt::Error when the budget cannot hold the always-resident part and the largest brick
+    /// of each bricked model (the line says the minimum), or a brick is corrupted (in core).
+    BrickStream(RenderScene& scene, Backend& backend, const StreamOptions& options);
+    ~BrickStream();
+    BrickStream(const BrickStream&) = delete;
+    BrickStream& operator=(const BrickStream&) = delete;
+
+    /// Makes `view` (the scene's view(), e.g. with other materials) current on the backend again,
+    /// keeping the resident bricks. Returns the backend's set_scene() statistics.
+    UploadStats set_scene(const core::SceneView& view);
+    /// The set_scene() statistics.
+    const UploadStats& upload_stats() const { return m_upload; }
+    bool streaming() const { return !m_models.empty(); }
+    /// The bytes the scene takes in core, and the least budget streaming needs.
+    std::uint64_t in_core_bytes() const { return m_in_core_bytes; }
+    std::uint64_t minimum_bytes() const { return m_minimum_bytes; }
+    /// The always-resident bytes (top trees, tables, LOD discs, per-brick tables, other models).
+    std::uint64_t fixed_bytes() const { return m_fixed_bytes; }
+    /// Arena bytes over all bricked models, and bricks.
+    std::uint64_t arena_bytes() const;
+    std::uint32_t brick_count() const;
+    /// After a frame rendered with `stats`: reads the flags, uploads requested bricks (evicting
+    /// least recently used ones the frame did not use) for the next frame. Throws prt::Error
+    /// "POOL: section brick_data: brick I: ..." when a brick to upload is corrupted.
+    StreamFrame after_frame(const FrameStats& stats);
+
+private:
+    struct Model;
+    RenderScene& m_scene;
+    Backend& m_backend;
+    StreamOptions m_options;
+    UploadStats m_upload;
+    std::uint64_t m_in_core_bytes = 0, m_minimum_bytes = 0, m_fixed_bytes = 0;
+    std::uint64_t m_frame = 0;
+    std::vector<std::unique_ptr<Model>> m_models;
+};
+
+}  // namespace prt::rt

@@ -1,0 +1,426 @@
+// PointRT runtime (host): streaming bricks under a memory budget (prt/runtime/brick_stream.h).
+#include "prt/runtime/brick_stream.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <new>
+#include <optional>
+
+#include "prt/error.h"
+#include "prt/formats/brick_sections.h"
+#include "prt/parallel.h"
+#include "prt/runtime/leaf_bounds.h"
+
+namespace prt::rt {
+
+std::uint64_t parse_byte_size(const std::string& text, const std::string& option) {
+    const auto bad = [&]() -> Error {
+        return Error(option + ": '" + text +
+                     "' is not a size (bytes, or a number with K, M, G or T: 512M, 1.5G)");
+    };
+    std::size_t end = 0;
+    double value = 0;
+    try {
+        value = std::stod(text, &end);
+    } catch (const std::exception&) {
+        throw bad();
+    }
+    std::string unit = text.substr(end);
+    for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    if (unit.size() >= 2 && unit.substr(unit.size() - 2) == "IB")
+        unit.resize(unit.size() - 2);
+    else if (!unit.empty() && unit.back() == 'B')
+        unit.pop_back();
+    double scale = 1;
+    if (unit == "K")
+        scale = 1024.0;
+    else if (unit == "M")
+        scale = 1024.0 * 1024;
+    else if (unit == "G")
+        scale = 1024.0 * 1024 * 1024;
+    else if (unit == "T")
+        scale = 1024.0 * 1024 * 1024 * 1024;
+    else if (!unit.empty())
+        throw bad();
+    const double bytes = value * scale;
+    if (!std::isfinite(bytes) || bytes < 0 || bytes > 1.8e19) throw bad();
+    return static_cast<std::uint64_t>(std::llround(bytes));
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+    char buf[64];
+    const double b = static_cast<double>(bytes);
+    if (bytes < 1024)
+        std::snprintf(buf, sizeof(buf), "%llu B", static_cast<unsigned long long>(bytes));
+    else if (b < 1024.0 * 1024)
+        std::snprintf(buf, sizeof(buf), "%.1f KiB", b / 1024);
+    else if (b < 1024.0 * 1024 * 1024)
+        std::snprintf(buf, sizeof(buf), "%.1f MiB", b / (1024.0 * 1024));
+    else
+        std::snprintf(buf, sizeof(buf), "%.2f GiB", b / (1024.0 * 1024 * 1024));
+    return buf;
+}
+
+namespace {
+
+/// Per-brick tables always resident: the resident table (a pointer), the first leaf bound, the
+/// use and request flags.
+constexpr std::uint64_t k_table_bytes_per_brick = sizeof(void*) + 3 * sizeof(std::uint32_t);
+
+std::uint64_t round_up_64(std::uint64_t n) {
+    return (n + 63) / 64 * 64;
+}
+
+/// Host storage: one 64-byte aligned arena in host memory.
+class HostBrickStorage final : public BrickStorage {
+public:
+    HostBrickStorage(RenderScene& scene, std::size_t model, const BrickArena& a) {
+        m_arena.reset(static_cast<unsigned char*>(::operator new (
+            static_cast<std::size_t>(std::max<std::uint64_t>(a.bytes, 64)), std::align_val_t{64})));
+        m_resident.assign(a.brick_count, nullptr);
+        m_first.assign(std::size_t{a.brick_count} + 1, 0);
+        m_used.assign(a.brick_count, 0);
+        m_requested.assign(a.brick_count, 0);
+        core::BrickView v = scene.models().at(model).view.bricks;
+        v.resident = m_resident.data();
+        v.leaf_bounds = reinterpret_cast<const core::LeafBounds*>(m_arena.get());
+        v.leaf_bounds_first = m_first.data();
+        v.used = m_used.data();
+        v.requests = m_requested.data();
+        scene.set_brick_view(model, v);
+    }
+
+    void upload(std::uint64_t offset, std::span<const unsigned char> payload, std::uint64_t bounds_offset,
+                std::span<const core::LeafBounds> bounds) override {
+        std::memcpy(m_arena.get() + offset, payload.data(), payload.size());
+        std::memcpy(m_arena.get() + bounds_offset, bounds.data(), bounds.size_bytes());
+    }
+    void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) override {
+        m_resident[brick] = offset == k_not_resident ? nullptr : m_arena.get() + offset;
+        m_first[brick] = offset == k_not_resident ? 0 : first_bound;
+    }
+    void commit() override {}
+    void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) override {
+        used = m_used;
+        requested = m_requested;
+        std::fill(m_used.begin(), m_used.end(), 0u);
+        std::fill(m_requested.begin(), m_requested.end(), 0u);
+    }
+
+private:
+    struct AlignedDelete {
+        void operator()(unsigned char* p) const { ::operator delete (p, std::align_val_t{64}); }
+    };
+    std::unique_ptr<unsigned char, AlignedDelete> m_arena;
+    std::vector<const unsigned char*> m_resident;
+    std::vector<std::uint32_t> m_first, m_used, m_requested;
+};
+
+/// First-fit allocation of 64-byte multiples in [0, size), free blocks merged with their neighbours.
+class ArenaAllocator {
+public:
+    explicit ArenaAllocator(std::uint64_t size) : m_free_bytes(size) {
+        if (size > 0) m_free.emplace(0, size);
+    }
+    /// Free bytes in all (in blocks of any size).
+    std::uint64_t free_bytes() const { return m_free_bytes; }
+    /// The offset of a free block of `bytes`, or nullopt.
+    std::optional<std::uint64_t> allocate(std::uint64_t bytes) {
+        for (auto it = m_free.begin(); it != m_free.end(); ++it) {
+            if (it->second < bytes) continue;
+            const std::uint64_t at = it->first, left = it->second - bytes;
+            m_free.erase(it);
+            m_free_bytes -= bytes;
+            if (left > 0) m_free.emplace(at + bytes, left);
+            return at;
+        }
+        return std::nullopt;
+    }
+    void release(std::uint64_t at, std::uint64_t bytes) {
+        m_free_bytes += bytes;
+        auto next = m_free.lower_bound(at);
+        if (next != m_free.end() && next->first == at + bytes) {
+            bytes += next->second;
+            next = m_free.erase(next);
+        }
+        if (next != m_free.begin()) {
+            auto prev = std::prev(next);
+            if (prev->first + prev->second == at) {
+                prev->second += bytes;
+                return;
+            }
+        }
+        m_free.emplace(at, bytes);
+    }
+
+private:
+    std::map<std::uint64_t, std::uint64_t> m_free;  ///< offset -> bytes
+    std::uint64_t m_free_bytes = 0;
+};
+
+/// The block a brick takes: its payload, then its leaf bounds, each rounded up to 64 bytes.
+std::uint64_t block_bytes(const pool::BrickEntry& e) {
+    return round_up_64(e.size) + round_up_64(std::uint64_t{e.leaf_count} * sizeof(core::LeafBounds));
+}
+
+}  // namespace
+
+std::uint64_t BrickArena::total_bytes() const {
+    return bytes + std::uint64_t{brick_count} * k_table_bytes_per_brick;
+}
+
+std::unique_ptr<BrickStorage> make_host_brick_storage(RenderScene& scene, std::size_t model,
+                                                      const BrickArena& arena) {
+    return std::make_unique<HostBrickStorage>(scene, model, arena);
+}
+
+std::string describe(const StreamFrame& f) {
+    char buf[512];
+    std::snprintf(buf, sizeof(buf),
+                  "resident %s (%u of %u bricks), uploaded %u bricks (%s, %.2f GB/s: checks %.1f ms, copies "
+                  "%.1f ms), evicted %u, %llu rays fell back",
+                  format_bytes(f.resident_bytes).c_str(), f.resident_bricks, f.brick_count, f.uploaded,
+                  format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
+                  f.copy_seconds * 1e3, f.evicted, static_cast<unsigned long long>(f.fallback_rays));
+    return buf;
+}
+
+struct BrickStream::Model {
+    std::size_t index = 0;
+    const pool::PoolFile* pool = nullptr;
+    pool::BrickSections sections;
+    BrickArena arena;
+    std::uint64_t data_bytes = 0;
+    std::uint64_t largest_block = 0;
+    std::vector<const unsigned char*> placeholder;  ///< resident table before the storage exists
+    std::unique_ptr<BrickStorage> storage;
+    std::unique_ptr<ArenaAllocator> allocator;
+    std::vector<std::uint64_t> block_of;   ///< per brick: its block's offset or k_not_resident
+    std::vector<std::uint64_t> last_used;  ///< per brick: the last frame that used it (0: none)
+    std::vector<std::uint32_t> used, requested;
+    std::uint32_t resident = 0;
+    std::uint64_t resident_bytes = 0;  ///< the resident bricks' blocks
+
+    void evict(std::uint32_t b) {
+        const std::uint64_t bytes = block_bytes(sections.table[b]);
+        allocator->release(block_of[b], bytes);
+        storage->set_resident(b, BrickStorage::k_not_resident, 0);
+        block_of[b] = BrickStorage::k_not_resident;
+        resident_bytes -= bytes;
+        --resident;
+    }
+};
+
+BrickStream::~BrickStream() = default;
+
+BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptions& options)
+    : m_scene(scene), m_backend(backend), m_options(options) {
+    m_fixed_bytes = scene.bytes();
+    m_in_core_bytes = scene.bytes();
+    std::vector<std::unique_ptr<Model>> models;
+    std::uint64_t block_minimum = 0;
+    for (std::size_t i = 0; i < scene.models().size(); ++i) {
+        const LoadedModel& lm = scene.models()[i];
+        if (!lm.bricks_deferred) continue;
+        auto m = std::make_unique<Model>();
+        m->index = i;
+        m->pool = lm.pool.get();
+        m->sections = pool::validate_brick_index(*lm.pool);  // as at the load: the index only
+        const std::uint32_t bricks = m->sections.info.brick_count;
+        m->arena.brick_count = bricks;
+        std::uint64_t leaves = 0;
+        for (const pool::BrickEntry& e : m->sections.table) {
+            m->largest_block = std::max(m->largest_block, block_bytes(e));
+            leaves += e.leaf_count;
+        }
+        m->data_bytes = m->sections.data.size();
+        m_in_core_bytes +=
+            m->data_bytes + leaves * sizeof(core::LeafBounds) + (std::uint64_t{bricks} + 1) * 4;
+        m_fixed_bytes += std::uint64_t{bricks} * k_table_bytes_per_brick;
+        block_minimum += m->largest_block;
+        models.push_back(std::move(m));
+    }
+    m_minimum_bytes = m_fixed_bytes + block_minimum;
+    const bool in_core =
+        models.empty() || options.budget == 0 || m_in_core_bytes <= options.budget || !backend.can_stream();
+    if (in_core) {
+        scene.load_deferred_bricks();
+        m_upload = backend.set_scene(scene.view());
+        return;
+    }
+    if (options.budget < m_minimum_bytes)
+        throw Error("memory budget " + format_bytes(options.budget) +
+                    " is too small: the bricked scene needs at least " + format_bytes(m_minimum_bytes) +
+                    " (top tree, brick table, LOD discs, per-brick tables and other models " +
+                    format_bytes(m_fixed_bytes) + ", plus the largest brick of each bricked model; " +
+                    format_bytes(m_in_core_bytes) + " holds it all in core)");
+    // The arenas: the budget left after the always-resident part, shared in proportion to the
+    // models' brick data, each at least its largest brick.
+    const std::uint64_t spare = options.budget - m_minimum_bytes;
+    std::uint64_t data_total = 0;
+    for (const auto& m : models) data_total += m->data_bytes;
+    for (auto& m : models) {
+        const double share = data_total > 0 ? static_cast<double>(m->data_bytes) / data_total : 1.0;
+        const std::uint64_t extra = static_cast<std::uint64_t>(share * static_cast<double>(spare)) / 64 * 64;
+        m->arena.bytes = m->largest_block + extra;
+        m->allocator = std::make_unique<ArenaAllocator>(m->arena.bytes);
+        m->block_of.assign(m->arena.brick_count, BrickStorage::k_not_resident);
+        m->last_used.assign(m->arena.brick_count, 0);
+        // Until the storage exists: no brick resident, no leaf bounds (so a backend uploading the
+        // scene knows these bricks are streamed, and leaves brick_data where it is).
+        m->placeholder.assign(m->arena.brick_count, nullptr);
+        core::BrickView v = scene.models()[m->index].view.bricks;
+        v.resident = m->placeholder.data();
+        v.leaf_bounds = nullptr;
+        v.leaf_bounds_first = nullptr;
+        scene.set_brick_view(m->index, v);
+    }
+    m_upload = backend.set_scene(scene.view());
+    for (auto& m : models) {
+        const auto idx = static_cast<std::uint32_t>(m->index);
+        m->storage = backend.make_brick_storage(idx, scene.models()[m->index].view.bricks, m->arena);
+        if (!m->storage) m->storage = make_host_brick_storage(scene, m->index, m->arena);
+    }
+    m_models = std::move(models);
+}
+
+UploadStats BrickStream::set_scene(const core::SceneView& view) {
+    const UploadStats up = m_backend.set_scene(view);
+    for (auto& m : m_models) m->storage->reattach();
+    return up;
+}
+
+std::uint64_t BrickStream::arena_bytes() const {
+    std::uint64_t n = 0;
+    for (const auto& m : m_models) n += m->arena.bytes;
+    return n;
+}
+
+std::uint32_t BrickStream::brick_count() const {
+    std::uint32_t n = 0;
+    for (const auto& m : m_models) n += m->arena.brick_count;
+    return n;
+}
+
+StreamFrame BrickStream::after_frame(const FrameStats& stats) {
+    StreamFrame f;
+    f.fallback_rays = stats.fallbacks;
+    if (m_models.empty()) {
+        f.resident_bytes = m_scene.bytes();
+        for (const LoadedModel& lm : m_scene.models()) f.brick_count += lm.view.bricks.brick_count;
+        f.resident_bricks = f.brick_count;
+        return f;
+    }
+    f.streaming = true;
+    ++m_frame;
+    const auto start = std::chrono::steady_clock::now();
+    std::uint64_t allowance = m_options.upload_per_frame;
+    struct Upload {
+        Model* model;
+        std::uint32_t brick;
+        std::uint64_t offset;
+        std::vector<core::LeafBounds> bounds;
+    };
+    std::vector<Upload> uploads;
+    for (auto& mp : m_models) {
+        Model& m = *mp;
+        m.storage->take_flags(m.used, m.requested);
+        std::vector<std::uint32_t> missing;
+        for (std::uint32_t b = 0; b < m.arena.brick_count; ++b) {
+            if (m.used[b] != 0) {
+                m.last_used[b] = m_frame;
+                ++f.needed;
+            }
+            if (m.requested[b] != 0 && m.block_of[b] == BrickStorage::k_not_resident) {
+                missing.push_back(b);
+                ++f.needed;
+            }
+        }
+        // Eviction candidates: the resident bricks this frame did not use, least recently used first.
+        std::vector<std::uint32_t> victims;
+        for (std::uint32_t b = 0; b < m.arena.brick_count; ++b)
+            if (m.block_of[b] != BrickStorage::k_not_resident && m.last_used[b] < m_frame)
+                victims.push_back(b);
+        std::sort(victims.begin(), victims.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return m.last_used[a] != m.last_used[b] ? m.last_used[a] < m.last_used[b] : a < b;
+        });
+        std::uint64_t victim_bytes = 0;  // what evicting every candidate left would free
+        for (const std::uint32_t v : victims) victim_bytes += block_bytes(m.sections.table[v]);
+        std::size_t next_victim = 0, taken = 0;
+        for (const std::uint32_t b : missing) {
+            const std::uint64_t size = m.sections.table[b].size;
+            if (!uploads.empty() && size > allowance) break;  // the rest wait for the next frames
+            const std::uint64_t bytes = block_bytes(m.sections.table[b]);
+            std::optional<std::uint64_t> at = m.allocator->allocate(bytes);
+            // Evict only when it can make room (fragmentation aside): never for nothing.
+            if (!at && m.allocator->free_bytes() + victim_bytes < bytes) {
+                f.stalled = true;
+                break;
+            }
+            while (!at && next_victim < victims.size()) {
+                victim_bytes -= block_bytes(m.sections.table[victims[next_victim]]);
+                m.evict(victims[next_victim++]);
+                ++f.evicted;
+                at = m.allocator->allocate(bytes);
+            }
+            if (!at) {
+                f.stalled = true;  // the arena holds only bricks this frame used
+                break;
+            }
+            m.block_of[b] = *at;  // taken now, so a later request of this frame cannot evict it
+            m.last_used[b] = m_frame;
+            allowance -= std::min(allowance, size);
+            uploads.push_back(Upload{&m, b, *at, {}});
+            ++taken;
+        }
+        f.missing += static_cast<std::uint32_t>(missing.size() - taken);
+    }
+    // Each brick checked by its own checksum and its leaf bounds computed from it alone (in
+    // parallel), then copied into its block.
+    const auto prepare_start = std::chrono::steady_clock::now();
+    parallel_chunks(uploads.size(), 1, resolve_threads(0), [&](std::size_t i0, std::size_t i1, unsigned) {
+        for (std::size_t i = i0; i < i1; ++i) {
+            Upload& u = uploads[i];
+            const Model& m = *u.model;
+            const pool::BrickEntry& e = m.sections.table[u.brick];
+            pool::validate_brick(*m.pool, m.sections.info, e, u.brick, m.sections.payload(u.brick));
+            u.bounds = build_one_brick_leaf_bounds(
+                e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
+        }
+    });
+    const auto copy_start = std::chrono::steady_clock::now();
+    for (Upload& u : uploads) {
+        Model& m = *u.model;
+        const pool::BrickEntry& e = m.sections.table[u.brick];
+        const auto payload = m.sections.payload(u.brick);
+        const std::uint64_t bounds_offset = u.offset + round_up_64(e.size);
+        m.storage->upload(u.offset, {reinterpret_cast<const unsigned char*>(payload.data()), payload.size()},
+                          bounds_offset, u.bounds);
+        m.storage->set_resident(u.brick, u.offset,
+                                static_cast<std::uint32_t>(bounds_offset / sizeof(core::LeafBounds)));
+        m.resident_bytes += block_bytes(e);
+        ++m.resident;
+        ++f.uploaded;
+        f.uploaded_bytes += e.size;
+    }
+    for (auto& m : m_models) m->storage->commit();
+    if (!uploads.empty()) {
+        const auto end = std::chrono::steady_clock::now();
+        f.upload_seconds = std::chrono::duration<double>(end - start).count();
+        f.prepare_seconds = std::chrono::duration<double>(copy_start - prepare_start).count();
+        f.copy_seconds = std::chrono::duration<double>(end - copy_start).count();
+    }
+    f.resident_bytes = m_fixed_bytes;
+    for (const auto& m : m_models) {
+        f.resident_bytes += m->resident_bytes;
+        f.resident_bricks += m->resident;
+        f.brick_count += m->arena.brick_count;
+    }
+    return f;
+}
+
+}  // namespace prt::rt

@@ -1,0 +1,150 @@
+// Test fixture for streamed bricks (brick_stream_test.cpp on the CPU, brick_stream_gpu_test.cpp on
+// CUDA): a bricked pool of a sphere built in memory (bricks_test_data.h), close views of it, the
+// budget's terms redone from the brick table, corrupted copies, rendering until converged.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "bricks_test_data.h"
+#include "prt/formats/brick_sections.h"
+#include "prt/runtime/backend.h"
+#include "prt/runtime/brick_stream.h"
+#include "prt/runtime/render_scene.h"
+
+namespace prt::test {
+
+constexpr std::uint32_t k_size = 64;
+
+/// A bricked pool (bricks only, at most 2000 splats a brick) of a 40k-point sphere of radius 2 about
+/// (10, -3, 0), written once for all tests.
+class BrickStreamFixture : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        s_dir = std::filesystem::temp_directory_path() / ("prt_brick_stream_" + std::to_string(::getpid()));
+        std::filesystem::create_directories(s_dir);
+        const pool::PoolFile octree = pool::PoolFile::from_bytes(octree_pool_bytes(40000, 16), "octree");
+        s_bytes = bricked_bytes(octree, 2000, nullptr, false);
+        s_pool = write("sphere.pool", s_bytes);
+    }
+    static void TearDownTestSuite() { std::filesystem::remove_all(s_dir); }
+
+    static std::filesystem::path write(const char* name, const std::vector<std::byte>& bytes) {
+        std::ofstream out(s_dir / name, std::ios::binary);
+        out.write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+        return s_dir / name;
+    }
+
+    /// A close view of the sphere from direction `angle` (radians about +y): a few of its bricks.
+    static void close_view(rt::RenderScene& rs, double angle) {
+        scene::Camera& c = rs.scene().camera;
+        const double cx = 10.0, cy = -3.0, cz = 0.0;
+        c.position = {cx + 3.2 * std::sin(angle), cy + 0.4, cz + 3.2 * std::cos(angle)};
+        c.look_at = {cx + 2.0 * std::sin(angle), cy, cz + 2.0 * std::cos(angle)};
+        c.up = {0, 1, 0};
+        c.fov_y_degrees = 30;
+        c.width = c.height = k_size;
+    }
+
+    static rt::FrameRequest request(const rt::RenderScene& rs) {
+        return rt::FrameRequest{
+            .camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size};
+    }
+
+    /// The in-core image at `angle` (RenderScene loads and checks every brick, as without streaming).
+    static rt::Image in_core(double angle, rt::FrameStats* stats = nullptr, const std::string& kind = "cpu") {
+        rt::RenderScene rs = rt::RenderScene::from_pool(s_pool);
+        close_view(rs, angle);
+        auto backend = rt::make_backend(kind);
+        backend->set_scene(rs.view());
+        rt::Image img;
+        const rt::FrameStats s = backend->render(request(rs), img);
+        if (stats) *stats = s;
+        return img;
+    }
+
+    static rt::RenderScene deferred() {
+        rt::LoadOptions lo;
+        lo.defer_bricks = true;
+        return rt::RenderScene::from_pool(s_pool, lo);
+    }
+
+    /// The budget's terms, redone from the brick table: the always-resident bytes (top tree,
+    /// table, LOD discs, four per-brick tables), the largest brick's block and all blocks (a block:
+    /// the payload and its leaf bounds, each rounded up to 64 bytes).
+    struct Terms {
+        std::uint64_t fixed = 0, largest = 0, all = 0;
+        std::uint32_t bricks = 0;
+    };
+    static Terms budget_terms() {
+        const pool::PoolFile pf = pool::PoolFile::from_bytes(s_bytes, "sphere");
+        const pool::BrickSections s = pool::validate_bricks(pf);
+        Terms t;
+        for (const pool::BrickEntry& e : s.table) {
+            const std::uint64_t block =
+                (e.size + 63) / 64 * 64 + (e.leaf_count * sizeof(core::LeafBounds) + 63) / 64 * 64;
+            t.largest = std::max(t.largest, block);
+            t.all += block;
+        }
+        t.bricks = s.info.brick_count;
+        t.fixed = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes() +
+                  std::uint64_t{t.bricks} * (sizeof(void*) + 12);
+        return t;
+    }
+
+    /// The pool's bytes with the last byte of every brick payload flipped (the index untouched).
+    static std::vector<std::byte> corrupt_every_brick(const pool::PoolFile& pf,
+                                                      const pool::BrickSections& s) {
+        std::vector<std::byte> bytes(pf.file_bytes().begin(), pf.file_bytes().end());
+        for (std::uint32_t b = 0; b < s.info.brick_count; ++b) {
+            const auto payload = s.payload(b);
+            const std::size_t at = static_cast<std::size_t>(payload.data() - pf.file_bytes().data());
+            bytes.at(at + payload.size() - 1) ^= std::byte{0x5a};
+        }
+        return bytes;
+    }
+
+    static inline std::filesystem::path s_dir, s_pool;
+    static inline std::vector<std::byte> s_bytes;
+};
+
+/// Renders passes at the scene's camera until one has no fallback (at most `max_passes`).
+struct Converged {
+    rt::Image image;
+    std::uint32_t passes = 0;
+    std::uint64_t first_fallbacks = 0;
+    std::uint32_t evicted = 0, uploaded = 0;
+    bool converged = false;
+    rt::StreamFrame last;
+};
+inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickStream& stream,
+                          std::uint32_t max_passes = 400) {
+    Converged c;
+    for (; c.passes < max_passes;) {
+        const rt::FrameStats s = backend.render(
+            rt::FrameRequest{.camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size},
+            c.image);
+        const rt::StreamFrame f = stream.after_frame(s);
+        EXPECT_LE(s.fallbacks, s.rays()) << "fallbacks count rays";
+        if (c.passes++ == 0) c.first_fallbacks = s.fallbacks;
+        c.evicted += f.evicted;
+        c.uploaded += f.uploaded;
+        c.last = f;
+        EXPECT_LE(f.resident_bytes, stream.fixed_bytes() + stream.arena_bytes());
+        if (f.converged()) {
+            c.converged = true;
+            break;
+        }
+        if (f.uploaded == 0) break;
+    }
+    return c;
+}
+
+}  // namespace prt::test

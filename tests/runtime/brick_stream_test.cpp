@@ -1,0 +1,296 @@
+// Streaming bricks under a memory budget (issue 17, prt/runtime/brick_stream.h) on the CPU backend:
+// a budget of a few bricks converges, frame after frame, to the in-core image byte for byte (also
+// with a moving camera that forces evictions); a budget below the always-resident part is refused in
+// one line with the minimum; a corrupted brick is refused when uploaded, naming the pool and brick;
+// sizes parse with K/M/G suffixes; fallbacks count rays, not brick visits. The references are the
+// in-core renders (every brick loaded and checked, RenderScene without defer_bricks) and, for the
+// arena and the minimum, the budget arithmetic redone from the brick table.
+#include "prt/runtime/brick_stream.h"
+
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "brick_stream_fixture.h"
+#include "prt/core/render.h"
+#include "prt/cpu/cpu_backend.h"
+#include "prt/error.h"
+#include "prt/runtime/image.h"
+#include "tool_run.h"
+
+namespace prt::test {
+namespace {
+
+using BrickStreamTest = BrickStreamFixture;
+
+TEST_F(BrickStreamTest, ParsesSizes) {
+    EXPECT_EQ(rt::parse_byte_size("4096", "--gpu-budget"), 4096u);
+    EXPECT_EQ(rt::parse_byte_size("512K", "--gpu-budget"), 512u * 1024);
+    EXPECT_EQ(rt::parse_byte_size("300M", "--gpu-budget"), 300ull << 20);
+    EXPECT_EQ(rt::parse_byte_size("1.5G", "--gpu-budget"), 3ull << 29);
+    EXPECT_EQ(rt::parse_byte_size("2gib", "--gpu-budget"), 2ull << 30);
+    EXPECT_EQ(rt::parse_byte_size("8MB", "--gpu-budget"), 8ull << 20);
+    for (const char* bad : {"", "G", "12Q", "-1M", "1e400", "nan"})
+        EXPECT_THROW(rt::parse_byte_size(bad, "--gpu-budget"), Error) << bad;
+}
+
+/// A budget that holds everything: in core, the same image as without streaming.
+TEST_F(BrickStreamTest, AnAmpleBudgetLoadsInCore) {
+    const rt::Image ref = in_core(0.3);
+    rt::RenderScene rs = deferred();
+    close_view(rs, 0.3);
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = 1ull << 30});
+    EXPECT_FALSE(stream.streaming());
+    rt::Image img;
+    const rt::FrameStats s = backend->render(request(rs), img);
+    EXPECT_EQ(s.fallbacks, 0u);
+    EXPECT_TRUE(stream.after_frame(s).converged());
+    EXPECT_EQ(img.rgba8, ref.rgba8);
+}
+
+/// A budget of a few bricks (far fewer than the pool's) converges to the in-core image.
+TEST_F(BrickStreamTest, ConvergesToTheInCoreImage) {
+    rt::FrameStats ref_stats;
+    const rt::Image ref = in_core(0.3, &ref_stats);
+    const Terms t = budget_terms();
+    ASSERT_GT(t.bricks, 100u) << "the test wants many bricks";
+    rt::RenderScene rs = deferred();
+    close_view(rs, 0.3);
+    const std::uint64_t arena = t.all * 2 / 5 / 64 * 64;  // 40 % of the bricks' bytes
+    auto backend = cpu::make_cpu_backend(2);
+    // At most one brick a frame, so refinement takes several frames.
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + arena, .upload_per_frame = 1});
+    ASSERT_TRUE(stream.streaming());
+    EXPECT_EQ(stream.arena_bytes(), arena);
+    EXPECT_EQ(stream.brick_count(), t.bricks);
+    EXPECT_EQ(stream.minimum_bytes(), t.fixed + t.largest);
+    EXPECT_EQ(stream.fixed_bytes(), t.fixed);
+    const Converged c = converge(rs, *backend, stream);
+    ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
+                             << c.last.needed;
+    EXPECT_GT(c.passes, 2u) << "one brick a frame: refinement takes frames";
+    EXPECT_GT(c.first_fallbacks, 0u) << "nothing resident at first: rays use LOD discs";
+    EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the in-core image, byte for byte";
+    std::printf("  converged in %u passes, %u uploads\n", c.passes, c.uploaded);
+}
+
+/// A moving camera under a budget smaller than the union of its views: bricks are evicted, and
+/// every view still converges to its in-core image.
+TEST_F(BrickStreamTest, AMovingCameraEvictsAndStillConverges) {
+    const Terms t = budget_terms();
+    rt::RenderScene rs = deferred();
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
+    ASSERT_TRUE(stream.streaming());
+    std::uint32_t evicted = 0;
+    for (int view = 0; view < 4; ++view) {
+        const double angle = 0.3 + 1.6 * view;  // four sides of the sphere: few bricks shared
+        close_view(rs, angle);
+        const Converged c = converge(rs, *backend, stream);
+        ASSERT_TRUE(c.converged) << "view " << view << ": " << rt::describe(c.last) << ", needed "
+                                 << c.last.needed;
+        EXPECT_EQ(c.image.rgba8, in_core(angle).rgba8) << "view " << view;
+        evicted += c.evicted;
+    }
+    EXPECT_GT(evicted, 0u) << "40 % of the bricks cannot hold four sides' bricks";
+}
+
+/// A budget that cannot hold the view's bricks: rendering stops refining (nothing can be evicted),
+/// and the arena never holds more than its bytes.
+TEST_F(BrickStreamTest, ABudgetSmallerThanTheViewStalls) {
+    const Terms t = budget_terms();
+    rt::RenderScene rs = deferred();  // the default view frames the whole sphere: many bricks
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + 2 * t.largest});
+    ASSERT_TRUE(stream.streaming());
+    rt::Image img;
+    rt::StreamFrame f;
+    for (int i = 0; i < 4; ++i) f = stream.after_frame(backend->render(request(rs), img));
+    EXPECT_FALSE(f.converged());
+    EXPECT_TRUE(f.stalled);
+    EXPECT_EQ(f.uploaded, 0u);
+    EXPECT_GE(f.resident_bricks, 2u) << "two blocks of the largest brick hold at least two bricks";
+    EXPECT_GT(f.needed, f.resident_bricks);
+}
+
+/// Below the always-resident part and the largest brick: one line with the minimum.
+TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
+    const Terms t = budget_terms();
+    for (const std::uint64_t budget : {std::uint64_t{1}, t.fixed + t.largest - 1}) {
+        rt::RenderScene rs = deferred();
+        auto backend = cpu::make_cpu_backend(2);
+        try {
+            rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = budget});
+            ADD_FAILURE() << "budget " << budget << " accepted";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+            EXPECT_NE(what.find("too small"), std::string::npos) << what;
+            EXPECT_NE(what.find(rt::format_bytes(t.fixed + t.largest)), std::string::npos) << what;
+        }
+    }
+}
+
+/// A brick whose payload is corrupted: the pool opens (its index is sound), and the brick is
+/// refused when it is uploaded, naming the pool and the brick; in core, at load.
+TEST_F(BrickStreamTest, ACorruptedBrickIsRefusedAtUpload) {
+    const pool::PoolFile pf = pool::PoolFile::from_bytes(s_bytes, "sphere");
+    const pool::BrickSections s = pool::validate_bricks(pf);
+    // Every brick of the close view is a candidate: corrupt each payload's last splat byte.
+    const std::vector<std::byte> bytes = corrupt_every_brick(pf, s);
+    const std::filesystem::path bad = write("corrupt.pool", bytes);
+    rt::LoadOptions lo;
+    lo.defer_bricks = true;
+    rt::RenderScene rs = rt::RenderScene::from_pool(bad, lo);
+    close_view(rs, 0.3);
+    auto backend = cpu::make_cpu_backend(2);
+    const Terms t = budget_terms();
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 2});
+    rt::Image img;
+    try {
+        stream.after_frame(backend->render(request(rs), img));
+        ADD_FAILURE() << "a corrupted brick was uploaded";
+    } catch (const Error& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("corrupt.pool"), std::string::npos) << what;
+        EXPECT_NE(what.find("brick "), std::string::npos) << what;
+        EXPECT_NE(what.find("checksum"), std::string::npos) << what;
+    }
+    rt::RenderScene all = rt::RenderScene::from_pool(bad, lo);
+    EXPECT_THROW(rt::BrickStream(all, *backend, rt::StreamOptions{}), Error) << "in core: refused at load";
+}
+
+/// prt-play: --gpu-budget and --converge write the in-core image; a too-small budget and a corrupted
+/// brick fail in one line, exit 1, nothing written.
+TEST_F(BrickStreamTest, PrtPlayStreamsAndConverges) {
+    const std::string view = " --eye 12.0,-2.6,2.6 --look-at 11.0,-3,1.7 --fov 30 --width 48 --height 48";
+    const auto in_core_img = s_dir / "in_core.ppm", streamed = s_dir / "streamed.ppm";
+    ToolRun r = run_tool(
+        "prt-play", s_pool.string() + view + " --backend cpu --quiet --out " + in_core_img.string(), s_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    r = run_tool("prt-play",
+                 s_pool.string() + view +
+                     " --backend cpu --gpu-budget 1200K --converge --upload-per-frame 1 --out " +
+                     streamed.string(),
+                 s_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("streaming "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("rays fell back"), std::string::npos) << r.err;
+    EXPECT_TRUE(slurp(streamed) == slurp(in_core_img)) << r.err;
+
+    const auto none = s_dir / "none.ppm";
+    r = run_tool("prt-play", s_pool.string() + view + " --backend cpu --gpu-budget 1K --out " + none.string(),
+                 s_dir);
+    EXPECT_EQ(r.code, 1);
+    expect_one_line(r.err, {"too small", "at least"});
+    EXPECT_FALSE(std::filesystem::exists(none));
+
+    const pool::PoolFile pf = pool::PoolFile::from_bytes(s_bytes, "sphere");
+    const std::vector<std::byte> bytes = corrupt_every_brick(pf, pool::validate_bricks(pf));
+    const auto bad = write("bad.pool", bytes);
+    r = run_tool(
+        "prt-play",
+        bad.string() + view + " --backend cpu --gpu-budget 1200K --converge --quiet --out " + none.string(),
+        s_dir);
+    EXPECT_EQ(r.code, 1);
+    expect_one_line(r.err, {"bad.pool", "brick ", "checksum"});
+    EXPECT_FALSE(std::filesystem::exists(none));
+}
+
+/// prt-bench under a budget: it refines before timing, reports the streaming numbers (JSON), and
+/// the timed frames use no coarse level.
+TEST_F(BrickStreamTest, PrtBenchReportsStreaming) {
+    const auto json = s_dir / "bench.json";
+    const ToolRun r =
+        run_tool("prt-bench",
+                 s_pool.string() +
+                     " --backend cpu --gpu-budget 1200K --frames 2 --warmup 1 --scenarios primary "
+                     "--width 48 --height 48 --eye 12.0,-2.6,2.6 --look-at 11.0,-3,1.7 --fov 30 "
+                     "--json " +
+                     json.string(),
+                 s_dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("streaming"), std::string::npos) << r.out;
+    const nlohmann::json j = nlohmann::json::parse(slurp(json));
+    EXPECT_TRUE(j["streaming"]["streamed"].get<bool>());
+    EXPECT_EQ(j["streaming"]["budget_bytes"].get<std::uint64_t>(), 1200u * 1024);
+    const nlohmann::json& sc = j["scenarios"][0];
+    EXPECT_TRUE(sc["streaming"]["converged"].get<bool>()) << sc.dump();
+    EXPECT_GT(sc["streaming"]["bricks_uploaded"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(sc["brick_fallbacks"].get<std::uint64_t>(), 0u) << "timed after converging";
+}
+
+/// FrameStats::fallbacks counts rays, not brick visits: with nothing resident and primary rays only,
+/// it equals the primary rays whose walk fell back at least once, counted here ray by ray with the
+/// core's walk (which also counts the visits: more than the rays).
+TEST_F(BrickStreamTest, FallbacksCountRaysNotBrickVisits) {
+    const Terms t = budget_terms();
+    rt::RenderScene rs = deferred();
+    rs.params().shadows = 0;
+    rs.params().reflections = 0;
+    rs.params().refractions = 0;
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 4});
+    ASSERT_TRUE(stream.streaming());
+    rt::Image img;
+    const rt::FrameStats fs = backend->render(request(rs), img);
+    ASSERT_EQ(fs.shadow + fs.secondary, 0u);
+    const core::SceneView view = rs.view();
+    core::BrickView bricks = view.models[0].bricks;  // nothing resident yet; no flags touched here
+    bricks.requests = nullptr;
+    bricks.used = nullptr;
+    const core::PinholeCamera cam = rs.camera();
+    const core::BlendOptions blend{rs.params().blend_window, rs.params().deep_blending != 0};
+    std::uint64_t rays = 0, visits = 0;
+    for (std::uint32_t y = 0; y < k_size; ++y)
+        for (std::uint32_t x = 0; x < k_size; ++x) {
+            const core::Ray r = core::primary_ray(cam, x, y, k_size, k_size);
+            core::Vec3 o, d;
+            core::to_model_frame(view.models[0], r, o, d);
+            core::WalkStats st;
+            core::SplatSample h{};
+            core::closest_hit_bricks(bricks, o, d, false, r.t_max, blend, rs.params().max_steps, h, st,
+                                     rs.params().leaf_culling);
+            rays += st.fallbacks > 0;
+            visits += st.fallbacks;
+        }
+    EXPECT_GT(rays, 0u);
+    EXPECT_EQ(fs.fallbacks, rays);
+    EXPECT_GT(visits, rays) << "some rays pass several bricks' discs: visits would count more";
+}
+
+/// The window refines frame after frame: under xvfb-run, after 20 frames under a budget the
+/// displayed image is the in-core render (within the window test's tolerance: the texture path).
+TEST_F(BrickStreamTest, TheWindowRefinesToTheInCoreImage) {
+#ifndef PRT_TEST_HAVE_WINDOW
+    GTEST_SKIP() << "this build has no player window (configured without GLFW)";
+#endif
+    if (!on_path("xvfb-run"))
+        GTEST_SKIP() << "xvfb-run is not installed (Debian: apt-get install xvfb xauth): window test skipped";
+    const std::string view =
+        " --backend cpu --eye 12.0,-2.6,2.6 --look-at 11.0,-3,1.7 --fov 30 --width 48 --height 48";
+    const auto shot = s_dir / "shot.ppm", ref = s_dir / "ref.ppm";
+    const ToolRun win =
+        run_tool("prt-play",
+                 s_pool.string() + view + " --gpu-budget 1200K --upload-per-frame 64K --frames 20 " +
+                     "--screenshot " + shot.string(),
+                 s_dir, "xvfb-run -a -s '-screen 0 640x480x24'");
+    ASSERT_EQ(win.code, 0) << win.err;
+    EXPECT_NE(win.err.find("uploaded"), std::string::npos) << win.err;
+    const ToolRun head = run_tool("prt-play", s_pool.string() + view + " --out " + ref.string(), s_dir);
+    ASSERT_EQ(head.code, 0) << head.err;
+    const rt::Image a = rt::read_ppm(shot), b = rt::read_ppm(ref);
+    ASSERT_EQ(a.width, b.width);
+    ASSERT_EQ(a.height, b.height);
+    std::size_t off = 0;
+    for (std::size_t i = 0; i < a.rgba8.size(); ++i)
+        for (int c = 0; c < 3; ++c)
+            off += std::abs(int((a.rgba8[i] >> (8 * c)) & 255u) - int((b.rgba8[i] >> (8 * c)) & 255u)) > 2;
+    EXPECT_LE(off, a.rgba8.size() * 3 / 100) << "channels more than 2 levels apart: " << win.err;
+}
+
+}  // namespace
+}  // namespace prt::test
