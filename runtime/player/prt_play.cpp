@@ -176,13 +176,14 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         // render), or until nothing more can be uploaded.
         rt::FrameStats s;
         for (std::uint32_t pass = 0;; ++pass) {
+            const double t0 = tool::now_seconds();
             s = backend->render(req, image);
             ++passes;
             const rt::StreamFrame sf = stream->after_frame(s);
             if (sf.streaming)
-                tool::note(common.quiet, "prt-play: frame %u%s: %s", f,
+                tool::note(common.quiet, "prt-play: frame %u%s: %.2f ms (render %.2f ms, then streaming): %s", f,
                            o.converge ? (" pass " + std::to_string(pass)).c_str() : "",
-                           rt::describe(sf).c_str());
+                           1e3 * (tool::now_seconds() - t0), 1e3 * s.seconds, rt::describe(sf).c_str());
             last_fallbacks = s.fallbacks;
             if (!o.converge || !sf.streaming || sf.converged()) break;
             if (sf.uploaded == 0) {
