@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -95,8 +96,8 @@ private:
     std::string m_label;
     const std::byte* m_data = nullptr;
     std::uint64_t m_size = 0;
-    MappedFile m_file;                 // the file when mapped
-    std::vector<std::byte> m_owned;    // storage when built from bytes
+    MappedFile m_file;               // the file when mapped
+    std::vector<std::byte> m_owned;  // storage when built from bytes
     OpenOptions m_options;
 };
 
@@ -116,6 +117,13 @@ public:
                    {reinterpret_cast<const std::byte*>(holder->data()), holder->size() * sizeof(T)},
                    std::shared_ptr<const void>(holder, holder.get()));
     }
+    /// Adds (or replaces) a section as a view of `payload` (no copy), kept valid by `keep_alive`
+    /// until the writer is destroyed: a big section in a memory-mapped spill file stays out of RAM
+    /// (write() streams it to the file).
+    void add_view(SectionType type, std::uint32_t element_size, std::uint64_t count,
+                  std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive) {
+        add_shared(type, element_size, count, payload, std::move(keep_alive));
+    }
     /// Carries every section of `source` over as a view (no copy), except provenance, which is
     /// merged by add_provenance().
     void carry_over(const PoolFile& source);
@@ -130,6 +138,7 @@ public:
     /// Writes to "PATH.tmp.HOST.PID", fsyncs, renames over PATH; after the rename, removes this
     /// host's temporary files of PATH left by writers that no longer run (POOL.md "Writing"). On
     /// any failure the temporary file is removed and PATH is untouched. Returns the bytes written.
+    /// The sections are streamed to the file (the pool is never assembled in memory).
     std::uint64_t write(const std::filesystem::path& path) const;
     /// The exact bytes write() would produce (for tests and the fuzz corpus).
     std::vector<std::byte> serialize() const;
@@ -144,6 +153,8 @@ private:
     };
     void add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
                     std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive);
+    /// Lays the file out and hands its bytes, front to back, to `sink`; returns the file size.
+    std::uint64_t emit(const std::function<void(const std::byte*, std::size_t)>& sink) const;
     std::vector<Pending> m_sections;
     std::string m_provenance = "[]";
 };
