@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kd_tree.h"
+#include "morton.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
 #include "prt/tool.h"
@@ -26,6 +27,14 @@ struct Record {
 static_assert(sizeof(Record) == 16);
 
 constexpr double k_inf = std::numeric_limits<double>::infinity();
+
+/// A run of a tile's records (Morton order within the tile) and their bounding box: halos and
+/// scans read only the blocks that meet their box.
+struct Block {
+    std::uint64_t begin, end;
+    float lo[3], hi[3];
+};
+constexpr std::size_t k_block = 1024;
 
 float coord(const pool::Float3& p, int a) {
     return a == 0 ? p.x : a == 1 ? p.y : p.z;
@@ -214,11 +223,83 @@ private:
         });
         m_records.drop();
         if (m_params.positions_mapped) drop_pages(m_pos.data(), m_pos.size_bytes());
+        // Within each tile: Morton order (10 bits per axis over the tile's bounding box), then
+        // blocks of k_block records with their boxes.
+        m_block_begin.assign(tiles + 1, 0);
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> keys;
+        std::vector<Record> sorted;
+        for (std::size_t t = 0; t < tiles; ++t) {
+            Record* r = out + m_begin[t];
+            const std::size_t m = m_begin[t + 1] - m_begin[t];
+            float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
+                           std::numeric_limits<float>::max()};
+            float hi[3] = {-lo[0], -lo[1], -lo[2]};
+            for (std::size_t i = 0; i < m; ++i)
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min(lo[a], (&r[i].x)[a]);
+                    hi[a] = std::max(hi[a], (&r[i].x)[a]);
+                }
+            keys.resize(m);
+            for (std::size_t i = 0; i < m; ++i) {
+                std::uint32_t c[3];
+                for (int a = 0; a < 3; ++a) {
+                    const double e = double(hi[a]) - double(lo[a]);
+                    const double f = e > 0 ? (double((&r[i].x)[a]) - lo[a]) / e : 0.0;
+                    c[a] = static_cast<std::uint32_t>(std::clamp(f * 1024.0, 0.0, 1023.0));
+                }
+                keys[i] = {static_cast<std::uint32_t>(spread_bits21(c[0]) | spread_bits21(c[1]) << 1 |
+                                                      spread_bits21(c[2]) << 2),
+                           static_cast<std::uint32_t>(i)};
+            }
+            std::sort(keys.begin(), keys.end());
+            sorted.resize(m);
+            for (std::size_t i = 0; i < m; ++i) sorted[i] = r[keys[i].second];
+            std::copy(sorted.begin(), sorted.end(), r);
+            for (std::size_t b = 0; b < m; b += k_block) {
+                Block block{m_begin[t] + b, m_begin[t] + std::min(m, b + k_block), {}, {}};
+                for (int a = 0; a < 3; ++a) block.lo[a] = block.hi[a] = (&r[b].x)[a];
+                for (std::size_t i = b; i < std::min(m, b + k_block); ++i)
+                    for (int a = 0; a < 3; ++a) {
+                        block.lo[a] = std::min(block.lo[a], (&r[i].x)[a]);
+                        block.hi[a] = std::max(block.hi[a], (&r[i].x)[a]);
+                    }
+                m_blocks.push_back(block);
+            }
+            m_block_begin[t + 1] = m_blocks.size();
+            drop_pages(r, m * sizeof(Record));
+        }
+        keys = {};
+        sorted = {};
+    }
+
+    /// Calls f(record) for every record of the blocks meeting [lo, hi] (tiles whose region meets it).
+    template <class F>
+    bool for_records_in(const double lo[3], const double hi[3], F&& f) const {
+        const Record* all = reinterpret_cast<const Record*>(m_records.data());
+        for (std::size_t j = 0; j < m_part.tiles(); ++j) {
+            bool meets = true;
+            for (int a = 0; a < 3; ++a)
+                if (m_part.lo[j][a] > hi[a] || m_part.hi[j][a] < lo[a]) meets = false;
+            if (!meets) continue;
+            for (std::size_t bi = m_block_begin[j]; bi < m_block_begin[j + 1]; ++bi) {
+                const Block& b = m_blocks[bi];
+                if (b.lo[0] > hi[0] || b.hi[0] < lo[0] || b.lo[1] > hi[1] || b.hi[1] < lo[1] ||
+                    b.lo[2] > hi[2] || b.hi[2] < lo[2])
+                    continue;
+                for (std::uint64_t i = b.begin; i < b.end; ++i)
+                    if (!f(all[i])) return false;
+            }
+        }
+        return true;
     }
 
     std::span<const Record> tile_records(std::size_t t) const {
         const Record* r = reinterpret_cast<const Record*>(m_records.data());
         return {r + m_begin[t], static_cast<std::size_t>(m_begin[t + 1] - m_begin[t])};
+    }
+
+    void sample_memory() {
+        m_stats.peak_anon_rss = std::max(m_stats.peak_anon_rss, current_anon_rss_bytes());
     }
 
     void report(std::uint64_t done) {
@@ -228,9 +309,11 @@ private:
 
     /// One tile: round 1 over its own points, then the halo groups.
     void tile(std::size_t t) {
-        const std::span<const Record> recs = tile_records(t);
+        std::vector<Record> recs(tile_records(t).begin(), tile_records(t).end());
         const std::size_t m = recs.size();
         if (m == 0) return;
+        std::sort(recs.begin(), recs.end(),
+                  [](const Record& p, const Record& q) { return p.index < q.index; });
         const std::uint32_t k = m_k;
         std::vector<pool::Float3> pts(m);
         std::vector<std::uint32_t> global(m);
@@ -272,6 +355,7 @@ private:
             }
             nb.resize(w * k);
             dd.resize(w * k);
+            sample_memory();
             m_visit(KnnBatch{pts, global, queries, nb, dd});
             report(queries.size());
         } else {
@@ -281,22 +365,66 @@ private:
         m_stats.halo_queries += failing.size();
         std::sort(failing.begin(), failing.end());
 
-        // Round 2: groups of failing points by their bound, smallest first, within the memory.
-        std::vector<std::pair<std::size_t, std::size_t>> stack{{0, failing.size()}};
-        while (!stack.empty()) {
-            const auto [a, b] = stack.back();
-            stack.pop_back();
-            const double u = failing[b - 1].first;
-            if (std::isfinite(u) && group(pts, global, failing, a, b, halo_of(u))) continue;
-            if (b - a > 1 && std::isfinite(failing[a].first)) {
-                const std::size_t mid = a + (b - a) / 2;
-                stack.push_back({mid, b});
-                stack.push_back({a, mid});
+        // Round 2: the failing points by increasing bound u. Each step takes the longest run
+        // [start, c) whose box (the run's bounding box grown by the halo of u[c - 1]) holds at most
+        // the group cap by the block count (an upper bound, no record read), searches it as one
+        // group, and goes on with the rest; when not even one more point fits, the rest are scanned.
+        const std::uint64_t cap = std::min<std::uint64_t>(m_max_gathered, m + m / 2 + 4096);
+        std::size_t start = 0;
+        while (start < failing.size()) {
+            double lo[3] = {k_inf, k_inf, k_inf}, hi[3] = {-k_inf, -k_inf, -k_inf};
+            for (std::size_t i = start; i < failing.size(); ++i)
+                for (int c = 0; c < 3; ++c) {
+                    lo[c] = std::min(lo[c], double(coord(pts[failing[i].second], c)));
+                    hi[c] = std::max(hi[c], double(coord(pts[failing[i].second], c)));
+                }
+            auto fits = [&](std::size_t end) {
+                const double u = failing[end - 1].first;
+                return std::isfinite(u) && count_upper(lo, hi, halo_of(u), cap) <= cap;
+            };
+            std::size_t good = start, bad = failing.size() + 1;  // fits(good) (or good == start)
+            if (fits(failing.size())) {
+                good = failing.size();
+            } else {
+                bad = failing.size();
+                while (bad - good > 1) {
+                    const std::size_t mid = good + (bad - good) / 2;
+                    if (fits(mid))
+                        good = mid;
+                    else
+                        bad = mid;
+                }
+            }
+            if (good > start && group(pts, global, failing, start, good, halo_of(failing[good - 1].first))) {
+                start = good;
                 continue;
             }
-            for (std::size_t i = a; i < b; ++i)
-                scan(pts[failing[i].second], global[failing[i].second], failing[i].first);
+            // Not even the next point fits with the others' box: the rest (bounds at least as
+            // large) are scanned one by one, each within its own halo.
+            for (; start < failing.size(); ++start)
+                scan(pts[failing[start].second], global[failing[start].second], failing[start].first);
         }
+    }
+
+    /// The points in the blocks meeting [lo - h, hi + h], counted up to just above `cap`.
+    std::uint64_t count_upper(const double lo[3], const double hi[3], double h, std::uint64_t cap) const {
+        double glo[3], ghi[3];
+        for (int a = 0; a < 3; ++a) glo[a] = lo[a] - h, ghi[a] = hi[a] + h;
+        std::uint64_t count = 0;
+        for (std::size_t j = 0; j < m_part.tiles() && count <= cap; ++j) {
+            bool meets = true;
+            for (int a = 0; a < 3; ++a)
+                if (m_part.lo[j][a] > ghi[a] || m_part.hi[j][a] < glo[a]) meets = false;
+            if (!meets) continue;
+            for (std::size_t bi = m_block_begin[j]; bi < m_block_begin[j + 1] && count <= cap; ++bi) {
+                const Block& b = m_blocks[bi];
+                if (b.lo[0] > ghi[0] || b.hi[0] < glo[0] || b.lo[1] > ghi[1] || b.hi[1] < glo[1] ||
+                    b.lo[2] > ghi[2] || b.hi[2] < glo[2])
+                    continue;
+                count += b.end - b.begin;
+            }
+        }
+        return count;
     }
 
     /// Gathers the points inside [lo - h, hi + h] (by increasing index) unless more than `cap`.
@@ -305,20 +433,16 @@ private:
         out.clear();
         double glo[3], ghi[3];
         for (int a = 0; a < 3; ++a) glo[a] = lo[a] - h, ghi[a] = hi[a] + h;
-        for (std::size_t j = 0; j < m_part.tiles(); ++j) {
-            bool meets = true;
-            for (int a = 0; a < 3; ++a)
-                if (m_part.lo[j][a] > ghi[a] || m_part.hi[j][a] < glo[a]) meets = false;
-            if (!meets) continue;
-            for (const Record& r : tile_records(j)) {
-                const double v[3] = {r.x, r.y, r.z};
-                if (v[0] < glo[0] || v[0] > ghi[0] || v[1] < glo[1] || v[1] > ghi[1] || v[2] < glo[2] ||
-                    v[2] > ghi[2])
-                    continue;
-                if (out.size() >= cap) return false;
-                out.push_back(r);
-            }
-        }
+        const bool fits = for_records_in(glo, ghi, [&](const Record& r) {
+            const double v[3] = {r.x, r.y, r.z};
+            if (v[0] < glo[0] || v[0] > ghi[0] || v[1] < glo[1] || v[1] > ghi[1] || v[2] < glo[2] ||
+                v[2] > ghi[2])
+                return true;
+            if (out.size() >= cap) return false;
+            out.push_back(r);
+            return true;
+        });
+        if (!fits) return false;
         std::sort(out.begin(), out.end(), [](const Record& p, const Record& q) { return p.index < q.index; });
         return true;
     }
@@ -328,6 +452,9 @@ private:
     bool group(const std::vector<pool::Float3>& pts, const std::vector<std::uint32_t>& global,
                const std::vector<std::pair<double, std::uint32_t>>& failing, std::size_t a, std::size_t b,
                double h) {
+        const std::uint64_t cap =
+            b - a <= 64 ? m_max_gathered
+                        : std::min<std::uint64_t>(m_max_gathered, pts.size() + pts.size() / 2 + 4096);
         double lo[3] = {k_inf, k_inf, k_inf}, hi[3] = {-k_inf, -k_inf, -k_inf};
         for (std::size_t i = a; i < b; ++i)
             for (int c = 0; c < 3; ++c) {
@@ -335,7 +462,7 @@ private:
                 hi[c] = std::max(hi[c], double(coord(pts[failing[i].second], c)));
             }
         std::vector<Record> set;
-        if (!gather(lo, hi, h, m_max_gathered, set)) return false;
+        if (!gather(lo, hi, h, cap, set)) return false;
         const std::uint32_t k = m_k;
         const std::size_t g = set.size();
         m_stats.max_gathered = std::max<std::uint64_t>(m_stats.max_gathered, g);
@@ -362,6 +489,7 @@ private:
                     short_found = true;
         });
         if (short_found) throw Error("internal: tiled k-NN found fewer than k neighbours in a halo");
+        sample_memory();
         m_visit(KnnBatch{gp, gi, queries, nb, dd});
         report(queries.size());
         return true;
@@ -376,17 +504,13 @@ private:
         Best best{k, 0, index.data(), distance2.data()};
         const double h = std::isfinite(u) ? halo_of(u) : k_inf;
         const float q[3] = {p.x, p.y, p.z};
-        for (std::size_t j = 0; j < m_part.tiles(); ++j) {
-            bool meets = true;
-            for (int a = 0; a < 3; ++a)
-                if (m_part.lo[j][a] > q[a] + h || m_part.hi[j][a] < q[a] - h) meets = false;
-            if (!meets) continue;
-            for (const Record& r : tile_records(j)) {
-                const float dx = r.x - q[0], dy = r.y - q[1], dz = r.z - q[2];
-                const float d2 = dx * dx + dy * dy + dz * dz;
-                if (r.index != self) best.offer(d2, r.index);
-            }
-        }
+        const double slo[3] = {q[0] - h, q[1] - h, q[2] - h}, shi[3] = {q[0] + h, q[1] + h, q[2] + h};
+        for_records_in(slo, shi, [&](const Record& r) {
+            const float dx = r.x - q[0], dy = r.y - q[1], dz = r.z - q[2];
+            const float d2 = dx * dx + dy * dy + dz * dz;
+            if (r.index != self) best.offer(d2, r.index);
+            return true;
+        });
         if (best.count != k) throw Error("internal: tiled k-NN scan found fewer than k neighbours");
         // A batch of the point and its neighbours, in index order.
         std::vector<std::uint32_t> gi(index.begin(), index.end());
@@ -400,6 +524,7 @@ private:
         const std::uint32_t query = local(self);
         std::vector<std::uint32_t> nb(k);
         for (std::uint32_t j = 0; j < k; ++j) nb[j] = local(index[j]);
+        sample_memory();
         m_visit(KnnBatch{gp, gi, std::span<const std::uint32_t>(&query, 1), nb, distance2});
         report(1);
     }
@@ -415,6 +540,8 @@ private:
     Partition m_part;
     SpillFile m_records;
     std::vector<std::uint64_t> m_begin;
+    std::vector<Block> m_blocks;
+    std::vector<std::uint64_t> m_block_begin;  ///< per tile: its first block
 };
 
 }  // namespace

@@ -134,7 +134,8 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                       {"memory", memory},
                       {"tiles", tstats.tiles},
                       {"halo_points", tstats.halo_queries},
-                      {"peak_rss", pre::peak_rss_bytes()}});
+                      {"peak_rss", pre::peak_rss_bytes()},
+                      {"peak_anon_rss_search", tstats.peak_anon_rss}});
     report(step, params, stats);
     if (dropped_octree) step.note("prt-radii: dropped the input's octree sections (rerun prt-octree)");
     step.note("prt-radii: time: index %.3f s, search %.3f s, total %.3f s; wrote %s (%llu bytes)",
