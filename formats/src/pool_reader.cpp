@@ -12,7 +12,30 @@
 
 namespace prt::pool {
 
-std::uint64_t checksum(std::span<const std::byte> bytes) { return XXH3_64bits(bytes.data(), bytes.size()); }
+std::uint64_t checksum(std::span<const std::byte> bytes) {
+    return XXH3_64bits(bytes.data(), bytes.size());
+}
+
+/// checksum() of a section; on a mapped file, in 64 MiB steps (XXH3 streaming: the same value),
+/// each step's pages dropped once hashed.
+std::uint64_t checksum_section(std::span<const std::byte> bytes, bool mapped) {
+    constexpr std::size_t step = std::size_t{64} << 20;
+    if (!mapped) return checksum(bytes);
+    if (bytes.size() <= step) {
+        const std::uint64_t h = checksum(bytes);
+        prt::drop_mapped_pages(bytes.data(), bytes.size());
+        return h;
+    }
+    XXH3_state_t state;
+    XXH3_INITSTATE(&state);
+    XXH3_64bits_reset(&state);
+    for (std::size_t at = 0; at < bytes.size(); at += step) {
+        const std::size_t n = std::min(step, bytes.size() - at);
+        XXH3_64bits_update(&state, bytes.data() + at, n);
+        prt::drop_mapped_pages(bytes.data() + at, n);
+    }
+    return XXH3_64bits_digest(&state);
+}
 
 namespace {
 
@@ -23,7 +46,9 @@ std::string entry_label(const SectionEntry& e) {
 
 }  // namespace
 
-PoolFile::PoolFile(PoolFile&& o) noexcept { *this = std::move(o); }
+PoolFile::PoolFile(PoolFile&& o) noexcept {
+    *this = std::move(o);
+}
 
 PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
     if (this == &o) return *this;
@@ -55,7 +80,8 @@ PoolFile PoolFile::open(const std::filesystem::path& path, const OpenOptions& op
     return pool;
 }
 
-PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label, const OpenOptions& options) {
+PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label,
+                              const OpenOptions& options) {
     PoolFile pool;
     pool.m_options = options;
     pool.m_label = label;
@@ -69,7 +95,9 @@ PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& l
     return pool;
 }
 
-const PoolHeader& PoolFile::header() const { return *reinterpret_cast<const PoolHeader*>(m_data); }
+const PoolHeader& PoolFile::header() const {
+    return *reinterpret_cast<const PoolHeader*>(m_data);
+}
 
 std::span<const SectionEntry> PoolFile::sections() const {
     const PoolHeader& h = header();
@@ -157,8 +185,8 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
                          ") out of bounds of the " + std::to_string(m_size) + "-byte file");
         if (e.element_size == 0) fail(&e, "element size 0");
         if (e.count > e.size / e.element_size || e.count * e.element_size != e.size)
-            fail(&e, "count " + std::to_string(e.count) + " x element size " + std::to_string(e.element_size) +
-                         " disagrees with size " + std::to_string(e.size));
+            fail(&e, "count " + std::to_string(e.count) + " x element size " +
+                         std::to_string(e.element_size) + " disagrees with size " + std::to_string(e.size));
         if (const SectionTypeInfo* known = section_type_info(static_cast<SectionType>(e.type))) {
             if (e.version > known->version)
                 fail(&e, "version " + std::to_string(e.version) + " is newer than this build reads (" +
@@ -169,14 +197,17 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
         // Streaming: brick payloads are checked brick by brick as they are read (OpenOptions).
         const bool deferred =
             m_options.defer_brick_payloads && e.type == static_cast<std::uint32_t>(SectionType::brick_data);
-        if (!deferred && checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
+        if (!deferred && checksum_section(bytes(e), m_owned.empty()) != e.checksum)
+            fail(&e, "bad checksum (file corrupted)");
         ranges.emplace_back(e.offset, e.size);
     }
     std::sort(ranges.begin(), ranges.end());
     const std::uint64_t table_end = header().table_offset + table_bytes;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
-        if (ranges[i].second && ranges[i].first < table_end) fail(nullptr, "a section overlaps the header or table");
-        if (i + 1 < ranges.size() && ranges[i].second && ranges[i].first + ranges[i].second > ranges[i + 1].first)
+        if (ranges[i].second && ranges[i].first < table_end)
+            fail(nullptr, "a section overlaps the header or table");
+        if (i + 1 < ranges.size() && ranges[i].second &&
+            ranges[i].first + ranges[i].second > ranges[i + 1].first)
             fail(nullptr, "two sections overlap");
     }
 }
@@ -186,7 +217,8 @@ const ModelInfo& PoolFile::validate_counts() const {
     if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
     const ModelInfo& info = detail::single<ModelInfo>(*this, SectionType::model_info);
     if (info.point_count > 0 && !find(SectionType::positions))
-        fail(nullptr, "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
+        fail(nullptr,
+             "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
     if (!detail::finite_box(info.bounds_min, info.bounds_max) || !std::isfinite(info.origin[0]) ||
         !std::isfinite(info.origin[1]) || !std::isfinite(info.origin[2]))
         fail(info_entry, "origin or bounds not finite or inverted");

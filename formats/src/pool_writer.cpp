@@ -71,6 +71,11 @@ void PoolWriter::carry_over(const PoolFile& source) {
             continue;
         }
         add_shared(type, e.element_size, e.count, source.bytes(e), nullptr);
+        m_sections.back().file_mapped = source.mapped();
+        if (!(source.options().defer_brick_payloads && type == SectionType::brick_data)) {
+            m_sections.back().checksum_known = true;  // open() checked it against the payload
+            m_sections.back().checksum = e.checksum;
+        }
     }
 }
 
@@ -122,7 +127,7 @@ std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::s
         e.size = p.payload.size();
         e.count = p.count;
         e.element_size = p.element_size;
-        e.checksum = checksum(p.payload);
+        e.checksum = p.checksum_known ? p.checksum : checksum_section(p.payload, p.file_mapped);
         const char* name = section_name(p.type);  // informative; long names are cut to 15 bytes
         std::memcpy(e.name, name, std::min(std::strlen(name), sizeof e.name - 1));
         offset = align_up(offset + e.size);
@@ -152,8 +157,11 @@ std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::s
         pad_to(table[i].offset);
         const std::span<const std::byte> payload = sections[i].payload;
         constexpr std::size_t chunk = std::size_t{64} << 20;
-        for (std::size_t done = 0; done < payload.size(); done += chunk)
-            sink(payload.data() + done, std::min(chunk, payload.size() - done));
+        for (std::size_t done = 0; done < payload.size(); done += chunk) {
+            const std::size_t n = std::min(chunk, payload.size() - done);
+            sink(payload.data() + done, n);
+            if (sections[i].file_mapped) drop_mapped_pages(payload.data() + done, n);
+        }
         at += payload.size();
     }
     pad_to(header.file_size);

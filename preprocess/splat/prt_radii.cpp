@@ -93,7 +93,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
         progress.finish();
         step.writer().add_view(pool::SectionType::radii, sizeof(float), positions.size(),
                                {spill->data(), static_cast<std::size_t>(spill->size())},
-                               std::shared_ptr<const void>(spill, spill->data()));
+                               std::shared_ptr<const void>(spill, spill->data()), true);
         step.note(
             "prt-radii: %llu tiles of about %llu points; %llu points needed a halo (%llu groups, %llu "
             "scanned alone); at most %llu points held at once",

@@ -56,6 +56,8 @@ public:
     /// The entry of a section type, or nullptr when absent.
     const SectionEntry* find(SectionType type) const;
     bool has(SectionType type) const { return find(type) != nullptr; }
+    /// Whether the pool is a file mapping (open()), not bytes in memory (from_bytes()).
+    bool mapped() const { return m_owned.empty(); }
     std::span<const std::byte> bytes(const SectionEntry& entry) const;
 
     /// Typed view of a section; an empty span when absent. Throws if the element size differs.
@@ -120,9 +122,13 @@ public:
     /// Adds (or replaces) a section as a view of `payload` (no copy), kept valid by `keep_alive`
     /// until the writer is destroyed: a big section in a memory-mapped spill file stays out of RAM
     /// (write() streams it to the file).
+    /// `file_mapped`: the payload is a file mapping (a spill file), whose pages write() drops
+    /// once written (prt::drop_mapped_pages).
     void add_view(SectionType type, std::uint32_t element_size, std::uint64_t count,
-                  std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive) {
+                  std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive,
+                  bool file_mapped = false) {
         add_shared(type, element_size, count, payload, std::move(keep_alive));
+        m_sections.back().file_mapped = file_mapped;
     }
     /// Carries every section of `source` over as a view (no copy), except provenance, which is
     /// merged by add_provenance().
@@ -150,6 +156,9 @@ private:
         std::uint64_t count;
         std::span<const std::byte> payload;
         std::shared_ptr<const void> keep_alive;  // owner of payload, or null for carried views
+        bool file_mapped = false;                // a file mapping: pages dropped once written
+        bool checksum_known = false;             // carried: the source's checked checksum
+        std::uint64_t checksum = 0;
     };
     void add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
                     std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive);
@@ -161,6 +170,9 @@ private:
 
 /// XXH3-64 of a byte range (the pool's checksum).
 std::uint64_t checksum(std::span<const std::byte> bytes);
+/// checksum(); when `mapped` (a file mapping), computed in 64 MiB steps whose pages are dropped
+/// once hashed (prt::drop_mapped_pages): the same value, a bounded resident set.
+std::uint64_t checksum_section(std::span<const std::byte> bytes, bool mapped);
 
 /// Sets `info`'s point_count and bounding box (bounds_min, bounds_max) from the points' positions
 /// in its local frame (an empty set: min = FLT_MAX, max = -FLT_MAX).
