@@ -194,7 +194,11 @@ private:
                 std::size_t b, e;
                 chunk_range(c, b, e);
                 std::uint64_t* count = counts.data() + c * tiles;
-                for (std::size_t i = b; i < e; ++i) ++count[m_part.tile_of(m_pos[i])];
+                for (std::size_t s = b; s < e; s += k_step) {
+                    const std::size_t se = std::min(e, s + k_step);
+                    for (std::size_t i = s; i < se; ++i) ++count[m_part.tile_of(m_pos[i])];
+                    drop_positions(s, se);
+                }
             }
         });
         m_begin.assign(tiles + 1, 0);
@@ -215,9 +219,14 @@ private:
                 std::size_t b, e;
                 chunk_range(c, b, e);
                 std::uint64_t* cursor = counts.data() + c * tiles;
-                for (std::size_t i = b; i < e; ++i) {
-                    const pool::Float3& p = m_pos[i];
-                    out[cursor[m_part.tile_of(p)]++] = {p.x, p.y, p.z, static_cast<std::uint32_t>(i)};
+                for (std::size_t s = b; s < e; s += k_step) {
+                    const std::size_t se = std::min(e, s + k_step);
+                    for (std::size_t i = s; i < se; ++i) {
+                        const pool::Float3& p = m_pos[i];
+                        out[cursor[m_part.tile_of(p)]++] = {p.x, p.y, p.z, static_cast<std::uint32_t>(i)};
+                    }
+                    drop_positions(s, se);
+                    m_records.drop();  // written records stay in the file (a shared mapping)
                 }
             }
         });
@@ -291,6 +300,12 @@ private:
             }
         }
         return true;
+    }
+
+    static constexpr std::size_t k_step = std::size_t{1} << 20;  ///< points between page drops
+
+    void drop_positions(std::size_t b, std::size_t e) const {
+        if (m_params.positions_mapped) drop_pages(m_pos.data() + b, (e - b) * sizeof(pool::Float3));
     }
 
     std::span<const Record> tile_records(std::size_t t) const {
@@ -559,10 +574,14 @@ void tiled_knn(std::span<const pool::Float3> positions, const TiledKnnParams& pa
         throw Error("k-NN: " + std::to_string(n) + " points, need more than k = " + std::to_string(params.k));
     if (n >= std::numeric_limits<std::uint32_t>::max())
         throw Error("k-NN: " + std::to_string(n) + " points, at most 4294967294 are supported");
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) {
         if (!std::isfinite(positions[i].x) || !std::isfinite(positions[i].y) ||
             !std::isfinite(positions[i].z))
             throw Error("k-NN: point " + std::to_string(i) + " has a non-finite position");
+        if (params.positions_mapped && (i + 1) % (std::size_t{1} << 20) == 0)
+            drop_pages(positions.data() + i + 1 - (std::size_t{1} << 20),
+                       (std::size_t{1} << 20) * sizeof(pool::Float3));
+    }
     TiledKnnStats local;
     local.points = n;
     Tiler(positions, params, visit, progress, local).run();

@@ -220,10 +220,12 @@ void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::ui
                                           0.5 * (lo[2] + hi[2])};
     SpillFile offsets(tiling.spill_folder, std::uint64_t(n) * sizeof(pool::Float3), "the float positions");
     const std::span<pool::Float3> f = offsets.as<pool::Float3>();
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < n; ++i) {
         f[i] = {static_cast<float>(positions[i][0] - centre[0]),
                 static_cast<float>(positions[i][1] - centre[1]),
                 static_cast<float>(positions[i][2] - centre[2])};
+        if ((i + 1) % (std::size_t{1} << 20) == 0) offsets.drop();  // written pages stay in the file
+    }
     offsets.drop();
     // PCA takes the k - 1 nearest others: the first k - 1 of the in-core graph's k (same ties).
     tiling.k = k - 1;

@@ -59,6 +59,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                 const MemoryOptions& mem) {
     using namespace prt;
     const auto positions = step.input().require<pool::Float3>(pool::SectionType::positions, "prt-radii");
+    const std::uint64_t peak_after_open = pre::peak_rss_bytes();
     if (positions.size() <= params.k)
         throw Error(step.input_path() + ": " + std::to_string(positions.size()) +
                     " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
@@ -72,6 +73,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                             positions.size(), step.quiet());
     pre::RadiiStats stats;
     pre::TiledKnnStats tstats;
+    std::uint64_t peak_before_write = 0;
     const bool dropped_octree =
         step.drop_sections({pool::SectionType::octree_info, pool::SectionType::octree_nodes,
                             pool::SectionType::leaf_info, pool::SectionType::splats});
@@ -91,6 +93,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                                             [&](std::uint64_t done) { progress.update(done); });
         }));
         progress.finish();
+        peak_before_write = pre::peak_rss_bytes();
         step.writer().add_view(pool::SectionType::radii, sizeof(float), positions.size(),
                                {spill->data(), static_cast<std::size_t>(spill->size())},
                                std::shared_ptr<const void>(spill, spill->data()), true);
@@ -135,6 +138,8 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                       {"tiles", tstats.tiles},
                       {"halo_points", tstats.halo_queries},
                       {"peak_rss", pre::peak_rss_bytes()},
+                      {"peak_rss_before_write", peak_before_write},
+                      {"peak_rss_after_open", peak_after_open},
                       {"peak_anon_rss_search", tstats.peak_anon_rss}});
     report(step, params, stats);
     if (dropped_octree) step.note("prt-radii: dropped the input's octree sections (rerun prt-octree)");

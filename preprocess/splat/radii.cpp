@@ -176,17 +176,29 @@ float from_order_key(std::uint32_t key) {
     return f;
 }
 
+/// Calls f(v) for every value in order, dropping the pages of each 4M-value step once read (the
+/// spans here are spill files: prt::drop_mapped_pages).
+template <class F>
+void stream(std::span<const float> values, bool mapped, F&& f) {
+    constexpr std::size_t step = std::size_t{1} << 22;
+    for (std::size_t s = 0; s < values.size(); s += step) {
+        const std::size_t e = std::min(values.size(), s + step);
+        for (std::size_t i = s; i < e; ++i) f(values[i]);
+        if (mapped) drop_pages(values.data() + s, (e - s) * sizeof(float));
+    }
+}
+
 /// The element of rank `rank` (0-based) in sorted order: two radix passes of 16 bits.
-float select_rank(std::span<const float> values, std::uint64_t rank) {
+float select_rank(std::span<const float> values, std::uint64_t rank, bool mapped) {
     std::vector<std::uint64_t> hist(65536, 0);
-    for (const float v : values) ++hist[order_key(v) >> 16];
+    stream(values, mapped, [&](float v) { ++hist[order_key(v) >> 16]; });
     std::uint32_t high = 0;
     while (rank >= hist[high]) rank -= hist[high++];
     std::fill(hist.begin(), hist.end(), 0);
-    for (const float v : values) {
+    stream(values, mapped, [&](float v) {
         const std::uint32_t key = order_key(v);
         if ((key >> 16) == high) ++hist[key & 0xffffu];
-    }
+    });
     std::uint32_t low = 0;
     while (rank >= hist[low]) rank -= hist[low++];
     return from_order_key((high << 16) | low);
@@ -199,16 +211,16 @@ void streamed_statistics(std::span<const float> radii, RadiiStats& stats) {
     stats.clamped = 0;
     stats.clamp_limit = 0;
     if (n == 0) return;
-    stats.raw_median = median_streaming(radii);
+    stats.raw_median = median_streaming(radii, true);
     double sum = 0;
     float lo = radii[0], hi = radii[0];
     stats.zero = 0;
-    for (const float r : radii) {  // in index order, as clamp_radii sums
+    stream(radii, true, [&](float r) {  // in index order, as clamp_radii sums
         sum += r;
         lo = std::min(lo, r);
         hi = std::max(hi, r);
         if (r == 0) ++stats.zero;
-    }
+    });
     stats.min = lo;
     stats.max = hi;
     stats.mean = sum / double(n);
@@ -217,11 +229,11 @@ void streamed_statistics(std::span<const float> radii, RadiiStats& stats) {
 
 }  // namespace
 
-double median_streaming(std::span<const float> values) {
+double median_streaming(std::span<const float> values, bool mapped) {
     if (values.empty()) return 0;
     const std::size_t mid = (values.size() - 1) / 2;
-    double m = select_rank(values, mid);
-    if (values.size() % 2 == 0) m = 0.5 * (m + select_rank(values, mid + 1));
+    double m = select_rank(values, mid, mapped);
+    if (values.size() % 2 == 0) m = 0.5 * (m + select_rank(values, mid + 1, mapped));
     return m;
 }
 
@@ -277,7 +289,7 @@ SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const Rad
         out = SpillFile(tiling.spill_folder, std::uint64_t(n) * sizeof(float), "the radii");
         float* o = out.as<float>().data();
         std::atomic<std::uint64_t> clamped{0};
-        const std::size_t block = std::size_t{1} << 22;
+        const std::size_t block = std::size_t{1} << 18;  // 9.4 MB of neighbour lists at k = 9
         for (std::size_t base = 0; base < n; base += block) {
             const std::size_t end = std::min(n, base + block);
             parallel_chunks(end - base, 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -304,14 +316,16 @@ SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const Rad
     } else {
         // clamp_radii with the global median, in place.
         const std::span<float> radii = raw.as<float>();
-        const double raw_median = median_streaming(radii);
+        const double raw_median = median_streaming(radii, true);
         std::uint64_t clamped = 0;
         double limit = 0;
         if (params.clamp_factor > 0) {
             const float l = static_cast<float>(double(params.clamp_factor) * raw_median);
             limit = l;
-            for (float& v : radii)
-                if (v > l) v = l, ++clamped;
+            for (std::size_t i = 0; i < radii.size(); ++i) {
+                if (radii[i] > l) radii[i] = l, ++clamped;
+                if ((i + 1) % (std::size_t{1} << 22) == 0) raw.drop();
+            }
         }
         streamed_statistics(radii, local);
         local.raw_median = raw_median;

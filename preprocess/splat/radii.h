@@ -85,7 +85,9 @@ SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const Rad
                               const std::function<void(std::uint64_t)>& progress = {});
 
 /// The median of `values` as clamp_radii() takes it (the middle element; the mean of the two
-/// middle ones for an even count), by radix selection in four passes and O(1) memory.
-double median_streaming(std::span<const float> values);
+/// middle ones for an even count), by radix selection in four passes and O(1) memory. `mapped`:
+/// `values` is a file mapping (a spill file) whose pages are dropped as the passes go (never set
+/// it for memory of the heap: dropping would zero it).
+double median_streaming(std::span<const float> values, bool mapped = false);
 
 }  // namespace prt::pre
