@@ -207,9 +207,9 @@ protected:
         fs::create_directories(m_dir);
     }
     void TearDown() override { fs::remove_all(m_dir); }
-    int run(const std::string& args) {
-        const std::string cmd = (fs::path(PRT_BIN_DIR) / "prt-radii").string() + " " + args +
-                                " >/dev/null 2>" + (m_dir / "err.txt").string();
+    int run(const std::string& args, const std::string& out = "/dev/null") {
+        const std::string cmd = (fs::path(PRT_BIN_DIR) / "prt-radii").string() + " " + args + " >" + out +
+                                " 2>" + (m_dir / "err.txt").string();
         const int status = std::system(cmd.c_str());
         std::ifstream in(m_dir / "err.txt");
         std::stringstream ss;
@@ -251,6 +251,14 @@ TEST_F(RadiiTool, OutOfCoreEqualsInCore) {
         ASSERT_EQ(rb.size(), ra.size());
         EXPECT_EQ(std::memcmp(ra.data(), rb.data(), ra.size_bytes()), 0);
     }
+    // documented in --help (with the default), the testing option hidden
+    ASSERT_EQ(run("--help", path("help.txt")), 0);
+    std::ifstream help_file(path("help.txt"));
+    std::stringstream help;
+    help << help_file.rdbuf();
+    for (const char* opt : {"--memory", "--spill-folder", "half the physical memory"})
+        EXPECT_NE(help.str().find(opt), std::string::npos) << opt;
+    EXPECT_EQ(help.str().find("--tile-points"), std::string::npos);
     // the spill files are gone; a bad size is a usage error
     for (const auto& e : fs::directory_iterator(m_dir))
         EXPECT_EQ(e.path().filename().string().find("prt-spill"), std::string::npos) << e.path();
