@@ -46,9 +46,7 @@ std::string entry_label(const SectionEntry& e) {
 
 }  // namespace
 
-PoolFile::PoolFile(PoolFile&& o) noexcept {
-    *this = std::move(o);
-}
+PoolFile::PoolFile(PoolFile&& o) noexcept { *this = std::move(o); }
 
 PoolFile& PoolFile::operator=(PoolFile&& o) noexcept {
     if (this == &o) return *this;
@@ -80,8 +78,7 @@ PoolFile PoolFile::open(const std::filesystem::path& path, const OpenOptions& op
     return pool;
 }
 
-PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label,
-                              const OpenOptions& options) {
+PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& label, const OpenOptions& options) {
     PoolFile pool;
     pool.m_options = options;
     pool.m_label = label;
@@ -95,9 +92,7 @@ PoolFile PoolFile::from_bytes(std::vector<std::byte> bytes, const std::string& l
     return pool;
 }
 
-const PoolHeader& PoolFile::header() const {
-    return *reinterpret_cast<const PoolHeader*>(m_data);
-}
+const PoolHeader& PoolFile::header() const { return *reinterpret_cast<const PoolHeader*>(m_data); }
 
 std::span<const SectionEntry> PoolFile::sections() const {
     const PoolHeader& h = header();
@@ -185,8 +180,8 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
                          ") out of bounds of the " + std::to_string(m_size) + "-byte file");
         if (e.element_size == 0) fail(&e, "element size 0");
         if (e.count > e.size / e.element_size || e.count * e.element_size != e.size)
-            fail(&e, "count " + std::to_string(e.count) + " x element size " +
-                         std::to_string(e.element_size) + " disagrees with size " + std::to_string(e.size));
+            fail(&e, "count " + std::to_string(e.count) + " x element size " + std::to_string(e.element_size) +
+                         " disagrees with size " + std::to_string(e.size));
         if (const SectionTypeInfo* known = section_type_info(static_cast<SectionType>(e.type))) {
             if (e.version > known->version)
                 fail(&e, "version " + std::to_string(e.version) + " is newer than this build reads (" +
@@ -204,10 +199,8 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
     std::sort(ranges.begin(), ranges.end());
     const std::uint64_t table_end = header().table_offset + table_bytes;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
-        if (ranges[i].second && ranges[i].first < table_end)
-            fail(nullptr, "a section overlaps the header or table");
-        if (i + 1 < ranges.size() && ranges[i].second &&
-            ranges[i].first + ranges[i].second > ranges[i + 1].first)
+        if (ranges[i].second && ranges[i].first < table_end) fail(nullptr, "a section overlaps the header or table");
+        if (i + 1 < ranges.size() && ranges[i].second && ranges[i].first + ranges[i].second > ranges[i + 1].first)
             fail(nullptr, "two sections overlap");
     }
 }
@@ -217,8 +210,7 @@ const ModelInfo& PoolFile::validate_counts() const {
     if (!info_entry) fail(nullptr, "section model_info: missing (every pool has one)");
     const ModelInfo& info = detail::single<ModelInfo>(*this, SectionType::model_info);
     if (info.point_count > 0 && !find(SectionType::positions))
-        fail(nullptr,
-             "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
+        fail(nullptr, "section positions: missing (model_info says " + std::to_string(info.point_count) + " points)");
     if (!detail::finite_box(info.bounds_min, info.bounds_max) || !std::isfinite(info.origin[0]) ||
         !std::isfinite(info.origin[1]) || !std::isfinite(info.origin[2]))
         fail(info_entry, "origin or bounds not finite or inverted");

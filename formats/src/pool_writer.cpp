@@ -15,9 +15,7 @@ namespace prt::pool {
 
 namespace {
 
-std::uint64_t align_up(std::uint64_t v) {
-    return (v + k_alignment - 1) / k_alignment * k_alignment;
-}
+std::uint64_t align_up(std::uint64_t v) { return (v + k_alignment - 1) / k_alignment * k_alignment; }
 
 std::string utc_now() {
     const std::time_t t = std::time(nullptr);
@@ -84,8 +82,7 @@ void PoolWriter::remove(SectionType type) {
 }
 
 bool PoolWriter::has(SectionType type) const {
-    return std::any_of(m_sections.begin(), m_sections.end(),
-                       [type](const Pending& p) { return p.type == type; });
+    return std::any_of(m_sections.begin(), m_sections.end(), [type](const Pending& p) { return p.type == type; });
 }
 
 void PoolWriter::add_provenance(const std::string& tool, const std::string& version,
@@ -101,11 +98,8 @@ void PoolWriter::add_provenance(const std::string& tool, const std::string& vers
 std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::size_t)>& sink) const {
     // Section order: provenance first, then by type, so files are deterministic.
     std::vector<Pending> sections = m_sections;
-    sections.push_back({SectionType::provenance,
-                        1,
-                        m_provenance.size(),
-                        {reinterpret_cast<const std::byte*>(m_provenance.data()), m_provenance.size()},
-                        nullptr});
+    sections.push_back({SectionType::provenance, 1, m_provenance.size(),
+                        {reinterpret_cast<const std::byte*>(m_provenance.data()), m_provenance.size()}, nullptr});
     std::stable_sort(sections.begin(), sections.end(),
                      [](const Pending& a, const Pending& b) { return a.type < b.type; });
     if (sections.size() > k_max_sections) throw Error("too many sections");

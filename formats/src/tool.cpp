@@ -84,7 +84,7 @@ void Progress::finish() {
     m_finished = true;
     if (m_quiet) return;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
-    std::fprintf(stderr, "\r%s: done in %.3f s                  \n", m_label.c_str(), s);
+    std::fprintf(stderr, "\r%s: done in %.3f s\n", m_label.c_str(), s);
 }
 
 namespace {

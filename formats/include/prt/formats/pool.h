@@ -98,8 +98,8 @@ private:
     std::string m_label;
     const std::byte* m_data = nullptr;
     std::uint64_t m_size = 0;
-    MappedFile m_file;               // the file when mapped
-    std::vector<std::byte> m_owned;  // storage when built from bytes
+    MappedFile m_file;                 // the file when mapped
+    std::vector<std::byte> m_owned;    // storage when built from bytes
     OpenOptions m_options;
 };
 
