@@ -77,4 +77,12 @@ void MappedFile::release() {
     m_size = 0;
 }
 
+void drop_mapped_pages(const void* data, std::size_t bytes) {
+    if (!data || bytes == 0) return;
+    const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
+    const auto begin = reinterpret_cast<std::uintptr_t>(data);
+    const std::uintptr_t first = (begin + page - 1) / page * page, last = (begin + bytes) / page * page;
+    if (last > first) ::madvise(reinterpret_cast<void*>(first), last - first, MADV_DONTNEED);
+}
+
 }  // namespace prt

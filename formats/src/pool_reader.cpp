@@ -12,7 +12,30 @@
 
 namespace prt::pool {
 
-std::uint64_t checksum(std::span<const std::byte> bytes) { return XXH3_64bits(bytes.data(), bytes.size()); }
+std::uint64_t checksum(std::span<const std::byte> bytes) {
+    return XXH3_64bits(bytes.data(), bytes.size());
+}
+
+/// checksum() of a section; on a mapped file, in 64 MiB steps (XXH3 streaming: the same value),
+/// each step's pages dropped once hashed.
+std::uint64_t checksum_section(std::span<const std::byte> bytes, bool mapped) {
+    constexpr std::size_t step = std::size_t{64} << 20;
+    if (!mapped) return checksum(bytes);
+    if (bytes.size() <= step) {
+        const std::uint64_t h = checksum(bytes);
+        prt::drop_mapped_pages(bytes.data(), bytes.size());
+        return h;
+    }
+    XXH3_state_t state;
+    XXH3_INITSTATE(&state);
+    XXH3_64bits_reset(&state);
+    for (std::size_t at = 0; at < bytes.size(); at += step) {
+        const std::size_t n = std::min(step, bytes.size() - at);
+        XXH3_64bits_update(&state, bytes.data() + at, n);
+        prt::drop_mapped_pages(bytes.data() + at, n);
+    }
+    return XXH3_64bits_digest(&state);
+}
 
 namespace {
 
@@ -169,7 +192,8 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
         // Streaming: brick payloads are checked brick by brick as they are read (OpenOptions).
         const bool deferred =
             m_options.defer_brick_payloads && e.type == static_cast<std::uint32_t>(SectionType::brick_data);
-        if (!deferred && checksum(bytes(e)) != e.checksum) fail(&e, "bad checksum (file corrupted)");
+        if (!deferred && checksum_section(bytes(e), m_owned.empty()) != e.checksum)
+            fail(&e, "bad checksum (file corrupted)");
         ranges.emplace_back(e.offset, e.size);
     }
     std::sort(ranges.begin(), ranges.end());

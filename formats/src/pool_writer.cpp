@@ -69,6 +69,11 @@ void PoolWriter::carry_over(const PoolFile& source) {
             continue;
         }
         add_shared(type, e.element_size, e.count, source.bytes(e), nullptr);
+        m_sections.back().file_mapped = source.mapped();
+        if (!(source.options().defer_brick_payloads && type == SectionType::brick_data)) {
+            m_sections.back().checksum_known = true;  // open() checked it against the payload
+            m_sections.back().checksum = e.checksum;
+        }
     }
 }
 
@@ -90,7 +95,7 @@ void PoolWriter::add_provenance(const std::string& tool, const std::string& vers
     m_provenance = list.dump();
 }
 
-std::vector<std::byte> PoolWriter::serialize() const {
+std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::size_t)>& sink) const {
     // Section order: provenance first, then by type, so files are deterministic.
     std::vector<Pending> sections = m_sections;
     sections.push_back({SectionType::provenance, 1, m_provenance.size(),
@@ -116,28 +121,58 @@ std::vector<std::byte> PoolWriter::serialize() const {
         e.size = p.payload.size();
         e.count = p.count;
         e.element_size = p.element_size;
-        e.checksum = checksum(p.payload);
+        e.checksum = p.checksum_known ? p.checksum : checksum_section(p.payload, p.file_mapped);
         const char* name = section_name(p.type);  // informative; long names are cut to 15 bytes
         std::memcpy(e.name, name, std::min(std::strlen(name), sizeof e.name - 1));
         offset = align_up(offset + e.size);
     }
     header.file_size = offset;
-    header.table_checksum = checksum({reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry)});
-    header.header_checksum = checksum({reinterpret_cast<const std::byte*>(&header), offsetof(PoolHeader, header_checksum)});
+    header.table_checksum =
+        checksum({reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry)});
+    header.header_checksum =
+        checksum({reinterpret_cast<const std::byte*>(&header), offsetof(PoolHeader, header_checksum)});
 
-    std::vector<std::byte> out(header.file_size, std::byte{0});
-    std::memcpy(out.data(), &header, sizeof header);
-    std::memcpy(out.data() + header.table_offset, table.data(), table.size() * sizeof(SectionEntry));
-    for (std::size_t i = 0; i < sections.size(); ++i)
-        if (!sections[i].payload.empty())
-            std::memcpy(out.data() + table[i].offset, sections[i].payload.data(), sections[i].payload.size());
+    // Front to back: header, table, then each payload after zero padding to its offset.
+    static const std::byte zeros[k_alignment] = {};
+    std::uint64_t at = 0;
+    auto pad_to = [&](std::uint64_t target) {
+        while (at < target) {
+            const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(target - at, k_alignment));
+            sink(zeros, n);
+            at += n;
+        }
+    };
+    sink(reinterpret_cast<const std::byte*>(&header), sizeof header);
+    at = sizeof header;
+    pad_to(header.table_offset);
+    sink(reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry));
+    at += table.size() * sizeof(SectionEntry);
+    for (std::size_t i = 0; i < sections.size(); ++i) {
+        pad_to(table[i].offset);
+        const std::span<const std::byte> payload = sections[i].payload;
+        constexpr std::size_t chunk = std::size_t{64} << 20;
+        for (std::size_t done = 0; done < payload.size(); done += chunk) {
+            const std::size_t n = std::min(chunk, payload.size() - done);
+            sink(payload.data() + done, n);
+            if (sections[i].file_mapped) drop_mapped_pages(payload.data() + done, n);
+        }
+        at += payload.size();
+    }
+    pad_to(header.file_size);
+    return header.file_size;
+}
+
+std::vector<std::byte> PoolWriter::serialize() const {
+    std::vector<std::byte> out;
+    emit([&](const std::byte* data, std::size_t n) { out.insert(out.end(), data, data + n); });
     return out;
 }
 
 std::uint64_t PoolWriter::write(const std::filesystem::path& path) const {
-    const std::vector<std::byte> bytes = serialize();
-    write_file_atomic(path, bytes);
-    return bytes.size();
+    AtomicFile file(path);
+    const std::uint64_t bytes = emit([&](const std::byte* data, std::size_t n) { file.write(data, n); });
+    file.commit();
+    return bytes;
 }
 
 }  // namespace prt::pool

@@ -1,6 +1,10 @@
 #include "prt/tool.h"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cctype>
+#include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <exception>
@@ -64,7 +68,13 @@ void Progress::update(std::uint64_t done) {
     if (now - m_last < std::chrono::milliseconds(250)) return;
     m_last = now;
     const double pct = m_total ? 100.0 * static_cast<double>(done) / static_cast<double>(m_total) : 100.0;
-    std::fprintf(stderr, "\r%s: %5.1f%%", m_label.c_str(), pct);
+    const double elapsed = std::chrono::duration<double>(now - m_start).count();
+    if (elapsed >= 1.0 && pct >= 1.0 && pct < 100.0) {
+        const double left = elapsed * (100.0 - pct) / pct;
+        std::fprintf(stderr, "\r%s: %5.1f%%, about %.0f s left   ", m_label.c_str(), pct, std::ceil(left));
+    } else {
+        std::fprintf(stderr, "\r%s: %5.1f%%", m_label.c_str(), pct);
+    }
     m_printed = true;
     std::fflush(stderr);
 }
@@ -92,6 +102,52 @@ void note(bool quiet, const char* format, ...) {
     va_start(args, format);
     vnote(format, args);
     va_end(args);
+}
+
+std::uint64_t parse_byte_size(const std::string& text, const char* what) {
+    const auto bad = [&]() {
+        return Error(std::string(what) + ": '" + text + "' is not a size (e.g. 512M, 4G)");
+    };
+    std::size_t used = 0;
+    double value = 0;
+    try {
+        value = std::stod(text, &used);
+    } catch (const std::exception&) {
+        throw bad();
+    }
+    if (text.empty() || (!std::isdigit(static_cast<unsigned char>(text[0])) && text[0] != '.')) throw bad();
+    std::string suffix = text.substr(used);
+    for (char& c : suffix) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+    double scale = 1;
+    if (!suffix.empty() && std::string("KMGT").find(suffix[0]) != std::string::npos) {
+        scale = std::pow(1024.0, double(std::string("KMGT").find(suffix[0]) + 1));
+        suffix.erase(0, 1);
+        if (suffix == "IB" || suffix == "B") suffix.clear();
+    } else if (suffix == "B") {
+        suffix.clear();
+    }
+    const double bytes = value * scale;
+    if (!suffix.empty() || !std::isfinite(bytes) || bytes < 1 || bytes > 1.8e19) throw bad();
+    return static_cast<std::uint64_t>(bytes);
+}
+
+std::uint64_t physical_memory_bytes() {
+    const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGESIZE);
+    return pages > 0 && page > 0 ? std::uint64_t(pages) * std::uint64_t(page) : 0;
+}
+
+std::string format_bytes(std::uint64_t bytes) {
+    char buf[64];
+    const char* units[] = {"KiB", "MiB", "GiB", "TiB"};
+    double v = double(bytes);
+    if (bytes < 1024) {
+        std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(bytes));
+        return buf;
+    }
+    int u = -1;
+    while (v >= 1024 && u < 3) v /= 1024, ++u;
+    std::snprintf(buf, sizeof buf, "%.*f %s", v < 10 ? 2 : 1, v, units[u]);
+    return buf;
 }
 
 double now_seconds() {

@@ -7,11 +7,13 @@
 #include <limits>
 
 #include "knn.h"
+#include "pca_normal.h"
 #include "progress.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
 #include "prt/symmetric_eigen.h"
 #include "prt/tool.h"
+#include "spill_file.h"
 
 namespace prt::pre::import {
 
@@ -191,49 +193,63 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
     std::vector<pool::Float3> normals(n, {std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
     LazyProgress progress("estimating normals (PCA, k=" + std::to_string(k) + ")", n, quiet);
     parallel_chunks(n, 4096, resolve_threads(0), [&](std::size_t b, std::size_t e, unsigned worker) {
-        for (std::size_t i = b; i < e; ++i) {
-            const std::uint32_t* row = graph.neighbours.data() + i * gk;
-            // Coordinates relative to the point itself: double sums of small numbers.
-            double d[257][3];
-            std::uint32_t m = 0;
-            d[m][0] = d[m][1] = d[m][2] = 0.0;
-            ++m;
-            for (std::uint32_t j = 0; j < others; ++j) {
-                if (row[j] == k_no_neighbour) break;
-                for (int a = 0; a < 3; ++a) d[m][a] = positions[row[j]][a] - positions[i][a];
-                ++m;
-            }
-            if (m < 3) continue;
-            double mean[3] = {0, 0, 0};
-            for (std::uint32_t j = 0; j < m; ++j)
-                for (int a = 0; a < 3; ++a) mean[a] += d[j][a];
-            for (int a = 0; a < 3; ++a) mean[a] /= m;
-            std::array<Vec3d, 3> c{};
-            for (std::uint32_t j = 0; j < m; ++j) {
-                const double x = d[j][0] - mean[0], y = d[j][1] - mean[1], z = d[j][2] - mean[2];
-                c[0][0] += x * x;
-                c[0][1] += x * y;
-                c[0][2] += x * z;
-                c[1][1] += y * y;
-                c[1][2] += y * z;
-                c[2][2] += z * z;
-            }
-            c[1][0] = c[0][1];
-            c[2][0] = c[0][2];
-            c[2][1] = c[1][2];
-            const SymmetricEigen eigen = symmetric_eigen(c);
-            const Vec3d& w = eigen.values;
-            const Vec3d& v = eigen.vectors[0];
-            if (!(w[2] > 0.0) || w[1] <= 1e-10 * w[2]) continue;  // coincident or collinear
-            const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            if (!(len > 0.0) || !std::isfinite(len)) continue;
-            normals[i] = {static_cast<float>(v[0] / len), static_cast<float>(v[1] / len),
-                          static_cast<float>(v[2] / len)};
-        }
+        for (std::size_t i = b; i < e; ++i)
+            pca_normal(
+                positions[i], graph.neighbours.data() + i * gk, others,
+                [&](std::uint32_t j) -> const std::array<double, 3>& { return positions[j]; }, normals[i]);
         if (worker == 0) progress.update(e);
     });
     progress.finish();
     return normals;
+}
+
+void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
+                       TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats,
+                       const std::function<void(std::uint64_t)>& progress) {
+    const std::size_t n = positions.size();
+    if (k < 3) throw Error("--k must be at least 3 for PCA normals");
+    if (normals.size() != n) throw Error("internal: pca_normals_tiled: normals of the wrong size");
+    // The in-core KdTree's coordinates (knn.cpp): float offsets from the bounding-box centre.
+    std::array<double, 3> lo = n ? positions[0] : std::array<double, 3>{0, 0, 0}, hi = lo;
+    for (const auto& p : positions)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    const std::array<double, 3> centre = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
+                                          0.5 * (lo[2] + hi[2])};
+    SpillFile offsets(tiling.spill_folder, std::uint64_t(n) * sizeof(pool::Float3), "the float positions");
+    const std::span<pool::Float3> f = offsets.as<pool::Float3>();
+    for (std::size_t i = 0; i < n; ++i) {
+        f[i] = {static_cast<float>(positions[i][0] - centre[0]),
+                static_cast<float>(positions[i][1] - centre[1]),
+                static_cast<float>(positions[i][2] - centre[2])};
+        if ((i + 1) % (std::size_t{1} << 20) == 0) offsets.drop();  // written pages stay in the file
+    }
+    offsets.drop();
+    // PCA takes the k - 1 nearest others: the first k - 1 of the in-core graph's k (same ties).
+    tiling.k = k - 1;
+    tiling.positions_mapped = true;  // the spill file above
+    std::fill(normals.begin(), normals.end(),
+              pool::Float3{std::numeric_limits<float>::quiet_NaN(), 0.f, 0.f});
+    const unsigned threads = resolve_threads(tiling.threads);
+    tiled_knn(
+        f, tiling,
+        [&](const KnnBatch& batch) {
+            parallel_chunks(batch.queries.size(), 1024, threads, [&](std::size_t b, std::size_t e, unsigned) {
+                std::vector<std::uint32_t> row(k - 1);
+                for (std::size_t q = b; q < e; ++q) {
+                    for (std::uint32_t j = 0; j < k - 1; ++j)
+                        row[j] = batch.global[batch.neighbours[q * (k - 1) + j]];
+                    const std::uint32_t g = batch.global[batch.queries[q]];
+                    pca_normal(
+                        positions[g], row.data(), k - 1,
+                        [&](std::uint32_t j) -> const std::array<double, 3>& { return positions[j]; },
+                        normals[g]);
+                }
+            });
+        },
+        progress, stats);
 }
 
 }  // namespace prt::pre::import

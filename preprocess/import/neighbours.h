@@ -6,12 +6,15 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "orient.h"
 #include "point_cloud.h"
+#include "tiled_knn.h"
 
 namespace prt::pre::import {
 
@@ -71,5 +74,17 @@ void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uin
 /// smaller eigenvalues below 1e-10 of the largest) gets a NaN normal.
 std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& positions,
                                       const KnnGraph& graph, std::uint32_t k, bool quiet);
+
+/// pca_normals() out of core (issue 17): the k - 1 nearest neighbours PCA uses are searched tile
+/// by tile with a halo (tiled_knn.h, within tiling.memory; tiling.k is set here) over the same
+/// float offsets from the bounding-box centre as the in-core KdTree (knn.h), which go to a spill
+/// file in tiling.spill_folder; each point's normal is computed (pca_normal.h) as soon as its
+/// neighbours are final and written to `normals` (positions.size(); may be a spill file). Equal
+/// bit for bit to pca_normals() over the graph outliers_and_graph() builds with no outlier removed.
+/// `positions` may be a mapped file too (it is read in tile order). Throws prt::Error as
+/// pca_normals() and tiled_knn() do.
+void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
+                       TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats = nullptr,
+                       const std::function<void(std::uint64_t)>& progress = {});
 
 }  // namespace prt::pre::import

@@ -1,5 +1,8 @@
 // prt-radii: splat radius per point = distance to its k-th nearest neighbour (thesis 3.1).
+#include <algorithm>
 #include <cstdio>
+#include <filesystem>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -16,7 +19,16 @@ constexpr const char* k_description =
     "(F = --clamp-factor): an isolated point among dense ones is clamped, a sparse region is not. Reads "
     "the positions of INPUT (local frame) and writes "
     "OUTPUT with a radii section; the other sections are carried over, an existing octree (which "
-    "depends on the radii) is dropped.";
+    "depends on the radii) is dropped. When the search does not fit --memory, it runs out of core "
+    "(issue 17): tile by tile with a halo of neighbouring points, the sorted points, raw radii and "
+    "neighbour lists in spill files (--spill-folder), with results equal to the in-core run.";
+
+/// The out-of-core options of prt-radii.
+struct MemoryOptions {
+    std::string memory;        ///< --memory text; empty = half the physical memory
+    std::string spill_folder;  ///< empty = the output's folder
+    std::uint64_t tile_points = 0;
+};
 
 void report(const prt::tool::PoolStep& step, const prt::pre::RadiiParams& params,
             const prt::pre::RadiiStats& stats) {
@@ -43,25 +55,65 @@ void report(const prt::tool::PoolStep& step, const prt::pre::RadiiParams& params
             static_cast<unsigned long long>(stats.zero));
 }
 
-void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const std::string& scope) {
+void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const std::string& scope,
+                const MemoryOptions& mem) {
     using namespace prt;
     const auto positions = step.input().require<pool::Float3>(pool::SectionType::positions, "prt-radii");
+    const std::uint64_t peak_after_open = pre::peak_rss_bytes();
     if (positions.size() <= params.k)
         throw Error(step.input_path() + ": " + std::to_string(positions.size()) +
                     " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
     params.scope = pre::parse_clamp_scope(scope);
-    tool::Progress progress("prt-radii: k-NN search", positions.size(), step.quiet());
+    const std::uint64_t memory = mem.memory.empty()
+                                     ? std::max<std::uint64_t>(tool::physical_memory_bytes() / 2, 256u << 20)
+                                     : tool::parse_byte_size(mem.memory, "--memory");
+    const std::uint64_t in_core = pre::radii_in_core_bytes(positions.size(), params);
+    const bool tiled = mem.tile_points > 0 || in_core > memory;
+    tool::Progress progress(tiled ? "prt-radii: k-NN search by tiles" : "prt-radii: k-NN search",
+                            positions.size(), step.quiet());
     pre::RadiiStats stats;
-    std::vector<float> radii = step.about_input([&] {
-        return pre::compute_radii(positions, params, &stats,
-                                  [&](std::uint64_t done) { progress.update(done); });
-    });
-    progress.finish();
-
+    pre::TiledKnnStats tstats;
+    std::uint64_t peak_before_write = 0;
     const bool dropped_octree =
         step.drop_sections({pool::SectionType::octree_info, pool::SectionType::octree_nodes,
                             pool::SectionType::leaf_info, pool::SectionType::splats});
-    step.writer().add_array(pool::SectionType::radii, std::move(radii));
+    if (tiled) {
+        pre::TiledKnnParams tiling;
+        tiling.memory = memory;
+        tiling.tile_points = mem.tile_points;
+        tiling.positions_mapped = true;  // the input pool's positions section
+        tiling.spill_folder = !mem.spill_folder.empty()
+                                  ? std::filesystem::path(mem.spill_folder)
+                                  : std::filesystem::absolute(step.output_path()).parent_path();
+        step.note("prt-radii: out of core: the search needs about %s, --memory is %s; spill files in %s",
+                  tool::format_bytes(in_core).c_str(), tool::format_bytes(memory).c_str(),
+                  tiling.spill_folder.string().c_str());
+        auto spill = std::make_shared<pre::SpillFile>(step.about_input([&] {
+            return pre::compute_radii_tiled(positions, params, tiling, &stats, &tstats,
+                                            [&](std::uint64_t done) { progress.update(done); });
+        }));
+        progress.finish();
+        peak_before_write = pre::peak_rss_bytes();
+        step.writer().add_view(pool::SectionType::radii, sizeof(float), positions.size(),
+                               {spill->data(), static_cast<std::size_t>(spill->size())},
+                               std::shared_ptr<const void>(spill, spill->data()), true);
+        step.note(
+            "prt-radii: %llu tiles of about %llu points; %llu points needed a halo (%llu groups, %llu "
+            "scanned alone); at most %llu points held at once",
+            static_cast<unsigned long long>(tstats.tiles),
+            static_cast<unsigned long long>(tstats.tile_points),
+            static_cast<unsigned long long>(tstats.halo_queries),
+            static_cast<unsigned long long>(tstats.halo_groups),
+            static_cast<unsigned long long>(tstats.scanned),
+            static_cast<unsigned long long>(tstats.max_gathered));
+    } else {
+        std::vector<float> radii = step.about_input([&] {
+            return pre::compute_radii(positions, params, &stats,
+                                      [&](std::uint64_t done) { progress.update(done); });
+        });
+        progress.finish();
+        step.writer().add_array(pool::SectionType::radii, std::move(radii));
+    }
     const nlohmann::json parameters = {
         {"k", params.k}, {"clamp_factor", params.clamp_factor}, {"clamp_scope", scope}};
     const std::uint64_t bytes = step.write(parameters);
@@ -80,7 +132,15 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
                       {"index_seconds", stats.seconds_index},
                       {"search_seconds", stats.seconds_search},
                       {"radii_seconds", stats.seconds},
-                      {"total_seconds", total_seconds}});
+                      {"total_seconds", total_seconds},
+                      {"out_of_core", tiled},
+                      {"memory", memory},
+                      {"tiles", tstats.tiles},
+                      {"halo_points", tstats.halo_queries},
+                      {"peak_rss", pre::peak_rss_bytes()},
+                      {"peak_rss_before_write", peak_before_write},
+                      {"peak_rss_after_open", peak_after_open},
+                      {"peak_anon_rss_search", tstats.peak_anon_rss}});
     report(step, params, stats);
     if (dropped_octree) step.note("prt-radii: dropped the input's octree sections (rerun prt-octree)");
     step.note("prt-radii: time: index %.3f s, search %.3f s, total %.3f s; wrote %s (%llu bytes)",
@@ -93,6 +153,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
 int main(int argc, char** argv) {
     prt::pre::RadiiParams params;
     std::string scope = "local";
+    MemoryOptions mem;
     prt::tool::PoolStep step("prt-radii", k_description,
                              {.stats = "Also write the statistics as JSON to this file (benchmarks)"});
     return step.run(
@@ -110,7 +171,26 @@ int main(int argc, char** argv) {
                    "local: the median raw radius of the point's k neighbours (uneven scans keep their "
                    "sparse regions); global: the whole model's median radius")
                 ->check(CLI::IsMember({"local", "global"}));
+            app.add_option("--memory", mem.memory,
+                           "Memory the k-NN search may use (K, M, G suffixes: 512M, 4G); above it the search "
+                           "runs out of core, tile by tile (default: half the physical memory)")
+                ->check(
+                    [](const std::string& text) {
+                        try {
+                            prt::tool::parse_byte_size(text, "--memory");
+                            return std::string();
+                        } catch (const prt::Error& e) {
+                            return std::string(e.what());
+                        }
+                    },
+                    "SIZE");
+            app.add_option("--spill-folder", mem.spill_folder,
+                           "Folder of the out-of-core spill files (removed as soon as created; about "
+                           "16 + 8 + 4k bytes per point) (default: the output's folder)");
+            app.add_option("--tile-points", mem.tile_points,
+                           "Testing: force the out-of-core search with tiles of this many points")
+                ->group("");
             prt::tool::PoolStep::add_threads(app, params.threads);
         },
-        [&](prt::tool::PoolStep& s) { radii_step(s, params, scope); });
+        [&](prt::tool::PoolStep& s) { radii_step(s, params, scope, mem); });
 }

@@ -154,4 +154,191 @@ std::vector<float> compute_radii(std::span<const pool::Float3> positions, const 
     return radii;
 }
 
+std::uint64_t radii_in_core_bytes(std::uint64_t n, const RadiiParams& params) {
+    // kd-tree (16-byte points, slot map, splits) + radii + the clamped copy, and the k neighbour
+    // indices per point for the local clamp.
+    const bool local = params.scope == ClampScope::local && params.clamp_factor > 0;
+    return n * (24 + 4 + 4 + (local ? 4 * std::uint64_t(params.k) : 0));
+}
+
+namespace {
+
+std::uint32_t order_key(float f) {
+    std::uint32_t u;
+    std::memcpy(&u, &f, sizeof u);
+    return (u & 0x80000000u) ? ~u : (u | 0x80000000u);
+}
+
+float from_order_key(std::uint32_t key) {
+    const std::uint32_t u = (key & 0x80000000u) ? (key & 0x7fffffffu) : ~key;
+    float f;
+    std::memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/// Calls f(v) for every value in order, dropping the pages of each 4M-value step once read (the
+/// spans here are spill files: prt::drop_mapped_pages).
+template <class F>
+void stream(std::span<const float> values, bool mapped, F&& f) {
+    constexpr std::size_t step = std::size_t{1} << 22;
+    for (std::size_t s = 0; s < values.size(); s += step) {
+        const std::size_t e = std::min(values.size(), s + step);
+        for (std::size_t i = s; i < e; ++i) f(values[i]);
+        if (mapped) drop_pages(values.data() + s, (e - s) * sizeof(float));
+    }
+}
+
+/// The element of rank `rank` (0-based) in sorted order: two radix passes of 16 bits.
+float select_rank(std::span<const float> values, std::uint64_t rank, bool mapped) {
+    std::vector<std::uint64_t> hist(65536, 0);
+    stream(values, mapped, [&](float v) { ++hist[order_key(v) >> 16]; });
+    std::uint32_t high = 0;
+    while (rank >= hist[high]) rank -= hist[high++];
+    std::fill(hist.begin(), hist.end(), 0);
+    stream(values, mapped, [&](float v) {
+        const std::uint32_t key = order_key(v);
+        if ((key >> 16) == high) ++hist[key & 0xffffu];
+    });
+    std::uint32_t low = 0;
+    while (rank >= hist[low]) rank -= hist[low++];
+    return from_order_key((high << 16) | low);
+}
+
+/// clamp_radii(radii, 0, stats) over a span: everything but the clamp.
+void streamed_statistics(std::span<const float> radii, RadiiStats& stats) {
+    const std::size_t n = radii.size();
+    stats.points = n;
+    stats.clamped = 0;
+    stats.clamp_limit = 0;
+    if (n == 0) return;
+    stats.raw_median = median_streaming(radii, true);
+    double sum = 0;
+    float lo = radii[0], hi = radii[0];
+    stats.zero = 0;
+    stream(radii, true, [&](float r) {  // in index order, as clamp_radii sums
+        sum += r;
+        lo = std::min(lo, r);
+        hi = std::max(hi, r);
+        if (r == 0) ++stats.zero;
+    });
+    stats.min = lo;
+    stats.max = hi;
+    stats.mean = sum / double(n);
+    stats.median = stats.raw_median;
+}
+
+}  // namespace
+
+double median_streaming(std::span<const float> values, bool mapped) {
+    if (values.empty()) return 0;
+    const std::size_t mid = (values.size() - 1) / 2;
+    double m = select_rank(values, mid, mapped);
+    if (values.size() % 2 == 0) m = 0.5 * (m + select_rank(values, mid + 1, mapped));
+    return m;
+}
+
+SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const RadiiParams& params,
+                              TiledKnnParams tiling, RadiiStats* stats, TiledKnnStats* tiling_stats,
+                              const std::function<void(std::uint64_t)>& progress) {
+    const double start = tool::now_seconds();
+    const std::size_t n = positions.size();
+    const std::uint32_t k = params.k;
+    if (k == 0) throw Error("k-NN radii: k must be at least 1");
+    if (n <= k)
+        throw Error("k-NN radii: " + std::to_string(n) + " points, need more than k = " + std::to_string(k) +
+                    " (lower --k)");
+    if (!(params.clamp_factor >= 0) || !std::isfinite(params.clamp_factor))
+        throw Error("k-NN radii: the clamp factor must be finite and >= 0");
+    tiling.k = k;
+    tiling.threads = params.threads;
+    const unsigned threads = resolve_threads(params.threads);
+    const bool local_clamp = params.scope == ClampScope::local && params.clamp_factor > 0;
+
+    // The raw radii (index order) and, for the local clamp, each point's k neighbours (global).
+    SpillFile raw(tiling.spill_folder, std::uint64_t(n) * sizeof(float), "the raw radii");
+    SpillFile neighbours;
+    if (local_clamp)
+        neighbours = SpillFile(tiling.spill_folder, std::uint64_t(n) * k * sizeof(std::uint32_t),
+                               "the neighbour lists");
+    float* r = raw.as<float>().data();
+    std::uint32_t* nb = local_clamp ? neighbours.as<std::uint32_t>().data() : nullptr;
+    TiledKnnStats tstats;
+    tiled_knn(
+        positions, tiling,
+        [&](const KnnBatch& batch) {
+            parallel_chunks(batch.queries.size(), 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
+                for (std::size_t q = b; q < e; ++q) {
+                    const std::uint32_t g = batch.global[batch.queries[q]];
+                    r[g] = std::sqrt(batch.distance2[q * k + k - 1]);  // as knn_distances
+                    if (nb)
+                        for (std::uint32_t j = 0; j < k; ++j)
+                            nb[std::size_t(g) * k + j] = batch.global[batch.neighbours[q * k + j]];
+                }
+            });
+            raw.drop();
+            if (nb) neighbours.drop();
+        },
+        progress, &tstats);
+
+    RadiiStats local;
+    local.seconds_index = tstats.seconds_bucket;
+    local.seconds_search = tstats.seconds_search;
+    SpillFile out;
+    if (local_clamp) {
+        // clamp_radii_local, streamed in index order.
+        out = SpillFile(tiling.spill_folder, std::uint64_t(n) * sizeof(float), "the radii");
+        float* o = out.as<float>().data();
+        std::atomic<std::uint64_t> clamped{0};
+        const std::size_t block = std::size_t{1} << 18;  // 9.4 MB of neighbour lists at k = 9
+        for (std::size_t base = 0; base < n; base += block) {
+            const std::size_t end = std::min(n, base + block);
+            parallel_chunks(end - base, 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
+                std::vector<float> v(k);
+                std::uint64_t c = 0;
+                for (std::size_t i = base + b; i < base + e; ++i) {
+                    for (std::uint32_t j = 0; j < k; ++j) v[j] = r[nb[i * k + j]];
+                    std::nth_element(v.begin(), v.begin() + k / 2, v.end());
+                    const float limit = params.clamp_factor * v[k / 2];
+                    o[i] = r[i] > limit ? (++c, limit) : r[i];
+                }
+                clamped += c;
+            });
+            drop_pages(nb + base * k, (end - base) * k * sizeof(std::uint32_t));
+            out.drop();
+        }
+        neighbours = SpillFile();
+        streamed_statistics(raw.as<const float>(), local);
+        const double raw_median = local.raw_median;
+        raw = SpillFile();
+        streamed_statistics(out.as<const float>(), local);
+        local.raw_median = raw_median;
+        local.clamped = clamped.load();
+    } else {
+        // clamp_radii with the global median, in place.
+        const std::span<float> radii = raw.as<float>();
+        const double raw_median = median_streaming(radii, true);
+        std::uint64_t clamped = 0;
+        double limit = 0;
+        if (params.clamp_factor > 0) {
+            const float l = static_cast<float>(double(params.clamp_factor) * raw_median);
+            limit = l;
+            for (std::size_t i = 0; i < radii.size(); ++i) {
+                if (radii[i] > l) radii[i] = l, ++clamped;
+                if ((i + 1) % (std::size_t{1} << 22) == 0) raw.drop();
+            }
+        }
+        streamed_statistics(radii, local);
+        local.raw_median = raw_median;
+        local.clamped = clamped;
+        local.clamp_limit = limit;
+        out = std::move(raw);
+    }
+    out.drop();
+    if (tiling.positions_mapped) drop_pages(positions.data(), positions.size_bytes());
+    local.seconds = tool::now_seconds() - start;
+    if (stats) *stats = local;
+    if (tiling_stats) *tiling_stats = tstats;
+    return out;
+}
+
 }  // namespace prt::pre

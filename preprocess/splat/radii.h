@@ -9,6 +9,8 @@
 #include <vector>
 
 #include "prt/formats/pool_layout.h"
+#include "spill_file.h"
+#include "tiled_knn.h"
 
 namespace prt::pre {
 
@@ -67,5 +69,25 @@ void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_
 std::vector<float> compute_radii(std::span<const pool::Float3> positions, const RadiiParams& params,
                                  RadiiStats* stats = nullptr,
                                  const std::function<void(std::uint64_t)>& progress = {});
+
+/// Bytes compute_radii() holds for n points (the kd-tree, the radii, the neighbour lists of the
+/// local clamp and the clamped copy), for choosing between it and compute_radii_tiled().
+std::uint64_t radii_in_core_bytes(std::uint64_t n, const RadiiParams& params);
+
+/// compute_radii() out of core (issue 17): the k-NN tile by tile with a halo (tiled_knn.h, within
+/// tiling.memory; tiling.k and tiling.threads are taken from `params`), the raw radii and the
+/// neighbour lists of the local clamp in spill files in tiling.spill_folder, the clamp and the
+/// statistics (exact medians by radix selection) streamed over them. Returns the radii in a spill
+/// file, equal bit for bit to what compute_radii() returns, statistics included.
+SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const RadiiParams& params,
+                              TiledKnnParams tiling, RadiiStats* stats = nullptr,
+                              TiledKnnStats* tiling_stats = nullptr,
+                              const std::function<void(std::uint64_t)>& progress = {});
+
+/// The median of `values` as clamp_radii() takes it (the middle element; the mean of the two
+/// middle ones for an even count), by radix selection in four passes and O(1) memory. `mapped`:
+/// `values` is a file mapping (a spill file) whose pages are dropped as the passes go (never set
+/// it for memory of the heap: dropping would zero it).
+double median_streaming(std::span<const float> values, bool mapped = false);
 
 }  // namespace prt::pre

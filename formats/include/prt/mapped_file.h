@@ -41,4 +41,10 @@ private:
     std::string m_label;
 };
 
+/// Unmaps the whole pages inside [data, data + bytes) of a read-only or shared file mapping from
+/// the process (madvise MADV_DONTNEED); they are read again from the page cache or the file when
+/// touched. Keeps the resident set of a pass over a file larger than memory bounded (issue 17).
+/// Never call it on anonymous memory: that would zero it.
+void drop_mapped_pages(const void* data, std::size_t bytes);
+
 }  // namespace prt

@@ -2,12 +2,11 @@
 // exit codes for usage and runtime errors), --quiet, and progress on stderr.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <chrono>
 #include <cstdint>
 #include <functional>
 #include <string>
-
-#include <CLI/CLI.hpp>
 
 #include "prt/error.h"
 
@@ -25,7 +24,9 @@ int run(int argc, char** argv, const std::string& tool, const std::string& descr
         const std::function<void(CLI::App&, CommonOptions&)>& setup,
         const std::function<void(const CommonOptions&)>& body);
 
-/// Progress of a long step on stderr, at most a few updates per second, silent when quiet.
+/// Progress of a long step on stderr, at most a few updates per second, silent when quiet. Once a
+/// step has run a second and is past 1 %, the line also shows an estimate of the time left
+/// (elapsed x remaining / done: a straight extrapolation of the rate so far).
 class Progress {
 public:
     Progress(std::string label, std::uint64_t total, bool quiet);
@@ -44,6 +45,17 @@ private:
     std::chrono::steady_clock::time_point m_start;
     std::chrono::steady_clock::time_point m_last;
 };
+
+/// A byte count as users write it: a number with an optional suffix K, M, G or T (powers of 1024,
+/// case-insensitive, an optional trailing "B" or "iB": "512M", "1.5G", "4GiB", "1000"). Throws
+/// prt::Error "WHAT: 'TEXT' is not a size (e.g. 512M, 4G)" on anything else or on 0.
+std::uint64_t parse_byte_size(const std::string& text, const char* what = "size");
+
+/// The machine's physical memory in bytes (sysconf), or 0 when unknown.
+std::uint64_t physical_memory_bytes();
+
+/// "1.50 GiB", "512.0 MiB", "12.0 KiB", "100 B" (messages).
+std::string format_bytes(std::uint64_t bytes);
 
 /// Statistics and notes for the user on stderr unless quiet (printf-style).
 void note(bool quiet, const char* format, ...) __attribute__((format(printf, 2, 3)));

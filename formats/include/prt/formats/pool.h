@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
@@ -55,6 +56,8 @@ public:
     /// The entry of a section type, or nullptr when absent.
     const SectionEntry* find(SectionType type) const;
     bool has(SectionType type) const { return find(type) != nullptr; }
+    /// Whether the pool is a file mapping (open()), not bytes in memory (from_bytes()).
+    bool mapped() const { return m_owned.empty(); }
     std::span<const std::byte> bytes(const SectionEntry& entry) const;
 
     /// Typed view of a section; an empty span when absent. Throws if the element size differs.
@@ -116,6 +119,17 @@ public:
                    {reinterpret_cast<const std::byte*>(holder->data()), holder->size() * sizeof(T)},
                    std::shared_ptr<const void>(holder, holder.get()));
     }
+    /// Adds (or replaces) a section as a view of `payload` (no copy), kept valid by `keep_alive`
+    /// until the writer is destroyed: a big section in a memory-mapped spill file stays out of RAM
+    /// (write() streams it to the file).
+    /// `file_mapped`: the payload is a file mapping (a spill file), whose pages write() drops
+    /// once written (prt::drop_mapped_pages).
+    void add_view(SectionType type, std::uint32_t element_size, std::uint64_t count,
+                  std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive,
+                  bool file_mapped = false) {
+        add_shared(type, element_size, count, payload, std::move(keep_alive));
+        m_sections.back().file_mapped = file_mapped;
+    }
     /// Carries every section of `source` over as a view (no copy), except provenance, which is
     /// merged by add_provenance().
     void carry_over(const PoolFile& source);
@@ -130,6 +144,7 @@ public:
     /// Writes to "PATH.tmp.HOST.PID", fsyncs, renames over PATH; after the rename, removes this
     /// host's temporary files of PATH left by writers that no longer run (POOL.md "Writing"). On
     /// any failure the temporary file is removed and PATH is untouched. Returns the bytes written.
+    /// The sections are streamed to the file (the pool is never assembled in memory).
     std::uint64_t write(const std::filesystem::path& path) const;
     /// The exact bytes write() would produce (for tests and the fuzz corpus).
     std::vector<std::byte> serialize() const;
@@ -141,15 +156,23 @@ private:
         std::uint64_t count;
         std::span<const std::byte> payload;
         std::shared_ptr<const void> keep_alive;  // owner of payload, or null for carried views
+        bool file_mapped = false;                // a file mapping: pages dropped once written
+        bool checksum_known = false;             // carried: the source's checked checksum
+        std::uint64_t checksum = 0;
     };
     void add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
                     std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive);
+    /// Lays the file out and hands its bytes, front to back, to `sink`; returns the file size.
+    std::uint64_t emit(const std::function<void(const std::byte*, std::size_t)>& sink) const;
     std::vector<Pending> m_sections;
     std::string m_provenance = "[]";
 };
 
 /// XXH3-64 of a byte range (the pool's checksum).
 std::uint64_t checksum(std::span<const std::byte> bytes);
+/// checksum(); when `mapped` (a file mapping), computed in 64 MiB steps whose pages are dropped
+/// once hashed (prt::drop_mapped_pages): the same value, a bounded resident set.
+std::uint64_t checksum_section(std::span<const std::byte> bytes, bool mapped);
 
 /// Sets `info`'s point_count and bounding box (bounds_min, bounds_max) from the points' positions
 /// in its local frame (an empty set: min = FLT_MAX, max = -FLT_MAX).

@@ -1,0 +1,55 @@
+// PointRT preprocess: spill files for the out-of-core builds (issue 17). A spill file is a temporary
+// file, removed from its folder as soon as it is created (nothing is left behind if the tool is
+// killed), memory-mapped read-write and shared, so a big array (a tool's output section, the
+// points sorted by tile) lives in the page cache and on disk instead of in the process's memory;
+// the kernel writes its pages back and reclaims them under pressure. drop_pages() unmaps the pages
+// a pass is done with, which keeps the resident set (and getrusage's peak) of a long pass bounded.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <string>
+
+namespace prt::pre {
+
+/// A temporary read-write memory-mapped file of a fixed size (zero-filled, sparse). Move-only.
+class SpillFile {
+public:
+    SpillFile() = default;
+    /// Creates a file of `bytes` in `folder` (O_TMPFILE, or a unique name removed at once) and
+    /// maps it. Throws prt::Error "FOLDER: cannot create a spill file for WHAT: REASON".
+    SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what);
+    SpillFile(SpillFile&& other) noexcept;
+    SpillFile& operator=(SpillFile&& other) noexcept;
+    SpillFile(const SpillFile&) = delete;
+    SpillFile& operator=(const SpillFile&) = delete;
+    ~SpillFile();
+
+    std::byte* data() const { return m_data; }
+    std::uint64_t size() const { return m_size; }
+    template <class T>
+    std::span<T> as() const {
+        return {reinterpret_cast<T*>(m_data), static_cast<std::size_t>(m_size / sizeof(T))};
+    }
+    /// drop_pages() over the whole mapping (the contents stay in the file).
+    void drop() const;
+
+private:
+    void release();
+    std::byte* m_data = nullptr;
+    std::uint64_t m_size = 0;
+};
+
+/// Unmaps the whole pages inside [data, data + bytes) of a file mapping from the process
+/// (madvise MADV_DONTNEED): a read-only mapping or a shared one re-reads them from the file (or
+/// the page cache) when touched again. Never call it on anonymous memory (it would zero it).
+void drop_pages(const void* data, std::size_t bytes);
+
+/// The process's peak resident set in bytes (getrusage ru_maxrss) and its current anonymous
+/// resident memory (/proc/self/status RssAnon; 0 when unknown), for the out-of-core statistics.
+std::uint64_t peak_rss_bytes();
+std::uint64_t current_anon_rss_bytes();
+
+}  // namespace prt::pre
