@@ -81,7 +81,8 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
         if (e.encoded_count > e.splat_count || (e.encoded_count == 0) != (e.splat_count == 0))
             pool.fail(et, brick_label(b) + std::to_string(e.encoded_count) + " encoded splats for " +
                               std::to_string(e.splat_count) + " references");
-        const std::uint64_t want = brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
+        const std::uint64_t want =
+            brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
         if (e.size != want)
             pool.fail(et, brick_label(b) + "size " + std::to_string(e.size) + " does not match its counts (" +
                               std::to_string(want) + " bytes)");
@@ -126,9 +127,10 @@ BrickView brick_view(std::span<const std::byte> payload) {
         std::size_t(h.leaf_count) + 1};
     v.refs = payload.data() + brick_refs_offset(h.node_count, h.leaf_count);
     v.ref_bytes = brick_ref_bytes(h.encoded_count);
-    v.splats = {reinterpret_cast<const CompressedSplat*>(
-                    payload.data() + brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count)),
-                h.encoded_count};
+    v.splats = {
+        reinterpret_cast<const CompressedSplat*>(
+            payload.data() + brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count)),
+        h.encoded_count};
     return v;
 }
 
@@ -157,8 +159,9 @@ BrickSections validate_brick_index(const PoolFile& pool) {
     if (s.top_nodes.empty())
         pool.fail(pool.find(SectionType::brick_top_nodes), "no nodes (the root is missing)");
     if ((s.info.flags & k_bricks_indexed) == 0)
-        pool.fail(ei, "bricks of an older prt-bricks (a splat copied into every leaf, no splat index): "
-                      "run prt-bricks again");
+        pool.fail(ei,
+                  "bricks of an older prt-bricks (a splat copied into every leaf, no splat index): "
+                  "run prt-bricks again");
     if (!(s.info.root_size > 0) || !std::isfinite(s.info.root_size) || !std::isfinite(s.info.root_min[0]) ||
         !std::isfinite(s.info.root_min[1]) || !std::isfinite(s.info.root_min[2]))
         pool.fail(ei, "root cube not finite with a positive size");
@@ -183,8 +186,8 @@ void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntr
         fail(std::to_string(payload.size()) + " bytes but its entry says " + std::to_string(entry.size));
     if (payload.size() < sizeof(BrickHeader) || entry.node_count == 0 ||
         entry.encoded_count > entry.splat_count ||
-        payload.size() != brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count,
-                                             entry.encoded_count))
+        payload.size() !=
+            brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count, entry.encoded_count))
         fail("payload size " + std::to_string(payload.size()) + " does not match its entry's counts");
     if (checksum(payload) != entry.checksum) fail("checksum mismatch");
     const BrickView v = brick_view(payload);

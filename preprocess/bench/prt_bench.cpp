@@ -97,8 +97,8 @@ nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, r
         "%-10s streaming: %s after %zu pass(es), %.3f s: %llu bricks uploaded (%s, %.2f GB/s), %u of %u "
         "bricks resident (%s)%s\n",
         name.c_str(), f.converged() ? "converged" : "not converged", passes.size(), secs,
-        static_cast<unsigned long long>(uploaded), rt::format_bytes(bytes).c_str(), gbs, f.resident_bricks,
-        f.brick_count, rt::format_bytes(f.resident_bytes).c_str(),
+        static_cast<unsigned long long>(uploaded), tool::format_bytes(bytes).c_str(), gbs, f.resident_bricks,
+        f.brick_count, tool::format_bytes(f.resident_bytes).c_str(),
         f.converged() ? ""
                       : (", the budget holds too few of the " + std::to_string(f.needed) +
                          " bricks the view needs; timed frames use coarse levels")
@@ -289,9 +289,9 @@ void run(Options o, const tool::CommonOptions& common) {
         std::printf(
             "prt-bench: streaming %u bricks under a budget of %s (always resident %s, bricks %s; in core "
             "%s)\n",
-            stream.brick_count(), rt::format_bytes(stream_options.budget).c_str(),
-            rt::format_bytes(stream.fixed_bytes()).c_str(), rt::format_bytes(stream.arena_bytes()).c_str(),
-            rt::format_bytes(stream.in_core_bytes()).c_str());
+            stream.brick_count(), tool::format_bytes(stream_options.budget).c_str(),
+            tool::format_bytes(stream.fixed_bytes()).c_str(), tool::format_bytes(stream.arena_bytes()).c_str(),
+            tool::format_bytes(stream.in_core_bytes()).c_str());
     std::printf(
         "prt-bench: %s on %s, %ux%u, %llu points (%llu splats, %llu filled leaves), leaf culling %u, median "
         "of %u "

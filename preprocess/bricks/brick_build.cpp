@@ -256,8 +256,8 @@ public:
     struct Scratch {
         std::vector<std::uint32_t> src, nodes, leaf_info;
         std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;  // (source leaf, local node)
-        std::vector<const pool::Splat*> splats;   // per reference, in leaf order
-        std::vector<std::uint32_t> refs;          // per reference: index into `encoded`
+        std::vector<const pool::Splat*> splats;                       // per reference, in leaf order
+        std::vector<std::uint32_t> refs;                              // per reference: index into `encoded`
         std::vector<const pool::Splat*> encoded;  // the distinct splats, in order of first reference
         std::unordered_map<std::uint32_t, std::uint32_t> first;  // point -> its first encoded index
     };

@@ -95,7 +95,8 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
         "prt-bricks: %u bricks (%u to %u splat references), top tree %u nodes (depth %u); %llu references "
         "to %llu encoded splats (%.2f and %.2f per point)",
         stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.top_nodes, stats.top_depth,
-        ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point, double(stats.encoded) * per_point);
+        ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point,
+        double(stats.encoded) * per_point);
     step.note(
         "prt-bricks: splats %.1f -> %.1f MiB (%.2f B per point with nodes, leaf ranges and references); "
         "pool %.1f -> %.1f MiB (%.2f B per point)%s",
@@ -103,7 +104,8 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
         double(stats.data_bytes) * mib, double(stats.data_bytes) * per_point, double(in.file_size()) * mib,
         double(bytes) * mib, double(bytes) * per_point,
         point_bytes ? (", per-point sections dropped (" + std::to_string(point_bytes / 1048576) +
-                       " MiB; --keep-points keeps them)").c_str()
+                       " MiB; --keep-points keeps them)")
+                          .c_str()
                     : "");
     step.note(
         "prt-bricks: codec error: position max %.4f mean %.4f splat radii (max %.3f quanta), normal max %.3f "

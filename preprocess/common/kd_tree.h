@@ -110,13 +110,8 @@ public:
                         });
     }
 
-private:
-    struct Point {
-        T x, y, z;
-        std::uint32_t index;  ///< into the original points
-    };
-
-    /// The k best candidates so far, sorted by (squared distance, index).
+    /// The k best candidates by (squared distance, index), ties broken by the smaller index, in
+    /// ascending order (the search's list; the tiled search of tiled_knn.cpp keeps the same).
     struct Best {
         std::uint32_t k;
         std::uint32_t count = 0;
@@ -135,6 +130,12 @@ private:
             distance2[at] = d2;
             index[at] = i;
         }
+    };
+
+private:
+    struct Point {
+        T x, y, z;
+        std::uint32_t index;  ///< into the original points
     };
 
     struct Query {

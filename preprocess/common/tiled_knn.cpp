@@ -110,23 +110,7 @@ double border_distance(const float q[3], const std::array<double, 3>& lo, const 
 }
 
 /// The k best candidates by (squared distance, index), exactly as KdTree's search keeps them.
-struct Best {
-    std::uint32_t k;
-    std::uint32_t count = 0;
-    std::uint32_t* index;
-    float* distance2;
-    void offer(float d2, std::uint32_t i) {
-        if (count == k && (d2 > distance2[k - 1] || (d2 == distance2[k - 1] && i > index[k - 1]))) return;
-        std::uint32_t at = count < k ? count++ : k - 1;
-        while (at > 0 && (distance2[at - 1] > d2 || (distance2[at - 1] == d2 && index[at - 1] > i))) {
-            distance2[at] = distance2[at - 1];
-            index[at] = index[at - 1];
-            --at;
-        }
-        distance2[at] = d2;
-        index[at] = i;
-    }
-};
+using Best = KdTree<float>::Best;
 
 class Tiler {
 public:

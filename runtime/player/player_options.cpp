@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "prt/tool.h"
+
 namespace prt::player {
 
 void add_render_options(CLI::App& app, RenderOverrides& o) {
@@ -132,10 +134,9 @@ rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& back
     else if (b.gpu_budget == "unlimited")
         s.budget = 0;
     else {
-        s.budget = rt::parse_byte_size(b.gpu_budget, "--gpu-budget");
-        if (s.budget == 0) throw Error("--gpu-budget: 0 bytes (give a size, or 'unlimited')");
+        s.budget = tool::parse_byte_size(b.gpu_budget, "--gpu-budget");  // 0 is refused
     }
-    s.upload_per_frame = rt::parse_byte_size(b.upload_per_frame, "--upload-per-frame");
+    s.upload_per_frame = tool::parse_byte_size(b.upload_per_frame, "--upload-per-frame");
     return s;
 }
 

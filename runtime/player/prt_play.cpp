@@ -119,9 +119,10 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
             "prt-play: streaming %u bricks: a budget of %s (always resident %s, bricks %s; in core the "
             "scene takes %s)",
             stream->brick_count(),
-            rt::format_bytes(player::stream_options(o.backend, *backend).budget).c_str(),
-            rt::format_bytes(stream->fixed_bytes()).c_str(), rt::format_bytes(stream->arena_bytes()).c_str(),
-            rt::format_bytes(stream->in_core_bytes()).c_str());
+            tool::format_bytes(player::stream_options(o.backend, *backend).budget).c_str(),
+            tool::format_bytes(stream->fixed_bytes()).c_str(),
+            tool::format_bytes(stream->arena_bytes()).c_str(),
+            tool::format_bytes(stream->in_core_bytes()).c_str());
     if (o.converge && !stream->streaming())
         tool::note(common.quiet,
                    "prt-play: --converge: every brick is resident (in core): one pass per frame");
@@ -181,8 +182,8 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
             ++passes;
             const rt::StreamFrame sf = stream->after_frame(s);
             if (sf.streaming)
-                tool::note(common.quiet, "prt-play: frame %u%s: %.2f ms (render %.2f ms, then streaming): %s", f,
-                           o.converge ? (" pass " + std::to_string(pass)).c_str() : "",
+                tool::note(common.quiet, "prt-play: frame %u%s: %.2f ms (render %.2f ms, then streaming): %s",
+                           f, o.converge ? (" pass " + std::to_string(pass)).c_str() : "",
                            1e3 * (tool::now_seconds() - t0), 1e3 * s.seconds, rt::describe(sf).c_str());
             last_fallbacks = s.fallbacks;
             if (!o.converge || !sf.streaming || sf.converged()) break;

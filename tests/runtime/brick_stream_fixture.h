@@ -111,6 +111,28 @@ protected:
         return bytes;
     }
 
+    /// Streams `bad` (every brick corrupted, the close view) on `backend` under half the bricks and
+    /// expects the first frame's uploads to stop with one error naming the pool, a brick and the
+    /// checksum.
+    static void expect_corrupted_brick_refused(const std::filesystem::path& bad, rt::Backend& backend) {
+        rt::LoadOptions lo;
+        lo.defer_bricks = true;
+        rt::RenderScene rs = rt::RenderScene::from_pool(bad, lo);
+        close_view(rs, 0.3);
+        const Terms t = budget_terms();
+        rt::BrickStream stream(rs, backend, rt::StreamOptions{.budget = t.fixed + t.all / 2});
+        rt::Image img;
+        try {
+            stream.after_frame(backend.render(request(rs), img));
+            ADD_FAILURE() << "a corrupted brick was uploaded";
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(bad.filename().string()), std::string::npos) << what;
+            EXPECT_NE(what.find("brick "), std::string::npos) << what;
+            EXPECT_NE(what.find("checksum"), std::string::npos) << what;
+        }
+    }
+
     static inline std::filesystem::path s_dir, s_pool;
     static inline std::vector<std::byte> s_bytes;
 };

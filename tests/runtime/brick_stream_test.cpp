@@ -18,23 +18,13 @@
 #include "prt/cpu/cpu_backend.h"
 #include "prt/error.h"
 #include "prt/runtime/image.h"
+#include "prt/tool.h"
 #include "tool_run.h"
 
 namespace prt::test {
 namespace {
 
 using BrickStreamTest = BrickStreamFixture;
-
-TEST_F(BrickStreamTest, ParsesSizes) {
-    EXPECT_EQ(rt::parse_byte_size("4096", "--gpu-budget"), 4096u);
-    EXPECT_EQ(rt::parse_byte_size("512K", "--gpu-budget"), 512u * 1024);
-    EXPECT_EQ(rt::parse_byte_size("300M", "--gpu-budget"), 300ull << 20);
-    EXPECT_EQ(rt::parse_byte_size("1.5G", "--gpu-budget"), 3ull << 29);
-    EXPECT_EQ(rt::parse_byte_size("2gib", "--gpu-budget"), 2ull << 30);
-    EXPECT_EQ(rt::parse_byte_size("8MB", "--gpu-budget"), 8ull << 20);
-    for (const char* bad : {"", "G", "12Q", "-1M", "1e400", "nan"})
-        EXPECT_THROW(rt::parse_byte_size(bad, "--gpu-budget"), Error) << bad;
-}
 
 /// A budget that holds everything: in core, the same image as without streaming.
 TEST_F(BrickStreamTest, AnAmpleBudgetLoadsInCore) {
@@ -129,7 +119,7 @@ TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
             const std::string what = e.what();
             EXPECT_EQ(what.find('\n'), std::string::npos) << what;
             EXPECT_NE(what.find("too small"), std::string::npos) << what;
-            EXPECT_NE(what.find(rt::format_bytes(t.fixed + t.largest)), std::string::npos) << what;
+            EXPECT_NE(what.find(tool::format_bytes(t.fixed + t.largest)), std::string::npos) << what;
         }
     }
 }
@@ -142,23 +132,10 @@ TEST_F(BrickStreamTest, ACorruptedBrickIsRefusedAtUpload) {
     // Every brick of the close view is a candidate: corrupt each payload's last splat byte.
     const std::vector<std::byte> bytes = corrupt_every_brick(pf, s);
     const std::filesystem::path bad = write("corrupt.pool", bytes);
+    auto backend = cpu::make_cpu_backend(2);
+    expect_corrupted_brick_refused(bad, *backend);
     rt::LoadOptions lo;
     lo.defer_bricks = true;
-    rt::RenderScene rs = rt::RenderScene::from_pool(bad, lo);
-    close_view(rs, 0.3);
-    auto backend = cpu::make_cpu_backend(2);
-    const Terms t = budget_terms();
-    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 2});
-    rt::Image img;
-    try {
-        stream.after_frame(backend->render(request(rs), img));
-        ADD_FAILURE() << "a corrupted brick was uploaded";
-    } catch (const Error& e) {
-        const std::string what = e.what();
-        EXPECT_NE(what.find("corrupt.pool"), std::string::npos) << what;
-        EXPECT_NE(what.find("brick "), std::string::npos) << what;
-        EXPECT_NE(what.find("checksum"), std::string::npos) << what;
-    }
     rt::RenderScene all = rt::RenderScene::from_pool(bad, lo);
     EXPECT_THROW(rt::BrickStream(all, *backend, rt::StreamOptions{}), Error) << "in core: refused at load";
 }

@@ -140,9 +140,12 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_all, 4>(),                           // every surface, sampling
     megakernel<core::k_mask_splats | core::k_mask_bricks, 3>(),  // bricked splats (issue 17)
 #if PRT_CUDA_TUNING_KERNELS
-    megakernel<core::k_mask_splats, 1>(),  megakernel<core::k_mask_splats, 2>(),
-    megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats, 5>(),
-    megakernel<core::k_mask_splats, 6>(),  megakernel<core::k_mask_patches, 1>(),
+    megakernel<core::k_mask_splats, 1>(),
+    megakernel<core::k_mask_splats, 2>(),
+    megakernel<core::k_mask_splats, 3>(),
+    megakernel<core::k_mask_splats, 5>(),
+    megakernel<core::k_mask_splats, 6>(),
+    megakernel<core::k_mask_patches, 1>(),
     megakernel<core::k_mask_patches, 4>(),
     megakernel<core::k_mask_splats | core::k_mask_bricks, 2>(),
     megakernel<core::k_mask_splats | core::k_mask_bricks, 4>(),

@@ -11,59 +11,13 @@
 #include <optional>
 
 #include "prt/error.h"
+#include "prt/tool.h"
 #include "prt/formats/brick_sections.h"
 #include "prt/parallel.h"
 #include "prt/runtime/leaf_bounds.h"
 
 namespace prt::rt {
 
-std::uint64_t parse_byte_size(const std::string& text, const std::string& option) {
-    const auto bad = [&]() -> Error {
-        return Error(option + ": '" + text +
-                     "' is not a size (bytes, or a number with K, M, G or T: 512M, 1.5G)");
-    };
-    std::size_t end = 0;
-    double value = 0;
-    try {
-        value = std::stod(text, &end);
-    } catch (const std::exception&) {
-        throw bad();
-    }
-    std::string unit = text.substr(end);
-    for (char& c : unit) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-    if (unit.size() >= 2 && unit.substr(unit.size() - 2) == "IB")
-        unit.resize(unit.size() - 2);
-    else if (!unit.empty() && unit.back() == 'B')
-        unit.pop_back();
-    double scale = 1;
-    if (unit == "K")
-        scale = 1024.0;
-    else if (unit == "M")
-        scale = 1024.0 * 1024;
-    else if (unit == "G")
-        scale = 1024.0 * 1024 * 1024;
-    else if (unit == "T")
-        scale = 1024.0 * 1024 * 1024 * 1024;
-    else if (!unit.empty())
-        throw bad();
-    const double bytes = value * scale;
-    if (!std::isfinite(bytes) || bytes < 0 || bytes > 1.8e19) throw bad();
-    return static_cast<std::uint64_t>(std::llround(bytes));
-}
-
-std::string format_bytes(std::uint64_t bytes) {
-    char buf[64];
-    const double b = static_cast<double>(bytes);
-    if (bytes < 1024)
-        std::snprintf(buf, sizeof(buf), "%llu B", static_cast<unsigned long long>(bytes));
-    else if (b < 1024.0 * 1024)
-        std::snprintf(buf, sizeof(buf), "%.1f KiB", b / 1024);
-    else if (b < 1024.0 * 1024 * 1024)
-        std::snprintf(buf, sizeof(buf), "%.1f MiB", b / (1024.0 * 1024));
-    else
-        std::snprintf(buf, sizeof(buf), "%.2f GiB", b / (1024.0 * 1024 * 1024));
-    return buf;
-}
 
 namespace {
 
@@ -183,8 +137,8 @@ std::string describe(const StreamFrame& f) {
     std::snprintf(buf, sizeof(buf),
                   "resident %s (%u of %u bricks), uploaded %u bricks (%s, %.2f GB/s: checks %.1f ms, copies "
                   "%.1f ms), evicted %u, %llu rays fell back",
-                  format_bytes(f.resident_bytes).c_str(), f.resident_bricks, f.brick_count, f.uploaded,
-                  format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
+                  tool::format_bytes(f.resident_bytes).c_str(), f.resident_bricks, f.brick_count, f.uploaded,
+                  tool::format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
                   f.copy_seconds * 1e3, f.evicted, static_cast<unsigned long long>(f.fallback_rays));
     return buf;
 }
@@ -253,11 +207,11 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         return;
     }
     if (options.budget < m_minimum_bytes)
-        throw Error("memory budget " + format_bytes(options.budget) +
-                    " is too small: the bricked scene needs at least " + format_bytes(m_minimum_bytes) +
+        throw Error("memory budget " + tool::format_bytes(options.budget) +
+                    " is too small: the bricked scene needs at least " + tool::format_bytes(m_minimum_bytes) +
                     " (top tree, brick table, LOD discs, per-brick tables and other models " +
-                    format_bytes(m_fixed_bytes) + ", plus the largest brick of each bricked model; " +
-                    format_bytes(m_in_core_bytes) + " holds it all in core)");
+                    tool::format_bytes(m_fixed_bytes) + ", plus the largest brick of each bricked model; " +
+                    tool::format_bytes(m_in_core_bytes) + " holds it all in core)");
     // The arenas: the budget left after the always-resident part, shared in proportion to the
     // models' brick data, each at least its largest brick.
     const std::uint64_t spare = options.budget - m_minimum_bytes;

@@ -11,8 +11,8 @@
 #include <fstream>
 #include <functional>
 #include <set>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "brick_build.h"
@@ -310,22 +310,25 @@ TEST_F(Bricks, StreamingOpenDefersTheBrickChecksumsToEachBrick) {
     const std::uint64_t at = s_bricked->find(SectionType::brick_data)->offset + good.table[victim].offset +
                              good.table[victim].size - 5;
     bytes[at] ^= std::byte{0x10};
-    EXPECT_NE(error_of([&] { PoolFile::from_bytes(bytes, "disk.pool"); })
-                  .find("disk.pool: section brick_data: bad checksum (file corrupted)"),
+    EXPECT_NE(error_of([&] {
+                  PoolFile::from_bytes(bytes, "disk.pool");
+              }).find("disk.pool: section brick_data: bad checksum (file corrupted)"),
               std::string::npos);
     pool::OpenOptions streaming;
     streaming.defer_brick_payloads = true;
     const PoolFile pool = PoolFile::from_bytes(bytes, "disk.pool", streaming);
     const pool::BrickSections s = pool::validate_brick_index(pool);
     for (std::uint32_t b = 0; b < s.table.size(); ++b) {
-        const std::string e = error_of([&] { pool::validate_brick(pool, s.info, s.table[b], b, s.payload(b)); });
+        const std::string e =
+            error_of([&] { pool::validate_brick(pool, s.info, s.table[b], b, s.payload(b)); });
         EXPECT_EQ(e, b == victim ? "disk.pool: section brick_data: brick 3: checksum mismatch" : "") << b;
     }
     // Deferring skips brick_data only: a flipped byte in any other section is still refused at open.
     std::vector<std::byte> top(s_bricked->file_bytes().begin(), s_bricked->file_bytes().end());
     top[s_bricked->find(SectionType::brick_top_nodes)->offset] ^= std::byte{0x01};
-    EXPECT_NE(error_of([&] { PoolFile::from_bytes(top, "disk.pool", streaming); })
-                  .find("section brick_top_nodes: bad checksum"),
+    EXPECT_NE(error_of([&] {
+                  PoolFile::from_bytes(top, "disk.pool", streaming);
+              }).find("section brick_top_nodes: bad checksum"),
               std::string::npos);
 }
 
@@ -377,10 +380,13 @@ TEST_F(Bricks, BadReferencesAndOldLayoutsAreRefused) {
         std::memset(base + pool::brick_refs_offset(h.node_count, h.leaf_count), 0, 2 * h.splat_count);
         table[victim].checksum = pool::checksum({base, std::size_t(table[victim].size)});
     });
-    EXPECT_NE(error_of([&] { pool::validate_bricks(orphans); }).find("brick 2: splat 1 is referenced by no leaf"),
+    EXPECT_NE(
+        error_of([&] { pool::validate_bricks(orphans); }).find("brick 2: splat 1 is referenced by no leaf"),
+        std::string::npos);
+    const PoolFile old =
+        modified(*s_bricked, [](auto& info, auto&, auto&) { info.flags &= ~pool::k_bricks_indexed; });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(old); }).find("run prt-bricks again"),
               std::string::npos);
-    const PoolFile old = modified(*s_bricked, [](auto& info, auto&, auto&) { info.flags &= ~pool::k_bricks_indexed; });
-    EXPECT_NE(error_of([&] { pool::validate_brick_index(old); }).find("run prt-bricks again"), std::string::npos);
 }
 
 TEST_F(Bricks, BadBrickNodesAreRefusedNamingTheBrick) {

@@ -237,10 +237,10 @@ TEST_F(BrickTrace, OneWalkVisitsTheFloatOctreesLeaves) {
             const core::Vec3 o = g.origin(*v, i, rho);
             core::WalkStats fs, bs;
             core::SplatSample a, b;
-            const bool fh = core::closest_hit_splats(v->octree, v->colors, o, g.d, false, core::k_inf, k_blend,
-                                                     1u << 16, a, fs, core::k_cull_none);
-            const bool bh = core::closest_hit_bricks(v->bricks, o, g.d, false, core::k_inf, k_blend, 1u << 16, b,
-                                                     bs, core::k_cull_none);
+            const bool fh = core::closest_hit_splats(v->octree, v->colors, o, g.d, false, core::k_inf,
+                                                     k_blend, 1u << 16, a, fs, core::k_cull_none);
+            const bool bh = core::closest_hit_bricks(v->bricks, o, g.d, false, core::k_inf, k_blend, 1u << 16,
+                                                     b, bs, core::k_cull_none);
             if (fh || bh) continue;
             ++misses;
             ASSERT_EQ(bs.leaves, fs.leaves) << "ray " << i << ", " << v->bricks.brick_count << " bricks";

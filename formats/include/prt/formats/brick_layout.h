@@ -97,17 +97,17 @@ enum BrickFlags : std::uint32_t {
 
 /// One brick (section brick_table, 64 bytes).
 struct BrickEntry {
-    float cube_min[3];          ///< 0: the brick root's cube, local frame
-    float cube_size;            ///< 12
-    std::uint64_t offset;       ///< 16: payload byte offset in brick_data (multiple of 64)
-    std::uint64_t size;         ///< 24: payload bytes (brick_payload_size), padding excluded
-    std::uint32_t node_count;   ///< 32: nodes of the brick's subtree
-    std::uint32_t leaf_count;   ///< 36: filled leaves
-    std::uint32_t splat_count;  ///< 40: splat references of its leaves (replicas included)
-    std::uint32_t top_node;     ///< 44: the brick_top_nodes node that addresses this brick
-    std::uint32_t level;        ///< 48: level of the brick's root (root of the whole tree = 0)
+    float cube_min[3];            ///< 0: the brick root's cube, local frame
+    float cube_size;              ///< 12
+    std::uint64_t offset;         ///< 16: payload byte offset in brick_data (multiple of 64)
+    std::uint64_t size;           ///< 24: payload bytes (brick_payload_size), padding excluded
+    std::uint32_t node_count;     ///< 32: nodes of the brick's subtree
+    std::uint32_t leaf_count;     ///< 36: filled leaves
+    std::uint32_t splat_count;    ///< 40: splat references of its leaves (replicas included)
+    std::uint32_t top_node;       ///< 44: the brick_top_nodes node that addresses this brick
+    std::uint32_t level;          ///< 48: level of the brick's root (root of the whole tree = 0)
     std::uint32_t encoded_count;  ///< 52: compressed splats (each splat once)
-    std::uint64_t checksum;     ///< 56: XXH3-64 of the payload's `size` bytes
+    std::uint64_t checksum;       ///< 56: XXH3-64 of the payload's `size` bytes
 };
 static_assert(sizeof(BrickEntry) == 64);
 static_assert(offsetof(BrickEntry, offset) == 16);
@@ -177,7 +177,8 @@ PRT_BRICK_HD inline constexpr std::uint64_t brick_refs_offset(std::uint32_t node
                                                               std::uint32_t leaf_count) {
     return brick_leaf_info_offset(node_count) + 4ull * (std::uint64_t(leaf_count) + 1);
 }
-PRT_BRICK_HD inline constexpr std::uint64_t brick_splats_offset(std::uint32_t node_count, std::uint32_t leaf_count,
+PRT_BRICK_HD inline constexpr std::uint64_t brick_splats_offset(std::uint32_t node_count,
+                                                                std::uint32_t leaf_count,
                                                                 std::uint32_t splat_count,
                                                                 std::uint32_t encoded_count) {
     return (brick_refs_offset(node_count, leaf_count) +

@@ -34,7 +34,7 @@ struct BrickView {
     std::span<const std::uint32_t> leaf_info;  ///< leaf_count + 1 begin indices into the references
     const std::byte* refs = nullptr;           ///< splat_count references, ref_bytes each
     std::uint32_t ref_bytes = 2;
-    std::span<const CompressedSplat> splats;   ///< encoded_count compressed splats
+    std::span<const CompressedSplat> splats;  ///< encoded_count compressed splats
 
     /// Reference i: the index among `splats` of the leaves' i-th splat.
     std::uint32_t ref(std::size_t i) const {

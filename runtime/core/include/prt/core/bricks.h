@@ -216,10 +216,11 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     std::uint32_t l = level;
     if (l < cur.level) cur.level = BrickCursor::k_top_tree;  // the next cell is outside the brick
     bool in_brick = cur.level != BrickCursor::k_top_tree;
-    const std::uint32_t* nodes = in_brick ? reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset())
-                                          : v.top_nodes;
-    std::uint32_t count = in_brick ? reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count
-                                   : v.top_node_count;
+    const std::uint32_t* nodes =
+        in_brick ? reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset())
+                 : v.top_nodes;
+    std::uint32_t count =
+        in_brick ? reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count : v.top_node_count;
     std::uint32_t node = load_node_word(nodes, in_brick && l == cur.level ? 0u : path[l]);
     for (;;) {  // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick once
         if (node_is_internal(node)) {
@@ -234,7 +235,7 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
             const std::uint32_t b = node_addr(node);
             if (b >= v.brick_count) return level = l, k_empty_leaf_node;
             const unsigned char* payload = brick_payload(v, b);
-            if (payload == nullptr) break;  // not resident: the brick node is the leaf
+            if (payload == nullptr) break;                 // not resident: the brick node is the leaf
             if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
             cur.level = l;
             cur.brick = b;
@@ -252,26 +253,19 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
 }
 
 /// thesis 2.2.1 over a bricked tree: the next leaf along the walk (walk_next with descend_bricked).
-PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, BrickCursor& cur, OctreeLeaf& leaf) {
-    if (!w.active) return false;
-    if (w.steps_left == 0) {
-        w.active = false;
-        w.truncated = true;
-        return false;
-    }
-    --w.steps_left;
-    std::uint32_t level = w.restart;
-    const std::uint32_t node = descend_bricked(v, w.p, w.path, level, cur);
-    return walk_step_out(w, node, level, leaf);
+PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, BrickCursor& cur,
+                                         OctreeLeaf& leaf) {
+    return walk_step(w, leaf,
+                     [&](std::uint32_t& level) { return descend_bricked(v, w.p, w.path, level, cur); });
 }
 
 /// The reference range [begin, end) of filled leaf `node` of the cursor's brick, or, with the
 /// view's leaf bounds and `culling`, false when its bounds rule out a hit in [lo, hi] (counted as
 /// culled) or it is empty; as next_leaf does it on the float path (splat.h).
-PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur, const pool::BrickHeader& h,
-                                        std::uint32_t node, std::uint32_t culling, Vec3 o, Vec3 d,
-                                        float inv_dlen, bool inside, float lo, float hi, std::uint32_t& begin,
-                                        std::uint32_t& end, WalkStats& stats) {
+PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur,
+                                        const pool::BrickHeader& h, std::uint32_t node, std::uint32_t culling,
+                                        Vec3 o, Vec3 d, float inv_dlen, bool inside, float lo, float hi,
+                                        std::uint32_t& begin, std::uint32_t& end, WalkStats& stats) {
     const std::uint32_t a = node_addr(node);
     if (a >= h.leaf_count) return false;
     if (culling != k_cull_none && v.leaf_bounds != nullptr) {
@@ -318,8 +312,8 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
             note_fallback(v, b, stats);
             LodSplats lod;
             if (lod_disc(v, walk.path[leaf.level], lod) &&
-                detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f, hi, blend,
-                                        h, stats))
+                detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f, hi,
+                                        blend, h, stats))
                 break;
             continue;
         }
@@ -366,7 +360,8 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
         const BrickSplats src = brick_splats(cur.payload);
         std::uint32_t begin = 0, end = 0;
         if (!brick_leaf_range(v, cur, src.header, leaf.node, culling, o, d, inv_dlen, inside,
-                              own_range ? leaf.t0 : 0.0f, own_range ? fminf(leaf.t1, hi) : hi, begin, end, stats))
+                              own_range ? leaf.t0 : 0.0f, own_range ? fminf(leaf.t1, hi) : hi, begin, end,
+                              stats))
             continue;
         if (detail::any_in_leaf(src, begin, end, o, d, inside, 0.0f, hi, stats)) return true;
     }

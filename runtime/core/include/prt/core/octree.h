@@ -269,7 +269,8 @@ PRT_HD PRT_INLINE std::uint32_t find_leaf(const OctreeView& v, const Fixed3& p, 
 /// the leaf's cell and t range into `leaf`, then the point moved into the neighbour across the exit
 /// face. Returns true (the leaf is valid); the walk is left inactive when the ray leaves the root or
 /// passes t_end. Shared by walk_next and the bricked walk (bricks.h), which descend differently.
-PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uint32_t level, OctreeLeaf& leaf) {
+PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uint32_t level,
+                                     OctreeLeaf& leaf) {
     const std::uint32_t shift = k_fixed_bits - level;
     const Fixed3 cell{w.p.x >> shift, w.p.y >> shift, w.p.z >> shift};
     const float size = exp2_neg(level);
@@ -343,9 +344,11 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
     return true;
 }
 
-/// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
-/// root, passed t_max or used up its steps.
-PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+/// thesis 2.2.1: one step of a walk: the bound on steps, then `descend(level)` (from level =
+/// w.restart, returning the leaf's node word and setting its level), then walk_step_out. Shared by
+/// walk_next and the bricked walk (bricks.h), which descend differently.
+template <class Descend>
+PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& descend) {
     if (!w.active) return false;
     if (w.steps_left == 0) {
         w.active = false;
@@ -353,11 +356,17 @@ PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& lea
         return false;
     }
     --w.steps_left;
-    // Top-down descent (thesis 2.2.2), from the deepest node the previous leaf's path shares with
-    // this cell rather than from the root: the same leaf, found with fewer dependent reads.
     std::uint32_t level = w.restart;
-    const std::uint32_t node = descend(v, w.p, w.path, level);
+    const std::uint32_t node = descend(level);
     return walk_step_out(w, node, level, leaf);
+}
+
+/// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
+/// root, passed t_max or used up its steps. Top-down descent (thesis 2.2.2), from the deepest node
+/// the previous leaf's path shares with this cell rather than from the root: the same leaf, found
+/// with fewer dependent reads.
+PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+    return walk_step(w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); });
 }
 
 /// The splat index range [begin, end) of a filled leaf, clamped to the arrays (empty if invalid).

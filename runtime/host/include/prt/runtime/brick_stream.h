@@ -26,12 +26,6 @@
 
 namespace prt::rt {
 
-/// "4096", "512K", "300M", "1.5G", "2T" (also "300MB", "300MiB"): bytes, suffixes binary (1024).
-/// Throws prt::Error naming `option` when the text is not a size.
-std::uint64_t parse_byte_size(const std::string& text, const std::string& option);
-/// A byte count for people: "812 B", "12.3 KiB", "1.50 GiB".
-std::string format_bytes(std::uint64_t bytes);
-
 /// The shape of one model's brick arena.
 struct BrickArena {
     std::uint32_t brick_count = 0;
