@@ -293,13 +293,13 @@ public:
         std::memcpy(base + pool::brick_leaf_info_offset(h.node_count), scratch.leaf_info.data(),
                     4 * scratch.leaf_info.size());
         std::byte* refs = base + pool::brick_refs_offset(h.node_count, h.leaf_count);
-        for (std::size_t k = 0; k < scratch.refs.size(); ++k) {
-            if (pool::brick_ref_bytes(h.encoded_count) == 2) {
+        if (pool::brick_ref_bytes(h.encoded_count) == 2) {
+            for (std::size_t k = 0; k < scratch.refs.size(); ++k) {
                 const auto r = static_cast<std::uint16_t>(scratch.refs[k]);
                 std::memcpy(refs + 2 * k, &r, 2);
-            } else {
-                std::memcpy(refs + 4 * k, &scratch.refs[k], 4);
             }
+        } else {
+            std::memcpy(refs, scratch.refs.data(), 4 * scratch.refs.size());
         }
         auto* out_splats = reinterpret_cast<pool::CompressedSplat*>(
             base + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));

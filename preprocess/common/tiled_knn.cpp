@@ -169,22 +169,23 @@ private:
         const std::size_t n = m_pos.size(), tiles = m_part.tiles();
         const std::size_t chunks = std::min<std::size_t>(std::max<std::size_t>(1, n / 65536), 8 * m_threads);
         std::vector<std::uint64_t> counts(chunks * tiles, 0);
-        auto chunk_range = [&](std::size_t c, std::size_t& b, std::size_t& e) {
-            b = c * n / chunks;
-            e = (c + 1) * n / chunks;
-        };
-        parallel_chunks(chunks, 1, m_threads, [&](std::size_t cb, std::size_t ce, unsigned) {
-            for (std::size_t c = cb; c < ce; ++c) {
-                std::size_t b, e;
-                chunk_range(c, b, e);
-                std::uint64_t* count = counts.data() + c * tiles;
-                for (std::size_t s = b; s < e; s += k_step) {
-                    const std::size_t se = std::min(e, s + k_step);
-                    for (std::size_t i = s; i < se; ++i) ++count[m_part.tile_of(m_pos[i])];
-                    drop_positions(s, se);
+        // Both passes: chunk c's points in index order, each step's position pages dropped after it
+        // (`visit(c, i)` per point, `after_step()` after each step).
+        const auto over_chunks = [&](auto&& visit, auto&& after_step) {
+            parallel_chunks(chunks, 1, m_threads, [&](std::size_t cb, std::size_t ce, unsigned) {
+                for (std::size_t c = cb; c < ce; ++c) {
+                    const std::size_t b = c * n / chunks, e = (c + 1) * n / chunks;
+                    for (std::size_t s = b; s < e; s += k_step) {
+                        const std::size_t se = std::min(e, s + k_step);
+                        for (std::size_t i = s; i < se; ++i) visit(c, i);
+                        drop_positions(s, se);
+                        after_step();
+                    }
                 }
-            }
-        });
+            });
+        };
+        over_chunks([&](std::size_t c, std::size_t i) { ++counts[c * tiles + m_part.tile_of(m_pos[i])]; },
+                    [] {});
         m_begin.assign(tiles + 1, 0);
         for (std::size_t t = 0; t < tiles; ++t) {
             std::uint64_t at = m_begin[t];
@@ -198,22 +199,12 @@ private:
         m_records =
             SpillFile(m_params.spill_folder, std::uint64_t(n) * sizeof(Record), "the points sorted by tile");
         Record* out = reinterpret_cast<Record*>(m_records.data());
-        parallel_chunks(chunks, 1, m_threads, [&](std::size_t cb, std::size_t ce, unsigned) {
-            for (std::size_t c = cb; c < ce; ++c) {
-                std::size_t b, e;
-                chunk_range(c, b, e);
-                std::uint64_t* cursor = counts.data() + c * tiles;
-                for (std::size_t s = b; s < e; s += k_step) {
-                    const std::size_t se = std::min(e, s + k_step);
-                    for (std::size_t i = s; i < se; ++i) {
-                        const pool::Float3& p = m_pos[i];
-                        out[cursor[m_part.tile_of(p)]++] = {p.x, p.y, p.z, static_cast<std::uint32_t>(i)};
-                    }
-                    drop_positions(s, se);
-                    m_records.drop();  // written records stay in the file (a shared mapping)
-                }
-            }
-        });
+        over_chunks(
+            [&](std::size_t c, std::size_t i) {
+                const pool::Float3& p = m_pos[i];
+                out[counts[c * tiles + m_part.tile_of(p)]++] = {p.x, p.y, p.z, static_cast<std::uint32_t>(i)};
+            },
+            [&] { m_records.drop(); });  // written records stay in the file (a shared mapping)
         m_records.drop();
         if (m_params.positions_mapped) drop_pages(m_pos.data(), m_pos.size_bytes());
         // Within each tile: Morton order (10 bits per axis over the tile's bounding box), then

@@ -14,6 +14,31 @@
 
 namespace prt::pre {
 
+namespace {
+
+/// Minimum, maximum, sum and zeros of the final radii, added in index order (the in-core and the
+/// streamed statistics sum alike).
+struct RadiusSummary {
+    double sum = 0;
+    float lo = 0, hi = 0;
+    std::uint64_t zero = 0, count = 0;
+    void add(float r) {
+        sum += r;
+        lo = count == 0 ? r : std::min(lo, r);
+        hi = count == 0 ? r : std::max(hi, r);
+        if (r == 0) ++zero;
+        ++count;
+    }
+    void into(RadiiStats& stats) const {
+        stats.min = lo;
+        stats.max = hi;
+        stats.mean = sum / double(count);
+        stats.zero = zero;
+    }
+};
+
+}  // namespace
+
 const char* clamp_scope_name(ClampScope s) {
     return s == ClampScope::local ? "local" : "global";
 }
@@ -95,18 +120,9 @@ void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stat
                 ++stats.clamped;
             }
     }
-    double sum = 0;
-    float lo = radii[0], hi = radii[0];
-    stats.zero = 0;
-    for (const float r : radii) {
-        sum += r;
-        lo = std::min(lo, r);
-        hi = std::max(hi, r);
-        if (r == 0) ++stats.zero;
-    }
-    stats.min = lo;
-    stats.max = hi;
-    stats.mean = sum / double(n);
+    RadiusSummary summary;
+    for (const float r : radii) summary.add(r);
+    summary.into(stats);
     stats.median = median_of(radii);
 }
 
@@ -212,18 +228,9 @@ void streamed_statistics(std::span<const float> radii, RadiiStats& stats) {
     stats.clamp_limit = 0;
     if (n == 0) return;
     stats.raw_median = median_streaming(radii, true);
-    double sum = 0;
-    float lo = radii[0], hi = radii[0];
-    stats.zero = 0;
-    stream(radii, true, [&](float r) {  // in index order, as clamp_radii sums
-        sum += r;
-        lo = std::min(lo, r);
-        hi = std::max(hi, r);
-        if (r == 0) ++stats.zero;
-    });
-    stats.min = lo;
-    stats.max = hi;
-    stats.mean = sum / double(n);
+    RadiusSummary summary;
+    stream(radii, true, [&](float r) { summary.add(r); });  // in index order, as clamp_radii sums
+    summary.into(stats);
     stats.median = stats.raw_median;
 }
 

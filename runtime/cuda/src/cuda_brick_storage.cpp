@@ -34,16 +34,7 @@ public:
         std::memset(m_host_resident.data(), 0, m_resident.size() * sizeof(unsigned long long));
         std::memset(m_host_first.data(), 0, m_first.size() * 4);
         m_staging = PinnedBuffer(k_staging);
-        core::BrickView v = scene.model(model).bricks;  // device top tree, table, LOD
-        v.data = nullptr;
-        v.data_bytes = 0;
-        v.resident = reinterpret_cast<const unsigned char* const*>(m_resident.data());
-        v.leaf_bounds = reinterpret_cast<const core::LeafBounds*>(m_arena.data());
-        v.leaf_bounds_first = m_first.data();
-        v.used = m_flags.data();
-        v.requests = m_flags.data() + m_bricks;
-        m_view = v;
-        scene.set_model_bricks(model, v);
+        reattach();
     }
     ~CudaBrickStorage() override {
         if (m_copy) {
@@ -93,17 +84,17 @@ public:
         requested.assign(flags + m_bricks, flags + 2 * std::size_t{m_bricks});
     }
 
+    /// Points the device model's brick view at this storage: the scene's device top tree, table
+    /// and LOD (new addresses after each upload of the scene), this storage's arena and tables.
     void reattach() override {
-        // The scene was uploaded again: its top tree, table and LOD have new device addresses.
         core::BrickView v = m_scene.model(m_model).bricks;
         v.data = nullptr;
         v.data_bytes = 0;
-        v.resident = m_view.resident;
-        v.leaf_bounds = m_view.leaf_bounds;
-        v.leaf_bounds_first = m_view.leaf_bounds_first;
-        v.used = m_view.used;
-        v.requests = m_view.requests;
-        m_view = v;
+        v.resident = reinterpret_cast<const unsigned char* const*>(m_resident.data());
+        v.leaf_bounds = reinterpret_cast<const core::LeafBounds*>(m_arena.data());
+        v.leaf_bounds_first = m_first.data();
+        v.used = m_flags.data();
+        v.requests = m_flags.data() + m_bricks;
         m_scene.set_model_bricks(m_model, v);
     }
 
@@ -130,7 +121,6 @@ private:
     DeviceScene& m_scene;
     std::uint32_t m_model;
     std::uint32_t m_bricks;
-    core::BrickView m_view;  ///< as set on the device
     cudaStream_t m_copy = nullptr;
     DeviceBuffer<unsigned char> m_arena;
     DeviceBuffer<unsigned long long> m_resident;  ///< const unsigned char* per brick

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <map>
@@ -11,13 +10,12 @@
 #include <optional>
 
 #include "prt/error.h"
-#include "prt/tool.h"
 #include "prt/formats/brick_sections.h"
 #include "prt/parallel.h"
 #include "prt/runtime/leaf_bounds.h"
+#include "prt/tool.h"
 
 namespace prt::rt {
-
 
 namespace {
 

@@ -96,7 +96,8 @@ struct BrickSplats : Rgb565Splats {
     const void* refs;
     pool::BrickHeader header;
     PRT_HD PRT_INLINE std::uint32_t ref(std::uint32_t i) const {
-        if (header.encoded_count <= 65536u) return static_cast<const std::uint16_t*>(refs)[i];
+        if (pool::brick_ref_bytes(header.encoded_count) == 2)
+            return static_cast<const std::uint16_t*>(refs)[i];
         return static_cast<const std::uint32_t*>(refs)[i];
     }
     PRT_HD PRT_INLINE pool::Splat load(std::uint32_t i) const {
