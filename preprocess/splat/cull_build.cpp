@@ -127,13 +127,13 @@ core::OctreeView octree_view(const OctreeSections& s) {
     return core::make_octree_view(s.info, s.nodes.data(), s.leaf_info.data(), s.splats.data());
 }
 
-std::vector<CullLeaf> collect_leaves(const OctreeSections& s) {
+std::vector<CullLeaf> collect_leaves(const OctreeSections& s, NodeCell root) {
     check_sections(s);
     std::vector<CullLeaf> leaves(s.info.filled_leaves, CullLeaf{0, k_cull_leaf_unknown, {0, 0, 0}});
     struct Item {
         std::uint32_t index, level, cell[3];
     };
-    std::vector<Item> stack{{0, 0, {0, 0, 0}}};
+    std::vector<Item> stack{{0, root.level, {root.cell[0], root.cell[1], root.cell[2]}}};
     const std::size_t n = s.nodes.size();
     while (!stack.empty()) {  // bounded: children always have larger indices (breadth-first layout)
         const Item it = stack.back();
@@ -243,7 +243,7 @@ std::string resolve_cull_backend(const std::string& name, std::string* why) {
 }
 
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,
-                                          CullStats* stats_out) {
+                                          CullStats* stats_out, const OctreePart& part) {
     check_params(params);
     check_sections(s);
     if ((s.info.flags & pool::k_octree_replicated) == 0)
@@ -252,7 +252,7 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
             "cull");
     const std::string backend = resolve_cull_backend(params.backend);
     const double start = tool::now_seconds();
-    const std::vector<CullLeaf> leaves = collect_leaves(s);
+    const std::vector<CullLeaf> leaves = collect_leaves(s, part.root);
     const std::vector<ProbeDirection> directions =
         make_probe_directions(params.directions, k_direction_sets, params.seed);
     std::vector<std::uint8_t> keep = centre_flags(s, leaves);
@@ -282,6 +282,7 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
     view.policy = params.policy;
     view.window = params.window;
     view.seed = params.seed;
+    view.leaf_base = part.leaf_base;
 
     if (backend == "cuda") {
 #ifdef PRT_HAVE_CUDA
@@ -314,8 +315,9 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
     return keep;
 }
 
-CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, CullStats* stats) {
-    const std::vector<std::uint8_t> keep = cull_keep_flags(s, params, stats);
+CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, CullStats* stats,
+                         const OctreePart& part) {
+    const std::vector<std::uint8_t> keep = cull_keep_flags(s, params, stats, part);
     CulledOctree out;
     out.info = s.info;
     out.leaf_info.resize(s.leaf_info.size());

@@ -11,7 +11,7 @@
 //   for each probe direction d (spread over a hemisphere, randomly rotated per leaf)
 //     for each cell of a jittered G x G grid over the projection across d of the part of B that
 //     L's disks reach
-//       walk the probe line through the octree (the renderer's walk_next) to L's range [t0, t1]
+//       clip the probe line to L's closed cell (the renderer's cell planes): its range [t0, t1]
 //       intersect every splat of L there (the renderer's intersect_splat); the line is two probe
 //       rays, along d (disks facing -d) and along -d (disks facing d), each handled as below
 //       thesis policy: no hit on C(L) -> keep every replica it hits
@@ -40,6 +40,7 @@
 #include <string>
 #include <vector>
 
+#include "octree_build.h"
 #include "prt/core/cull.h"
 #include "prt/core/octree.h"
 #include "prt/core/splat.h"
@@ -117,9 +118,19 @@ struct CulledOctree {
     std::vector<pool::Splat> splats;
 };
 
+/// Where the octree handed to culling sits in a whole one: its node 0 is the whole octree's node
+/// `root` and its filled leaf 0 the whole one's leaf `leaf_base` (an out-of-core build culls it cell
+/// by cell, issue 17: probes depend only on their leaf, so the result is the whole octree's). The
+/// default is the whole octree.
+struct OctreePart {
+    NodeCell root;
+    std::uint32_t leaf_base = 0;
+};
+
 /// The filled leaves of an octree (level, cell, node word by leaf_info index), found by walking
-/// the node pool from the root. Throws prt::Error on a malformed tree.
-std::vector<CullLeaf> collect_leaves(const OctreeSections& s);
+/// the node pool from node 0, which is node `root` of the whole octree. Throws prt::Error on a
+/// malformed tree.
+std::vector<CullLeaf> collect_leaves(const OctreeSections& s, NodeCell root = {});
 
 /// The probe direction table: `sets` random rotations of `directions` directions spread evenly over
 /// a hemisphere (a Fibonacci spiral).
@@ -138,10 +149,11 @@ std::string resolve_cull_backend(const std::string& name, std::string* why = nul
 /// Runs the per-leaf culling and returns the final keep flags (one per stored splat). Throws
 /// prt::Error on invalid parameters or an octree that is not replicated.
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,
-                                          CullStats* stats = nullptr);
+                                          CullStats* stats = nullptr, const OctreePart& part = {});
 
 /// Culls an octree (thesis 3.4): cull_keep_flags(), then the kept splats in their leaf order.
-CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, CullStats* stats = nullptr);
+CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, CullStats* stats = nullptr,
+                         const OctreePart& part = {});
 
 // ---- Hole rate -----------------------------------------------------------------------------------
 

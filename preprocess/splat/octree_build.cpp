@@ -47,6 +47,53 @@ struct BuildSplat {
     float box_hi[3];
 };
 
+/// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell):
+/// replication mode: the disk overlaps the child's closed box (thesis 3.4); otherwise the child
+/// holding the centre (half-open cells: a centre on a mid-plane goes to the upper child).
+std::uint8_t classify_splat(const BuildSplat& s, bool replicate, const double mid[3],
+                            const double child_lo[8][3], const double child_hi[8][3]) {
+    if (!replicate) {
+        return static_cast<std::uint8_t>(1u << ((double(s.c[0]) >= mid[0] ? 1 : 0) |
+                                                (double(s.c[1]) >= mid[1] ? 2 : 0) |
+                                                (double(s.c[2]) >= mid[2] ? 4 : 0)));
+    }
+    // Per axis, which halves the disk's bounding box reaches (closed halves share the mid-plane).
+    unsigned lower = 0, upper = 0;
+    for (int a = 0; a < 3; ++a) {
+        if (double(s.box_lo[a]) <= mid[a]) lower |= 1u << a;
+        if (double(s.box_hi[a]) >= mid[a]) upper |= 1u << a;
+    }
+    const unsigned both = lower & upper;
+    if (both == 0) {
+        // One candidate child: the disk overlaps this node (invariant) and the node is the union
+        // of its children, so the disk overlaps that child without an exact test.
+        return static_cast<std::uint8_t>(1u << upper);
+    }
+    const double c[3] = {s.c[0], s.c[1], s.c[2]};
+    const double n[3] = {s.n[0], s.n[1], s.n[2]};
+    std::uint8_t mask = 0;
+    for (unsigned child = 0; child < 8; ++child) {
+        // candidate iff on every axis the child's half is reached by the bounding box
+        bool candidate = true;
+        for (int a = 0; a < 3 && candidate; ++a)
+            candidate = (child >> a & 1u) ? (upper >> a & 1u) : (lower >> a & 1u);
+        if (candidate && disk_overlaps_box(c, n, double(s.r), child_lo[child], child_hi[child]))
+            mask |= static_cast<std::uint8_t>(1u << child);
+    }
+    return mask;
+}
+
+/// The boxes of the 8 children of node (level, cell) (node_box()) and the node's mid-planes.
+void child_cell_boxes(const pool::OctreeInfo& info, std::uint32_t level, const std::uint32_t cell[3],
+                      double mid[3], double lo[8][3], double hi[8][3]) {
+    for (unsigned child = 0; child < 8; ++child) {
+        const std::uint32_t cc[3] = {2 * cell[0] + (child & 1u), 2 * cell[1] + (child >> 1 & 1u),
+                                     2 * cell[2] + (child >> 2 & 1u)};
+        node_box(info, level + 1, cc, lo[child], hi[child]);
+    }
+    for (int a = 0; a < 3; ++a) mid[a] = hi[0][a];  // child 0 is the lower half on every axis
+}
+
 /// A subtree under construction: nodes in local numbering (children of a node contiguous, the
 /// internal nodes' address = local index of the first child), leaves in depth-first order.
 struct LocalTree {
@@ -74,18 +121,20 @@ struct Scratch {
 
 class Builder {
 public:
-    Builder(std::vector<BuildSplat> splats, const pool::OctreeInfo& info, const OctreeParams& params)
-        : m_splats(std::move(splats)), m_info(info), m_params(params) {}
+    Builder(std::vector<BuildSplat> splats, const pool::OctreeInfo& info, const OctreeParams& params,
+            NodeCell root = {})
+        : m_splats(std::move(splats)), m_info(info), m_params(params), m_root(root) {}
 
     /// Would a node at this level holding these splats be split (thesis 3.2: more than X)?
     bool should_split(std::uint32_t level, const std::uint32_t cell[3], const std::uint32_t* list,
                       std::size_t count) const {
         if (count <= m_params.max_leaf_splats || level >= m_params.max_depth) return false;
+        std::uint64_t centres = count;
         if (m_params.split_by_centres && m_params.replicate) {
             // count only the centres in the node's half-open cell (the others are replicas)
             double lo[3], hi[3];
             node_box(m_info, level, cell, lo, hi);
-            std::size_t centres = 0;
+            centres = 0;
             for (std::size_t k = 0; k < count; ++k) {
                 const BuildSplat& s = m_splats[list[k]];
                 bool inside = true;
@@ -93,61 +142,22 @@ public:
                     inside = inside && double(s.c[a]) >= lo[a] && double(s.c[a]) < hi[a];
                 centres += inside;
             }
-            if (centres <= m_params.max_leaf_splats) return false;
         }
-        if (m_params.min_cell_ratio > 0) {
-            double sum = 0;
+        double sum = 0;
+        if (m_params.min_cell_ratio > 0)
             for (std::size_t k = 0; k < count; ++k) sum += m_splats[list[k]].r;
-            const double edge = double(m_info.root_size) / double(std::uint64_t(1) << level);
-            if (edge < double(m_params.min_cell_ratio) * (sum / double(count))) return false;
-        }
-        return true;
+        return octree_splits_node(m_params, m_info, NodeCell{level, {cell[0], cell[1], cell[2]}}, count, sum,
+                                  centres);
     }
 
-    /// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell):
-    /// replication mode: the disk overlaps the child's closed box (thesis 3.4); otherwise the child
-    /// holding the centre (half-open cells: a centre on a mid-plane goes to the upper child).
     std::uint8_t classify(const BuildSplat& s, const double mid[3], const double child_lo[8][3],
                           const double child_hi[8][3]) const {
-        if (!m_params.replicate) {
-            return static_cast<std::uint8_t>(1u << ((double(s.c[0]) >= mid[0] ? 1 : 0) |
-                                                    (double(s.c[1]) >= mid[1] ? 2 : 0) |
-                                                    (double(s.c[2]) >= mid[2] ? 4 : 0)));
-        }
-        // Per axis, which halves the disk's bounding box reaches (closed halves share the mid-plane).
-        unsigned lower = 0, upper = 0;
-        for (int a = 0; a < 3; ++a) {
-            if (double(s.box_lo[a]) <= mid[a]) lower |= 1u << a;
-            if (double(s.box_hi[a]) >= mid[a]) upper |= 1u << a;
-        }
-        const unsigned both = lower & upper;
-        if (both == 0) {
-            // One candidate child: the disk overlaps this node (invariant) and the node is the union
-            // of its children, so the disk overlaps that child without an exact test.
-            return static_cast<std::uint8_t>(1u << upper);
-        }
-        const double c[3] = {s.c[0], s.c[1], s.c[2]};
-        const double n[3] = {s.n[0], s.n[1], s.n[2]};
-        std::uint8_t mask = 0;
-        for (unsigned child = 0; child < 8; ++child) {
-            // candidate iff on every axis the child's half is reached by the bounding box
-            bool candidate = true;
-            for (int a = 0; a < 3 && candidate; ++a)
-                candidate = (child >> a & 1u) ? (upper >> a & 1u) : (lower >> a & 1u);
-            if (candidate && disk_overlaps_box(c, n, double(s.r), child_lo[child], child_hi[child]))
-                mask |= static_cast<std::uint8_t>(1u << child);
-        }
-        return mask;
+        return classify_splat(s, m_params.replicate, mid, child_lo, child_hi);
     }
 
     void child_boxes(std::uint32_t level, const std::uint32_t cell[3], double mid[3], double lo[8][3],
                      double hi[8][3]) const {
-        for (unsigned child = 0; child < 8; ++child) {
-            const std::uint32_t cc[3] = {2 * cell[0] + (child & 1u), 2 * cell[1] + (child >> 1 & 1u),
-                                         2 * cell[2] + (child >> 2 & 1u)};
-            node_box(m_info, level + 1, cc, lo[child], hi[child]);
-        }
-        for (int a = 0; a < 3; ++a) mid[a] = hi[0][a];  // child 0 is the lower half on every axis
+        child_cell_boxes(m_info, level, cell, mid, lo, hi);
     }
 
     /// Emits a leaf for list[0, count): splats whose centre lies in the leaf's closed box first
@@ -297,9 +307,9 @@ public:
         std::iota(top_scratch.stack.begin(), top_scratch.stack.end(), 0u);
         const std::size_t task_threshold = std::max<std::size_t>(2048, n / (std::size_t(threads) * 32));
         m_top.nodes.resize(1);
-        const std::uint32_t root_cell[3] = {0, 0, 0};
+        m_top.depth = m_root.level;
         m_top_phase = true;
-        build_top(top_scratch, 0, 0, root_cell, 0, n, task_threshold);
+        build_top(top_scratch, 0, m_root.level, m_root.cell, 0, n, task_threshold);
         m_top_phase = false;
         top_scratch = Scratch{};
 
@@ -438,6 +448,7 @@ private:
     std::vector<BuildSplat> m_splats;
     pool::OctreeInfo m_info;
     OctreeParams m_params;
+    NodeCell m_root;  // the node the tree is built from (the octree's root, or one cell of it)
     unsigned m_threads = 1;
     bool m_top_phase = false;  // only the (serial) top phase classifies large lists in parallel
     LocalTree m_top;
@@ -447,6 +458,17 @@ private:
 };
 
 }  // namespace
+
+bool octree_splits_node(const OctreeParams& params, const pool::OctreeInfo& info, NodeCell node,
+                        std::uint64_t count, double radius_sum, std::uint64_t centres) {
+    if (count <= params.max_leaf_splats || node.level >= params.max_depth) return false;
+    if (params.split_by_centres && params.replicate && centres <= params.max_leaf_splats) return false;
+    if (params.min_cell_ratio > 0) {
+        const double edge = double(info.root_size) / double(std::uint64_t(1) << node.level);
+        if (edge < double(params.min_cell_ratio) * (radius_sum / double(count))) return false;
+    }
+    return true;
+}
 
 void check_octree_limits(std::uint64_t nodes, std::uint64_t filled_leaves, std::uint64_t stored_splats) {
     const std::uint64_t max_nodes = std::uint64_t(pool::k_node_address_max) + 1;  // child address <= 2^30 - 8
@@ -473,107 +495,201 @@ void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint
     }
 }
 
-SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
-                         std::span<const float> radii, const OctreeParams& params, OctreeStats* stats_out) {
-    const double start = tool::now_seconds();
-    if (normals.size() != positions.size() || radii.size() != positions.size())
-        throw Error("octree build: " + std::to_string(positions.size()) + " positions but " +
-                    std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
-                    " radii");
+namespace {
+
+/// thesis 3.1: whether point (p, n, r) can be a splat: a finite positive radius, a finite position
+/// and a finite non-zero normal; `len` gets the normal's length.
+bool usable_splat(const pool::Float3& p, const pool::Float3& n, float r, double& len) {
+    len = std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
+    return r > 0 && std::isfinite(r) && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
+           len > 0 && std::isfinite(len);
+}
+
+/// The build record of a usable point: the unit normal (normalised in double, then rounded) and
+/// the disk's bounding box, rounded outward.
+BuildSplat make_build_splat(const pool::Float3& p, const pool::Float3& nrm, float r, double len,
+                            std::uint32_t point) {
+    const double c[3] = {p.x, p.y, p.z};
+    const double n[3] = {nrm.x / len, nrm.y / len, nrm.z / len};
+    BuildSplat s{};
+    for (int a = 0; a < 3; ++a) {
+        s.c[a] = static_cast<float>(c[a]);
+        s.n[a] = static_cast<float>(n[a]);
+    }
+    s.r = r;
+    s.point = point;
+    for (int a = 0; a < 3; ++a) {
+        // the exact test uses the stored float normal: bound the box with it, renormalised
+        const double na = double(s.n[a]);
+        // + 1e-6 r: the stored normal is unit only to float precision; the box must stay a superset
+        const double e = disk_half_extent(double(r), std::min(1.0, std::fabs(na))) + 1e-6 * double(r);
+        s.box_lo[a] = round_down(c[a] - e);
+        s.box_hi[a] = round_up(c[a] + e);
+    }
+    return s;
+}
+
+void check_params(const OctreeParams& params, std::size_t points) {
     if (params.max_leaf_splats == 0) throw Error("octree build: the leaf size (X) must be at least 1");
     if (params.max_depth > k_max_supported_depth)
         throw Error("octree build: maximum depth " + std::to_string(params.max_depth) + " exceeds " +
                     std::to_string(k_max_supported_depth));
     if (!(params.min_cell_ratio >= 0) || !std::isfinite(params.min_cell_ratio))
         throw Error("octree build: the minimum cell ratio must be finite and >= 0");
-    if (positions.size() > std::numeric_limits<std::uint32_t>::max())
+    if (points > std::numeric_limits<std::uint32_t>::max())
         throw Error("octree build: more than 2^32 - 1 points");
-    const unsigned threads = resolve_threads(params.threads);
+}
 
-    // -- 1. the splats: disks with a finite positive radius and a usable normal (thesis 3.1) ------
-    OctreeStats stats;
+/// The usable points as build records (point = index in the arrays), skipped ones counted.
+std::vector<BuildSplat> build_splats(std::span<const pool::Float3> positions,
+                                     std::span<const pool::Float3> normals, std::span<const float> radii,
+                                     OctreeStats& stats, RootBounds* bounds) {
+    if (normals.size() != positions.size() || radii.size() != positions.size())
+        throw Error("octree build: " + std::to_string(positions.size()) + " positions but " +
+                    std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
+                    " radii");
     std::vector<BuildSplat> splats;
     splats.reserve(positions.size());
-    double lo[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
-                    std::numeric_limits<double>::infinity()};
-    double hi[3] = {-lo[0], -lo[1], -lo[2]};
     for (std::size_t i = 0; i < positions.size(); ++i) {
-        const float r = radii[i];
-        const double c[3] = {positions[i].x, positions[i].y, positions[i].z};
-        double n[3] = {normals[i].x, normals[i].y, normals[i].z};
-        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        if (!(r > 0) || !std::isfinite(r) || !std::isfinite(c[0]) || !std::isfinite(c[1]) ||
-            !std::isfinite(c[2]) || !(len > 0) || !std::isfinite(len)) {
+        double len;
+        if (!usable_splat(positions[i], normals[i], radii[i], len)) {
             ++stats.skipped_splats;
             continue;
         }
-        BuildSplat s{};
-        for (int a = 0; a < 3; ++a) {
-            n[a] /= len;
-            s.c[a] = static_cast<float>(c[a]);
-            s.n[a] = static_cast<float>(n[a]);
-        }
-        s.r = r;
-        s.point = static_cast<std::uint32_t>(i);
-        for (int a = 0; a < 3; ++a) {
-            // the exact test uses the stored float normal: bound the box with it, renormalised
-            const double na = double(s.n[a]);
-            // + 1e-6 r: the stored normal is unit only to float precision; the box must stay a superset
-            const double e = disk_half_extent(double(r), std::min(1.0, std::fabs(na))) + 1e-6 * double(r);
-            s.box_lo[a] = round_down(c[a] - e);
-            s.box_hi[a] = round_up(c[a] + e);
-            lo[a] = std::min(lo[a], c[a] - r);
-            hi[a] = std::max(hi[a], c[a] + r);
-        }
-        splats.push_back(s);
+        if (bounds) bounds->add(positions[i], normals[i], radii[i]);
+        splats.push_back(
+            make_build_splat(positions[i], normals[i], radii[i], len, static_cast<std::uint32_t>(i)));
     }
     if (splats.empty())
         throw Error("octree build: no point has a finite positive radius and a normal (" +
                     std::to_string(positions.size()) + " points)");
+    return splats;
+}
 
-    // -- the root: a cube enclosing every disk (centre +- radius), enlarged by 1/1024 ----------------
+/// Morton (Z-curve) order of the centres: the builder's lists then touch nearby memory, whatever
+/// the input order (a random-order input otherwise makes every access a cache miss). Ties keep
+/// the input order, so the result does not depend on the thread count, and a subset of the
+/// points (one cell of an out-of-core build) keeps the order it has among all of them.
+void sort_by_morton(std::vector<BuildSplat>& splats, const pool::OctreeInfo& info, unsigned threads) {
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(splats.size());
+    const double scale = 2097151.0 / double(info.root_size);
+    parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) {
+            std::uint32_t q[3];
+            for (int a = 0; a < 3; ++a)
+                q[a] = static_cast<std::uint32_t>(
+                    std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0));
+            keys[i] = {pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
+        }
+    });
+    // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
+    pre::radix_sort_by(keys, 63, threads, [](const auto& k) { return k.first; });
+    std::vector<BuildSplat> sorted(splats.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = splats[keys[i].second];
+    splats = std::move(sorted);
+}
+
+}  // namespace
+
+bool octree_uses_point(const pool::Float3& position, const pool::Float3& normal, float radius) {
+    double len;
+    return usable_splat(position, normal, radius, len);
+}
+
+RootBounds::RootBounds() {
+    for (int a = 0; a < 3; ++a) {
+        m_lo[a] = std::numeric_limits<double>::infinity();
+        m_hi[a] = -std::numeric_limits<double>::infinity();
+    }
+}
+
+bool RootBounds::add(const pool::Float3& position, const pool::Float3& normal, float radius) {
+    double len;
+    if (!usable_splat(position, normal, radius, len)) {
+        ++m_skipped;
+        return false;
+    }
+    const double c[3] = {position.x, position.y, position.z};
+    for (int a = 0; a < 3; ++a) {
+        m_lo[a] = std::min(m_lo[a], c[a] - radius);
+        m_hi[a] = std::max(m_hi[a], c[a] + radius);
+    }
+    ++m_valid;
+    return true;
+}
+
+void RootBounds::merge(const RootBounds& o) {
+    for (int a = 0; a < 3; ++a)
+        m_lo[a] = std::min(m_lo[a], o.m_lo[a]), m_hi[a] = std::max(m_hi[a], o.m_hi[a]);
+    m_valid += o.m_valid;
+    m_skipped += o.m_skipped;
+}
+
+pool::OctreeInfo RootBounds::root() const {
+    if (m_valid == 0)
+        throw Error("octree build: no point has a finite positive radius and a normal (" +
+                    std::to_string(m_skipped) + " points)");
+    // a cube enclosing every disk (centre +- radius), enlarged by 1/1024
     double extent = 0;
-    for (int a = 0; a < 3; ++a) extent = std::max(extent, hi[a] - lo[a]);
+    for (int a = 0; a < 3; ++a) extent = std::max(extent, m_hi[a] - m_lo[a]);
     const double size = extent * (1.0 + 1.0 / 1024.0);
     pool::OctreeInfo info{};
     double root_size = 0;
     for (int a = 0; a < 3; ++a) {
-        info.root_min[a] = round_down(0.5 * (lo[a] + hi[a]) - 0.5 * size);
-        root_size = std::max(root_size, hi[a] - double(info.root_min[a]));
+        info.root_min[a] = round_down(0.5 * (m_lo[a] + m_hi[a]) - 0.5 * size);
+        root_size = std::max(root_size, m_hi[a] - double(info.root_min[a]));
     }
     info.root_size = round_up(root_size * (1.0 + 1.0 / 4096.0));
     for (int a = 0; a < 3; ++a)
-        if (!(double(info.root_min[a]) + double(info.root_size) > hi[a]) ||
-            !(double(info.root_min[a]) < lo[a]))
+        if (!(double(info.root_min[a]) + double(info.root_size) > m_hi[a]) ||
+            !(double(info.root_min[a]) < m_lo[a]))
             throw Error("octree build: the root cube cannot enclose the model in float precision");
+    return info;
+}
 
-    // Morton (Z-curve) order of the centres: the builder's lists then touch nearby memory, whatever
-    // the input order (a random-order input otherwise makes every access a cache miss). Ties keep
-    // the input order, so the result does not depend on the thread count.
-    {
-        std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(splats.size());
-        const double scale = 2097151.0 / double(info.root_size);
-        parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-            for (std::size_t i = b; i < e; ++i) {
-                std::uint32_t q[3];
-                for (int a = 0; a < 3; ++a)
-                    q[a] = static_cast<std::uint32_t>(
-                        std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0));
-                keys[i] = {pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
-            }
-        });
-        // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
-        pre::radix_sort_by(keys, 63, threads, [](const auto& k) { return k.first; });
-        std::vector<BuildSplat> sorted(splats.size());
-        for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = splats[keys[i].second];
-        splats = std::move(sorted);
-    }
-
+SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                         std::span<const float> radii, const OctreeParams& params, OctreeStats* stats_out) {
+    const double start = tool::now_seconds();
+    check_params(params, positions.size());
+    const unsigned threads = resolve_threads(params.threads);
+    OctreeStats stats;
+    RootBounds bounds;
+    std::vector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds);  // thesis 3.1
+    const pool::OctreeInfo info = bounds.root();
+    sort_by_morton(splats, info, threads);
     Builder builder(std::move(splats), info, params);
     SplatOctree octree = builder.run(threads, stats);
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
     return octree;
+}
+
+SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                              std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
+                              const OctreeParams& params, OctreeStats* stats_out) {
+    const double start = tool::now_seconds();
+    check_params(params, positions.size());
+    if (cell.level > params.max_depth)
+        throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
+    const unsigned threads = resolve_threads(params.threads);
+    OctreeStats stats;
+    std::vector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr);
+    sort_by_morton(splats, root, threads);
+    Builder builder(std::move(splats), root, params, cell);
+    SplatOctree octree = builder.run(threads, stats);
+    stats.seconds = tool::now_seconds() - start;
+    if (stats_out) *stats_out = stats;
+    return octree;
+}
+
+std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
+                                const pool::Float3& normal, float radius, bool replicate) {
+    double len;
+    if (!usable_splat(position, normal, radius, len)) return 0;
+    const BuildSplat s = make_build_splat(position, normal, radius, len, 0);
+    double mid[3], lo[8][3], hi[8][3];
+    child_cell_boxes(root, node.level, node.cell, mid, lo, hi);
+    return classify_splat(s, replicate, mid, lo, hi);
 }
 
 void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer) {

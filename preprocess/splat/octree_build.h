@@ -12,13 +12,19 @@
 
 namespace prt::pre {
 
+/// A node's cell: its level (root = 0) and integer coordinates (each < 2^level).
+struct NodeCell {
+    std::uint32_t level = 0;
+    std::uint32_t cell[3] = {0, 0, 0};
+};
+
 struct OctreeParams {
     /// X of thesis 3.2: a leaf overlapped by more splats is split. 48 from measurement (1M-point
     /// sphere, k = 9 radii: X = 16 stores each splat 63 times and misses the 2 s build target,
     /// X = 32 10 times, X = 48 6.5 times in 1.4 s; scripts/bench-splat.sh).
     std::uint32_t max_leaf_splats = 48;
-    std::uint32_t max_depth = 24;        ///< leaves at this level are never split
-    bool replicate = true;               ///< store each splat in every leaf its disk overlaps
+    std::uint32_t max_depth = 24;  ///< leaves at this level are never split
+    bool replicate = true;         ///< store each splat in every leaf its disk overlaps
     // Added by prt-octree (issue 3); the fields above are the agreed interface.
     /// A node whose edge is shorter than min_cell_ratio x the mean radius of the splats overlapping
     /// it is not split: once cells are smaller than the disks, every cell keeps the disks that
@@ -66,6 +72,55 @@ struct SplatOctree {
 SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
                          std::span<const float> radii, const OctreeParams& params,
                          OctreeStats* stats = nullptr);
+
+// ---- Added for the out-of-core brick build (issue 17) -------------------------------------------
+
+/// Whether build_octree makes a splat of this point (thesis 3.1): a finite positive radius, a finite
+/// position and a finite non-zero normal; the others are skipped.
+bool octree_uses_point(const pool::Float3& position, const pool::Float3& normal, float radius);
+
+/// build_octree's root cube, accumulated over points given in any number of batches (an out-of-core
+/// build reads them in passes; merge() joins the bounds of parallel batches).
+class RootBounds {
+public:
+    RootBounds();
+    /// Adds a point; false (counted as skipped) when build_octree skips it: radius not finite and
+    /// positive, a non-finite position, a zero or non-finite normal.
+    bool add(const pool::Float3& position, const pool::Float3& normal, float radius);
+    void merge(const RootBounds& other);
+    std::uint64_t valid() const { return m_valid; }
+    std::uint64_t skipped() const { return m_skipped; }
+    /// The root cube (build_octree's details) with only root_min and root_size set. Throws
+    /// prt::Error when no point was valid or float cannot enclose the model.
+    pool::OctreeInfo root() const;
+
+private:
+    double m_lo[3], m_hi[3];
+    std::uint64_t m_valid = 0, m_skipped = 0;
+};
+
+/// The subtree below node `cell` of the octree whose root cube is `root` (RootBounds::root()), as
+/// build_octree would build it, given exactly the usable points whose disk overlaps that node (as
+/// child_overlap_mask() decides it level by level from the root), in their input order. The
+/// result's node 0 is `cell`; its leaves are numbered and its splats stored as in build_octree
+/// (Splat::point is the index in these arrays); info holds the root cube and this subtree's counts
+/// (depth: the deepest level in the whole octree's numbering). The caller checks that the
+/// whole octree splits every ancestor of `cell` (octree_splits_node()).
+SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                              std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
+                              const OctreeParams& params, OctreeStats* stats = nullptr);
+
+/// Bit c is set when build_octree puts the point's splat in child c of `node` (replicate: its disk
+/// overlaps the child's closed box, thesis 3.4; otherwise the child holding its centre); 0 for a
+/// point build_octree skips.
+std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
+                                const pool::Float3& normal, float radius, bool replicate);
+
+/// build_octree's split rule (thesis 3.2) for a node whose list holds `count` splats whose radii
+/// sum to `radius_sum`, `centres` of them with their centre in the node's half-open cell (read
+/// only with split_by_centres).
+bool octree_splits_node(const OctreeParams& params, const pool::OctreeInfo& root, NodeCell node,
+                        std::uint64_t count, double radius_sum, std::uint64_t centres);
 
 /// Adds (replacing) the four octree sections to a writer.
 void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer);

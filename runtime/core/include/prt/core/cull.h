@@ -55,9 +55,9 @@ struct CullView {
     CullPolicy policy = CullPolicy::greedy;
     float window = 1.0f;     ///< blending window in radii of the nearest splat (RenderParams::blend_window)
     std::uint32_t seed = 0;  ///< jitter and direction-set choice
-    /// Leaves one probe walk may visit: it starts within 1/32 of the leaf's edge of the leaf, so it
-    /// needs a few steps; a walk cut by the bound is no probe.
-    std::uint32_t max_steps = 64;
+    /// Added to a leaf's index in the hashes that pick its direction set and jitter: the octree-wide
+    /// index of leaf 0 when `leaves` are a part of an octree (an out-of-core build culls cell by cell).
+    std::uint32_t leaf_base = 0;
 };
 
 /// Per-leaf counters, summed by the backends.
@@ -240,7 +240,7 @@ struct ProbeFrame {
 /// direction sets, picked by a hash of the leaf index and the seed.
 PRT_HD inline void probe_frame(const CullView& v, std::uint32_t leaf, const ProbeRegion& r, std::uint32_t di,
                                ProbeFrame& f) {
-    const std::uint32_t leaf_hash = cull_detail::hash32(leaf ^ cull_detail::hash32(v.seed));
+    const std::uint32_t leaf_hash = cull_detail::hash32((leaf + v.leaf_base) ^ cull_detail::hash32(v.seed));
     f.dir = v.directions[(leaf_hash % v.direction_sets) * v.directions_per_set + di];
     f.u0 = f.v0 = f.d0 = k_inf;
     f.u1 = f.v1 = f.d1 = -k_inf;
@@ -265,8 +265,8 @@ PRT_HD inline bool make_probe(const CullView& v, std::uint32_t leaf, const Probe
                               const ProbeFrame& f, std::uint32_t k, Vec3& o, Vec3& d, float& t_max) {
     const std::uint32_t cell = k % (v.grid * v.grid);
     const std::uint32_t gi = cell % v.grid, gj = cell / v.grid;
-    const std::uint32_t h =
-        cull_detail::hash32(cull_detail::hash32(leaf ^ cull_detail::hash32(v.seed)) + k * 0x9e3779b9u);
+    const std::uint32_t h = cull_detail::hash32(
+        cull_detail::hash32((leaf + v.leaf_base) ^ cull_detail::hash32(v.seed)) + k * 0x9e3779b9u);
     const float inv_g = 1.0f / static_cast<float>(v.grid);
     const float a = f.u0 + (f.u1 - f.u0) * ((static_cast<float>(gi) + cull_detail::unit_float(h)) * inv_g);
     const float b =
@@ -296,36 +296,48 @@ PRT_HD inline bool make_probe(const CullView& v, std::uint32_t leaf, const Probe
     return e0 <= e1;
 }
 
-/// The probe's parameter range inside its leaf, exactly as the renderer computes it: the ray is
-/// walked through the octree (thesis 2.2.1, walk_next) until it reaches the leaf. Returns
-/// false when the walk does not reach the leaf (the probe grazes an edge or corner).
+/// The probe's parameter range inside its leaf: the ray clipped to the leaf's closed cell, with the
+/// renderer's arithmetic (walk_begin's normalized root coordinates, walk_step_out's cell planes c *
+/// 2^-level). It depends on the leaf alone, not on the leaves the ray crosses before it, so a part of an
+/// octree (an out-of-core brick build, issue 17) culls exactly as the whole tree does. Returns false when the
+/// line misses the leaf's cell.
 PRT_HD inline bool probe_leaf_range(const CullView& v, std::uint32_t leaf, Vec3 o, Vec3 d, float t_max,
                                     float& t0, float& t1) {
-    OctreeWalk w;
-    if (!walk_begin(v.octree, o, d, 0.0f, t_max, v.max_steps, w)) return false;
-    const std::uint32_t node = v.leaves[leaf].node;
-    OctreeLeaf l;
-    while (walk_next(v.octree, w, l)) {  // bounded by max_steps
-        if (l.node == node) {
-            t0 = l.t0;
-            t1 = l.t1;
-            return t0 <= t1;
+    const CullLeaf L = v.leaves[leaf];
+    const Vec3 on = (o - v.octree.root_min) * v.octree.inv_root_size;
+    const Vec3 dn = d * v.octree.inv_root_size;
+    const float size = exp2_neg(L.level);
+    float lo = 0.0f, hi = t_max;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float oa = component(on, a), da = component(dn, a);
+        const float c = static_cast<float>(L.cell[a]);
+        const float r0 = c * size, r1 = (c + 1.0f) * size;  // exact: c < 2^24, size a power of 2
+        if (da == 0.0f) {
+            if (!(oa >= r0 && oa <= r1)) return false;
+            continue;
         }
+        const float ta = (r0 - oa) / da, tb = (r1 - oa) / da;
+        lo = fmaxf(lo, fminf(ta, tb));
+        hi = fminf(hi, fmaxf(ta, tb));
     }
-    return false;
+    t0 = lo;
+    t1 = hi;
+    return t0 <= t1;
 }
 
 /// Probe line k of `leaf` (`frame` is set at the first line of each of its directions): the ray
 /// o + t d, its range [t0, t1] inside the leaf, and both sides' nearest hits among the leaf's
 /// centre splats [begin, end) (probe_hits). False when the line misses the leaf.
 PRT_HD inline bool trace_probe_line(const CullView& v, std::uint32_t leaf, const ProbeRegion& region,
-                                    ProbeFrame& frame, std::uint32_t k, std::uint32_t begin, std::uint32_t end,
-                                    const std::uint8_t* keep, Vec3& o, Vec3& d, float& t0, float& t1,
-                                    cull_detail::SideHits hits[2], CullCounters& c) {
+                                    ProbeFrame& frame, std::uint32_t k, std::uint32_t begin,
+                                    std::uint32_t end, const std::uint8_t* keep, Vec3& o, Vec3& d, float& t0,
+                                    float& t1, cull_detail::SideHits hits[2], CullCounters& c) {
     const std::uint32_t per_dir = v.grid * v.grid;
     float t_max;
     if (k % per_dir == 0) probe_frame(v, leaf, region, k / per_dir, frame);
-    if (!make_probe(v, leaf, region, frame, k, o, d, t_max) || !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
+    if (!make_probe(v, leaf, region, frame, k, o, d, t_max) ||
+        !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
         return false;
     cull_detail::probe_hits(v.octree, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
     return true;
