@@ -32,15 +32,6 @@ namespace {
 
 constexpr double k_pi = 3.14159265358979323846;
 
-/// Area-weighted sums of a node's splats (LOD), each replica weighted 1 / its copies.
-struct LodSum {
-    double w = 0, p[3] = {0, 0, 0}, n[3] = {0, 0, 0}, c[3] = {0, 0, 0};
-    void add(const LodSum& o) {
-        w += o.w;
-        for (int a = 0; a < 3; ++a) p[a] += o.p[a], n[a] += o.n[a], c[a] += o.c[a];
-    }
-};
-
 float round_up(double x) {
     float f = static_cast<float>(x);
     if (double(f) < x) f = std::nextafter(f, INFINITY);
@@ -130,8 +121,10 @@ struct TopCut {
 
 /// Phase 2: the top tree, breadth first from the root, into `top_nodes`.
 TopCut cut_top_tree(std::span<const std::uint32_t> nodes, const Subtrees& sub, std::uint32_t limit,
-                    std::vector<std::uint32_t>& top_nodes) {
+                    NodeCell root, std::vector<std::uint32_t>& top_nodes) {
     TopCut cut;
+    cut.level[0] = root.level;
+    std::copy(root.cell, root.cell + 3, cut.cell.begin());
     for (std::size_t t = 0; t < cut.src.size(); ++t) {
         const std::uint32_t s = cut.src[t];
         const NodeType type = pool::node_type(nodes[s]);
@@ -255,22 +248,18 @@ public:
     /// One worker's reusable buffers.
     struct Scratch {
         std::vector<std::uint32_t> src, nodes, leaf_info;
+        std::vector<NodeCell> cells;                                  // per src entry
         std::vector<std::pair<std::uint32_t, std::uint32_t>> leaves;  // (source leaf, local node)
-        std::vector<const pool::Splat*> splats;                       // per reference, in leaf order
-        std::vector<std::uint32_t> refs;                              // per reference: index into `encoded`
+        std::vector<std::uint8_t> centre;  // per reference: its centre lies in its leaf's half-open cell
+        std::vector<const pool::Splat*> splats;   // per reference, in leaf order
+        std::vector<std::uint32_t> refs;          // per reference: index into `encoded`
         std::vector<const pool::Splat*> encoded;  // the distinct splats, in order of first reference
         std::unordered_map<std::uint32_t, std::uint32_t> first;  // point -> its first encoded index
     };
 
     BrickEncoder(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
                  const TopCut& cut, BrickedOctree& out)
-        : m_octree(octree), m_colors(colors), m_cut(cut), m_out(out) {
-        // copies of each point among the stored splats: a replica weighs 1 / copies in the LOD sums
-        std::uint32_t max_point = 0;
-        for (const pool::Splat& sp : octree.splats) max_point = std::max(max_point, sp.point);
-        m_copies.assign(octree.splats.empty() ? 0 : std::size_t(max_point) + 1, 0);
-        for (const pool::Splat& sp : octree.splats) ++m_copies[sp.point];
-    }
+        : m_octree(octree), m_colors(colors), m_cut(cut), m_out(out) {}
 
     /// The distinct splats of brick b (the one whose top node is `top_node`).
     std::uint32_t count(std::uint32_t top_node, Scratch& scratch) const {
@@ -280,7 +269,10 @@ public:
 
     /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
     /// its distinct splats encoded and measured, its references; returns its LOD sums (its disc is
-    /// written to out.lod).
+    /// written to out.lod). The sums count each point once, area-weighted, in the leaf whose
+    /// half-open cell holds its centre (every point has exactly one such leaf in the octree, and
+    /// culling keeps it there), so the sums of all bricks count every point once and a brick's sums
+    /// do not depend on other bricks (an out-of-core build makes them cell by cell).
     LodSum encode(std::size_t b, CodecError& err, Scratch& scratch) const {
         pool::BrickEntry& e = m_out.table[b];
         gather(e.top_node, scratch);
@@ -313,22 +305,21 @@ public:
                             " not representable (internal error)");
             measure(err, sp, pool::decode_splat(out_splats[k], h), col, quantum, step);
         }
-        LodSum sum;  // over every reference, each weighted 1 / the point's copies
-        for (const pool::Splat* ref : scratch.splats) {
-            const pool::Splat& sp = *ref;
+        LodSum sum, any;  // any: every reference, for the disc of a brick holding only replicas
+        for (std::size_t k = 0; k < scratch.splats.size(); ++k) {
+            const pool::Splat& sp = *scratch.splats[k];
             const pool::Rgba8 col = color(sp);
             const double r = sp.radius;
-            const double w = std::max(k_pi * r * r, 1e-300) / m_copies[sp.point];
-            sum.w += w;
+            const double w = std::max(k_pi * r * r, 1e-300);
             const double p[3] = {sp.position.x, sp.position.y, sp.position.z};
             const double nn[3] = {sp.normal.x, sp.normal.y, sp.normal.z};
             const double c[3] = {double(col.r), double(col.g), double(col.b)};
-            for (int ax = 0; ax < 3; ++ax)
-                sum.p[ax] += w * p[ax], sum.n[ax] += w * nn[ax], sum.c[ax] += w * c[ax];
+            any.add_point(w, p, nn, c);
+            if (scratch.centre[k]) sum.add_point(w, p, nn, c);
         }
         e.checksum = pool::checksum({base, static_cast<std::size_t>(e.size)});
         // the brick's LOD disc: its sphere holds every splat's disc
-        pool::LodSplat disc = lod_from_sum(sum);
+        pool::LodSplat disc = lod_from_sum(sum.w > 0 ? sum : any);
         double cover = 0;
         for (const pool::Splat* sp : scratch.encoded)
             cover = std::max(cover, distance(sp->position, disc.position) + sp->radius);
@@ -351,6 +342,9 @@ private:
     /// The brick's nodes (breadth first from 0), leaf ranges, references and distinct splats into `s`.
     void gather(std::uint32_t top_node, Scratch& s) const {
         s.src.assign(1, m_cut.src[top_node]);
+        s.cells.assign(1, NodeCell{m_cut.level[top_node],
+                                   {m_cut.cell[3 * top_node], m_cut.cell[3 * top_node + 1],
+                                    m_cut.cell[3 * top_node + 2]}});
         s.nodes.clear();
         s.leaves.clear();
         for (std::size_t i = 0; i < s.src.size(); ++i) {
@@ -359,7 +353,13 @@ private:
             switch (pool::node_type(w)) {
                 case NodeType::internal:
                     s.nodes.push_back(pool::make_node(NodeType::internal, std::uint32_t(s.src.size())));
-                    for (std::uint32_t c = 0; c < 8; ++c) s.src.push_back(a + c);
+                    for (std::uint32_t c = 0; c < 8; ++c) {
+                        s.src.push_back(a + c);
+                        const NodeCell& pc = s.cells[i];
+                        s.cells.push_back(NodeCell{pc.level + 1,
+                                                   {2 * pc.cell[0] + (c & 1u), 2 * pc.cell[1] + (c >> 1 & 1u),
+                                                    2 * pc.cell[2] + (c >> 2 & 1u)}});
+                    }
                     break;
                 case NodeType::filled_leaf:
                     s.leaves.emplace_back(a, std::uint32_t(i));
@@ -373,6 +373,7 @@ private:
         std::sort(s.leaves.begin(), s.leaves.end());
         s.leaf_info.assign(s.leaves.size() + 1, 0);
         s.splats.clear();
+        s.centre.clear();
         s.refs.clear();
         s.encoded.clear();
         s.first.clear();
@@ -380,9 +381,16 @@ private:
             s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
             const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
                                 se = m_octree.leaf_info[s.leaves[l].first + 1];
+            const NodeCell& lc = s.cells[s.leaves[l].second];
+            double lo[3], hi[3];
+            node_box(m_octree.info, lc.level, lc.cell, lo, hi);
             for (std::uint32_t k = sb; k < se; ++k) {
                 const pool::Splat& sp = m_octree.splats[k];
                 s.splats.push_back(&sp);
+                const double cp[3] = {sp.position.x, sp.position.y, sp.position.z};
+                bool inside = true;
+                for (int ax = 0; ax < 3; ++ax) inside = inside && cp[ax] >= lo[ax] && cp[ax] < hi[ax];
+                s.centre.push_back(inside);
                 const auto [it, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
                 if (fresh || !same_splat(*s.encoded[it->second], sp)) {
                     s.refs.push_back(std::uint32_t(s.encoded.size()));
@@ -399,18 +407,27 @@ private:
     std::span<const pool::Rgba8> m_colors;
     const TopCut& m_cut;
     BrickedOctree& m_out;
-    std::vector<std::uint32_t> m_copies;
 };
 
 /// Phase 4: LOD discs of the internal top nodes, children first (they come after their parent).
+/// A node whose bricks hold only replicas (no centre, zero weight) gets the disc of its children's
+/// discs, each weighted by its area.
 void internal_lods(BrickedOctree& out, std::vector<LodSum>& sums) {
     for (std::size_t t = out.top_nodes.size(); t-- > 0;) {
         const std::uint32_t w = out.top_nodes[t];
         if (pool::node_type(w) != NodeType::internal) continue;
         const std::uint32_t a = pool::node_address(w);
-        LodSum sum;
-        for (std::uint32_t c = 0; c < 8; ++c) sum.add(sums[a + c]);
-        pool::LodSplat disc = lod_from_sum(sum);
+        LodSum sum, discs;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            sum.add(sums[a + c]);
+            const pool::LodSplat& d = out.lod[a + c];
+            if (!(d.radius > 0)) continue;
+            const double p[3] = {d.position.x, d.position.y, d.position.z};
+            const double n[3] = {d.normal.x, d.normal.y, d.normal.z};
+            const double col[3] = {double(d.color.r), double(d.color.g), double(d.color.b)};
+            discs.add_point(k_pi * double(d.radius) * d.radius, p, n, col);
+        }
+        pool::LodSplat disc = lod_from_sum(sum.w > 0 ? sum : discs);
         double cover = 0;
         for (std::uint32_t c = 0; c < 8; ++c)
             if (out.lod[a + c].radius > 0)
@@ -423,8 +440,8 @@ void internal_lods(BrickedOctree& out, std::vector<LodSum>& sums) {
 }
 
 /// BrickInfo from the octree's and the table's facts, and the build's statistics.
-BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCut& cut, std::uint32_t limit,
-                     bool colors) {
+BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, std::uint32_t top_depth,
+                     std::uint32_t limit, bool colors) {
     pool::BrickInfo& info = out.info;
     for (int ax = 0; ax < 3; ++ax) info.root_min[ax] = oi.root_min[ax];
     info.root_size = oi.root_size;
@@ -439,7 +456,7 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCu
     BrickStats stats;
     stats.bricks = info.brick_count;
     stats.top_nodes = info.top_node_count;
-    stats.top_depth = *std::max_element(cut.level.begin(), cut.level.end());
+    stats.top_depth = top_depth;
     stats.min_brick_splats = out.table.empty() ? 0 : 0xFFFFFFFFu;
     for (const pool::BrickEntry& e : out.table) {
         info.splat_count += e.splat_count;
@@ -456,14 +473,15 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, const TopCu
 
 }  // namespace
 
-BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
-                           const BrickParams& params, BrickStats* stats_out) {
-    const double start = tool::now_seconds();
+BrickPart build_brick_part(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                           const BrickParams& params, NodeCell root) {
     if (octree.nodes.empty()) throw Error("the octree has no nodes");
     const std::uint32_t limit = std::max<std::uint32_t>(params.brick_splats, 1);
-    BrickedOctree out;
-    const Subtrees sub = subtree_sizes(octree.nodes, octree.leaf_info);        // 1
-    const TopCut cut = cut_top_tree(octree.nodes, sub, limit, out.top_nodes);  // 2
+    BrickPart part;
+    BrickedOctree& out = part.bricks;
+    const Subtrees sub = subtree_sizes(octree.nodes, octree.leaf_info);              // 1
+    const TopCut cut = cut_top_tree(octree.nodes, sub, limit, root, out.top_nodes);  // 2
+    part.top_depth = *std::max_element(cut.level.begin(), cut.level.end());
     const std::size_t bricks = cut.brick_top.size();
     const unsigned threads = resolve_threads(params.threads);
     const BrickEncoder encoder(octree, colors, cut, out);
@@ -473,25 +491,40 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
         for (std::size_t b = begin; b < end; ++b) encoded[b] = encoder.count(cut.brick_top[b], scratch);
     });
     lay_out_bricks(cut, sub, octree.info, encoded, out);
-    std::vector<LodSum> sums(out.top_nodes.size());
+    part.sums.assign(out.top_nodes.size(), LodSum{});
     out.lod.assign(out.top_nodes.size(), pool::LodSplat{});
     std::vector<CodecError> errors(threads);
     std::atomic<std::uint64_t> done{0};
     parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {  // 3b
         BrickEncoder::Scratch scratch;
         for (std::size_t b = begin; b < end; ++b) {
-            sums[out.table[b].top_node] = encoder.encode(b, errors[worker], scratch);
+            part.sums[out.table[b].top_node] = encoder.encode(b, errors[worker], scratch);
             const std::uint64_t now = done.fetch_add(1) + 1;
             if (worker == 0 && params.progress) params.progress(now, bricks);
         }
     });
     if (params.progress) params.progress(bricks, bricks);
+    for (const CodecError& e : errors) part.error.merge(e);
+    return part;
+}
+
+BrickStats finish_bricks(BrickedOctree& out, std::vector<LodSum>& sums, const pool::OctreeInfo& octree_info,
+                         std::uint32_t top_depth, const BrickParams& params, bool colors) {
     internal_lods(out, sums);  // 4
-    BrickStats stats = fill_info(out, octree.info, cut, limit, !colors.empty());
-    for (const CodecError& e : errors) stats.error.merge(e);
+    return fill_info(out, octree_info, top_depth, std::max<std::uint32_t>(params.brick_splats, 1), colors);
+}
+
+BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                           const BrickParams& params, BrickStats* stats_out) {
+    const double start = tool::now_seconds();
+    BrickPart part = build_brick_part(octree, colors, params, NodeCell{});
+    BrickStats stats =
+        finish_bricks(part.bricks, part.sums, octree.info, part.top_depth, params, !colors.empty());
+    stats.data_bytes = part.bricks.data.size();
+    stats.error = part.error;
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
-    return out;
+    return std::move(part.bricks);
 }
 
 void add_brick_sections(BrickedOctree bricks, pool::PoolWriter& writer) {

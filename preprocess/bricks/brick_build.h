@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "octree_build.h"
 #include "prt/formats/brick_layout.h"
 #include "prt/formats/octree_sections.h"
 #include "prt/formats/pool.h"
@@ -63,6 +64,46 @@ struct BrickedOctree {
 /// count above 2^32 - 1 in one brick, a radius the codec cannot represent).
 BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
                            const BrickParams& params, BrickStats* stats = nullptr);
+
+// ---- The pieces of build_bricks, for the out-of-core build (bricks_from_points.h) --------------
+
+/// Area-weighted sums of a node's points (LOD): each point once, in the leaf whose half-open cell
+/// holds its centre (BrickEncoder::encode in brick_build.cpp).
+struct LodSum {
+    double w = 0, p[3] = {0, 0, 0}, n[3] = {0, 0, 0}, c[3] = {0, 0, 0};
+    void add(const LodSum& o) {
+        w += o.w;
+        for (int a = 0; a < 3; ++a) p[a] += o.p[a], n[a] += o.n[a], c[a] += o.c[a];
+    }
+    /// A point of weight `wt` (its disc's area) at `pos` with unit normal `nrm` and colour `col`.
+    void add_point(double wt, const double pos[3], const double nrm[3], const double col[3]) {
+        w += wt;
+        for (int a = 0; a < 3; ++a) p[a] += wt * pos[a], n[a] += wt * nrm[a], c[a] += wt * col[a];
+    }
+};
+
+/// The bricks of one node's subtree: `bricks` as build_bricks makes them but numbered from that
+/// node (top node 0 is `root`; table offsets into bricks.data; BrickEntry::top_node local), the
+/// internal top nodes' discs not yet made, brick_info empty; `sums` per top node (each brick's at
+/// its top node).
+struct BrickPart {
+    BrickedOctree bricks;
+    std::vector<LodSum> sums;
+    std::uint32_t top_depth = 0;
+    CodecError error;
+};
+
+/// Phases 1-3 of build_bricks over `octree`, whose node 0 is node `root` of the whole octree
+/// (octree.info holds the whole octree's root cube). Every ancestor of `root` must be an internal
+/// top node of the whole octree's cut (its subtree holds more than BrickParams::brick_splats).
+BrickPart build_brick_part(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
+                           const BrickParams& params, NodeCell root);
+
+/// Phase 4 and brick_info over a whole top tree: the internal top nodes' discs from `sums`, then
+/// brick_info from `octree_info` (root cube, depth, flags, unique splats) and the table. Returns the
+/// statistics but data_bytes, error and seconds.
+BrickStats finish_bricks(BrickedOctree& out, std::vector<LodSum>& sums, const pool::OctreeInfo& octree_info,
+                         std::uint32_t top_depth, const BrickParams& params, bool colors);
 
 /// Adds (replacing) the five brick sections to a writer.
 void add_brick_sections(BrickedOctree bricks, pool::PoolWriter& writer);

@@ -6,8 +6,10 @@
 #include <string>
 
 #include "brick_build.h"
+#include "bricks_from_points.h"
 #include "prt/formats/octree_sections.h"
 #include "prt/pool_step.h"
+#include "prt/tool.h"
 
 namespace {
 
@@ -23,7 +25,21 @@ constexpr const char* k_description =
     "--keep-float, the per-point sections (positions, normals, colors, radii, material_ids, "
     "intensities, scan_ids) unless --keep-points: a streaming pool needs neither, tools that read "
     "points (prt-iso, prt-mls, prt-fidelity) do. Other sections are carried over. Material ids and "
-    "intensities are not carried into bricks. Reports the codec's error against the float splats.";
+    "intensities are not carried into bricks. Reports the codec's error against the float splats.\n\n"
+    "Given a pool without an octree but with radii (prt-radii), prt-bricks builds the octree, culls it "
+    "and cuts it itself, out of core: the model is partitioned into octree cells that each fit in "
+    "--memory and each cell's subtree is built, culled and cut alone, the points and payloads going "
+    "through spill files; the result equals prt-octree -> prt-cull -> prt-bricks with the same "
+    "options byte for byte.";
+
+/// The options of the build from points (out of core).
+struct PointOptions {
+    prt::pre::PointBrickParams params;
+    bool no_cull = false;
+    std::string policy = "greedy";
+    std::string memory;        ///< --memory text; empty = half the physical memory
+    std::string spill_folder;  ///< empty = the output's folder
+};
 
 constexpr prt::pool::SectionType k_point_sections[] = {
     prt::pool::SectionType::positions,    prt::pool::SectionType::normals,
@@ -48,10 +64,123 @@ nlohmann::json error_json(const prt::pre::CodecError& e) {
             {"color_error_max", e.color_max}};
 }
 
-void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool keep_float, bool keep_points) {
+/// Removes the per-point sections (unless keep_points); returns their bytes.
+std::uint64_t drop_points(prt::tool::PoolStep& step, bool keep_points) {
+    std::uint64_t bytes = 0;
+    if (!keep_points)
+        for (const prt::pool::SectionType t : k_point_sections)
+            if (const prt::pool::SectionEntry* e = step.input().find(t))
+                bytes += e->size, step.writer().remove(t);
+    return bytes;
+}
+
+void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, bool keep_points) {
     using namespace prt;
     const pool::PoolFile& in = step.input();
-    if (!pool::has_splat_octree(in)) throw Error(step.input_path() + ": no octree: run prt-octree first");
+    const char* tool = "prt-bricks (from points)";
+    const auto positions = in.require<pool::Float3>(pool::SectionType::positions, tool);
+    const auto normals = in.require<pool::Float3>(pool::SectionType::normals, tool);
+    const auto radii = in.require<float>(pool::SectionType::radii, tool);
+    const auto colors = in.array<pool::Rgba8>(pool::SectionType::colors);
+    if (keep_float)
+        throw Error(step.input_path() +
+                    ": --keep-float needs an octree (prt-octree); this pool has points only");
+    step.check_output_folder();
+    pre::PointBrickParams& p = opt.params;
+    p.cull = !opt.no_cull;
+    p.culling.policy = opt.policy == "votes"    ? pre::CullPolicy::votes
+                       : opt.policy == "thesis" ? pre::CullPolicy::thesis
+                                                : pre::CullPolicy::greedy;
+    p.memory = opt.memory.empty() ? std::max<std::uint64_t>(tool::physical_memory_bytes() / 2, 256u << 20)
+                                  : tool::parse_byte_size(opt.memory, "--memory");
+    p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
+                                               : std::filesystem::absolute(step.output_path()).parent_path();
+    step.note(
+        "prt-bricks: %llu points; octree cells of at most about %llu points (--memory %s), spill files in %s",
+        ull(positions.size()), ull(p.cell_points ? p.cell_points : p.memory / pre::k_cell_bytes_per_point),
+        tool::format_bytes(p.memory).c_str(), p.spill_folder.string().c_str());
+    pre::PointBrickStats stats;
+    pre::PointBricks built;
+    {
+        tool::StagedProgress progress("prt-bricks", step.quiet());
+        p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
+            progress.update(stage, done, total);
+        };
+        built = step.about_input(
+            [&] { return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats); });
+        progress.finish();
+    }
+    pool::PoolWriter& writer = step.writer();
+    pre::BrickedOctree& b = built.bricks;
+    writer.add_array(pool::SectionType::brick_info, std::vector<pool::BrickInfo>{b.info});
+    writer.add_array(pool::SectionType::brick_top_nodes, std::move(b.top_nodes));
+    writer.add_array(pool::SectionType::brick_table, std::move(b.table));
+    auto data = std::make_shared<pre::SpillFile>(std::move(built.data));
+    writer.add_view(pool::SectionType::brick_data, 1, built.data_bytes,
+                    {data->data(), static_cast<std::size_t>(built.data_bytes)},
+                    std::shared_ptr<const void>(data, data->data()), true);
+    writer.add_array(pool::SectionType::lod_splats, std::move(b.lod));
+    const std::uint64_t point_bytes = drop_points(step, keep_points);
+    const nlohmann::json parameters = {{"brick_splats", p.bricks.brick_splats},
+                                       {"leaf_size", p.octree.max_leaf_splats},
+                                       {"max_depth", p.octree.max_depth},
+                                       {"min_cell", p.octree.min_cell_ratio},
+                                       {"cull", p.cull},
+                                       {"directions", p.culling.directions},
+                                       {"grid", p.culling.grid},
+                                       {"policy", opt.policy},
+                                       {"memory", p.memory},
+                                       {"keep_points", keep_points}};
+    const std::uint64_t bytes = step.write(parameters);
+    const double per_point = 1.0 / double(stats.points ? stats.points : 1);
+    step.note(
+        "prt-bricks: %u cells (deepest at level %u, at most %llu points, %.2f records per point); %llu "
+        "stored splats, %llu after culling",
+        stats.cells, stats.partition_depth, ull(stats.max_cell_points),
+        double(stats.cell_records) * per_point, ull(stats.stored_splats), ull(stats.culled_splats));
+    step.note(
+        "prt-bricks: %u bricks, top tree %u nodes (depth %u); %llu encoded splats (%.2f per point); pool "
+        "%.2f B per point%s",
+        stats.bricks.bricks, stats.bricks.top_nodes, stats.bricks.top_depth, ull(stats.bricks.encoded),
+        double(stats.bricks.encoded) * per_point, double(bytes) * per_point,
+        point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
+    const double seconds = step.seconds();
+    step.note("prt-bricks: %.3f s building (%.2f M points/s), total %.3f s, peak memory %s; wrote %s",
+              stats.seconds, double(positions.size()) / std::max(stats.seconds, 1e-9) * 1e-6, seconds,
+              tool::format_bytes(pre::peak_rss_bytes()).c_str(), step.output_path().c_str());
+    step.write_stats({{"input", step.input_path()},
+                      {"parameters", parameters},
+                      {"points", stats.points},
+                      {"skipped_points", stats.skipped},
+                      {"cells", stats.cells},
+                      {"partition_depth", stats.partition_depth},
+                      {"max_cell_points", stats.max_cell_points},
+                      {"cell_records", stats.cell_records},
+                      {"stored_splats", stats.stored_splats},
+                      {"culled_splats", stats.culled_splats},
+                      {"bricks", stats.bricks.bricks},
+                      {"top_nodes", stats.bricks.top_nodes},
+                      {"encoded_splats", stats.bricks.encoded},
+                      {"brick_data_bytes", built.data_bytes},
+                      {"pool_bytes_after", bytes},
+                      {"pool_bytes_per_point", double(bytes) * per_point},
+                      {"codec_error", error_json(stats.bricks.error)},
+                      {"build_seconds", stats.seconds},
+                      {"points_per_second", double(positions.size()) / std::max(stats.seconds, 1e-9)},
+                      {"peak_rss_bytes", pre::peak_rss_bytes()},
+                      {"total_seconds", seconds}});
+}
+
+void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool keep_float, bool keep_points,
+                 PointOptions& from_points) {
+    using namespace prt;
+    const pool::PoolFile& in = step.input();
+    if (!pool::has_splat_octree(in)) {
+        if (!in.has(pool::SectionType::radii))
+            throw Error(step.input_path() + ": no octree and no radii: run prt-radii (or prt-octree) first");
+        from_points.params.bricks = params;
+        return points_step(step, from_points, keep_float, keep_points);
+    }
     const pool::SplatOctreeSections octree = pool::splat_octree(in, "prt-bricks");
     const std::span<const pool::Rgba8> colors = in.array<pool::Rgba8>(pool::SectionType::colors);
     if (const auto ids = in.array<std::uint32_t>(pool::SectionType::material_ids); !ids.empty()) {
@@ -78,10 +207,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
         for (const pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
                                           pool::SectionType::leaf_info, pool::SectionType::splats})
             writer.remove(t);
-    std::uint64_t point_bytes = 0;
-    if (!keep_points)
-        for (const pool::SectionType t : k_point_sections)
-            if (const pool::SectionEntry* e = in.find(t)) point_bytes += e->size, writer.remove(t);
+    const std::uint64_t point_bytes = drop_points(step, keep_points);
     const nlohmann::json parameters = {
         {"brick_splats", params.brick_splats}, {"keep_float", keep_float}, {"keep_points", keep_points}};
     const std::uint64_t bytes = step.write(parameters);
@@ -143,8 +269,10 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
 int main(int argc, char** argv) {
     prt::pre::BrickParams params;
     bool keep_float = false, keep_points = false;
+    PointOptions points;
     prt::tool::PoolStep step("prt-bricks", k_description,
-                             {.input = "Input pool file with a splat octree (prt-octree, prt-cull)"});
+                             {.input = "Input pool file with a splat octree (prt-octree, prt-cull), or with "
+                                       "points and radii (prt-radii)"});
     return step.run(
         argc, argv,
         [&](CLI::App& app) {
@@ -162,7 +290,63 @@ int main(int argc, char** argv) {
                          "Keep the per-point sections (positions, normals, colors, radii, material_ids, "
                          "intensities, scan_ids) beside the bricks, for tools that read points (default: "
                          "removed)");
+            prt::pre::PointBrickParams& pp = points.params;
+            const char* from_points = "From points (an input without an octree)";
+            app.add_option("-X,--leaf-size", pp.octree.max_leaf_splats,
+                           "prt-octree's X (thesis 3.2): a node overlapped by more splats is split")
+                ->check(CLI::Range(1u, 1u << 20))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option("--max-depth", pp.octree.max_depth, "prt-octree's maximum depth (root = 0)")
+                ->check(CLI::Range(0u, 30u))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option(
+                   "--min-cell", pp.octree.min_cell_ratio,
+                   "prt-octree's --min-cell: do not split a node whose edge is below this times the mean "
+                   "radius of its splats (0 = off)")
+                ->check(CLI::Range(0.0f, 1.0e6f))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_flag("--no-cull", points.no_cull,
+                         "Keep every replica (default: probe-ray culling as prt-cull, thesis 3.4)")
+                ->group(from_points);
+            app.add_option("--directions", pp.culling.directions, "prt-cull's probe directions per leaf")
+                ->check(CLI::Range(1u, 256u))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option("--grid", pp.culling.grid, "prt-cull's G x G probe lines per direction")
+                ->check(CLI::Range(1u, 64u))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option("--policy", points.policy, "prt-cull's policy: greedy, votes or thesis")
+                ->check(CLI::IsMember({"greedy", "votes", "thesis"}))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option("--backend", pp.culling.backend,
+                           "Culling backend: auto (CUDA when a device is usable, else CPU), cpu or cuda")
+                ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
+                ->capture_default_str()
+                ->group(from_points);
+            app.add_option("--memory", points.memory,
+                           "Memory for one octree cell's build (SIZE, e.g. 8G); larger models are split into "
+                           "cells of about SIZE / 640 points (default: half the physical memory)")
+                ->check([](const std::string& text) {
+                    prt::tool::parse_byte_size(text, "--memory");
+                    return std::string();
+                })
+                ->group(from_points);
+            app.add_option("--spill-folder", points.spill_folder,
+                           "Folder of the spill files (removed as soon as created; about 32 bytes per point "
+                           "and the brick payloads twice) (default: the output's folder)")
+                ->group(from_points);
+            app.add_option("--cell-points", pp.cell_points,
+                           "Testing: cells of at most about this many points whatever --memory")
+                ->group("");
             prt::tool::PoolStep::add_threads(app, params.threads);
         },
-        [&](prt::tool::PoolStep& s) { bricks_step(s, params, keep_float, keep_points); });
+        [&](prt::tool::PoolStep& s) {
+            points.params.threads = params.threads;
+            bricks_step(s, params, keep_float, keep_points, points);
+        });
 }

@@ -16,11 +16,11 @@
 
 namespace prt::pre {
 
-SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what) {
+namespace {
+
+/// A new temporary read-write file in `folder`, already removed from it.
+int temporary_file(const std::filesystem::path& folder, const std::string& what) {
     const std::filesystem::path dir = folder.empty() ? std::filesystem::path(".") : folder;
-    auto fail = [&](int err) {
-        return Error(dir.string() + ": cannot create a spill file for " + what + ": " + std::strerror(err));
-    };
     int fd = -1;
 #ifdef O_TMPFILE
     fd = ::open(dir.c_str(), O_TMPFILE | O_RDWR | O_CLOEXEC, 0600);
@@ -28,9 +28,22 @@ SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, c
     if (fd < 0) {
         std::string name = (dir / "prt-spill-XXXXXX").string();
         fd = ::mkstemp(name.data());
-        if (fd < 0) throw fail(errno);
+        if (fd < 0)
+            throw Error(dir.string() + ": cannot create a spill file for " + what + ": " +
+                        std::strerror(errno));
         ::unlink(name.c_str());
     }
+    return fd;
+}
+
+}  // namespace
+
+SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what) {
+    const std::filesystem::path dir = folder.empty() ? std::filesystem::path(".") : folder;
+    auto fail = [&](int err) {
+        return Error(dir.string() + ": cannot create a spill file for " + what + ": " + std::strerror(err));
+    };
+    const int fd = temporary_file(folder, what);
     if (bytes > 0) {
         if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
             const int err = errno;
@@ -45,6 +58,57 @@ SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, c
         m_size = bytes;
     } else {
         ::close(fd);
+    }
+}
+
+AppendFile::AppendFile(const std::filesystem::path& folder, const std::string& what)
+    : m_fd(temporary_file(folder, what)), m_what(what) {}
+
+AppendFile::AppendFile(AppendFile&& other) noexcept
+    : m_fd(std::exchange(other.m_fd, -1)),
+      m_size(std::exchange(other.m_size, 0)),
+      m_what(std::move(other.m_what)) {}
+
+AppendFile& AppendFile::operator=(AppendFile&& other) noexcept {
+    if (this != &other) {
+        if (m_fd >= 0) ::close(m_fd);
+        m_fd = std::exchange(other.m_fd, -1);
+        m_size = std::exchange(other.m_size, 0);
+        m_what = std::move(other.m_what);
+    }
+    return *this;
+}
+
+AppendFile::~AppendFile() {
+    if (m_fd >= 0) ::close(m_fd);
+}
+
+std::uint64_t AppendFile::append(const void* data, std::uint64_t bytes) {
+    const std::uint64_t at = m_size;
+    const auto* p = static_cast<const char*>(data);
+    for (std::uint64_t done = 0; done < bytes;) {
+        const ssize_t n =
+            ::pwrite(m_fd, p + done, static_cast<std::size_t>(bytes - done), static_cast<off_t>(at + done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            throw Error("spill file for " + m_what +
+                        ": write failed: " + std::strerror(n < 0 ? errno : ENOSPC));
+        done += static_cast<std::uint64_t>(n);
+    }
+    m_size += bytes;
+    return at;
+}
+
+void AppendFile::read(std::uint64_t offset, void* out, std::uint64_t bytes) const {
+    auto* p = static_cast<char*>(out);
+    for (std::uint64_t done = 0; done < bytes;) {
+        const ssize_t n = ::pread(m_fd, p + done, static_cast<std::size_t>(bytes - done),
+                                  static_cast<off_t>(offset + done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            throw Error("spill file for " + m_what +
+                        ": read failed: " + (n < 0 ? std::strerror(errno) : "end of file"));
+        done += static_cast<std::uint64_t>(n);
     }
 }
 

@@ -42,6 +42,31 @@ private:
     std::uint64_t m_size = 0;
 };
 
+/// A temporary file written by appending (its final size unknown) and read back at offsets; removed
+/// from its folder at creation, like SpillFile. Move-only.
+class AppendFile {
+public:
+    AppendFile() = default;
+    /// Throws prt::Error "FOLDER: cannot create a spill file for WHAT: REASON".
+    AppendFile(const std::filesystem::path& folder, const std::string& what);
+    AppendFile(AppendFile&& other) noexcept;
+    AppendFile& operator=(AppendFile&& other) noexcept;
+    AppendFile(const AppendFile&) = delete;
+    AppendFile& operator=(const AppendFile&) = delete;
+    ~AppendFile();
+
+    /// Appends `bytes` bytes; returns the offset they start at. Throws prt::Error on a write error.
+    std::uint64_t append(const void* data, std::uint64_t bytes);
+    /// Reads `bytes` bytes at `offset` (written before) into `out`. Throws prt::Error on a read error.
+    void read(std::uint64_t offset, void* out, std::uint64_t bytes) const;
+    std::uint64_t size() const { return m_size; }
+
+private:
+    int m_fd = -1;
+    std::uint64_t m_size = 0;
+    std::string m_what;
+};
+
 /// Unmaps the whole pages inside [data, data + bytes) of a file mapping from the process
 /// (madvise MADV_DONTNEED): a read-only mapping or a shared one re-reads them from the file (or
 /// the page cache) when touched again. Never call it on anonymous memory (it would zero it).

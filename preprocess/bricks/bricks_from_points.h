@@ -1,0 +1,68 @@
+// PointRT preprocess: bricks straight from points, out of core (issue 17). Builds the bricked
+// octree that prt-octree -> prt-cull -> prt-bricks would build, equal byte for byte, without ever
+// holding the whole splat octree: the model is partitioned into cells of the octree that each fit
+// in --memory, and each cell's subtree is built (build_octree_cell), culled (cull_octree over a part)
+// and cut into bricks (build_brick_part) alone; the top tree, the brick table and the LOD discs
+// above the cells are assembled at the end.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+#include <string>
+
+#include "brick_build.h"
+#include "cull_build.h"
+#include "octree_build.h"
+#include "spill_file.h"
+
+namespace prt::pre {
+
+struct PointBrickParams {
+    OctreeParams octree;  ///< prt-octree's parameters (threads, progress unused: see below)
+    bool cull = true;     ///< probe-ray culling of each cell (prt-cull, thesis 3.4)
+    CullParams culling;   ///< prt-cull's parameters
+    BrickParams bricks;   ///< prt-bricks' parameters
+    /// Memory for one cell's build; the partition makes cells of about memory /
+    /// k_cell_bytes_per_point points.
+    std::uint64_t memory = std::uint64_t(4) << 30;
+    /// > 0: cells of at most about this many points whatever the memory (tests, benchmarks).
+    std::uint64_t cell_points = 0;
+    std::filesystem::path spill_folder;  ///< the partitioned points and the brick payloads
+    unsigned threads = 0;                ///< 0 = every hardware thread
+    /// Progress on stderr: (stage, done, total), called from the calling thread; may be empty.
+    std::function<void(const char*, std::uint64_t, std::uint64_t)> progress;
+};
+
+/// Bytes one cell's build holds per point of the cell (points, build records, the replicated and the
+/// culled octree, the cell's bricks), an upper estimate measured with prt-bricks --stats.
+inline constexpr std::uint64_t k_cell_bytes_per_point = 640;
+
+struct PointBrickStats {
+    std::uint64_t points = 0, skipped = 0;  ///< usable points; points the octree skips
+    std::uint32_t cells = 0;                ///< cells built (non-empty)
+    std::uint32_t partition_depth = 0;      ///< deepest cell level
+    std::uint64_t cell_records = 0;  ///< points over all cells (a point in several cells counts in each)
+    std::uint64_t max_cell_points = 0;
+    std::uint64_t stored_splats = 0, culled_splats = 0;  ///< replicated octree; after culling
+    BrickStats bricks;
+    double seconds = 0;
+};
+
+/// The brick sections with brick_data in a spill file (`data`, `data_bytes` long).
+struct PointBricks {
+    BrickedOctree bricks;  ///< data empty
+    SpillFile data;
+    std::uint64_t data_bytes = 0;
+};
+
+/// Builds the bricks of the points (positions, normals, radii, colours may be empty) within
+/// `params.memory`. Throws prt::Error when no point is usable, or when the model cannot be
+/// partitioned (a cell that must be split holds too few points to be an inner top node).
+PointBricks build_bricks_from_points(std::span<const pool::Float3> positions,
+                                     std::span<const pool::Float3> normals, std::span<const float> radii,
+                                     std::span<const pool::Rgba8> colors, const PointBrickParams& params,
+                                     PointBrickStats* stats = nullptr);
+
+}  // namespace prt::pre

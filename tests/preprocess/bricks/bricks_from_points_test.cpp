@@ -1,0 +1,189 @@
+// Tests of the out-of-core brick build (bricks_from_points.h, issue 17): built cell by cell from the
+// points, the bricks equal byte for byte what the in-core pipeline builds (build_octree ->
+// cull_octree -> build_bricks, the code of prt-octree, prt-cull and prt-bricks).
+#include "bricks_from_points.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <random>
+#include <vector>
+
+#include "prt/error.h"
+
+namespace prt {
+namespace {
+
+/// A scan-like model: a noisy ground plane whose density falls off with distance from a scanner,
+/// a sphere standing on it, a few unusable points; colours from the position, k-NN-like radii.
+struct Scan {
+    std::vector<pool::Float3> positions, normals;
+    std::vector<float> radii;
+    std::vector<pool::Rgba8> colors;
+};
+
+Scan scan_model(std::size_t n, std::uint32_t seed) {
+    Scan s;
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::normal_distribution<double> noise(0.0, 0.002);
+    for (std::size_t i = 0; i < n; ++i) {
+        double p[3], nn[3];
+        if (i % 3 != 0) {  // ground: denser near the scanner at the origin
+            const double r = 4.0 * std::pow(u(rng), 1.7), a = 6.283185307179586 * u(rng);
+            p[0] = r * std::cos(a), p[1] = r * std::sin(a), p[2] = noise(rng);
+            nn[0] = noise(rng), nn[1] = noise(rng), nn[2] = 1.0;
+        } else {  // sphere of radius 0.8 on the ground
+            const double z = 2.0 * u(rng) - 1.0, a = 6.283185307179586 * u(rng), q = std::sqrt(1.0 - z * z);
+            nn[0] = q * std::cos(a), nn[1] = q * std::sin(a), nn[2] = z;
+            p[0] = 1.5 + 0.8 * nn[0], p[1] = 0.5 + 0.8 * nn[1], p[2] = 0.8 + 0.8 * nn[2];
+        }
+        const double d = std::sqrt(p[0] * p[0] + p[1] * p[1]);
+        s.positions.push_back({float(p[0]), float(p[1]), float(p[2])});
+        s.normals.push_back({float(nn[0]), float(nn[1]), float(nn[2])});
+        s.radii.push_back(float((0.012 + 0.01 * d) * (0.8 + 0.4 * u(rng))));
+        s.colors.push_back(
+            {std::uint8_t(128 + 30 * p[0]), std::uint8_t(128 + 30 * p[1]), std::uint8_t(i % 251), 255});
+    }
+    s.radii[7] = 0.0f;  // skipped by the octree
+    s.normals[11] = {0.0f, 0.0f, 0.0f};
+    s.positions[13].x = std::nanf("");
+    return s;
+}
+
+struct Pipeline {
+    pre::OctreeParams octree;
+    pre::CullParams culling;
+    pre::BrickParams bricks;
+    bool cull = true;
+    Pipeline() {
+        octree.max_leaf_splats = 24;
+        octree.threads = 2;
+        culling.backend = "cpu";
+        culling.threads = 2;
+        bricks.brick_splats = 700;
+        bricks.threads = 2;
+    }
+};
+
+/// The in-core pipeline: prt-octree, prt-cull, prt-bricks.
+pre::BrickedOctree in_core(const Scan& s, const Pipeline& setup, pre::BrickStats* stats) {
+    const pre::SplatOctree octree = pre::build_octree(s.positions, s.normals, s.radii, setup.octree);
+    pool::SplatOctreeSections sections{octree.info, octree.nodes, octree.leaf_info, octree.splats};
+    pre::CulledOctree culled;
+    if (setup.cull) {
+        culled = pre::cull_octree(sections, setup.culling);
+        sections = pool::SplatOctreeSections{culled.info, octree.nodes, culled.leaf_info, culled.splats};
+    }
+    return pre::build_bricks(sections, s.colors, setup.bricks, stats);
+}
+
+pre::PointBricks out_of_core(const Scan& s, const Pipeline& setup, std::uint64_t cell_points,
+                             pre::PointBrickStats* stats) {
+    pre::PointBrickParams p;
+    p.octree = setup.octree;
+    p.cull = setup.cull;
+    p.culling = setup.culling;
+    p.bricks = setup.bricks;
+    p.cell_points = cell_points;
+    p.threads = 2;
+    p.spill_folder = std::filesystem::temp_directory_path();
+    return pre::build_bricks_from_points(s.positions, s.normals, s.radii, s.colors, p, stats);
+}
+
+template <class T>
+void expect_same_bytes(const std::vector<T>& a, const std::vector<T>& b, const char* what) {
+    ASSERT_EQ(a.size(), b.size()) << what;
+    for (std::size_t i = 0; i < a.size(); ++i)
+        ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(T)), 0) << what << " " << i << " of " << a.size();
+}
+
+void expect_equal(const pre::BrickedOctree& ref, const pre::PointBricks& got) {
+    EXPECT_EQ(std::memcmp(&ref.info, &got.bricks.info, sizeof ref.info), 0) << "brick_info";
+    expect_same_bytes(ref.top_nodes, got.bricks.top_nodes, "top node");
+    expect_same_bytes(ref.table, got.bricks.table, "brick entry");
+    expect_same_bytes(ref.lod, got.bricks.lod, "LOD disc");
+    ASSERT_EQ(ref.data.size(), got.data_bytes);
+    ASSERT_EQ(std::memcmp(ref.data.data(), got.data.data(), ref.data.size()), 0) << "brick payloads differ";
+}
+
+TEST(BricksFromPoints, CulledCellByCellEqualsTheInCorePipeline) {
+    const Scan s = scan_model(30000, 3);
+    const Pipeline setup;
+    pre::BrickStats ref_stats;
+    const pre::BrickedOctree ref = in_core(s, setup, &ref_stats);
+    ASSERT_GT(ref.table.size(), 20u);
+    pre::PointBrickStats stats;
+    const pre::PointBricks got = out_of_core(s, setup, 2500, &stats);
+    EXPECT_GE(stats.cells, 10u) << "the partition must cut the model into many cells";
+    EXPECT_GE(stats.partition_depth, 2u);
+    EXPECT_EQ(stats.points, 30000u - 3u);
+    EXPECT_EQ(stats.skipped, 3u);
+    EXPECT_LT(stats.culled_splats, stats.stored_splats);
+    expect_equal(ref, got);
+    EXPECT_EQ(stats.bricks.bricks, ref_stats.bricks);
+    EXPECT_EQ(stats.bricks.top_depth, ref_stats.top_depth);
+    EXPECT_EQ(stats.bricks.encoded, ref_stats.encoded);
+    EXPECT_EQ(stats.bricks.error.splats, ref_stats.error.splats);
+}
+
+TEST(BricksFromPoints, UnculledAndSplitByCentresEqualTheInCorePipeline) {
+    const Scan s = scan_model(12000, 5);
+    Pipeline setup;
+    setup.cull = false;
+    expect_equal(in_core(s, setup, nullptr), out_of_core(s, setup, 1500, nullptr));
+    setup.octree.split_by_centres = true;
+    setup.cull = true;
+    expect_equal(in_core(s, setup, nullptr), out_of_core(s, setup, 1500, nullptr));
+}
+
+TEST(BricksFromPoints, OneCellWhenTheModelFits) {
+    const Scan s = scan_model(5000, 9);
+    const Pipeline setup;
+    pre::PointBrickStats stats;
+    const pre::PointBricks got = out_of_core(s, setup, 0, &stats);
+    EXPECT_EQ(stats.cells, 1u);
+    EXPECT_EQ(stats.partition_depth, 0u);
+    expect_equal(in_core(s, setup, nullptr), got);
+}
+
+TEST(BricksFromPoints, EveryPointCountsOnceInTheRootDisc) {
+    // The LOD sums count each point once, in the leaf holding its centre: the root disc's centre is
+    // the area-weighted mean of the usable points (computed here independently, in double).
+    const Scan s = scan_model(8000, 4);
+    const Pipeline setup;
+    const pre::PointBricks got = out_of_core(s, setup, 1000, nullptr);
+    double w = 0, c[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        const pool::Float3 p = s.positions[i], n = s.normals[i];
+        if (!(s.radii[i] > 0) || !std::isfinite(p.x) || (n.x == 0 && n.y == 0 && n.z == 0)) continue;
+        const double a = 3.141592653589793 * double(s.radii[i]) * s.radii[i];
+        w += a;
+        c[0] += a * p.x, c[1] += a * p.y, c[2] += a * p.z;
+    }
+    const pool::LodSplat& root = got.bricks.lod.at(0);
+    EXPECT_NEAR(root.position.x, c[0] / w, 1e-5);
+    EXPECT_NEAR(root.position.y, c[1] / w, 1e-5);
+    EXPECT_NEAR(root.position.z, c[2] / w, 1e-5);
+}
+
+TEST(BricksFromPoints, BadInputIsRefused) {
+    Scan s = scan_model(100, 1);
+    s.radii.pop_back();
+    const Pipeline setup;
+    EXPECT_THROW(out_of_core(s, setup, 0, nullptr), Error);
+    Scan none = scan_model(100, 1);
+    for (float& r : none.radii) r = 0.0f;
+    try {
+        out_of_core(none, setup, 0, nullptr);
+        FAIL() << "no usable point";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("no point has a finite positive radius"), std::string::npos)
+            << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace prt
