@@ -320,6 +320,7 @@ private:
                 if (!colors.empty()) colors[k] = recs[k].color;
             }
             drop_pages(recs.data(), recs.size_bytes());
+            double t0 = tool::now_seconds();
             OctreeParams op = m_params.octree;
             op.threads = m_threads;
             op.progress = nullptr;
@@ -327,6 +328,8 @@ private:
             std::vector<pool::Float3>().swap(positions);
             std::vector<pool::Float3>().swap(normals);
             std::vector<float>().swap(radii);
+            double t1 = tool::now_seconds();
+            stats.octree_seconds += t1 - t0;
             m_depth = std::max(m_depth, octree.info.depth);
             stats.stored_splats += octree.splats.size();
             if (octree.leaf_info.size() - 1 + leaf_base > std::numeric_limits<std::uint32_t>::max())
@@ -343,6 +346,8 @@ private:
                     pool::SplatOctreeSections{culled.info, octree.nodes, culled.leaf_info, culled.splats};
             }
             stats.culled_splats += sections.splats.size();
+            t0 = tool::now_seconds();
+            stats.cull_seconds += t0 - t1;
             leaf_base += octree.info.filled_leaves;
             BrickParams bp = m_params.bricks;
             bp.threads = m_threads;
@@ -352,6 +357,7 @@ private:
             m_top_depth = std::max(m_top_depth, part.top_depth);
             const std::uint64_t base = m_payloads.append(part.bricks.data.data(), part.bricks.data.size());
             for (pool::BrickEntry& entry : part.bricks.table) entry.offset += base;
+            stats.brick_seconds += tool::now_seconds() - t0;
             m_cells[c] = CellBricks{std::move(part.bricks.top_nodes), std::move(part.bricks.table),
                                     std::move(part.bricks.lod), std::move(part.sums)};
             stats.cell_records += e - b;

@@ -145,6 +145,10 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         double(stats.bricks.encoded) * per_point, double(bytes) * per_point,
         point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
     const double seconds = step.seconds();
+    step.note(
+        "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks, %.1f s assembly",
+        stats.partition_seconds, stats.octree_seconds, stats.cull_seconds, stats.brick_seconds,
+        stats.assemble_seconds);
     step.note("prt-bricks: %.3f s building (%.2f M points/s), total %.3f s, peak memory %s; wrote %s",
               stats.seconds, double(positions.size()) / std::max(stats.seconds, 1e-9) * 1e-6, seconds,
               tool::format_bytes(pre::peak_rss_bytes()).c_str(), step.output_path().c_str());
@@ -166,6 +170,12 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                       {"pool_bytes_per_point", double(bytes) * per_point},
                       {"codec_error", error_json(stats.bricks.error)},
                       {"build_seconds", stats.seconds},
+                      {"seconds",
+                       {{"partition", stats.partition_seconds},
+                        {"octree", stats.octree_seconds},
+                        {"cull", stats.cull_seconds},
+                        {"bricks", stats.brick_seconds},
+                        {"assemble", stats.assemble_seconds}}},
                       {"points_per_second", double(positions.size()) / std::max(stats.seconds, 1e-9)},
                       {"peak_rss_bytes", pre::peak_rss_bytes()},
                       {"total_seconds", seconds}});
@@ -330,7 +340,7 @@ int main(int argc, char** argv) {
                 ->group(from_points);
             app.add_option("--memory", points.memory,
                            "Memory for one octree cell's build (SIZE, e.g. 8G); larger models are split into "
-                           "cells of about SIZE / 640 points (default: half the physical memory)")
+                           "cells of about SIZE / 840 points (default: half the physical memory)")
                 ->check([](const std::string& text) {
                     prt::tool::parse_byte_size(text, "--memory");
                     return std::string();
