@@ -86,17 +86,31 @@ public:
 
     PointBricks run(PointBrickStats& stats) {
         const double start = tool::now_seconds();
-        bounds(stats);                      // 1
-        partition(histogram());             // 2, 3
-        count();                            // 4
-        scatter();                          // 5
-        build_cells(stats);                 // 6
+        bounds(stats);           // 1
+        partition(histogram());  // 2, 3
+        count();                 // 4
+        scatter();               // 5
+        const double cells = tool::now_seconds();
+        stats.partition_seconds = cells - start;
+        build_cells(stats);  // 6
+        const double assembly = tool::now_seconds();
         PointBricks out = assemble(stats);  // 7
         stats.seconds = tool::now_seconds() - start;
+        stats.assemble_seconds = stats.seconds - (assembly - start);
         return out;
     }
 
 private:
+    /// Unmaps the input's pages of points [b, e) when the input is a file mapping, so that the passes
+    /// over a model larger than memory keep the resident set bounded (spill_file.h drop_pages).
+    void drop_input(std::size_t b, std::size_t e) const {
+        if (!m_params.input_mapped) return;
+        drop_pages(m_positions.data() + b, (e - b) * sizeof(pool::Float3));
+        drop_pages(m_normals.data() + b, (e - b) * sizeof(pool::Float3));
+        drop_pages(m_radii.data() + b, (e - b) * sizeof(float));
+        if (!m_colors.empty()) drop_pages(m_colors.data() + b, (e - b) * sizeof(pool::Rgba8));
+    }
+
     void report(const char* stage, std::uint64_t done, std::uint64_t total) const {
         if (m_params.progress) m_params.progress(stage, done, total);
     }
@@ -113,6 +127,7 @@ private:
         std::vector<RootBounds> per(m_threads);
         parallel_chunks(n, k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
             for (std::size_t i = b; i < e; ++i) per[w].add(m_positions[i], m_normals[i], m_radii[i]);
+            drop_input(b, e);
         });
         RootBounds all;
         for (const RootBounds& r : per) all.merge(r);
@@ -137,6 +152,7 @@ private:
                                                  fine_coordinate(p.y, m_root.root_min[1], scale),
                                                  fine_coordinate(p.z, m_root.root_min[2], scale))];
                             }
+                            drop_input(b, e);
                         });
         std::vector<std::uint64_t> prefix(cells + 1, 0);
         for (std::size_t m = 0; m < cells; ++m) {
@@ -231,6 +247,7 @@ private:
                     classify(
                         i, [&](std::uint32_t cell) { ++row[cell]; }, counts[w].data(), sums[w].data());
                 }
+                drop_input(b, e);
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
                 if (w == 0) report("partitioning points", d, 2 * m_positions.size());
             });
@@ -272,6 +289,7 @@ private:
         parallel_chunks(
             m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
                 std::uint64_t* slot = m_slot.data() + (b / k_chunk) * cells;
+                const std::vector<std::uint64_t> first(slot, slot + cells);
                 for (std::size_t i = b; i < e; ++i) {
                     if (!usable(i)) continue;
                     const Record r{m_positions[i], m_normals[i], m_radii[i],
@@ -279,6 +297,10 @@ private:
                     classify(
                         i, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
                 }
+                drop_input(b, e);
+                // the records written stay in the spill file (shared mapping), not in the process
+                for (std::size_t c = 0; c < cells; ++c)
+                    drop_pages(out + first[c], (slot[c] - first[c]) * sizeof(Record));
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
                 if (w == 0) report("partitioning points", m_positions.size() + d, 2 * m_positions.size());
             });
@@ -440,6 +462,7 @@ private:
         for (std::size_t b = 0; b < brick_src.size(); ++b) {
             const pool::BrickEntry& src = m_cells[brick_src[b].first].table[brick_src[b].second];
             m_payloads.read(src.offset, out.data.data() + br.table[b].offset, src.size);
+            drop_pages(out.data.data() + br.table[b].offset, src.size);
             report("writing bricks", b + 1, brick_src.size());
         }
         m_payloads = AppendFile{};

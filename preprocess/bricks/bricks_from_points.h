@@ -30,7 +30,11 @@ struct PointBrickParams {
     /// > 0: cells of at most about this many points whatever the memory (tests, benchmarks).
     std::uint64_t cell_points = 0;
     std::filesystem::path spill_folder;  ///< the partitioned points and the brick payloads
-    unsigned threads = 0;                ///< 0 = every hardware thread
+    /// The input arrays are a file mapping (a pool opened from a file): the passes over them unmap
+    /// the pages they are done with (spill_file.h drop_pages), so the resident set stays bounded.
+    /// Never true for arrays in anonymous memory (dropping would zero them).
+    bool input_mapped = false;
+    unsigned threads = 0;  ///< 0 = every hardware thread
     /// Progress on stderr: (stage, done, total), called from the calling thread; may be empty.
     std::function<void(const char*, std::uint64_t, std::uint64_t)> progress;
 };

@@ -88,6 +88,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     step.check_output_folder();
     pre::PointBrickParams& p = opt.params;
     p.cull = !opt.no_cull;
+    p.input_mapped = in.mapped();
     p.culling.policy = opt.policy == "votes"    ? pre::CullPolicy::votes
                        : opt.policy == "thesis" ? pre::CullPolicy::thesis
                                                 : pre::CullPolicy::greedy;
