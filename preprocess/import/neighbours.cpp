@@ -205,7 +205,8 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
 
 void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
                        TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats,
-                       const std::function<void(std::uint64_t)>& progress) {
+                       const std::function<void(std::uint64_t)>& progress,
+                       const std::array<double, 3>* centre_in) {
     const std::size_t n = positions.size();
     if (k < 3) throw Error("--k must be at least 3 for PCA normals");
     if (normals.size() != n) throw Error("internal: pca_normals_tiled: normals of the wrong size");
@@ -216,8 +217,10 @@ void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::ui
             lo[a] = std::min(lo[a], p[a]);
             hi[a] = std::max(hi[a], p[a]);
         }
-    const std::array<double, 3> centre = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
-                                          0.5 * (lo[2] + hi[2])};
+    const std::array<double, 3> centre =
+        centre_in
+            ? *centre_in
+            : std::array<double, 3>{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     SpillFile offsets(tiling.spill_folder, std::uint64_t(n) * sizeof(pool::Float3), "the float positions");
     const std::span<pool::Float3> f = offsets.as<pool::Float3>();
     for (std::size_t i = 0; i < n; ++i) {

@@ -204,19 +204,11 @@ OrientStats orient_toward(const std::vector<std::array<double, 3>>& positions,
     if (ambiguous) ambiguous->assign(normals.size(), 0);
     for (std::size_t i = 0; i < normals.size(); ++i) {
         if (only && !(*only)[i]) continue;
-        pool::Float3& nn = normals[i];
-        if (!valid(nn)) {
+        const int r =
+            orient_toward_one(positions[i], normals[i], sensors[scan_ids.empty() ? 0 : scan_ids[i]]);
+        if (r == 2) {
             ++stats.skipped;
-            continue;
-        }
-        const pool::Sensor& s = sensors[scan_ids.empty() ? 0 : scan_ids[i]];
-        double d[3];
-        for (int a = 0; a < 3; ++a)
-            d[a] = s.kind == pool::k_sensor_direction ? s.position[a] : s.position[a] - positions[i][a];
-        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-        const double c = nn.x * d[0] + nn.y * d[1] + nn.z * d[2];
-        if (c < 0.0) flip(nn);
-        if (!(len > 0.0) || std::fabs(c) < k_ambiguous_dot * len) {
+        } else if (r == 1) {
             ++stats.ambiguous;
             if (ambiguous) (*ambiguous)[i] = 1;
         }

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "import.h"
+#include "out_of_core.h"
+#include "poses.h"
 #include "prt/pool_step.h"
 
 namespace imp = prt::pre::import;
@@ -23,6 +25,9 @@ struct Cli {
     std::vector<double> sensor, sensor_direction;
     imp::Options options;
     bool keep_outliers = false;
+    std::string memory;        ///< --memory text; empty = half the physical memory
+    std::string spill_folder;  ///< empty = the output's folder
+    std::uint64_t tile_points = 0;
 
     void declare(CLI::App& app);
     /// The import options the command line names.
@@ -131,6 +136,28 @@ void Cli::declare(CLI::App& app) {
         ->check(CLI::Range(1e-6, 1.0));
     app.add_flag("--keep-duplicates", options.keep_duplicates,
                  "Keep exactly coincident points (default: keep the first, drop and count the rest)");
+    app.add_option("--memory", memory,
+                   "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set whose "
+                   "in-core import needs more is imported out of core: read in chunks, duplicates, "
+                   "outliers and normals tile by tile, the sections in spill files, with the in-core "
+                   "result; other inputs and options that need the whole point set fail naming it "
+                   "(default: half the physical memory)")
+        ->check(
+            [](const std::string& text) {
+                try {
+                    prt::tool::parse_byte_size(text, "--memory");
+                    return std::string();
+                } catch (const prt::Error& e) {
+                    return std::string(e.what());
+                }
+            },
+            "SIZE");
+    app.add_option("--spill-folder", spill_folder,
+                   "Folder of the out-of-core spill files (removed as soon as created; about 100 bytes "
+                   "per point) (default: the output's folder)");
+    app.add_option("--tile-points", tile_points,
+                   "Testing: force the out-of-core import with k-NN tiles of this many points")
+        ->group("");
     app.callback([&] {
         if (poses.empty() && inputs.size() != 1)
             throw CLI::ValidationError("inputs", inputs.empty()
@@ -166,10 +193,72 @@ imp::Options Cli::import_options(bool quiet) {
     return options;
 }
 
+/// Whether the import runs out of core (--memory, issue 17); throws the one-line error when it
+/// would have to and cannot.
+bool out_of_core(const Cli& cli, const imp::Options& options, const std::vector<std::filesystem::path>& paths,
+                 std::uint64_t memory) {
+    using prt::tool::format_bytes;
+    const std::string forced = cli.tile_points > 0 ? " (--tile-points forces the out-of-core import)" : "";
+    if (!cli.poses.empty()) {
+        // Merged scans are not imported out of core: the sum of the scans' in-core estimates.
+        std::uint64_t bytes = 0;
+        try {
+            if (!paths.empty())
+                for (const std::filesystem::path& p : paths) bytes += imp::estimate_import(p, options).bytes;
+            else
+                for (const imp::PoseEntry& e : imp::read_poses(cli.poses))
+                    bytes += imp::estimate_import(e.file, options).bytes;
+        } catch (const prt::Error&) {
+            return false;  // the in-core import reports the bad pose list or scan
+        }
+        if (bytes > memory || cli.tile_points > 0)
+            throw prt::Error(cli.poses +
+                             ": merged scans (--poses) are not imported out of core, and their in-core "
+                             "import needs about " +
+                             format_bytes(bytes) + ", --memory is " + format_bytes(memory) + forced +
+                             ": raise --memory");
+        return false;
+    }
+    imp::ImportEstimate e;
+    try {
+        e = imp::estimate_import(paths[0], options);
+    } catch (const prt::Error&) {
+        return false;  // the in-core import reports the unreadable input
+    }
+    if (e.bytes <= memory && cli.tile_points == 0) return false;
+    if (!e.unsupported.empty())
+        throw prt::Error(e.unsupported + "; the in-core import needs about " + format_bytes(e.bytes) +
+                         ", --memory is " + format_bytes(memory) + forced + ": raise --memory");
+    return true;
+}
+
 void import_step(prt::tool::PoolStep& step, Cli& cli) {
     const imp::Options options = cli.import_options(step.quiet());
     imp::Report report;
     std::vector<std::filesystem::path> paths(cli.inputs.begin(), cli.inputs.end());
+    const std::uint64_t memory =
+        cli.memory.empty() ? std::max<std::uint64_t>(prt::tool::physical_memory_bytes() / 2, 256u << 20)
+                           : prt::tool::parse_byte_size(cli.memory, "--memory");
+    if (out_of_core(cli, options, paths, memory)) {
+        imp::MemoryParams mem;
+        mem.memory = memory;
+        mem.tile_points = cli.tile_points;
+        mem.spill_folder = !cli.spill_folder.empty()
+                               ? std::filesystem::path(cli.spill_folder)
+                               : std::filesystem::absolute(step.output_path()).parent_path();
+        const imp::SpilledCloud cloud = imp::import_file_out_of_core(paths[0], options, mem, report);
+        imp::write_point_sections(cloud, mem, step.writer());
+        const double t0 = prt::tool::now_seconds();
+        const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));
+        for (const std::string& line : report.summary_lines()) step.note("%s", line.c_str());
+        step.note("wrote %s: %llu points%s%s%s%s, %llu bytes in %.3f s (out of core, peak RSS %s)",
+                  step.output_path().c_str(), static_cast<unsigned long long>(cloud.size),
+                  cloud.normals.file ? ", normals" : "", cloud.colors.file ? ", colors" : "",
+                  cloud.intensities.file ? ", intensities" : "", cloud.radii.file ? ", radii" : "",
+                  static_cast<unsigned long long>(bytes), prt::tool::now_seconds() - t0,
+                  prt::tool::format_bytes(prt::pre::peak_rss_bytes()).c_str());
+        return;
+    }
     const prt::pre::PointCloud cloud = cli.poses.empty()
                                            ? imp::import_file(paths[0], options, report)
                                            : imp::import_merged(cli.poses, paths, options, report);

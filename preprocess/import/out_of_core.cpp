@@ -1,0 +1,658 @@
+// PointRT prt-import out of core (issue 17): see out_of_core.h.
+#include "out_of_core.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "neighbours.h"
+#include "ply_reader.h"
+#include "prt/error.h"
+#include "prt/formats/pool.h"
+#include "prt/mapped_file.h"
+#include "prt/tool.h"
+#include "tiled_knn.h"
+#include "xyz_reader.h"
+
+namespace prt::pre::import {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr std::uint64_t k_drop_every = std::uint64_t{1} << 20;  // points between page drops
+
+std::string fmt(const char* format, double a) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, format, a);
+    return buf;
+}
+
+std::string sensor_text(const pool::Sensor& s) {
+    return (s.kind == pool::k_sensor_direction ? "direction " : "point ") + std::string("(") +
+           fmt("%g", s.position[0]) + ", " + fmt("%g", s.position[1]) + ", " + fmt("%g", s.position[2]) + ")";
+}
+
+template <class T>
+SpillArray<T> make_spill(const MemoryParams& memory, std::uint64_t count, const char* what) {
+    return {std::make_shared<SpillFile>(memory.spill_folder, std::max<std::uint64_t>(count, 1) * sizeof(T),
+                                        what)};
+}
+
+/// The spilled per-point arrays while they are being filled (`n` points so far).
+struct Arrays {
+    SpilledCloud cloud;
+    bool normals = false, colors = false, radii = false, intensities = false;
+
+    void drop() const {
+        for (const SpillFile* f :
+             {cloud.positions.file.get(), cloud.normals.file.get(), cloud.colors.file.get(),
+              cloud.radii.file.get(), cloud.intensities.file.get()})
+            if (f) f->drop();
+    }
+    /// Keeps the points whose keep[i] is set, in order (keep_points()); returns how many.
+    std::uint64_t compact(std::span<const std::uint8_t> keep) {
+        const auto p = cloud.positions.span();
+        const auto nn = cloud.normals.span();
+        const auto c = cloud.colors.span();
+        const auto r = cloud.radii.span();
+        const auto in = cloud.intensities.span();
+        std::uint64_t out = 0;
+        for (std::uint64_t i = 0; i < cloud.size; ++i) {
+            if (keep[i]) {
+                p[out] = p[i];
+                if (normals) nn[out] = nn[i];
+                if (colors) c[out] = c[i];
+                if (radii) r[out] = r[i];
+                if (intensities) in[out] = in[i];
+                ++out;
+            }
+            if ((i + 1) % k_drop_every == 0) drop();
+        }
+        drop();
+        cloud.size = out;
+        return out;
+    }
+};
+
+/// The bounding-box centre of positions (knn.cpp's box_centre), read once.
+std::array<double, 3> box_centre(std::span<const std::array<double, 3>> positions) {
+    if (positions.empty()) return {0, 0, 0};
+    std::array<double, 3> lo = positions[0], hi = positions[0];
+    for (const auto& p : positions)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    return {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+}
+
+/// clean()'s hash of a position (-0 as +0).
+std::uint64_t position_hash(const std::array<double, 3>& p) {
+    std::uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int a = 0; a < 3; ++a) {
+        const double v = p[a] == 0.0 ? 0.0 : p[a];
+        std::uint64_t bits;
+        std::memcpy(&bits, &v, sizeof bits);
+        h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 31;
+    }
+    return h;
+}
+
+/// clean()'s exact duplicate removal out of core: the (hash, index) keys go to buckets by hash
+/// (a spill file sorted by bucket, each bucket within the memory); each bucket is sorted as clean()
+/// sorts all keys and its runs of equal hashes compared the same way. Equal positions have equal
+/// hashes, so they meet in one bucket: the same first occurrences are kept. Clears keep[i] of the
+/// duplicates and returns their count.
+std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, std::span<std::uint8_t> keep,
+                              const MemoryParams& memory, bool quiet) {
+    struct Key {
+        std::uint64_t hash;
+        std::uint64_t index;
+    };
+    const std::uint64_t n = positions.size();
+    const std::uint64_t per_bucket = std::max<std::uint64_t>(memory.memory / 2 / sizeof(Key), 1024);
+    const std::uint64_t buckets = std::min<std::uint64_t>(
+        std::uint64_t{1} << 24,
+        memory.tile_points ? std::max<std::uint64_t>(4, n / std::max<std::uint64_t>(memory.tile_points, 1))
+                           : (n + per_bucket - 1) / per_bucket);
+    auto bucket_of = [&](std::uint64_t h) { return ((h >> 32) * buckets) >> 32; };
+    std::vector<std::uint64_t> begin(buckets + 1, 0);
+    for (std::uint64_t i = 0; i < n; ++i)
+        if (keep[i]) ++begin[bucket_of(position_hash(positions[i])) + 1];
+    for (std::uint64_t b = 0; b < buckets; ++b) begin[b + 1] += begin[b];
+    SpillFile records(memory.spill_folder, std::max<std::uint64_t>(begin[buckets], 1) * sizeof(Key),
+                      "the duplicate keys");
+    const std::span<Key> r = records.as<Key>();
+    {
+        std::vector<std::uint64_t> fill(begin.begin(), begin.end() - 1);
+        for (std::uint64_t i = 0; i < n; ++i) {
+            if (!keep[i]) continue;
+            const std::uint64_t h = position_hash(positions[i]);
+            r[fill[bucket_of(h)]++] = {h, i};
+            if ((i + 1) % k_drop_every == 0) records.drop();
+        }
+        records.drop();
+    }
+    std::uint64_t duplicates = 0;
+    tool::Progress progress("prt-import: exact duplicates by hash buckets", buckets, quiet);
+    std::vector<Key> keys;
+    for (std::uint64_t b = 0; b < buckets; ++b) {
+        keys.assign(r.begin() + static_cast<std::ptrdiff_t>(begin[b]),
+                    r.begin() + static_cast<std::ptrdiff_t>(begin[b + 1]));
+        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& c) {
+            return a.hash != c.hash ? a.hash < c.hash : a.index < c.index;
+        });
+        for (std::size_t run = 0; run < keys.size();) {
+            std::size_t end = run + 1;
+            while (end < keys.size() && keys[end].hash == keys[run].hash) ++end;
+            for (std::size_t a = run; a < end; ++a) {
+                if (!keep[keys[a].index]) continue;
+                for (std::size_t c = a + 1; c < end; ++c)
+                    if (keep[keys[c].index] && positions[keys[c].index] == positions[keys[a].index]) {
+                        keep[keys[c].index] = 0;
+                        ++duplicates;
+                    }
+            }
+            run = end;
+        }
+        records.drop();
+        progress.update(b + 1);
+    }
+    progress.finish();
+    keys = {};
+    return duplicates;
+}
+
+/// The float offsets from `centre` the in-core KdTree searches (knn.cpp), in a spill file.
+SpillFile float_offsets(std::span<const std::array<double, 3>> positions, const std::array<double, 3>& centre,
+                        const MemoryParams& memory) {
+    SpillFile f(memory.spill_folder, std::max<std::size_t>(positions.size(), 1) * sizeof(pool::Float3),
+                "the float positions");
+    const auto out = f.as<pool::Float3>();
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+        out[i] = {static_cast<float>(positions[i][0] - centre[0]),
+                  static_cast<float>(positions[i][1] - centre[1]),
+                  static_cast<float>(positions[i][2] - centre[2])};
+        if ((i + 1) % k_drop_every == 0) f.drop();
+    }
+    f.drop();
+    return f;
+}
+
+TiledKnnParams tiling_of(const MemoryParams& memory, std::uint32_t k) {
+    TiledKnnParams t;
+    t.k = k;
+    t.memory = memory.memory;
+    t.tile_points = memory.tile_points;
+    t.spill_folder = memory.spill_folder;
+    t.positions_mapped = true;
+    return t;
+}
+
+/// outliers_and_graph()'s outlier removal (neighbours.cpp) over tiled_knn(): the same per-point
+/// mean and m-th distances (the first k of the same exact neighbours, ties by index), the same
+/// sums in index order and the same medians. Clears keep[i] of the outliers.
+void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
+                           const std::array<double, 3>& centre, const OutlierParams& params,
+                           std::span<std::uint8_t> keep, OutlierReport& report, const MemoryParams& memory,
+                           bool quiet) {
+    const double t0 = tool::now_seconds();
+    const std::uint64_t n = positions.size();
+    report = OutlierReport{};
+    report.input = n;
+    bool run = params.enabled && (params.std_ratio > 0 || params.radius_factor > 0);
+    if (!params.enabled)
+        report.skipped = "not run (--keep-outliers)";
+    else if (!run)
+        report.skipped = "not run (both tests disabled)";
+    if (run && n <= params.k) {
+        report.skipped = "not run: " + std::to_string(n) + " points, need more than --outlier-k " +
+                         std::to_string(params.k);
+        run = false;
+    }
+    if (!run) return;
+    if (params.min_neighbours > params.k)
+        throw Error("--outlier-min-neighbours (" + std::to_string(params.min_neighbours) +
+                    ") must not exceed --outlier-k (" + std::to_string(params.k) + ")");
+    if (n > 0xFFFFFFFEull) throw Error("more than 2^32 - 2 points: the k-NN graph cannot index them");
+
+    SpillFile distances(memory.spill_folder, n * 2 * sizeof(float), "the outlier distances");
+    const std::span<float> mean_distance = distances.as<float>().subspan(0, n);
+    const std::span<float> mth_distance = distances.as<float>().subspan(n, n);
+    {
+        const SpillFile offsets = float_offsets(positions, centre, memory);
+        const std::uint32_t k = params.k;
+        const std::uint32_t r = std::max<std::uint32_t>(params.min_neighbours, 1) - 1;
+        tool::Progress progress("prt-import: outliers, k-NN by tiles (k=" + std::to_string(k) + ")", n,
+                                quiet);
+        tiled_knn(
+            offsets.as<const pool::Float3>(), tiling_of(memory, k),
+            [&](const KnnBatch& batch) {
+                for (std::size_t q = 0; q < batch.queries.size(); ++q) {
+                    const std::uint32_t g = batch.global[batch.queries[q]];
+                    const float* d2 = batch.distance2.data() + q * k;
+                    double sum = 0;
+                    for (std::uint32_t j = 0; j < k; ++j) sum += std::sqrt(double(d2[j]));
+                    mean_distance[g] = static_cast<float>(sum / k);
+                    mth_distance[g] = std::sqrt(d2[r]);
+                }
+            },
+            [&](std::uint64_t done) { progress.update(done); });
+        progress.finish();
+    }
+    distances.drop();
+    if (params.sensor) {
+        const auto& s = *params.sensor;
+        auto range = [&](std::uint64_t i) {
+            const auto& p = positions[i];
+            return float(std::sqrt((p[0] - s[0]) * (p[0] - s[0]) + (p[1] - s[1]) * (p[1] - s[1]) +
+                                   (p[2] - s[2]) * (p[2] - s[2])));
+        };
+        const double median_range = median_streamed(n, range);
+        if (median_range > 0 && std::isfinite(median_range)) {
+            for (std::uint64_t i = 0; i < n; ++i) {
+                const double scale = median_range / std::max<double>(range(i), 1e-3 * median_range);
+                mean_distance[i] = float(mean_distance[i] * scale);
+                mth_distance[i] = float(mth_distance[i] * scale);
+            }
+            report.range_scaled = true;
+        }
+    }
+    double sum = 0, sum2 = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const float d = mean_distance[i];
+        sum += d;
+        sum2 += double(d) * d;
+    }
+    report.mean = sum / double(n);
+    const double variance = std::max(0.0, (sum2 - sum * sum / double(n)) / double(n - 1));
+    report.stddev = std::sqrt(variance);
+    report.threshold = report.mean + params.std_ratio * report.stddev;
+    report.median_spacing = median_streamed(n, [&](std::uint64_t i) { return mean_distance[i]; });
+    report.radius_used = params.radius_factor * report.median_spacing;
+    report.ran = true;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const bool stat = params.std_ratio > 0 && mean_distance[i] > report.threshold;
+        const bool rad =
+            params.radius_factor > 0 && params.min_neighbours > 0 && mth_distance[i] > report.radius_used;
+        report.statistical += stat;
+        report.radius += rad;
+        if (stat || rad) {
+            keep[i] = 0;
+            ++report.removed;
+        }
+    }
+    report.seconds = tool::now_seconds() - t0;
+}
+
+Format point_format(const fs::path& path, const Options& options) {
+    return options.format == Format::automatic ? detect_format(path) : options.format;
+}
+
+}  // namespace
+
+float median_streamed(std::uint64_t n, const std::function<float(std::uint64_t)>& value) {
+    if (n == 0) return 0;
+    const std::uint64_t rank = (n - 1) / 2;
+    // Non-negative floats (and +inf) order as their bit patterns: select the high 16 bits, then
+    // the low 16 bits among the values with those.
+    std::vector<std::uint64_t> hist(65536);
+    for (std::uint64_t i = 0; i < n; ++i) ++hist[std::bit_cast<std::uint32_t>(value(i)) >> 16];
+    std::uint64_t below = 0;
+    std::uint32_t high = 0;
+    while (below + hist[high] <= rank) below += hist[high++];
+    std::fill(hist.begin(), hist.end(), 0);
+    for (std::uint64_t i = 0; i < n; ++i) {
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(value(i));
+        if ((bits >> 16) == high) ++hist[bits & 0xFFFF];
+    }
+    std::uint32_t low = 0;
+    while (below + hist[low] <= rank) below += hist[low++];
+    return std::bit_cast<float>((high << 16) | low);
+}
+
+ImportEstimate estimate_import(const fs::path& path, const Options& options) {
+    ImportEstimate e;
+    const std::string label = path.string();
+    const Format format = point_format(path, options);
+    std::error_code ec;
+    const std::uint64_t file_bytes = fs::file_size(path, ec);
+    if (ec) throw Error(label + ": cannot open: " + ec.message());
+    bool has_normals = false, has_sensor = false;
+    // Bytes per point of the in-core import: the point set (positions, normals, colours,
+    // intensities), clean()'s keys and flags, the kd-tree, the k-NN graph, PCA normals and the
+    // orientation's adjacency (neighbours.cpp, orient_normals.cpp).
+    std::uint64_t per_point = 24 + 12 + 8 + 16 + 2 + 32 + 8;
+    const std::uint64_t k = static_cast<std::uint64_t>(options.k);
+    if (format == Format::ply) {
+        const MappedFile file = MappedFile::open(path);
+        const PlyHeader header = parse_ply_header(file.view(), label);
+        const PlyElement* vertex = header.find("vertex");
+        e.points = vertex ? vertex->count : 0;
+        has_normals = header.has_vertex_normals();
+        const PlyElement* camera = header.find("camera");
+        has_sensor = camera && camera->find("view_px") && camera->count == 1;
+        if (options.mesh_mode == MeshMode::mesh || options.sample > 0 ||
+            (options.mesh_mode == MeshMode::automatic && header.face_count() > 0 && !has_normals &&
+             have_openmesh()))
+            e.unsupported =
+                label +
+                ": a mesh (faces) is not imported out of core (--mesh-mode points reads its vertices)";
+    } else if (format == Format::xyz) {
+        const MappedFile file = MappedFile::open(path);
+        const char* p = file.data();
+        const char* const end = p + file.size();
+        std::uint64_t lines = 0;
+        while (p < end) {
+            const char* eol =
+                static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
+            ++lines;
+            p = eol ? eol + 1 : end;
+        }
+        e.points = lines;
+        // The column count: the first line with 3 or 6 numbers (as read_xyz() fixes it).
+        p = file.data();
+        for (int tries = 0; p < end && tries < 1000; ++tries) {
+            const char* eol =
+                static_cast<const char*>(std::memchr(p, '\n', static_cast<std::size_t>(end - p)));
+            if (!eol) eol = end;
+            std::string line(p, static_cast<std::size_t>(eol - p));
+            if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+            for (char& c : line)
+                if (c == ',' || c == ';' || c == '\t' || c == '\r') c = ' ';
+            int fields = 0;
+            for (std::size_t i = 0; i < line.size();) {
+                while (i < line.size() && line[i] == ' ') ++i;
+                if (i == line.size()) break;
+                ++fields;
+                while (i < line.size() && line[i] != ' ') ++i;
+            }
+            if (fields == 3 || fields == 6) {
+                has_normals = fields == 6;
+                break;
+            }
+            p = eol + 1;
+        }
+        drop_mapped_pages(file.data(), file.size());
+    } else {
+        e.points = file_bytes / 12;
+        e.unsupported = label + ": " +
+                        (format == Format::pcd    ? std::string("PCD")
+                         : format == Format::pool ? std::string("a pool")
+                                                  : std::string("a mesh")) +
+                        " is not imported out of core (only PLY and XYZ point sets are)";
+    }
+    if (options.no_sensor) has_sensor = false;
+    if (options.sensor || options.sensor_direction) has_sensor = true;
+    const bool estimate = options.normals == NormalsMode::estimate ||
+                          (options.normals == NormalsMode::automatic && !has_normals);
+    if (options.outliers.enabled || estimate)
+        per_point += 4 * std::max<std::uint64_t>(options.outliers.k, estimate ? k : 0);
+    if (estimate) per_point += 12 + 8 + 8 * k + 24;
+    e.bytes = e.points * per_point;
+    if (e.unsupported.empty() && estimate) {
+        if (!has_sensor)
+            e.unsupported =
+                label +
+                ": estimated normals without a sensor are oriented by propagation over the whole "
+                "k-NN graph, not out of core (give --sensor or --sensor-direction, or --normals keep)";
+        else if (options.grazing_cos > 0)
+            e.unsupported = label + ": --grazing-cos " + fmt("%g", options.grazing_cos) +
+                            " orients grazing normals by propagation over the whole k-NN graph, not out of "
+                            "core (--grazing-cos 0 orients each by its sensor alone)";
+        else if (options.propagate_then_vote)
+            e.unsupported = label + ": orientation by propagation is not out of core";
+    }
+    return e;
+}
+
+SpilledCloud import_file_out_of_core(const fs::path& path, const Options& options, const MemoryParams& memory,
+                                     Report& report) {
+    const std::string label = path.string();
+    const ImportEstimate sizes = estimate_import(path, options);
+    if (!sizes.unsupported.empty()) throw Error(sizes.unsupported);
+    report.label = label;
+    const bool quiet = options.quiet;
+    const double t0 = tool::now_seconds();
+    const Format format = point_format(path, options);
+    const bool drop_file_normals = options.normals == NormalsMode::estimate;
+    const std::uint64_t capacity = std::max<std::uint64_t>(sizes.points, 1);
+
+    // 1. Read in chunks: --keep-fraction, then clean()'s per-point checks; survivors to spill files.
+    Arrays arrays;
+    SpilledCloud& out = arrays.cloud;
+    CleanReport& clean = report.clean;
+    std::uint64_t record = 0;
+    bool first = true;
+    const std::size_t chunk = static_cast<std::size_t>(
+        std::clamp<std::uint64_t>(memory.memory / 8 / 64, 4096, std::uint64_t{1} << 22));
+    auto flush = [&](const PointCloud& c) {
+        if (first) {
+            first = false;
+            out.positions = make_spill<std::array<double, 3>>(memory, capacity, "the positions");
+            arrays.normals = c.has_normals() && !drop_file_normals;
+            arrays.colors = c.has_colors();
+            arrays.radii = c.has_radii();
+            arrays.intensities = c.has_intensities();
+            if (arrays.normals) out.normals = make_spill<pool::Float3>(memory, capacity, "the normals");
+            if (arrays.colors) out.colors = make_spill<pool::Rgba8>(memory, capacity, "the colours");
+            if (arrays.radii) out.radii = make_spill<float>(memory, capacity, "the radii");
+            if (arrays.intensities) out.intensities = make_spill<float>(memory, capacity, "the intensities");
+        }
+        if (out.size + c.size() > capacity) throw Error(label + ": more points than the file announced");
+        const auto p = out.positions.span();
+        const auto nn = out.normals.span();
+        for (std::size_t j = 0; j < c.size(); ++j, ++record) {
+            if (options.keep_fraction < 1.0 &&
+                !decimation_keeps(record, options.keep_fraction, options.seed)) {
+                ++report.decimated;
+                continue;
+            }
+            ++clean.input;
+            const auto& q = c.positions[j];
+            if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2])) {
+                ++clean.non_finite;
+                continue;
+            }
+            const std::uint64_t i = out.size;
+            if (arrays.normals) {
+                const pool::Float3 m = c.normals[j];
+                const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
+                if (!std::isfinite(len) || len < 1e-20) {
+                    ++clean.zero_normal;
+                    continue;
+                }
+                nn[i] = {float(m.x / len), float(m.y / len), float(m.z / len)};
+            }
+            p[i] = q;
+            if (arrays.colors) out.colors.span()[i] = c.colors[j];
+            if (arrays.radii) out.radii.span()[i] = c.radii[j];
+            if (arrays.intensities) out.intensities.span()[i] = c.intensities[j];
+            ++out.size;
+        }
+        arrays.drop();
+    };
+    PointCloud head = format == Format::ply ? read_ply_chunks(path, report, quiet, chunk, flush)
+                                            : read_xyz_chunks(path, report, quiet, chunk, flush);
+    report.read_seconds = tool::now_seconds() - t0;
+    if (first) out.positions = make_spill<std::array<double, 3>>(memory, 1, "the positions");
+    if (arrays.normals) {
+        report.normals_from_file = true;
+        report.normals_detail = "from the file";
+    }
+    out.flags = head.flags;
+    if (options.no_sensor) head.sensors.clear();
+    report.notes.push_back(label + ": out of core: the in-core import needs about " +
+                           tool::format_bytes(sizes.bytes) + ", --memory is " +
+                           tool::format_bytes(memory.memory) + "; spill files in " +
+                           (memory.spill_folder.empty() ? std::string(".") : memory.spill_folder.string()));
+
+    // 2. Exact duplicates (clean()), then the outliers of the scan.
+    SpillFile keep_file(memory.spill_folder, std::max<std::uint64_t>(out.size, 1), "the point flags");
+    auto keep = [&] { return keep_file.as<std::uint8_t>().subspan(0, out.size); };
+    if (!options.keep_duplicates && out.size > 1) {
+        std::fill(keep().begin(), keep().end(), std::uint8_t{1});
+        clean.duplicates = drop_duplicates(out.positions.span().subspan(0, out.size), keep(), memory, quiet);
+        if (clean.duplicates) arrays.compact(keep());
+    }
+    clean.kept = out.size;
+    if (out.size == 0) throw Error(label + ": no points left: " + clean.summary());
+    const std::array<double, 3> centre = box_centre(out.positions.span().subspan(0, out.size));
+    OutlierParams params = options.outliers;
+    if (head.sensors.size() == 1 && head.sensors[0].kind == pool::k_sensor_point)
+        params.sensor = std::array<double, 3>{head.sensors[0].position[0], head.sensors[0].position[1],
+                                              head.sensors[0].position[2]};
+    {
+        std::fill(keep().begin(), keep().end(), std::uint8_t{1});
+        try {
+            remove_outliers_tiled(out.positions.span().subspan(0, out.size), centre, params, keep(),
+                                  report.outliers, memory, quiet);
+        } catch (const Error& e) {
+            throw Error(label + ": " + e.what());
+        }
+        if (report.outliers.removed) arrays.compact(keep());
+    }
+    if (out.size == 0) throw Error(label + ": no points left after outlier removal");
+
+    // 3. Sensors (import.cpp finish()).
+    out.sensors = head.sensors;
+    if (options.sensor) {
+        out.sensors = {pool::Sensor{
+            {(*options.sensor)[0], (*options.sensor)[1], (*options.sensor)[2]}, pool::k_sensor_point, 0}};
+    } else if (options.sensor_direction) {
+        const auto& d = *options.sensor_direction;
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        if (!(len > 0) || !std::isfinite(len))
+            throw Error("--sensor-direction must be a finite non-zero vector");
+        out.sensors = {pool::Sensor{{d[0] / len, d[1] / len, d[2] / len}, pool::k_sensor_direction, 0}};
+    }
+
+    // 4. Normals: PCA by tiles, toward the sensor, then clean()'s check of the normals.
+    const bool estimate = options.normals != NormalsMode::keep && !arrays.normals;
+    if (estimate && out.sensors.empty())
+        throw Error(label +
+                    ": estimated normals without a sensor are oriented by propagation over the whole "
+                    "k-NN graph, not out of core (give --sensor or --sensor-direction, or --normals keep)");
+    if (estimate) {
+        const double t1 = tool::now_seconds();
+        const std::uint32_t k = static_cast<std::uint32_t>(options.k);
+        if (out.size < 3)
+            throw Error(label + ": too few points (" + std::to_string(out.size) + ") to estimate normals");
+        out.normals = make_spill<pool::Float3>(memory, out.size, "the normals");
+        arrays.normals = true;
+        const auto positions = out.positions.span().subspan(0, out.size);
+        const auto normals = out.normals.span().subspan(0, out.size);
+        {
+            tool::Progress progress("prt-import: normals, k-NN by tiles (k=" + std::to_string(k) + ")",
+                                    out.size, quiet);
+            try {
+                pca_normals_tiled(
+                    positions, k, tiling_of(memory, k), normals, nullptr,
+                    [&](std::uint64_t done) { progress.update(done); }, &centre);
+            } catch (const Error& e) {
+                throw Error(label + ": " + e.what());
+            }
+            progress.finish();
+        }
+        std::uint64_t ambiguous = 0;
+        for (std::uint64_t i = 0; i < out.size; ++i) {
+            ambiguous += orient_toward_one(positions[i], normals[i], out.sensors[0]) == 1;
+            if ((i + 1) % k_drop_every == 0) arrays.drop();
+        }
+        out.flags |= pool::k_model_normals_estimated;
+        report.normals_estimated = true;
+        report.oriented_to_sensor = true;
+        report.ambiguous = ambiguous;
+        // clean(cloud, false): PCA's failures (no normal) go, the others are renormalised.
+        const auto flags = keep();
+        std::uint64_t failed = 0;
+        for (std::uint64_t i = 0; i < out.size; ++i) {
+            pool::Float3& m = normals[i];
+            const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
+            flags[i] = std::isfinite(len) && len >= 1e-20;
+            if (flags[i])
+                m = {float(m.x / len), float(m.y / len), float(m.z / len)};
+            else
+                ++failed;
+        }
+        if (failed) arrays.compact(flags);
+        report.estimate_failed = failed;
+        report.normals_seconds = tool::now_seconds() - t1;
+        report.normals_detail =
+            "estimated by PCA over k=" + std::to_string(options.k) + " neighbours in " +
+            fmt("%.3f s", report.normals_seconds) + "; " + "oriented toward the sensor (" +
+            sensor_text(out.sensors[0]) + ")" + "; " + std::to_string(ambiguous) +
+            " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)" +
+            (failed ? "; " + std::to_string(failed) +
+                          " points without a normal (degenerate neighbourhood) dropped"
+                    : "");
+        if (out.size == 0) throw Error(label + ": no points left after normal estimation");
+    } else if (!arrays.normals) {
+        report.normals_detail =
+            "none (the file has none and --normals keep): the pool has no normals section";
+    }
+
+    if (out.sensors.empty())
+        report.sensors_detail = "none";
+    else
+        report.sensors_detail = "1 " + sensor_text(out.sensors[0]) +
+                                (options.sensor || options.sensor_direction ? " (command line)"
+                                 : !report.sensor_source.empty() ? " (" + report.sensor_source + ")"
+                                                                 : std::string());
+    report.written = out.size;
+    if (!arrays.normals) out.normals = {};
+    return std::move(arrays.cloud);
+}
+
+void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory, pool::PoolWriter& writer) {
+    if (cloud.size == 0)
+        throw Error("no points to write (every input point was dropped or the input is empty)");
+    const auto positions = cloud.positions.span().subspan(0, cloud.size);
+    std::array<double, 3> lo = positions[0], hi = positions[0];
+    for (const auto& p : positions)
+        for (int a = 0; a < 3; ++a) {
+            lo[a] = std::min(lo[a], p[a]);
+            hi[a] = std::max(hi[a], p[a]);
+        }
+    pool::ModelInfo info{};
+    for (int a = 0; a < 3; ++a) info.origin[a] = 0.5 * (lo[a] + hi[a]);
+    auto local = std::make_shared<SpillFile>(memory.spill_folder, cloud.size * sizeof(pool::Float3),
+                                             "the local positions");
+    const auto l = local->as<pool::Float3>();
+    for (std::uint64_t i = 0; i < cloud.size; ++i) {
+        l[i] = {float(positions[i][0] - info.origin[0]), float(positions[i][1] - info.origin[1]),
+                float(positions[i][2] - info.origin[2])};
+        if ((i + 1) % k_drop_every == 0) local->drop();
+    }
+    cloud.positions.file->drop();
+    pool::set_point_bounds(info, l);
+    local->drop();
+    info.flags = cloud.flags;
+    writer.add_array(pool::SectionType::model_info, std::vector<pool::ModelInfo>{info});
+    auto view = [&](pool::SectionType type, const std::shared_ptr<SpillFile>& file,
+                    std::uint32_t element_size) {
+        if (!file) {
+            writer.remove(type);
+            return;
+        }
+        writer.add_view(type, element_size, cloud.size,
+                        {file->data(), static_cast<std::size_t>(cloud.size * element_size)},
+                        std::shared_ptr<const void>(file, file->data()), true);
+    };
+    view(pool::SectionType::positions, local, sizeof(pool::Float3));
+    view(pool::SectionType::normals, cloud.normals.file, sizeof(pool::Float3));
+    view(pool::SectionType::colors, cloud.colors.file, sizeof(pool::Rgba8));
+    view(pool::SectionType::radii, cloud.radii.file, sizeof(float));
+    view(pool::SectionType::intensities, cloud.intensities.file, sizeof(float));
+    if (!cloud.sensors.empty())
+        writer.add_array(pool::SectionType::sensors, cloud.sensors);
+    else
+        writer.remove(pool::SectionType::sensors);
+    writer.remove(pool::SectionType::scan_ids);
+}
+
+}  // namespace prt::pre::import

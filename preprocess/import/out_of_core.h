@@ -1,0 +1,99 @@
+// PointRT prt-import out of core (issue 17, prt-import --memory): one PLY or XYZ point set larger
+// than the memory allowed, streamed and worked tile by tile, with the result of the in-core import
+// (import_file) bit for bit:
+//
+//   file --chunks--> decimate, drop non-finite / zero normals (clean()) --> spill files
+//   exact duplicates: hash buckets of at most --memory each (the same hash and first-kept rule as clean())
+//   outliers: the statistics of outliers_and_graph() over tiled_knn() (tiled_knn.h), medians by
+//             a two-pass radix selection (exact)
+//   normals: pca_normals_tiled() in the float frame of the in-core KdTree, oriented toward the
+//            sensor point by point (orient_toward_one), then clean()'s check of the normals
+//   pool: positions, normals, colors, radii, intensities as views of the spill files, streamed
+//         by PoolWriter::write().
+//
+// Every per-point array lives in a spill file (spill_file.h); what stays in memory is a chunk of the
+// input, a bucket of duplicate keys or a tile of the k-NN search, each within --memory.
+// Not out of core (estimate_import says why, one line): meshes, PCD and pool inputs, pose lists,
+// estimated normals without a sensor or with --grazing-cos > 0 (both orient over the whole k-NN
+// graph).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "import.h"
+#include "spill_file.h"
+
+namespace prt::pool {
+class PoolWriter;
+}
+
+namespace prt::pre::import {
+
+/// --keep-fraction's choice: whether the point at `index` (in file order) is kept. A counter-based
+/// hash of (seed, index) (splitmix64's finalizer): the same points for the same file and seed.
+inline bool decimation_keeps(std::uint64_t index, double fraction, std::uint64_t seed) {
+    std::uint64_t h = seed * 0x9E3779B97F4A7C15ull + index;
+    h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;
+    h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
+    h ^= h >> 31;
+    return double(h >> 11) * 0x1.0p-53 < fraction;
+}
+
+/// --memory, --spill-folder and the hidden --tile-points of prt-import.
+struct MemoryParams {
+    std::uint64_t memory = 1ull << 30;   ///< bytes the import may hold
+    std::filesystem::path spill_folder;  ///< where the spill files go (empty: the current folder)
+    std::uint64_t tile_points = 0;       ///< > 0: out of core whatever the size, tiles of this many points
+};
+
+/// What the in-core import of one input would hold, and whether the out-of-core one can take it.
+struct ImportEstimate {
+    std::uint64_t points = 0;  ///< PLY: the vertex count; XYZ: the line count; others: file size / 12
+    std::uint64_t bytes = 0;   ///< the in-core import's working set, about
+    /// Why the out-of-core import cannot take this input with these options, naming the option or
+    /// the file ("" when it can).
+    std::string unsupported;
+};
+
+/// Estimates the in-core import of `path` (single input, no pose list) from its header or size.
+/// Throws prt::Error for a file that cannot be opened.
+ImportEstimate estimate_import(const std::filesystem::path& path, const Options& options);
+
+/// A per-point array in a spill file.
+template <class T>
+struct SpillArray {
+    std::shared_ptr<SpillFile> file;
+    std::span<T> span() const { return file ? file->as<T>() : std::span<T>{}; }
+};
+
+/// The result of the out-of-core import: the point sections in spill files (`size` points each).
+struct SpilledCloud {
+    std::uint64_t size = 0;
+    SpillArray<std::array<double, 3>> positions;
+    SpillArray<pool::Float3> normals;  ///< empty file when none
+    SpillArray<pool::Rgba8> colors;
+    SpillArray<float> radii;
+    SpillArray<float> intensities;
+    std::vector<pool::Sensor> sensors;
+    std::uint32_t flags = 0;
+};
+
+/// import_file() out of core for a PLY or XYZ point set (estimate_import().unsupported empty):
+/// the same points, attributes, order, counts in `report` (timings aside), within memory.memory.
+/// Throws prt::Error as import_file() does, and for inputs estimate_import() does not support.
+SpilledCloud import_file_out_of_core(const std::filesystem::path& path, const Options& options,
+                                     const MemoryParams& memory, Report& report);
+
+/// write_point_sections() for a SpilledCloud: the sections are views of its spill files (the
+/// writer keeps them alive), the positions' local float copy another spill file.
+void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory, pool::PoolWriter& writer);
+
+/// The median as median_of() in neighbours.cpp takes it (the element of rank (n - 1) / 2) of n
+/// non-negative floats given by `value(i)`, read twice in index order (two 16-bit radix passes).
+float median_streamed(std::uint64_t n, const std::function<float(std::uint64_t)>& value);
+
+}  // namespace prt::pre::import

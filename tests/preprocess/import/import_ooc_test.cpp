@@ -1,0 +1,315 @@
+// prt-import out of core (issue 17, --memory): import_file_out_of_core against the in-core
+// import_file on synthetic PLY and XYZ scans (written here), with tiles and memory forced small:
+// the pools both write are compared section by section, byte for byte, and the counts of the
+// reports. The in-core path is itself checked against analytic references elsewhere (normals_test,
+// ply_reader_test, ...); here it is the reference. Also: the one-line errors of what is not out of
+// core, the median selection against nth_element, and the tool end to end (--tile-points).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include "import_test_util.h"
+#include "out_of_core.h"
+#include "prt/error.h"
+#include "prt/formats/pool.h"
+
+namespace {
+
+using namespace prt::pre::import;
+using namespace prt_import_test;
+using prt::pool::Float3;
+
+struct Scan {
+    std::vector<std::array<double, 3>> positions;
+    std::vector<Float3> normals;
+    std::vector<std::array<std::uint8_t, 3>> colors;
+    std::vector<float> intensities;
+};
+
+/// A scan-like set far from the origin: a wavy ground denser near the scanner, a sphere, a few
+/// far outliers, exact duplicates, non-finite points and (with normals) a few zero normals.
+Scan synthetic_scan(bool with_normals, int ground = 3000) {
+    Scan s;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const double ox = 4.5e5, oy = 5.2e6, oz = 120.0;
+    auto add = [&](std::array<double, 3> p, Float3 n) {
+        s.positions.push_back(p);
+        s.normals.push_back(n);
+        s.colors.push_back({std::uint8_t(rng() & 255), std::uint8_t(rng() & 255), std::uint8_t(rng() & 255)});
+        s.intensities.push_back(float(u(rng)));
+    };
+    for (int i = 0; i < ground; ++i) {
+        const double r = 20.0 * u(rng) * u(rng) + 0.5, t = 1.5707963 * u(rng);
+        const double x = r * std::cos(t), y = r * std::sin(t);
+        add({ox + x, oy + y, oz + 0.2 * std::sin(x) * std::cos(0.5 * y)}, {0.f, 0.f, 1.f});
+    }
+    for (int i = 0; i < 1200; ++i) {
+        const double z = 2 * u(rng) - 1, t = 6.2831853 * u(rng), c = std::sqrt(1 - z * z);
+        add({ox + 8 + c * std::cos(t), oy + 8 + c * std::sin(t), oz + 2 + z},
+            {float(c * std::cos(t)), float(c * std::sin(t)), float(z)});
+    }
+    for (int i = 0; i < 12; ++i)  // isolated points far off the surfaces
+        add({ox + 30 + 7 * u(rng), oy - 20 + 9 * u(rng), oz + 15 + 5 * u(rng)}, {1.f, 0.f, 0.f});
+    const std::size_t n = s.positions.size();
+    for (int i = 0; i < 40; ++i) {  // exact duplicates (later in the file)
+        const std::size_t j = std::size_t(i) * 97 % n;
+        add(s.positions[j], s.normals[j]);
+    }
+    const double nan = std::nan("");
+    add({nan, oy, oz}, {0.f, 0.f, 1.f});
+    add({ox, std::numeric_limits<double>::infinity(), oz}, {0.f, 0.f, 1.f});
+    if (with_normals) {
+        add({ox + 1, oy + 1, oz + 0.5}, {0.f, 0.f, 0.f});
+        add({ox + 2, oy + 1, oz + 0.5}, {nan, 0.f, 1.f});
+    }
+    // Shuffle so duplicates and bad points are spread over the chunks.
+    std::vector<std::size_t> order(s.positions.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::shuffle(order.begin(), order.end(), rng);
+    Scan out;
+    for (const std::size_t i : order) {
+        out.positions.push_back(s.positions[i]);
+        out.normals.push_back(s.normals[i]);
+        out.colors.push_back(s.colors[i]);
+        out.intensities.push_back(s.intensities[i]);
+    }
+    if (!with_normals) out.normals.clear();
+    return out;
+}
+
+/// Binary little-endian PLY: double x y z, [float nx ny nz], uchar rgb, float intensity, and a
+/// camera element (the scanner) when `camera` is given.
+std::string ply_bytes(const Scan& s, const std::array<double, 3>* camera) {
+    std::string h = "ply\nformat binary_little_endian 1.0\nelement vertex " +
+                    std::to_string(s.positions.size()) +
+                    "\nproperty double x\nproperty double y\nproperty double z\n";
+    if (!s.normals.empty()) h += "property float nx\nproperty float ny\nproperty float nz\n";
+    h += "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float intensity\n";
+    if (camera)
+        h += "element camera 1\nproperty float view_px\nproperty float view_py\nproperty float view_pz\n";
+    h += "end_header\n";
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        for (int a = 0; a < 3; ++a) put(h, s.positions[i][a]);
+        if (!s.normals.empty()) {
+            put(h, s.normals[i].x);
+            put(h, s.normals[i].y);
+            put(h, s.normals[i].z);
+        }
+        for (int a = 0; a < 3; ++a) put(h, s.colors[i][a]);
+        put(h, s.intensities[i]);
+    }
+    if (camera)
+        for (int a = 0; a < 3; ++a) put(h, float((*camera)[a]));
+    return h;
+}
+
+std::string xyz_bytes(const Scan& s) {
+    std::string t = "# synthetic scan\n";
+    char buf[256];
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        const auto& p = s.positions[i];
+        if (s.normals.empty())
+            std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", p[0], p[1], p[2]);
+        else
+            std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.9g,%.9g,%.9g\n", p[0], p[1], p[2],
+                          double(s.normals[i].x), double(s.normals[i].y), double(s.normals[i].z));
+        t += buf;
+        if (i % 500 == 7) t += "1 2\n";  // malformed lines, dropped and counted
+    }
+    return t;
+}
+
+class ImportOutOfCore : public TempDirTest {
+protected:
+    /// Imports `file` in core and out of core (tiles of `tile` points, `memory` bytes) and expects
+    /// the same pool sections byte for byte and the same counts.
+    void expect_equal(const fs::path& file, Options options, std::uint64_t tile, std::uint64_t memory) {
+        SCOPED_TRACE(file.filename().string() + ", tile " + std::to_string(tile) + ", memory " +
+                     std::to_string(memory));
+        options.quiet = true;
+        Report in_report, out_report;
+        const prt::pre::PointCloud cloud = import_file(file, options, in_report);
+        prt::pool::PoolWriter in_writer;
+        prt::pre::write_point_sections(cloud, in_writer);
+        MemoryParams mem;
+        mem.memory = memory;
+        mem.tile_points = tile;
+        mem.spill_folder = m_dir;
+        const SpilledCloud spilled = import_file_out_of_core(file, options, mem, out_report);
+        prt::pool::PoolWriter out_writer;
+        write_point_sections(spilled, mem, out_writer);
+        const std::vector<std::byte> a = in_writer.serialize(), b = out_writer.serialize();
+        const prt::pool::PoolFile pa = prt::pool::PoolFile::from_bytes(a, "in core");
+        const prt::pool::PoolFile pb = prt::pool::PoolFile::from_bytes(b, "out of core");
+        ASSERT_EQ(pa.sections().size(), pb.sections().size());
+        for (std::size_t i = 0; i < pa.sections().size(); ++i) {
+            const auto& ea = pa.sections()[i];
+            const auto& eb = pb.sections()[i];
+            SCOPED_TRACE("section " + std::string(ea.name, strnlen(ea.name, sizeof ea.name)));
+            EXPECT_EQ(ea.type, eb.type);
+            EXPECT_EQ(ea.count, eb.count);
+            const auto sa = pa.bytes(ea);
+            const auto sb = pb.bytes(eb);
+            ASSERT_EQ(sa.size(), sb.size());
+            EXPECT_TRUE(std::equal(sa.begin(), sa.end(), sb.begin()));
+        }
+        EXPECT_EQ(a, b);
+        EXPECT_EQ(spilled.size, cloud.size());
+        EXPECT_EQ(in_report.records, out_report.records);
+        EXPECT_EQ(in_report.malformed_lines, out_report.malformed_lines);
+        EXPECT_EQ(in_report.clean.summary(), out_report.clean.summary());
+        EXPECT_EQ(in_report.outliers.removed, out_report.outliers.removed);
+        EXPECT_EQ(in_report.outliers.statistical, out_report.outliers.statistical);
+        EXPECT_EQ(in_report.outliers.radius, out_report.outliers.radius);
+        EXPECT_EQ(in_report.outliers.threshold, out_report.outliers.threshold);
+        EXPECT_EQ(in_report.outliers.median_spacing, out_report.outliers.median_spacing);
+        EXPECT_EQ(in_report.outliers.range_scaled, out_report.outliers.range_scaled);
+        EXPECT_EQ(in_report.estimate_failed, out_report.estimate_failed);
+        EXPECT_EQ(in_report.ambiguous, out_report.ambiguous);
+        EXPECT_EQ(in_report.decimated, out_report.decimated);
+        EXPECT_EQ(in_report.sensors_detail, out_report.sensors_detail);
+        EXPECT_EQ(in_report.written, out_report.written);
+        m_last = in_report;
+    }
+    Report m_last;
+};
+
+const std::array<double, 3> k_scanner = {4.5e5 - 1.0, 5.2e6 - 1.0, 121.5};
+
+TEST_F(ImportOutOfCore, PlyWithCameraEstimatedNormalsEqualsInCore) {
+    const auto file = write("scan.ply", ply_bytes(synthetic_scan(false), &k_scanner));
+    Options options;
+    options.grazing_cos = 0;  // orientation by the sensor alone: out of core
+    for (const std::uint64_t tile : {150u, 1000u}) expect_equal(file, options, tile, 200000);
+    expect_equal(file, options, 700, std::uint64_t(1) << 30);
+    // The fixture exercises what it should (in-core counts).
+    EXPECT_GT(m_last.clean.duplicates, 0u);
+    EXPECT_GT(m_last.clean.non_finite, 0u);
+    EXPECT_GT(m_last.outliers.removed, 0u);
+    EXPECT_TRUE(m_last.outliers.range_scaled);
+    EXPECT_TRUE(m_last.oriented_to_sensor);
+}
+
+TEST_F(ImportOutOfCore, PlyWithNormalsAndDecimationEqualsInCore) {
+    const auto file = write("scan.ply", ply_bytes(synthetic_scan(true), nullptr));
+    Options options;
+    expect_equal(file, options, 300, 200000);
+    EXPECT_GT(m_last.clean.zero_normal, 0u);
+    options.keep_fraction = 0.7;
+    options.keep_duplicates = true;
+    options.outliers.radius_factor = 0;
+    expect_equal(file, options, 300, 200000);
+    EXPECT_GT(m_last.decimated, 0u);
+    options.normals = NormalsMode::keep;
+    options.outliers.enabled = false;
+    expect_equal(file, options, 300, 200000);
+}
+
+TEST_F(ImportOutOfCore, XyzWithSensorOptionsEqualsInCore) {
+    const auto file = write("scan.xyz", xyz_bytes(synthetic_scan(false)));
+    Options options;
+    options.grazing_cos = 0;
+    options.sensor = k_scanner;
+    expect_equal(file, options, 250, 150000);
+    EXPECT_GT(m_last.malformed_lines, 0u);
+    options.sensor.reset();
+    options.sensor_direction = std::array<double, 3>{0.2, -0.1, 1.0};
+    options.normals = NormalsMode::estimate;
+    expect_equal(file, options, 250, 150000);
+    const auto with_normals = write("normals.xyz", xyz_bytes(synthetic_scan(true)));
+    expect_equal(with_normals, Options{}, 400, 150000);
+    EXPECT_TRUE(m_last.normals_from_file);
+}
+
+TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
+    const auto ply = write("scan.ply", ply_bytes(synthetic_scan(false, 200), nullptr));
+    Options options;
+    options.quiet = true;
+    const ImportEstimate e = estimate_import(ply, options);
+    EXPECT_EQ(e.points, 200u + 1200 + 12 + 40 + 2);
+    EXPECT_GT(e.bytes, e.points * 100);
+    EXPECT_NE(e.unsupported.find("without a sensor"), std::string::npos) << e.unsupported;
+    options.sensor = k_scanner;
+    EXPECT_NE(estimate_import(ply, options).unsupported.find("--grazing-cos 0.3"), std::string::npos);
+    options.grazing_cos = 0;
+    EXPECT_EQ(estimate_import(ply, options).unsupported, "");
+    const auto pcd = write("scan.pcd", "VERSION .7\n");
+    const std::string msg = estimate_import(pcd, options).unsupported;
+    EXPECT_EQ(msg.rfind(pcd.string() + ": PCD", 0), 0u) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos);
+    MemoryParams mem;
+    mem.spill_folder = m_dir;
+    Report report;
+    options.grazing_cos = 0.3;
+    const std::string err = error_of([&] { import_file_out_of_core(ply, options, mem, report); });
+    EXPECT_EQ(err.rfind(ply.string() + ": --grazing-cos", 0), 0u) << err;
+}
+
+TEST(MedianStreamed, EqualsNthElement) {
+    std::mt19937_64 rng(3);
+    std::exponential_distribution<float> d(2.0f);
+    for (const std::size_t n : {1u, 2u, 7u, 1000u, 65537u}) {
+        std::vector<float> v(n);
+        for (float& x : v) x = d(rng);
+        if (n > 10) v[3] = std::numeric_limits<float>::infinity(), v[5] = 0.f, v[6] = v[7];
+        std::vector<float> w = v;
+        const std::size_t mid = (n - 1) / 2;
+        std::nth_element(w.begin(), w.begin() + std::ptrdiff_t(mid), w.end());
+        EXPECT_EQ(median_streamed(n, [&](std::uint64_t i) { return v[i]; }), w[mid]) << n;
+    }
+}
+
+class ImportOutOfCoreTool : public TempDirTest {
+protected:
+    void SetUp() override {
+        TempDirTest::SetUp();
+        m_tool = fs::path(PRT_BIN_DIR) / "prt-import";
+        if (!fs::exists(m_tool)) GTEST_SKIP() << "prt-import is not built in " << PRT_BIN_DIR;
+    }
+    int run(const std::string& args) {
+        const std::string cmd = m_tool.string() + " " + args + " 2>" + path("err.txt").string();
+        const int status = std::system(cmd.c_str());
+        std::ifstream in(path("err.txt"));
+        std::stringstream ss;
+        ss << in.rdbuf();
+        m_stderr = ss.str();
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    fs::path m_tool;
+    std::string m_stderr;
+};
+
+TEST_F(ImportOutOfCoreTool, TilePointsGivesTheInCorePool) {
+    const auto file = write("scan.ply", ply_bytes(synthetic_scan(false), &k_scanner));
+    ASSERT_EQ(run(file.string() + " -o " + path("in.pool").string() + " --grazing-cos 0 --quiet"), 0)
+        << m_stderr;
+    ASSERT_EQ(run(file.string() + " -o " + path("out.pool").string() +
+                  " --grazing-cos 0 --tile-points 300 --memory 300K"),
+              0)
+        << m_stderr;
+    EXPECT_NE(m_stderr.find("out of core"), std::string::npos) << m_stderr;
+    const auto a = prt::pool::PoolFile::open(path("in.pool"));
+    const auto b = prt::pool::PoolFile::open(path("out.pool"));
+    std::size_t compared = 0;
+    for (const auto& e : a.sections()) {
+        const auto t = static_cast<prt::pool::SectionType>(e.type);
+        if (t == prt::pool::SectionType::provenance) continue;
+        ASSERT_NE(b.find(t), nullptr) << e.name;
+        const auto sa = a.bytes(e), sb = b.bytes(*b.find(t));
+        ASSERT_EQ(sa.size(), sb.size()) << e.name;
+        EXPECT_TRUE(std::equal(sa.begin(), sa.end(), sb.begin())) << e.name;
+        ++compared;
+    }
+    EXPECT_EQ(compared, 6u);  // model_info, positions, normals, colors, intensities, sensors
+    // Not out of core: one line, exit 1, nothing written.
+    EXPECT_EQ(run(file.string() + " -o " + path("x.pool").string() + " --tile-points 300"), 1);
+    EXPECT_NE(m_stderr.find("raise --memory"), std::string::npos) << m_stderr;
+    EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
+    EXPECT_FALSE(fs::exists(path("x.pool")));
+}
+
+}  // namespace
