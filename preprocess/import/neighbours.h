@@ -84,6 +84,8 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
 /// `positions` may be a mapped file too (it is read in tile order). `centre`, when not null, is
 /// the centre of the float frame instead of the positions' bounding-box centre: the in-core
 /// KdTree's when outlier removal took points away after it was built (import out of core).
+/// tiling.positions_mapped says that `positions` is a file mapping (a spill file) whose pages may
+/// be dropped once read; never set it for positions in a vector.
 /// Throws prt::Error as pca_normals() and tiled_knn() do.
 void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
                        TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats = nullptr,

@@ -81,11 +81,14 @@ struct Arrays {
 std::array<double, 3> box_centre(std::span<const std::array<double, 3>> positions) {
     if (positions.empty()) return {0, 0, 0};
     std::array<double, 3> lo = positions[0], hi = positions[0];
-    for (const auto& p : positions)
+    for (std::size_t i = 0; i < positions.size(); ++i) {
         for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], p[a]);
-            hi[a] = std::max(hi[a], p[a]);
+            lo[a] = std::min(lo[a], positions[i][a]);
+            hi[a] = std::max(hi[a], positions[i][a]);
         }
+        if ((i + 1) % k_drop_every == 0) drop_pages(positions.data(), (i + 1) * sizeof positions[0]);
+    }
+    drop_pages(positions.data(), positions.size() * sizeof positions[0]);  // a spill file
     return {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
 }
 
@@ -107,22 +110,27 @@ std::uint64_t position_hash(const std::array<double, 3>& p) {
 /// sorts all keys and its runs of equal hashes compared the same way. Equal positions have equal
 /// hashes, so they meet in one bucket: the same first occurrences are kept. Clears keep[i] of the
 /// duplicates and returns their count.
-std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, std::span<std::uint8_t> keep,
+std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions,
+                              const SpillFile& positions_file, std::span<std::uint8_t> keep,
                               const MemoryParams& memory, bool quiet) {
     struct Key {
         std::uint64_t hash;
         std::uint64_t index;
     };
     const std::uint64_t n = positions.size();
-    const std::uint64_t per_bucket = std::max<std::uint64_t>(memory.memory / 2 / sizeof(Key), 1024);
+    // A bucket's keys in memory plus the same in the mapped spill file while they are copied.
+    const std::uint64_t per_bucket = std::max<std::uint64_t>(memory.memory / 4 / sizeof(Key), 1024);
     const std::uint64_t buckets = std::min<std::uint64_t>(
         std::uint64_t{1} << 24,
         memory.tile_points ? std::max<std::uint64_t>(4, n / std::max<std::uint64_t>(memory.tile_points, 1))
                            : (n + per_bucket - 1) / per_bucket);
     auto bucket_of = [&](std::uint64_t h) { return ((h >> 32) * buckets) >> 32; };
     std::vector<std::uint64_t> begin(buckets + 1, 0);
-    for (std::uint64_t i = 0; i < n; ++i)
+    for (std::uint64_t i = 0; i < n; ++i) {
         if (keep[i]) ++begin[bucket_of(position_hash(positions[i])) + 1];
+        if ((i + 1) % k_drop_every == 0) positions_file.drop();
+    }
+    positions_file.drop();
     for (std::uint64_t b = 0; b < buckets; ++b) begin[b + 1] += begin[b];
     SpillFile records(memory.spill_folder, std::max<std::uint64_t>(begin[buckets], 1) * sizeof(Key),
                       "the duplicate keys");
@@ -133,9 +141,13 @@ std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, 
             if (!keep[i]) continue;
             const std::uint64_t h = position_hash(positions[i]);
             r[fill[bucket_of(h)]++] = {h, i};
-            if ((i + 1) % k_drop_every == 0) records.drop();
+            if ((i + 1) % k_drop_every == 0) {
+                records.drop();
+                positions_file.drop();
+            }
         }
         records.drop();
+        positions_file.drop();
     }
     std::uint64_t duplicates = 0;
     tool::Progress progress("prt-import: exact duplicates by hash buckets", buckets, quiet);
@@ -143,6 +155,7 @@ std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, 
     for (std::uint64_t b = 0; b < buckets; ++b) {
         keys.assign(r.begin() + static_cast<std::ptrdiff_t>(begin[b]),
                     r.begin() + static_cast<std::ptrdiff_t>(begin[b + 1]));
+        records.drop();
         std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& c) {
             return a.hash != c.hash ? a.hash < c.hash : a.index < c.index;
         });
@@ -160,6 +173,7 @@ std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, 
             run = end;
         }
         records.drop();
+        positions_file.drop();
         progress.update(b + 1);
     }
     progress.finish();
@@ -170,6 +184,7 @@ std::uint64_t drop_duplicates(std::span<const std::array<double, 3>> positions, 
 /// The float offsets from `centre` the in-core KdTree searches (knn.cpp), in a spill file.
 SpillFile float_offsets(std::span<const std::array<double, 3>> positions, const std::array<double, 3>& centre,
                         const MemoryParams& memory) {
+    // `positions` is a spill file: its pages leave the resident set as they are read.
     SpillFile f(memory.spill_folder, std::max<std::size_t>(positions.size(), 1) * sizeof(pool::Float3),
                 "the float positions");
     const auto out = f.as<pool::Float3>();
@@ -177,9 +192,13 @@ SpillFile float_offsets(std::span<const std::array<double, 3>> positions, const 
         out[i] = {static_cast<float>(positions[i][0] - centre[0]),
                   static_cast<float>(positions[i][1] - centre[1]),
                   static_cast<float>(positions[i][2] - centre[2])};
-        if ((i + 1) % k_drop_every == 0) f.drop();
+        if ((i + 1) % k_drop_every == 0) {
+            f.drop();
+            drop_pages(positions.data(), (i + 1) * sizeof positions[0]);
+        }
     }
     f.drop();
+    drop_pages(positions.data(), positions.size() * sizeof positions[0]);
     return f;
 }
 
@@ -241,13 +260,20 @@ void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
                     mth_distance[g] = std::sqrt(d2[r]);
                 }
             },
-            [&](std::uint64_t done) { progress.update(done); });
+            [&](std::uint64_t done) {
+                progress.update(done);
+                distances.drop();  // written at random: keep the resident set bounded
+            });
         progress.finish();
     }
     distances.drop();
     if (params.sensor) {
         const auto& s = *params.sensor;
         auto range = [&](std::uint64_t i) {
+            if ((i + 1) % k_drop_every == 0) {
+                drop_pages(positions.data(), (i + 1) * sizeof positions[0]);
+                distances.drop();
+            }
             const auto& p = positions[i];
             return float(std::sqrt((p[0] - s[0]) * (p[0] - s[0]) + (p[1] - s[1]) * (p[1] - s[1]) +
                                    (p[2] - s[2]) * (p[2] - s[2])));
@@ -262,6 +288,8 @@ void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
             report.range_scaled = true;
         }
     }
+    drop_pages(positions.data(), n * sizeof positions[0]);
+    distances.drop();
     double sum = 0, sum2 = 0;
     for (std::uint64_t i = 0; i < n; ++i) {
         const float d = mean_distance[i];
@@ -272,7 +300,10 @@ void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
     const double variance = std::max(0.0, (sum2 - sum * sum / double(n)) / double(n - 1));
     report.stddev = std::sqrt(variance);
     report.threshold = report.mean + params.std_ratio * report.stddev;
-    report.median_spacing = median_streamed(n, [&](std::uint64_t i) { return mean_distance[i]; });
+    report.median_spacing = median_streamed(n, [&](std::uint64_t i) {
+        if ((i + 1) % k_drop_every == 0) distances.drop();
+        return mean_distance[i];
+    });
     report.radius_used = params.radius_factor * report.median_spacing;
     report.ran = true;
     for (std::uint64_t i = 0; i < n; ++i) {
@@ -392,7 +423,9 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options) {
                           (options.normals == NormalsMode::automatic && !has_normals);
     if (options.outliers.enabled || estimate)
         per_point += 4 * std::max<std::uint64_t>(options.outliers.k, estimate ? k : 0);
-    if (estimate) per_point += 12 + 8 + 8 * k + 24;
+    if (estimate) per_point += 12 + 8 + 24;
+    if (estimate && (!has_sensor || options.grazing_cos > 0 || options.propagate_then_vote))
+        per_point += 8 * k + 24;  // orientation by propagation: the symmetric adjacency, heap, flags
     e.bytes = e.points * per_point;
     if (e.unsupported.empty() && estimate) {
         if (!has_sensor)
@@ -479,6 +512,7 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
     PointCloud head = format == Format::ply ? read_ply_chunks(path, report, quiet, chunk, flush)
                                             : read_xyz_chunks(path, report, quiet, chunk, flush);
     report.read_seconds = tool::now_seconds() - t0;
+    std::string peaks = "peak RSS: read " + tool::format_bytes(peak_rss_bytes());
     if (first) out.positions = make_spill<std::array<double, 3>>(memory, 1, "the positions");
     if (arrays.normals) {
         report.normals_from_file = true;
@@ -496,10 +530,12 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
     auto keep = [&] { return keep_file.as<std::uint8_t>().subspan(0, out.size); };
     if (!options.keep_duplicates && out.size > 1) {
         std::fill(keep().begin(), keep().end(), std::uint8_t{1});
-        clean.duplicates = drop_duplicates(out.positions.span().subspan(0, out.size), keep(), memory, quiet);
+        clean.duplicates = drop_duplicates(out.positions.span().subspan(0, out.size), *out.positions.file,
+                                           keep(), memory, quiet);
         if (clean.duplicates) arrays.compact(keep());
     }
     clean.kept = out.size;
+    peaks += ", duplicates " + tool::format_bytes(peak_rss_bytes());
     if (out.size == 0) throw Error(label + ": no points left: " + clean.summary());
     const std::array<double, 3> centre = box_centre(out.positions.span().subspan(0, out.size));
     OutlierParams params = options.outliers;
@@ -517,6 +553,7 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
         if (report.outliers.removed) arrays.compact(keep());
     }
     if (out.size == 0) throw Error(label + ": no points left after outlier removal");
+    peaks += ", outliers " + tool::format_bytes(peak_rss_bytes());
 
     // 3. Sensors (import.cpp finish()).
     out.sensors = head.sensors;
@@ -552,7 +589,11 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
             try {
                 pca_normals_tiled(
                     positions, k, tiling_of(memory, k), normals, nullptr,
-                    [&](std::uint64_t done) { progress.update(done); }, &centre);
+                    [&](std::uint64_t done) {
+                        progress.update(done);
+                        arrays.drop();  // positions read and normals written at random
+                    },
+                    &centre);
             } catch (const Error& e) {
                 throw Error(label + ": " + e.what());
             }
@@ -574,6 +615,7 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
             pool::Float3& m = normals[i];
             const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
             flags[i] = std::isfinite(len) && len >= 1e-20;
+            if ((i + 1) % k_drop_every == 0) arrays.drop();
             if (flags[i])
                 m = {float(m.x / len), float(m.y / len), float(m.z / len)};
             else
@@ -595,6 +637,8 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
         report.normals_detail =
             "none (the file has none and --normals keep): the pool has no normals section";
     }
+    if (estimate) peaks += ", normals " + tool::format_bytes(peak_rss_bytes());
+    report.notes.push_back(label + ": out of core: " + peaks);
 
     if (out.sensors.empty())
         report.sensors_detail = "none";
@@ -626,7 +670,10 @@ void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory,
     for (std::uint64_t i = 0; i < cloud.size; ++i) {
         l[i] = {float(positions[i][0] - info.origin[0]), float(positions[i][1] - info.origin[1]),
                 float(positions[i][2] - info.origin[2])};
-        if ((i + 1) % k_drop_every == 0) local->drop();
+        if ((i + 1) % k_drop_every == 0) {
+            local->drop();
+            cloud.positions.file->drop();
+        }
     }
     cloud.positions.file->drop();
     pool::set_point_bounds(info, l);
