@@ -59,7 +59,9 @@ void Cli::declare(CLI::App& app) {
         "neighbours; without a sensor, by propagation over the k-NN graph (Hoppe 1992) from each\n"
         "component's highest point (+z outward). Grazing (ambiguous) counts are reported. The\n"
         "measurements behind the defaults: preprocess/import/README.md. Dropped points (NaN/Inf,\n"
-        "zero normals, duplicates, outliers, malformed lines) are counted on stderr. On any error\n"
+        "zero normals, duplicates, outliers, malformed lines) are counted on stderr. Out of core\n"
+        "(--memory): a PLY or XYZ point set whose in-core import needs more is streamed and worked\n"
+        "tile by tile with the same result (preprocess/import/README.md). On any error\n"
         "nothing is written and the exit code is 1 (2 for bad usage).");
     app.add_option("inputs", inputs,
                    "Scan, mesh or pool to import (.ply .pcd .xyz .txt .obj .off .stl .pool); with --poses: "
@@ -153,8 +155,8 @@ void Cli::declare(CLI::App& app) {
             },
             "SIZE");
     app.add_option("--spill-folder", spill_folder,
-                   "Folder of the out-of-core spill files (removed as soon as created; about 100 bytes "
-                   "per point) (default: the output's folder)");
+                   "Folder of the out-of-core spill files (removed as soon as created; about 60 + 4k "
+                   "bytes per point) (default: the output's folder)");
     app.add_option("--tile-points", tile_points,
                    "Testing: force the out-of-core import with k-NN tiles of this many points")
         ->group("");
