@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "neighbours.h"
+#include "orient_propagate.h"
 #include "ply_reader.h"
 #include "prt/error.h"
 #include "prt/formats/pool.h"
@@ -320,11 +321,153 @@ void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
     report.seconds = tool::now_seconds() - t0;
 }
 
+/// What the --grazing-cos step did (import.cpp normals_for()).
+struct GrazingResult {
+    std::uint64_t unsure = 0;   ///< normals below --grazing-cos to their line of sight
+    std::uint64_t flipped = 0;  ///< of those, flipped by the propagation
+};
+
+/// normals_for()'s --grazing-cos step out of core: the normals more than acos(grazing_cos) from
+/// their line of sight take their sign from the others by orient_by_propagation() with the others
+/// fixed. Only the edges of the k-NN graph (k nearest, one tiled_knn() pass in the in-core kd-tree's
+/// frame) that end at such a grazing normal take part (an edge to a fixed point is never followed),
+/// so they are collected and put in the order of the in-core adjacency lists (by the edge's source
+/// point, then its rank in that point's row), and propagate_signs() runs the same steps over them.
+/// Needs those edges in memory (about 16 bytes each, up to 2k per grazing normal): throws, saying
+/// to raise --memory, when they do not fit.
+GrazingResult orient_grazing_tiled(std::span<const std::array<double, 3>> positions,
+                                   std::span<pool::Float3> normals, const pool::Sensor& sensor,
+                                   double grazing_cos, std::uint32_t k, const std::array<double, 3>& centre,
+                                   const MemoryParams& memory, const Arrays& arrays, bool quiet,
+                                   const std::string& label) {
+    const std::uint64_t n = positions.size();
+    GrazingResult result;
+    // Per point: 0 no valid normal (no part), 1 fixed, 2 grazing.
+    SpillFile state_file(memory.spill_folder, std::max<std::uint64_t>(n, 1), "the orientation states");
+    const std::span<std::uint8_t> state = state_file.as<std::uint8_t>();
+    std::uint64_t grazing = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        double d[3];  // the line of sight (import.cpp's line_of_sight)
+        for (int a = 0; a < 3; ++a)
+            d[a] = sensor.kind == pool::k_sensor_direction ? sensor.position[a]
+                                                           : sensor.position[a] - positions[i][a];
+        const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        const std::array<double, 3> l = {d[0] / len, d[1] / len, d[2] / len};
+        const pool::Float3& m = normals[i];
+        const bool fixed = std::fabs(m.x * l[0] + m.y * l[1] + m.z * l[2]) >= grazing_cos;
+        result.unsure += !fixed;
+        state[i] = !orient_detail::valid(m) ? 0 : fixed ? 1 : 2;
+        grazing += state[i] == 2;
+        if ((i + 1) % k_drop_every == 0) {
+            arrays.drop();
+            state_file.drop();
+        }
+    }
+    if (grazing == 0) return result;  // nothing to propagate to (no part changes sign)
+
+    std::vector<GrazingEdge> edges;
+    const std::uint64_t limit = std::max<std::uint64_t>(memory.memory / 2 / sizeof(GrazingEdge), 1024);
+    auto too_big = [&] {
+        return Error(label + ": --grazing-cos " + fmt("%g", grazing_cos) + ": the " +
+                     std::to_string(grazing) +
+                     " grazing normals take their sign over the k-NN graph around them, more than --memory " +
+                     tool::format_bytes(memory.memory) + " holds: raise --memory (or give --grazing-cos 0)");
+    };
+    {
+        const SpillFile offsets = float_offsets(positions, centre, memory);
+        tool::Progress progress("prt-import: grazing normals, k-NN by tiles (k=" + std::to_string(k) + ")", n,
+                                quiet);
+        tiled_knn(
+            offsets.as<const pool::Float3>(), tiling_of(memory, k),
+            [&](const KnnBatch& batch) {
+                std::vector<std::uint32_t> row(k);
+                for (std::size_t q = 0; q < batch.queries.size(); ++q) {
+                    for (std::uint32_t j = 0; j < k; ++j) row[j] = batch.global[batch.neighbours[q * k + j]];
+                    add_grazing_edges(batch.global[batch.queries[q]], row.data(), k, state, edges);
+                    if (edges.size() > limit) throw too_big();
+                }
+            },
+            [&](std::uint64_t done) {
+                progress.update(done);
+                state_file.drop();
+                arrays.drop();
+            });
+        progress.finish();
+    }
+    result.flipped = propagate_grazing(
+        std::move(edges), state, normals, [&](std::uint32_t g) { return positions[g][2]; }, memory.memory / 2,
+        [&] { throw too_big(); }, quiet);
+    arrays.drop();
+    return result;
+}
+
 Format point_format(const fs::path& path, const Options& options) {
     return options.format == Format::automatic ? detect_format(path) : options.format;
 }
 
 }  // namespace
+
+void add_grazing_edges(std::uint32_t g, const std::uint32_t* row, std::uint32_t k,
+                       std::span<const std::uint8_t> state, std::vector<GrazingEdge>& edges) {
+    const std::uint8_t sg = state[g];
+    if (sg == 0) return;
+    for (std::uint32_t j = 0; j < k; ++j) {
+        const std::uint32_t m = row[j];
+        if (m == k_no_neighbour || m == g || m >= state.size() || state[m] == 0) continue;
+        // The edge (g, m) is in g's list (as m) and in m's (as g), at g's turn: only what ends at
+        // a grazing point is ever followed.
+        if (state[m] == 2) edges.push_back({(std::uint64_t(g) << 32) | g, j, m});
+        if (sg == 2) edges.push_back({(std::uint64_t(m) << 32) | g, j, g});
+    }
+}
+
+std::uint64_t propagate_grazing(std::vector<GrazingEdge> edges, std::span<const std::uint8_t> state,
+                                std::span<pool::Float3> normals,
+                                const std::function<double(std::uint32_t)>& height_of, std::uint64_t memory,
+                                const std::function<void()>& too_big, bool quiet) {
+    std::sort(edges.begin(), edges.end(), [](const GrazingEdge& a, const GrazingEdge& b) {
+        return a.key != b.key ? a.key < b.key : a.j < b.j;
+    });
+    // The vertices: every owner of a list and every grazing point (a lone one is a seed), in point order.
+    std::vector<std::uint32_t> vertices;
+    for (std::size_t i = 0; i < state.size(); ++i)
+        if (state[i] == 2) vertices.push_back(static_cast<std::uint32_t>(i));
+    for (const GrazingEdge& e : edges) vertices.push_back(static_cast<std::uint32_t>(e.key >> 32));
+    std::sort(vertices.begin(), vertices.end());
+    vertices.erase(std::unique(vertices.begin(), vertices.end()), vertices.end());
+    const std::size_t nv = vertices.size();
+    if (nv * 40 + edges.size() * 4 > memory) too_big();
+    auto local = [&](std::uint32_t g) {
+        return static_cast<std::uint32_t>(std::lower_bound(vertices.begin(), vertices.end(), g) -
+                                          vertices.begin());
+    };
+    std::vector<std::uint64_t> begin(nv + 1, 0);
+    std::vector<std::uint32_t> adjacent(edges.size());
+    {
+        std::size_t v = 0;
+        for (std::size_t e = 0; e < edges.size(); ++e) {
+            const std::uint32_t owner = static_cast<std::uint32_t>(edges[e].key >> 32);
+            while (vertices[v] != owner) begin[++v] = e;
+            adjacent[e] = local(edges[e].target);
+        }
+        while (v < nv) begin[++v] = edges.size();
+    }
+    edges = {};
+    std::vector<pool::Float3> local_normals(nv);
+    std::vector<std::uint8_t> fixed(nv);
+    std::vector<double> height(nv);
+    for (std::size_t v = 0; v < nv; ++v) {
+        local_normals[v] = normals[vertices[v]];
+        fixed[v] = state[vertices[v]] == 1;
+        height[v] = height_of(vertices[v]);
+    }
+    const OrientStats stats = propagate_signs(
+        nv, begin, adjacent, local_normals, nullptr, fixed.data(), [&](std::uint32_t v) { return height[v]; },
+        quiet, nullptr);
+    for (std::size_t v = 0; v < nv; ++v)
+        if (!fixed[v]) normals[vertices[v]] = local_normals[v];
+    return stats.flipped;
+}
 
 float median_streamed(std::uint64_t n, const std::function<float(std::uint64_t)>& value) {
     if (n == 0) return 0;
@@ -433,10 +576,6 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options) {
                 label +
                 ": estimated normals without a sensor are oriented by propagation over the whole "
                 "k-NN graph, not out of core (give --sensor or --sensor-direction, or --normals keep)";
-        else if (options.grazing_cos > 0)
-            e.unsupported = label + ": --grazing-cos " + fmt("%g", options.grazing_cos) +
-                            " orients grazing normals by propagation over the whole k-NN graph, not out of "
-                            "core (--grazing-cos 0 orients each by its sensor alone)";
         else if (options.propagate_then_vote)
             e.unsupported = label + ": orientation by propagation is not out of core";
     }
@@ -604,6 +743,23 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
             ambiguous += orient_toward_one(positions[i], normals[i], out.sensors[0]) == 1;
             if ((i + 1) % k_drop_every == 0) arrays.drop();
         }
+        std::string grazing_text;
+        if (options.grazing_cos > 0) {
+            GrazingResult g;
+            try {
+                g = orient_grazing_tiled(positions, normals, out.sensors[0], options.grazing_cos, k, centre,
+                                         memory, arrays, quiet, label);
+            } catch (const Error& e) {
+                const std::string what = e.what();
+                throw Error(what.rfind(label, 0) == 0 ? what : label + ": " + what);
+            }
+            report.grazing_flipped = g.flipped;
+            grazing_text =
+                "; the " + std::to_string(g.unsure) + " more than " +
+                fmt("%.1f", std::acos(options.grazing_cos) * 180 / 3.14159265358979323846) +
+                " degrees from their line of sight took their sign from the others over the k-NN graph (" +
+                std::to_string(g.flipped) + " flipped)";
+        }
         out.flags |= pool::k_model_normals_estimated;
         report.normals_estimated = true;
         report.oriented_to_sensor = true;
@@ -629,6 +785,7 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
             fmt("%.3f s", report.normals_seconds) + "; " + "oriented toward the sensor (" +
             sensor_text(out.sensors[0]) + ")" + "; " + std::to_string(ambiguous) +
             " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)" +
+            grazing_text +
             (failed ? "; " + std::to_string(failed) +
                           " points without a normal (degenerate neighbourhood) dropped"
                     : "");

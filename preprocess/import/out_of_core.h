@@ -20,7 +20,9 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -91,6 +93,29 @@ SpilledCloud import_file_out_of_core(const std::filesystem::path& path, const Op
 /// write_point_sections() for a SpilledCloud: the sections are views of its spill files (the
 /// writer keeps them alive), the positions' local float copy another spill file.
 void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory, pool::PoolWriter& writer);
+
+/// One entry of the k-NN graph's adjacency lists that the --grazing-cos propagation follows out of
+/// core: `target` (a grazing point) in the list of the point key >> 32, put there when the row of
+/// point key & 0xFFFFFFFF was read, at rank j (the order orient_by_propagation() builds its lists in).
+struct GrazingEdge {
+    std::uint64_t key;
+    std::uint32_t j;
+    std::uint32_t target;
+};
+
+/// Appends the entries of point g's k-NN row (k_no_neighbour where short) that end at a grazing
+/// point; state[i]: 0 no valid normal (no part), 1 fixed (a source), 2 grazing.
+void add_grazing_edges(std::uint32_t g, const std::uint32_t* row, std::uint32_t k,
+                       std::span<const std::uint8_t> state, std::vector<GrazingEdge>& edges);
+
+/// orient_by_propagation() with the points of state 1 fixed, over the edges add_grazing_edges()
+/// collected from every row: the same steps (propagate_signs), so the grazing normals (state 2)
+/// get the signs the in-core run gives them; height_of(i) is point i's z. Calls too_big() (which
+/// throws) when the vertices and edges need more than `memory` bytes. Returns the flips.
+std::uint64_t propagate_grazing(std::vector<GrazingEdge> edges, std::span<const std::uint8_t> state,
+                                std::span<pool::Float3> normals,
+                                const std::function<double(std::uint32_t)>& height_of, std::uint64_t memory,
+                                const std::function<void()>& too_big, bool quiet);
 
 /// The median as median_of() in neighbours.cpp takes it (the element of rank (n - 1) / 2) of n
 /// non-negative floats given by `value(i)`, read twice in index order (two 16-bit radix passes).

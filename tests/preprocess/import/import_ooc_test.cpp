@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <sstream>
 
@@ -170,6 +171,7 @@ protected:
         EXPECT_EQ(in_report.outliers.range_scaled, out_report.outliers.range_scaled);
         EXPECT_EQ(in_report.estimate_failed, out_report.estimate_failed);
         EXPECT_EQ(in_report.ambiguous, out_report.ambiguous);
+        EXPECT_EQ(in_report.grazing_flipped, out_report.grazing_flipped);
         EXPECT_EQ(in_report.decimated, out_report.decimated);
         EXPECT_EQ(in_report.sensors_detail, out_report.sensors_detail);
         EXPECT_EQ(in_report.written, out_report.written);
@@ -192,6 +194,14 @@ TEST_F(ImportOutOfCore, PlyWithCameraEstimatedNormalsEqualsInCore) {
     EXPECT_GT(m_last.outliers.removed, 0u);
     EXPECT_TRUE(m_last.outliers.range_scaled);
     EXPECT_TRUE(m_last.oriented_to_sensor);
+    // The grazing normals take their sign from the others over the k-NN graph (the default).
+    for (const double grazing : {0.3, 0.8}) {
+        options.grazing_cos = grazing;
+        expect_equal(file, options, 150, std::uint64_t(16) << 20);  // the grazing edges: ~3 MB at 0.8
+        expect_equal(file, options, 1000, std::uint64_t(1) << 30);
+        EXPECT_NE(m_last.normals_detail.find("took their sign from the others"), std::string::npos);
+    }
+    EXPECT_GT(m_last.grazing_flipped, 0u);
 }
 
 TEST_F(ImportOutOfCore, PlyWithNormalsAndDecimationEqualsInCore) {
@@ -234,8 +244,6 @@ TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
     EXPECT_GT(e.bytes, e.points * 100);
     EXPECT_NE(e.unsupported.find("without a sensor"), std::string::npos) << e.unsupported;
     options.sensor = k_scanner;
-    EXPECT_NE(estimate_import(ply, options).unsupported.find("--grazing-cos 0.3"), std::string::npos);
-    options.grazing_cos = 0;
     EXPECT_EQ(estimate_import(ply, options).unsupported, "");
     const auto pcd = write("scan.pcd", "VERSION .7\n");
     const std::string msg = estimate_import(pcd, options).unsupported;
@@ -244,9 +252,17 @@ TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
     MemoryParams mem;
     mem.spill_folder = m_dir;
     Report report;
-    options.grazing_cos = 0.3;
+    options.sensor.reset();
     const std::string err = error_of([&] { import_file_out_of_core(ply, options, mem, report); });
-    EXPECT_EQ(err.rfind(ply.string() + ": --grazing-cos", 0), 0u) << err;
+    EXPECT_EQ(err.rfind(ply.string() + ": estimated normals without a sensor", 0), 0u) << err;
+    // The grazing normals' edges must fit the memory: else one line saying to raise it.
+    options.sensor = k_scanner;
+    options.grazing_cos = 0.9;
+    mem.memory = 20000;
+    mem.tile_points = 200;
+    const std::string big = error_of([&] { import_file_out_of_core(ply, options, mem, report); });
+    EXPECT_EQ(big.rfind(ply.string() + ": --grazing-cos 0.9", 0), 0u) << big;
+    EXPECT_NE(big.find("raise --memory"), std::string::npos) << big;
 }
 
 fs::path real_data(const std::string& rel) {
@@ -268,6 +284,54 @@ TEST_F(ImportOutOfCore, RealScansEqualInCore) {
     options.grazing_cos = 0;
     expect_equal(bunny, options, 4000, 2000000);
     EXPECT_GT(m_last.written, 30000u);
+}
+
+TEST(GrazingPropagation, TakesTheStepsOfOrientByPropagation) {
+    // A random graph (rows read in a shuffled order, as tiles give them) with normals from a small
+    // set of opposite and oblique directions (ties of |n_i . n_j| everywhere, so the order of the
+    // adjacency lists decides the signs), invalid normals, short rows and z ties for the seeds.
+    std::mt19937 rng(5);
+    const std::uint32_t n = 3000, k = 6;
+    const Float3 set[] = {{0, 0, 1},       {0, 0, -1},      {1, 0, 0},
+                          {-1, 0, 0},      {0.6f, 0, 0.8f}, {-0.6f, 0, -0.8f},
+                          {0, 0.8f, 0.6f}, {0, 0, 0},       {std::nanf(""), 0, 1}};
+    for (const int percent_fixed : {50, 5}) {
+        std::vector<std::array<double, 3>> positions(n);
+        std::vector<Float3> normals(n);
+        std::vector<std::uint8_t> fixed(n), state(n);
+        KnnGraph graph;
+        graph.k = k;
+        graph.neighbours.assign(std::size_t(n) * k, k_no_neighbour);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            positions[i] = {0, 0, double(rng() % 20)};
+            normals[i] = set[rng() % (rng() % 10 == 0 ? 9 : 7)];
+            fixed[i] = int(rng() % 100) < percent_fixed;
+            const std::uint32_t len = rng() % 20 == 0 ? k / 2 : k;
+            for (std::uint32_t j = 0; j < len; ++j) {
+                std::uint32_t m = rng() % n;
+                while (m == i) m = rng() % n;
+                graph.neighbours[std::size_t(i) * k + j] = m;
+            }
+            const float l =
+                normals[i].x * normals[i].x + normals[i].y * normals[i].y + normals[i].z * normals[i].z;
+            state[i] = !(std::isfinite(l) && l > 1e-12f) ? 0 : fixed[i] ? 1 : 2;
+        }
+        std::vector<Float3> want = normals;
+        const OrientStats stats = orient_by_propagation(positions, want, graph, true, &fixed);
+        std::vector<std::uint32_t> order(n);
+        for (std::uint32_t i = 0; i < n; ++i) order[i] = i;
+        std::shuffle(order.begin(), order.end(), rng);
+        std::vector<GrazingEdge> edges;
+        for (const std::uint32_t g : order)
+            add_grazing_edges(g, graph.neighbours.data() + std::size_t(g) * k, k, state, edges);
+        std::vector<Float3> got = normals;
+        const std::uint64_t flipped = propagate_grazing(
+            std::move(edges), state, got, [&](std::uint32_t i) { return positions[i][2]; },
+            std::uint64_t(1) << 30, [] { throw prt::Error("too big"); }, true);
+        EXPECT_GT(stats.flipped, 100u);
+        EXPECT_EQ(flipped, stats.flipped);
+        EXPECT_EQ(std::memcmp(got.data(), want.data(), n * sizeof(Float3)), 0);
+    }
 }
 
 TEST(MedianStreamed, EqualsNthElement) {
@@ -306,11 +370,8 @@ protected:
 
 TEST_F(ImportOutOfCoreTool, TilePointsGivesTheInCorePool) {
     const auto file = write("scan.ply", ply_bytes(synthetic_scan(false), &k_scanner));
-    ASSERT_EQ(run(file.string() + " -o " + path("in.pool").string() + " --grazing-cos 0 --quiet"), 0)
-        << m_stderr;
-    ASSERT_EQ(run(file.string() + " -o " + path("out.pool").string() +
-                  " --grazing-cos 0 --tile-points 300 --memory 300K"),
-              0)
+    ASSERT_EQ(run(file.string() + " -o " + path("in.pool").string() + " --quiet"), 0) << m_stderr;
+    ASSERT_EQ(run(file.string() + " -o " + path("out.pool").string() + " --tile-points 300 --memory 8M"), 0)
         << m_stderr;
     EXPECT_NE(m_stderr.find("out of core"), std::string::npos) << m_stderr;
     const auto a = prt::pool::PoolFile::open(path("in.pool"));
@@ -327,7 +388,7 @@ TEST_F(ImportOutOfCoreTool, TilePointsGivesTheInCorePool) {
     }
     EXPECT_EQ(compared, 6u);  // model_info, positions, normals, colors, intensities, sensors
     // Not out of core: one line, exit 1, nothing written.
-    EXPECT_EQ(run(file.string() + " -o " + path("x.pool").string() + " --tile-points 300"), 1);
+    EXPECT_EQ(run(file.string() + " -o " + path("x.pool").string() + " --tile-points 300 --no-sensor"), 1);
     EXPECT_NE(m_stderr.find("raise --memory"), std::string::npos) << m_stderr;
     EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
     EXPECT_FALSE(fs::exists(path("x.pool")));
