@@ -6,10 +6,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 
 #include "neighbours.h"
 #include "orient_propagate.h"
+#include "pcd_header.h"
 #include "ply_reader.h"
+#include "poses.h"
 #include "prt/error.h"
 #include "prt/formats/pool.h"
 #include "prt/mapped_file.h"
@@ -45,12 +48,13 @@ SpillArray<T> make_spill(const MemoryParams& memory, std::uint64_t count, const 
 /// The spilled per-point arrays while they are being filled (`n` points so far).
 struct Arrays {
     SpilledCloud cloud;
-    bool normals = false, colors = false, radii = false, intensities = false;
+    bool normals = false, colors = false, radii = false, intensities = false, scan_ids = false;
+    SpillArray<std::uint8_t> given;  ///< merged, some scans with normals: per point, the file's normal
 
     void drop() const {
-        for (const SpillFile* f :
-             {cloud.positions.file.get(), cloud.normals.file.get(), cloud.colors.file.get(),
-              cloud.radii.file.get(), cloud.intensities.file.get()})
+        for (const SpillFile* f : {cloud.positions.file.get(), cloud.normals.file.get(),
+                                   cloud.colors.file.get(), cloud.radii.file.get(),
+                                   cloud.intensities.file.get(), cloud.scan_ids.file.get(), given.file.get()})
             if (f) f->drop();
     }
     /// Keeps the points whose keep[i] is set, in order (keep_points()); returns how many.
@@ -60,6 +64,8 @@ struct Arrays {
         const auto c = cloud.colors.span();
         const auto r = cloud.radii.span();
         const auto in = cloud.intensities.span();
+        const auto ids = cloud.scan_ids.span();
+        const auto gv = given.span();
         std::uint64_t out = 0;
         for (std::uint64_t i = 0; i < cloud.size; ++i) {
             if (keep[i]) {
@@ -68,6 +74,8 @@ struct Arrays {
                 if (colors) c[out] = c[i];
                 if (radii) r[out] = r[i];
                 if (intensities) in[out] = in[i];
+                if (scan_ids) ids[out] = ids[i];
+                if (given.file) gv[out] = gv[i];
                 ++out;
             }
             if ((i + 1) % k_drop_every == 0) drop();
@@ -336,10 +344,11 @@ struct GrazingResult {
 /// Needs those edges in memory (about 16 bytes each, up to 2k per grazing normal): throws, saying
 /// to raise --memory, when they do not fit.
 GrazingResult orient_grazing_tiled(std::span<const std::array<double, 3>> positions,
-                                   std::span<pool::Float3> normals, const pool::Sensor& sensor,
-                                   double grazing_cos, std::uint32_t k, const std::array<double, 3>& centre,
-                                   const MemoryParams& memory, const Arrays& arrays, bool quiet,
-                                   const std::string& label) {
+                                   std::span<pool::Float3> normals, std::span<const pool::Sensor> sensors,
+                                   std::span<const std::uint16_t> scan_ids,
+                                   std::span<const std::uint8_t> given, double grazing_cos, std::uint32_t k,
+                                   const std::array<double, 3>& centre, const MemoryParams& memory,
+                                   const Arrays& arrays, bool quiet, const std::string& label) {
     const std::uint64_t n = positions.size();
     GrazingResult result;
     // Per point: 0 no valid normal (no part), 1 fixed, 2 grazing.
@@ -347,6 +356,11 @@ GrazingResult orient_grazing_tiled(std::span<const std::array<double, 3>> positi
     const std::span<std::uint8_t> state = state_file.as<std::uint8_t>();
     std::uint64_t grazing = 0;
     for (std::uint64_t i = 0; i < n; ++i) {
+        if (!given.empty() && given[i]) {  // the file's normal: a source
+            state[i] = orient_detail::valid(normals[i]) ? 1 : 0;
+            continue;
+        }
+        const pool::Sensor& sensor = sensors[scan_ids.empty() ? 0 : scan_ids[i]];
         double d[3];  // the line of sight (import.cpp's line_of_sight)
         for (int a = 0; a < 3; ++a)
             d[a] = sensor.kind == pool::k_sensor_direction ? sensor.position[a]
@@ -489,7 +503,7 @@ float median_streamed(std::uint64_t n, const std::function<float(std::uint64_t)>
     return std::bit_cast<float>((high << 16) | low);
 }
 
-ImportEstimate estimate_import(const fs::path& path, const Options& options) {
+ImportEstimate estimate_import(const fs::path& path, const Options& options, bool sensor_given) {
     ImportEstimate e;
     const std::string label = path.string();
     const Format format = point_format(path, options);
@@ -553,13 +567,26 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options) {
         }
         drop_mapped_pages(file.data(), file.size());
     } else {
-        e.points = file_bytes / 12;
+        // PCD: the header's point count; pools and meshes: from the size (a pool holds at least 12
+        // bytes of position per point, a mesh file about 24 bytes per vertex or more with faces).
+        e.points = file_bytes / (format == Format::pool ? 16 : 24);
+        if (format == Format::pcd) {
+            const MappedFile file = MappedFile::open(path);
+            Report unused;
+            try {
+                e.points = check_pcd(file, unused).points;
+            } catch (const Error&) {
+                // a bad header: the in-core import says what is wrong
+            }
+            drop_mapped_pages(file.data(), file.size());
+        }
         e.unsupported = label + ": " +
                         (format == Format::pcd    ? std::string("PCD")
                          : format == Format::pool ? std::string("a pool")
                                                   : std::string("a mesh")) +
                         " is not imported out of core (only PLY and XYZ point sets are)";
     }
+    if (sensor_given) has_sensor = true;
     if (options.no_sensor) has_sensor = false;
     if (options.sensor || options.sensor_direction) has_sensor = true;
     const bool estimate = options.normals == NormalsMode::estimate ||
@@ -582,10 +609,22 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options) {
     return e;
 }
 
-SpilledCloud import_file_out_of_core(const fs::path& path, const Options& options, const MemoryParams& memory,
-                                     Report& report) {
+namespace {
+
+/// One scan read, cleaned and rid of outliers out of core (import.cpp read_scan() + prepare_scan()
+/// up to the pose), in its own frame.
+struct ScanStage {
+    Arrays arrays;
+    std::vector<pool::Sensor> sensors;  ///< the file's (or the pose list's) sensor, scan frame
+    std::array<double, 3> centre{};     ///< the in-core kd-tree's centre (after clean())
+    std::string peaks;                  ///< peak RSS per phase, for the note
+};
+
+/// `sensor_override`: the pose list names the scan's sensor (none when it holds no value).
+ScanStage read_and_filter(const fs::path& path, const Options& options, const MemoryParams& memory,
+                          Report& report, const std::optional<std::optional<pool::Sensor>>& sensor_override) {
     const std::string label = path.string();
-    const ImportEstimate sizes = estimate_import(path, options);
+    const ImportEstimate sizes = estimate_import(path, options, sensor_override && *sensor_override);
     if (!sizes.unsupported.empty()) throw Error(sizes.unsupported);
     report.label = label;
     const bool quiet = options.quiet;
@@ -595,7 +634,8 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
     const std::uint64_t capacity = std::max<std::uint64_t>(sizes.points, 1);
 
     // 1. Read in chunks: --keep-fraction, then clean()'s per-point checks; survivors to spill files.
-    Arrays arrays;
+    ScanStage stage;
+    Arrays& arrays = stage.arrays;
     SpilledCloud& out = arrays.cloud;
     CleanReport& clean = report.clean;
     std::uint64_t record = 0;
@@ -651,13 +691,17 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
     PointCloud head = format == Format::ply ? read_ply_chunks(path, report, quiet, chunk, flush)
                                             : read_xyz_chunks(path, report, quiet, chunk, flush);
     report.read_seconds = tool::now_seconds() - t0;
-    std::string peaks = "peak RSS: read " + tool::format_bytes(peak_rss_bytes());
+    stage.peaks = "peak RSS: read " + tool::format_bytes(peak_rss_bytes());
     if (first) out.positions = make_spill<std::array<double, 3>>(memory, 1, "the positions");
     if (arrays.normals) {
         report.normals_from_file = true;
         report.normals_detail = "from the file";
     }
     out.flags = head.flags;
+    if (sensor_override) {
+        head.sensors.clear();
+        if (*sensor_override) head.sensors.push_back(**sensor_override);
+    }
     if (options.no_sensor) head.sensors.clear();
     report.notes.push_back(label + ": out of core: the in-core import needs about " +
                            tool::format_bytes(sizes.bytes) + ", --memory is " +
@@ -674,139 +718,398 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
         if (clean.duplicates) arrays.compact(keep());
     }
     clean.kept = out.size;
-    peaks += ", duplicates " + tool::format_bytes(peak_rss_bytes());
+    stage.peaks += ", duplicates " + tool::format_bytes(peak_rss_bytes());
     if (out.size == 0) throw Error(label + ": no points left: " + clean.summary());
-    const std::array<double, 3> centre = box_centre(out.positions.span().subspan(0, out.size));
+    stage.centre = box_centre(out.positions.span().subspan(0, out.size));
     OutlierParams params = options.outliers;
     if (head.sensors.size() == 1 && head.sensors[0].kind == pool::k_sensor_point)
         params.sensor = std::array<double, 3>{head.sensors[0].position[0], head.sensors[0].position[1],
                                               head.sensors[0].position[2]};
-    {
-        std::fill(keep().begin(), keep().end(), std::uint8_t{1});
-        try {
-            remove_outliers_tiled(out.positions.span().subspan(0, out.size), centre, params, keep(),
-                                  report.outliers, memory, quiet);
-        } catch (const Error& e) {
-            throw Error(label + ": " + e.what());
-        }
-        if (report.outliers.removed) arrays.compact(keep());
+    std::fill(keep().begin(), keep().end(), std::uint8_t{1});
+    try {
+        remove_outliers_tiled(out.positions.span().subspan(0, out.size), stage.centre, params, keep(),
+                              report.outliers, memory, quiet);
+    } catch (const Error& e) {
+        throw Error(label + ": " + e.what());
     }
+    if (report.outliers.removed) arrays.compact(keep());
     if (out.size == 0) throw Error(label + ": no points left after outlier removal");
-    peaks += ", outliers " + tool::format_bytes(peak_rss_bytes());
+    stage.peaks += ", outliers " + tool::format_bytes(peak_rss_bytes());
+    stage.sensors = std::move(head.sensors);
+    return stage;
+}
 
-    // 3. Sensors (import.cpp finish()).
-    out.sensors = head.sensors;
+/// --sensor / --sensor-direction replace the sensors (import.cpp finish()).
+void command_line_sensor(const Options& options, SpilledCloud& out, bool& scan_ids) {
     if (options.sensor) {
         out.sensors = {pool::Sensor{
             {(*options.sensor)[0], (*options.sensor)[1], (*options.sensor)[2]}, pool::k_sensor_point, 0}};
+        scan_ids = false;
     } else if (options.sensor_direction) {
         const auto& d = *options.sensor_direction;
         const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
         if (!(len > 0) || !std::isfinite(len))
             throw Error("--sensor-direction must be a finite non-zero vector");
         out.sensors = {pool::Sensor{{d[0] / len, d[1] / len, d[2] / len}, pool::k_sensor_direction, 0}};
+        scan_ids = false;
     }
+    if (out.sensors.size() == 1) scan_ids = false;  // POOL.md: absent with one sensor
+}
 
-    // 4. Normals: PCA by tiles, toward the sensor, then clean()'s check of the normals.
+/// import.cpp normals_for() out of core with a sensor per point: PCA by tiles (in the frame of the
+/// kd-tree centred at `centre`), the file's normals kept where arrays.given says so, the others
+/// toward their sensor, --grazing-cos, then clean()'s check of the normals.
+void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams& memory, Report& report,
+                      const std::string& label, const std::array<double, 3>& centre) {
+    SpilledCloud& out = arrays.cloud;
+    const bool quiet = options.quiet;
+    if (out.sensors.empty())
+        throw Error(
+            label +
+            ": estimated normals without a sensor are oriented by propagation over the whole k-NN graph, "
+            "not out of core (give --sensor or --sensor-direction, or --normals keep)");
+    const double t1 = tool::now_seconds();
+    const std::uint32_t k = static_cast<std::uint32_t>(options.k);
+    if (out.size < 3)
+        throw Error(label + ": too few points (" + std::to_string(out.size) + ") to estimate normals");
+    // The file's normals (merged scans, some with normals) stay in their array; PCA writes a new one.
+    const SpillArray<pool::Float3> file_normals = out.normals;
+    out.normals = make_spill<pool::Float3>(memory, out.size, "the normals");
+    arrays.normals = true;
+    const auto positions = out.positions.span().subspan(0, out.size);
+    const auto normals = out.normals.span().subspan(0, out.size);
+    {
+        tool::Progress progress("prt-import: normals, k-NN by tiles (k=" + std::to_string(k) + ")", out.size,
+                                quiet);
+        try {
+            pca_normals_tiled(
+                positions, k, tiling_of(memory, k), normals, nullptr,
+                [&](std::uint64_t done) {
+                    progress.update(done);
+                    arrays.drop();  // positions read and normals written at random
+                },
+                &centre);
+        } catch (const Error& e) {
+            throw Error(label + ": " + e.what());
+        }
+        progress.finish();
+    }
+    const std::span<const std::uint8_t> given =
+        arrays.given.file ? std::span<const std::uint8_t>(arrays.given.span().subspan(0, out.size))
+                          : std::span<const std::uint8_t>{};
+    const std::span<const std::uint16_t> ids =
+        arrays.scan_ids ? std::span<const std::uint16_t>(out.scan_ids.span().subspan(0, out.size))
+                        : std::span<const std::uint16_t>{};
+    std::uint64_t kept = 0, ambiguous = 0;
+    for (std::uint64_t i = 0; i < out.size; ++i) {
+        if (!given.empty() && given[i]) {
+            normals[i] = file_normals.span()[i];
+            ++kept;
+        } else {
+            ambiguous +=
+                orient_toward_one(positions[i], normals[i], out.sensors[ids.empty() ? 0 : ids[i]]) == 1;
+        }
+        if ((i + 1) % k_drop_every == 0) {
+            arrays.drop();
+            if (file_normals.file) file_normals.file->drop();
+        }
+    }
+    std::string how =
+        (out.sensors.size() == 1
+             ? "oriented toward the sensor (" + sensor_text(out.sensors[0]) + ")"
+             : "oriented toward each point's own sensor (" + std::to_string(out.sensors.size()) + " scans)") +
+        "; " + std::to_string(ambiguous) +
+        " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)";
+    if (options.grazing_cos > 0) {
+        GrazingResult g;
+        try {
+            g = orient_grazing_tiled(positions, normals, out.sensors, ids, given, options.grazing_cos, k,
+                                     centre, memory, arrays, quiet, label);
+        } catch (const Error& e) {
+            const std::string what = e.what();
+            throw Error(what.rfind(label, 0) == 0 ? what : label + ": " + what);
+        }
+        report.grazing_flipped = g.flipped;
+        how += "; the " + std::to_string(g.unsure) + " more than " +
+               fmt("%.1f", std::acos(options.grazing_cos) * 180 / 3.14159265358979323846) +
+               " degrees from their line of sight took their sign from the others over the k-NN graph (" +
+               std::to_string(g.flipped) + " flipped)";
+    }
+    out.flags |= pool::k_model_normals_estimated;
+    report.normals_estimated = true;
+    report.oriented_to_sensor = true;
+    report.ambiguous = ambiguous;
+    // clean(cloud, false): PCA's failures (no normal) go, the others are renormalised.
+    SpillFile flag_file(memory.spill_folder, std::max<std::uint64_t>(out.size, 1), "the point flags");
+    const auto flags = flag_file.as<std::uint8_t>();
+    std::uint64_t failed = 0;
+    for (std::uint64_t i = 0; i < out.size; ++i) {
+        pool::Float3& m = normals[i];
+        const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
+        flags[i] = std::isfinite(len) && len >= 1e-20;
+        if (flags[i])
+            m = {float(m.x / len), float(m.y / len), float(m.z / len)};
+        else
+            ++failed;
+        if ((i + 1) % k_drop_every == 0) arrays.drop();
+    }
+    if (failed) arrays.compact(flags);
+    report.estimate_failed = failed;
+    report.normals_seconds = tool::now_seconds() - t1;
+    report.normals_detail =
+        "estimated by PCA over k=" + std::to_string(options.k) + " neighbours in " +
+        fmt("%.3f s", report.normals_seconds) +
+        (kept ? " (" + std::to_string(kept) + " kept from the files)" : std::string()) + "; " + how +
+        (failed
+             ? "; " + std::to_string(failed) + " points without a normal (degenerate neighbourhood) dropped"
+             : "");
+    if (out.size == 0) throw Error(label + ": no points left after normal estimation");
+}
+
+std::string sensors_detail(const SpilledCloud& out, const Options& options, const std::string& source) {
+    if (out.sensors.empty()) return "none";
+    if (out.sensors.size() > 1)
+        return std::to_string(out.sensors.size()) + " (one per scan), scan_ids per point";
+    return "1 " + sensor_text(out.sensors[0]) +
+           (options.sensor || options.sensor_direction ? " (command line)"
+            : !source.empty()                          ? " (" + source + ")"
+                                                       : std::string());
+}
+
+SpilledCloud finish_cloud(Arrays& arrays) {
+    if (!arrays.normals) arrays.cloud.normals = {};
+    if (!arrays.colors) arrays.cloud.colors = {};
+    if (!arrays.radii) arrays.cloud.radii = {};
+    if (!arrays.intensities) arrays.cloud.intensities = {};
+    if (!arrays.scan_ids) arrays.cloud.scan_ids = {};
+    return std::move(arrays.cloud);
+}
+
+}  // namespace
+
+SpilledCloud import_file_out_of_core(const fs::path& path, const Options& options, const MemoryParams& memory,
+                                     Report& report) {
+    const std::string label = path.string();
+    ScanStage stage = read_and_filter(path, options, memory, report, std::nullopt);
+    Arrays& arrays = stage.arrays;
+    SpilledCloud& out = arrays.cloud;
+    out.sensors = std::move(stage.sensors);
+    command_line_sensor(options, out, arrays.scan_ids);
     const bool estimate = options.normals != NormalsMode::keep && !arrays.normals;
-    if (estimate && out.sensors.empty())
-        throw Error(label +
-                    ": estimated normals without a sensor are oriented by propagation over the whole "
-                    "k-NN graph, not out of core (give --sensor or --sensor-direction, or --normals keep)");
     if (estimate) {
-        const double t1 = tool::now_seconds();
-        const std::uint32_t k = static_cast<std::uint32_t>(options.k);
-        if (out.size < 3)
-            throw Error(label + ": too few points (" + std::to_string(out.size) + ") to estimate normals");
-        out.normals = make_spill<pool::Float3>(memory, out.size, "the normals");
-        arrays.normals = true;
-        const auto positions = out.positions.span().subspan(0, out.size);
-        const auto normals = out.normals.span().subspan(0, out.size);
-        {
-            tool::Progress progress("prt-import: normals, k-NN by tiles (k=" + std::to_string(k) + ")",
-                                    out.size, quiet);
-            try {
-                pca_normals_tiled(
-                    positions, k, tiling_of(memory, k), normals, nullptr,
-                    [&](std::uint64_t done) {
-                        progress.update(done);
-                        arrays.drop();  // positions read and normals written at random
-                    },
-                    &centre);
-            } catch (const Error& e) {
-                throw Error(label + ": " + e.what());
-            }
-            progress.finish();
-        }
-        std::uint64_t ambiguous = 0;
-        for (std::uint64_t i = 0; i < out.size; ++i) {
-            ambiguous += orient_toward_one(positions[i], normals[i], out.sensors[0]) == 1;
-            if ((i + 1) % k_drop_every == 0) arrays.drop();
-        }
-        std::string grazing_text;
-        if (options.grazing_cos > 0) {
-            GrazingResult g;
-            try {
-                g = orient_grazing_tiled(positions, normals, out.sensors[0], options.grazing_cos, k, centre,
-                                         memory, arrays, quiet, label);
-            } catch (const Error& e) {
-                const std::string what = e.what();
-                throw Error(what.rfind(label, 0) == 0 ? what : label + ": " + what);
-            }
-            report.grazing_flipped = g.flipped;
-            grazing_text =
-                "; the " + std::to_string(g.unsure) + " more than " +
-                fmt("%.1f", std::acos(options.grazing_cos) * 180 / 3.14159265358979323846) +
-                " degrees from their line of sight took their sign from the others over the k-NN graph (" +
-                std::to_string(g.flipped) + " flipped)";
-        }
-        out.flags |= pool::k_model_normals_estimated;
-        report.normals_estimated = true;
-        report.oriented_to_sensor = true;
-        report.ambiguous = ambiguous;
-        // clean(cloud, false): PCA's failures (no normal) go, the others are renormalised.
-        const auto flags = keep();
-        std::uint64_t failed = 0;
-        for (std::uint64_t i = 0; i < out.size; ++i) {
-            pool::Float3& m = normals[i];
-            const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
-            flags[i] = std::isfinite(len) && len >= 1e-20;
-            if ((i + 1) % k_drop_every == 0) arrays.drop();
-            if (flags[i])
-                m = {float(m.x / len), float(m.y / len), float(m.z / len)};
-            else
-                ++failed;
-        }
-        if (failed) arrays.compact(flags);
-        report.estimate_failed = failed;
-        report.normals_seconds = tool::now_seconds() - t1;
-        report.normals_detail =
-            "estimated by PCA over k=" + std::to_string(options.k) + " neighbours in " +
-            fmt("%.3f s", report.normals_seconds) + "; " + "oriented toward the sensor (" +
-            sensor_text(out.sensors[0]) + ")" + "; " + std::to_string(ambiguous) +
-            " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)" +
-            grazing_text +
-            (failed ? "; " + std::to_string(failed) +
-                          " points without a normal (degenerate neighbourhood) dropped"
-                    : "");
-        if (out.size == 0) throw Error(label + ": no points left after normal estimation");
+        estimate_normals(arrays, options, memory, report, label, stage.centre);
+        stage.peaks += ", normals " + tool::format_bytes(peak_rss_bytes());
     } else if (!arrays.normals) {
         report.normals_detail =
             "none (the file has none and --normals keep): the pool has no normals section";
     }
-    if (estimate) peaks += ", normals " + tool::format_bytes(peak_rss_bytes());
-    report.notes.push_back(label + ": out of core: " + peaks);
-
-    if (out.sensors.empty())
-        report.sensors_detail = "none";
-    else
-        report.sensors_detail = "1 " + sensor_text(out.sensors[0]) +
-                                (options.sensor || options.sensor_direction ? " (command line)"
-                                 : !report.sensor_source.empty() ? " (" + report.sensor_source + ")"
-                                                                 : std::string());
+    report.notes.push_back(label + ": out of core: " + stage.peaks);
+    report.sensors_detail = sensors_detail(out, options, report.sensor_source);
     report.written = out.size;
-    if (!arrays.normals) out.normals = {};
-    return std::move(arrays.cloud);
+    return finish_cloud(arrays);
+}
+
+SpilledCloud import_merged_out_of_core(const fs::path& poses, const std::vector<fs::path>& only,
+                                       const Options& options, const MemoryParams& memory, Report& report) {
+    std::vector<PoseEntry> entries = read_poses(poses);
+    if (!only.empty()) {
+        std::vector<PoseEntry> chosen;
+        for (const fs::path& want : only) {
+            std::error_code ec;
+            const fs::path a = fs::weakly_canonical(want, ec);
+            auto it = std::find_if(entries.begin(), entries.end(), [&](const PoseEntry& e) {
+                std::error_code ec2;
+                return fs::weakly_canonical(e.file, ec2) == a;
+            });
+            if (it == entries.end())
+                throw Error(want.string() + ": not listed in the pose file " + poses.string());
+            chosen.push_back(*it);
+        }
+        entries = std::move(chosen);
+    }
+    const std::string label = poses.string();
+    if (entries.size() == 1 && entries[0].pose.is_identity())
+        throw Error(label +
+                    ": one scan at the identity pose is not merged out of core: import the scan itself");
+    report.reader = "pose list " + label;
+    // Each scan: read, cleaned and filtered in its own frame, then moved (import.cpp prepare_scan()).
+    std::vector<ScanStage> scans;
+    std::vector<Report> per(entries.size());
+    for (std::size_t s = 0; s < entries.size(); ++s) {
+        const PoseEntry& entry = entries[s];
+        std::optional<std::optional<pool::Sensor>> sensor_override;
+        if (entry.sensor_given) sensor_override = entry.sensor;
+        scans.push_back(read_and_filter(entry.file, options, memory, per[s], sensor_override));
+        if (entry.sensor_given) per[s].sensor_source = entry.where;
+        ScanStage& st = scans.back();
+        if (!entry.pose.is_identity()) {
+            SpilledCloud& c = st.arrays.cloud;
+            const auto p = c.positions.span();
+            const auto nn = c.normals.span();
+            for (std::uint64_t i = 0; i < c.size; ++i) {
+                p[i] = entry.pose.apply(p[i]);
+                if (st.arrays.normals) {
+                    const auto r = entry.pose.rotate({nn[i].x, nn[i].y, nn[i].z});
+                    nn[i] = {static_cast<float>(r[0]), static_cast<float>(r[1]), static_cast<float>(r[2])};
+                }
+                if ((i + 1) % k_drop_every == 0) st.arrays.drop();
+            }
+            st.arrays.drop();
+            for (auto& sn : st.sensors) sn = entry.pose.apply(sn);
+        }
+    }
+    // The merge (import.cpp finish()): attributes all scans have, sensors and scan_ids when every
+    // scan has a sensor, the file's normals flagged when only some scans have them.
+    bool all_normals = true, any_normals = false, all_sensors = true, any_sensor = false;
+    bool colors = true, radii = true, intensities = true;
+    std::uint64_t total = 0, sensor_total = 0;
+    for (const ScanStage& st : scans) {
+        all_normals = all_normals && st.arrays.normals;
+        any_normals = any_normals || st.arrays.normals;
+        all_sensors = all_sensors && !st.sensors.empty();
+        any_sensor = any_sensor || !st.sensors.empty();
+        colors = colors && st.arrays.colors;
+        radii = radii && st.arrays.radii;
+        intensities = intensities && st.arrays.intensities;
+        total += st.arrays.cloud.size;
+        sensor_total += st.sensors.size();
+    }
+    if (sensor_total > pool::k_max_sensors)
+        throw Error(label + ": " + std::to_string(sensor_total) + " sensors, at most " +
+                    std::to_string(pool::k_max_sensors) + " (scan_ids are 16-bit)");
+    const bool mixed_normals = any_normals && !all_normals;
+    Arrays arrays;
+    SpilledCloud& out = arrays.cloud;
+    out.positions = make_spill<std::array<double, 3>>(memory, total, "the merged positions");
+    arrays.normals = any_normals;
+    arrays.colors = colors;
+    arrays.radii = radii;
+    arrays.intensities = intensities;
+    arrays.scan_ids = all_sensors;
+    if (arrays.normals) out.normals = make_spill<pool::Float3>(memory, total, "the merged normals");
+    if (colors) out.colors = make_spill<pool::Rgba8>(memory, total, "the merged colours");
+    if (radii) out.radii = make_spill<float>(memory, total, "the merged radii");
+    if (intensities) out.intensities = make_spill<float>(memory, total, "the merged intensities");
+    if (all_sensors) out.scan_ids = make_spill<std::uint16_t>(memory, total, "the scan ids");
+    if (mixed_normals) arrays.given = make_spill<std::uint8_t>(memory, total, "the normal flags");
+    std::vector<std::string> dropped;
+    auto note_dropped = [&](bool kept, bool any, const char* what) {
+        if (!kept && any) dropped.push_back(what);
+    };
+    bool any_colors = false, any_radii = false, any_intensities = false;
+    for (const ScanStage& st : scans) {
+        any_colors = any_colors || st.arrays.colors;
+        any_radii = any_radii || st.arrays.radii;
+        any_intensities = any_intensities || st.arrays.intensities;
+    }
+    note_dropped(colors, any_colors, "colors");
+    note_dropped(intensities, any_intensities, "intensities");
+    note_dropped(radii, any_radii, "radii");
+    std::uint64_t at = 0;
+    for (ScanStage& st : scans) {
+        const SpilledCloud& c = st.arrays.cloud;
+        const std::uint16_t base = static_cast<std::uint16_t>(out.sensors.size());
+        for (std::uint64_t i = 0; i < c.size; ++i, ++at) {
+            out.positions.span()[at] = c.positions.span()[i];
+            if (arrays.normals)
+                out.normals.span()[at] =
+                    st.arrays.normals ? c.normals.span()[i] : pool::Float3{0.f, 0.f, 1.f};
+            if (mixed_normals) arrays.given.span()[at] = st.arrays.normals ? 1 : 0;
+            if (colors) out.colors.span()[at] = c.colors.span()[i];
+            if (radii) out.radii.span()[at] = c.radii.span()[i];
+            if (intensities) out.intensities.span()[at] = c.intensities.span()[i];
+            if (all_sensors) out.scan_ids.span()[at] = base;
+            if ((i + 1) % k_drop_every == 0) {
+                arrays.drop();
+                st.arrays.drop();
+            }
+        }
+        if (all_sensors) out.sensors.insert(out.sensors.end(), st.sensors.begin(), st.sensors.end());
+        out.flags |= c.flags;
+        arrays.drop();
+        st.arrays = Arrays{};  // its spill files go
+    }
+    out.size = total;
+    if (any_sensor && !all_sensors)
+        report.notes.push_back(
+            label + ": only some scans have a sensor: none recorded, normals oriented by propagation");
+    for (const char* d : {"colors", "intensities", "radii"})
+        if (std::find(dropped.begin(), dropped.end(), d) != dropped.end())
+            report.notes.push_back(label + ": only some scans have " + d + ": dropped from the result");
+    command_line_sensor(options, out, arrays.scan_ids);
+
+    // Sums of the scans' counts, then clean() over the merged points: duplicates across scans.
+    for (const Report& r : per) {
+        report.records += r.records;
+        report.nan_entries += r.nan_entries;
+        report.malformed_lines += r.malformed_lines;
+        report.outliers.input += r.outliers.input;
+        report.outliers.removed += r.outliers.removed;
+        report.outliers.statistical += r.outliers.statistical;
+        report.outliers.radius += r.outliers.radius;
+        report.outliers.seconds += r.outliers.seconds;
+        report.outliers.ran = report.outliers.ran || r.outliers.ran;
+        report.read_seconds += r.read_seconds;
+    }
+    CleanReport& clean = report.clean;
+    clean.input = out.size;
+    {
+        SpillFile keep_file(memory.spill_folder, std::max<std::uint64_t>(out.size, 1), "the point flags");
+        const auto keep = keep_file.as<std::uint8_t>().subspan(0, out.size);
+        const auto p = out.positions.span();
+        const auto nn = out.normals.span();
+        for (std::uint64_t i = 0; i < out.size; ++i) {
+            keep[i] = 1;
+            if (!std::isfinite(p[i][0]) || !std::isfinite(p[i][1]) || !std::isfinite(p[i][2])) {
+                keep[i] = 0;
+                ++clean.non_finite;
+            } else if (arrays.normals) {
+                pool::Float3& m = nn[i];
+                const double len = std::sqrt(double(m.x) * m.x + double(m.y) * m.y + double(m.z) * m.z);
+                if (!std::isfinite(len) || len < 1e-20) {
+                    keep[i] = 0;
+                    ++clean.zero_normal;
+                } else {
+                    m = {float(m.x / len), float(m.y / len), float(m.z / len)};
+                }
+            }
+            if ((i + 1) % k_drop_every == 0) arrays.drop();
+        }
+        if (!options.keep_duplicates && out.size > 1)
+            clean.duplicates =
+                drop_duplicates(p.subspan(0, out.size), *out.positions.file, keep, memory, options.quiet);
+        if (clean.non_finite || clean.zero_normal || clean.duplicates) arrays.compact(keep);
+        clean.kept = out.size;
+    }
+    if (mixed_normals) {
+        if (options.normals != NormalsMode::keep)
+            report.notes.push_back(label + ": only some scans have normals: the others' are estimated");
+        else {
+            arrays.normals = false;
+            report.notes.push_back(label +
+                                   ": only some scans have normals and --normals keep: the result has none");
+        }
+    }
+    const bool estimate = options.normals != NormalsMode::keep && !all_normals;
+    if (estimate) {
+        if (out.size == 0) throw Error(label + ": no points left");
+        const std::array<double, 3> centre = box_centre(out.positions.span().subspan(0, out.size));
+        estimate_normals(arrays, options, memory, report, label, centre);
+    } else if (!arrays.normals) {
+        report.normals_detail =
+            "none (the file has none and --normals keep): the pool has no normals section";
+    } else {
+        report.normals_detail = "from the files";
+        report.normals_from_file = true;
+    }
+    std::string peaks;
+    for (std::size_t s = 0; s < scans.size(); ++s) peaks += (s ? "; " : "") + scans[s].peaks;
+    report.notes.push_back(label + ": out of core: " + peaks + "; merged " +
+                           tool::format_bytes(peak_rss_bytes()));
+    report.sensors_detail = sensors_detail(out, options, per.empty() ? std::string() : per[0].sensor_source);
+    report.written = out.size;
+    report.scans = std::move(per);
+    return finish_cloud(arrays);
 }
 
 void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory, pool::PoolWriter& writer) {
@@ -852,11 +1155,11 @@ void write_point_sections(const SpilledCloud& cloud, const MemoryParams& memory,
     view(pool::SectionType::colors, cloud.colors.file, sizeof(pool::Rgba8));
     view(pool::SectionType::radii, cloud.radii.file, sizeof(float));
     view(pool::SectionType::intensities, cloud.intensities.file, sizeof(float));
+    view(pool::SectionType::scan_ids, cloud.scan_ids.file, sizeof(std::uint16_t));
     if (!cloud.sensors.empty())
         writer.add_array(pool::SectionType::sensors, cloud.sensors);
     else
         writer.remove(pool::SectionType::sensors);
-    writer.remove(pool::SectionType::scan_ids);
 }
 
 }  // namespace prt::pre::import

@@ -63,7 +63,9 @@ struct ImportEstimate {
 
 /// Estimates the in-core import of `path` (single input, no pose list) from its header or size.
 /// Throws prt::Error for a file that cannot be opened.
-ImportEstimate estimate_import(const std::filesystem::path& path, const Options& options);
+/// `sensor_given`: a pose list gives the scan a sensor.
+ImportEstimate estimate_import(const std::filesystem::path& path, const Options& options,
+                               bool sensor_given = false);
 
 /// A per-point array in a spill file.
 template <class T>
@@ -80,6 +82,7 @@ struct SpilledCloud {
     SpillArray<pool::Rgba8> colors;
     SpillArray<float> radii;
     SpillArray<float> intensities;
+    SpillArray<std::uint16_t> scan_ids;  ///< merged scans with a sensor each: index into sensors
     std::vector<pool::Sensor> sensors;
     std::uint32_t flags = 0;
 };
@@ -89,6 +92,15 @@ struct SpilledCloud {
 /// Throws prt::Error as import_file() does, and for inputs estimate_import() does not support.
 SpilledCloud import_file_out_of_core(const std::filesystem::path& path, const Options& options,
                                      const MemoryParams& memory, Report& report);
+
+/// import_merged() out of core: every scan of the pose list (or of `only`) a PLY or XYZ point set,
+/// each read, cleaned and rid of outliers in its own frame out of core, moved, merged in the same
+/// order, then duplicates across scans and normals as import_merged() does them (toward each
+/// point's own sensor; estimated normals need sensors). Throws prt::Error as import_merged() does,
+/// and for scans or options the out-of-core import does not support.
+SpilledCloud import_merged_out_of_core(const std::filesystem::path& poses,
+                                       const std::vector<std::filesystem::path>& only, const Options& options,
+                                       const MemoryParams& memory, Report& report);
 
 /// write_point_sections() for a SpilledCloud: the sections are views of its spill files (the
 /// writer keeps them alive), the positions' local float copy another spill file.

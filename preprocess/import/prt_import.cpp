@@ -202,24 +202,38 @@ bool out_of_core(const Cli& cli, const imp::Options& options, const std::vector<
     using prt::tool::format_bytes;
     const std::string forced = cli.tile_points > 0 ? " (--tile-points forces the out-of-core import)" : "";
     if (!cli.poses.empty()) {
-        // Merged scans are not imported out of core: the sum of the scans' in-core estimates.
+        // Merged scans: the sum of the scans' in-core estimates; out of core when every scan can be.
         std::uint64_t bytes = 0;
+        std::string unsupported;
         try {
-            if (!paths.empty())
-                for (const std::filesystem::path& p : paths) bytes += imp::estimate_import(p, options).bytes;
-            else
-                for (const imp::PoseEntry& e : imp::read_poses(cli.poses))
-                    bytes += imp::estimate_import(e.file, options).bytes;
+            const std::vector<imp::PoseEntry> entries = imp::read_poses(cli.poses);
+            if (entries.size() == 1 && entries[0].pose.is_identity())
+                unsupported = cli.poses +
+                              ": one scan at the identity pose is not merged out of core (import the "
+                              "scan itself)";
+            for (const imp::PoseEntry& entry : entries) {
+                if (!paths.empty()) {
+                    std::error_code ec;
+                    const auto a = std::filesystem::weakly_canonical(entry.file, ec);
+                    bool listed = false;
+                    for (const auto& p : paths)
+                        listed = listed || std::filesystem::weakly_canonical(p, ec) == a;
+                    if (!listed) continue;
+                }
+                const imp::ImportEstimate e =
+                    imp::estimate_import(entry.file, options, entry.sensor_given && entry.sensor.has_value());
+                bytes += e.bytes;
+                if (unsupported.empty()) unsupported = e.unsupported;
+            }
         } catch (const prt::Error&) {
             return false;  // the in-core import reports the bad pose list or scan
         }
-        if (bytes > memory || cli.tile_points > 0)
-            throw prt::Error(cli.poses +
-                             ": merged scans (--poses) are not imported out of core, and their in-core "
-                             "import needs about " +
+        if (bytes <= memory && cli.tile_points == 0) return false;
+        if (!unsupported.empty())
+            throw prt::Error(unsupported + "; the in-core import of the merged scans needs about " +
                              format_bytes(bytes) + ", --memory is " + format_bytes(memory) + forced +
                              ": raise --memory");
-        return false;
+        return true;
     }
     imp::ImportEstimate e;
     try {
@@ -248,7 +262,9 @@ void import_step(prt::tool::PoolStep& step, Cli& cli) {
         mem.spill_folder = !cli.spill_folder.empty()
                                ? std::filesystem::path(cli.spill_folder)
                                : std::filesystem::absolute(step.output_path()).parent_path();
-        const imp::SpilledCloud cloud = imp::import_file_out_of_core(paths[0], options, mem, report);
+        const imp::SpilledCloud cloud =
+            cli.poses.empty() ? imp::import_file_out_of_core(paths[0], options, mem, report)
+                              : imp::import_merged_out_of_core(cli.poses, paths, options, mem, report);
         imp::write_point_sections(cloud, mem, step.writer());
         const double t0 = prt::tool::now_seconds();
         const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));
