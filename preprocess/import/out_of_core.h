@@ -13,9 +13,11 @@
 //
 // Every per-point array lives in a spill file (spill_file.h); what stays in memory is a chunk of the
 // input, a bucket of duplicate keys or a tile of the k-NN search, each within --memory.
-// Not out of core (estimate_import says why, one line): meshes, PCD and pool inputs, pose lists,
-// estimated normals without a sensor or with --grazing-cos > 0 (both orient over the whole k-NN
-// graph).
+// Merged scans (--poses) go the same way scan by scan, then are concatenated and finished as
+// import_merged() does (import_merged_out_of_core).
+// Not out of core (estimate_import says why, one line): meshes, PCD and pool inputs, normals
+// estimated without a sensor (orientation over the whole k-NN graph), grazing normals whose
+// edges do not fit in half the memory.
 #pragma once
 
 #include <cstdint>

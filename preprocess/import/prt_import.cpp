@@ -60,7 +60,7 @@ void Cli::declare(CLI::App& app) {
         "component's highest point (+z outward). Grazing (ambiguous) counts are reported. The\n"
         "measurements behind the defaults: preprocess/import/README.md. Dropped points (NaN/Inf,\n"
         "zero normals, duplicates, outliers, malformed lines) are counted on stderr. Out of core\n"
-        "(--memory): a PLY or XYZ point set whose in-core import needs more is streamed and worked\n"
+        "(--memory): PLY or XYZ point sets whose in-core import needs more are streamed and worked\n"
         "tile by tile with the same result (preprocess/import/README.md). On any error\n"
         "nothing is written and the exit code is 1 (2 for bad usage).");
     app.add_option("inputs", inputs,
@@ -139,8 +139,9 @@ void Cli::declare(CLI::App& app) {
     app.add_flag("--keep-duplicates", options.keep_duplicates,
                  "Keep exactly coincident points (default: keep the first, drop and count the rest)");
     app.add_option("--memory", memory,
-                   "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set whose "
-                   "in-core import needs more is imported out of core: read in chunks, duplicates, "
+                   "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set (or a "
+                   "pose list of them) whose in-core import needs more is imported out of core: read in "
+                   "chunks, duplicates, "
                    "outliers and normals tile by tile, the sections in spill files, with the in-core "
                    "result; other inputs and options that need the whole point set fail naming it "
                    "(default: half the physical memory)")
