@@ -591,6 +591,12 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options, boo
     if (options.sensor || options.sensor_direction) has_sensor = true;
     const bool estimate = options.normals == NormalsMode::estimate ||
                           (options.normals == NormalsMode::automatic && !has_normals);
+    // Meshes: vertices with area-weighted normals (OpenMesh's vertex and face records), no k-NN.
+    const bool mesh = format == Format::mesh || (format == Format::ply && !e.unsupported.empty());
+    if (mesh) {
+        e.bytes = e.points * (per_point + 96);
+        return e;
+    }
     if (options.outliers.enabled || estimate)
         per_point += 4 * std::max<std::uint64_t>(options.outliers.k, estimate ? k : 0);
     if (estimate) per_point += 12 + 8 + 24;
