@@ -140,26 +140,8 @@ Scan read_scan(const fs::path& path, const Options& options, Report& report) {
         case Format::pool: {
             const pool::PoolFile file = pool::PoolFile::open(path);
             cloud = read_point_sections(file);
-            report.records = cloud.size();
-            report.reader = "pool";
-            report.pools.push_back(path);
-            std::string dropped;
-            for (const pool::SectionEntry& e : file.sections()) {
-                const auto t = static_cast<pool::SectionType>(e.type);
-                using ST = pool::SectionType;
-                if (t == ST::provenance || t == ST::model_info || t == ST::positions || t == ST::normals ||
-                    t == ST::colors || t == ST::intensities || t == ST::sensors || t == ST::scan_ids)
-                    continue;
-                dropped +=
-                    (dropped.empty() ? "" : ", ") + std::string(e.name, strnlen(e.name, sizeof e.name));
-            }
             cloud.radii.clear();  // stale once points move or go: prt-radii computes them again
-            if (!dropped.empty())
-                report.notes.push_back(label + ": not carried over: " + dropped +
-                                       " (computed again by the later steps: prt-radii, prt-octree, ...)");
-            if (!cloud.sensors.empty())
-                report.sensor_source =
-                    "the pool's sensors section (" + std::to_string(cloud.sensors.size()) + ")";
+            pool_input_report(file, path, report);
             break;
         }
         case Format::mesh: {

@@ -483,6 +483,29 @@ std::uint64_t propagate_grazing(std::vector<GrazingEdge> edges, std::span<const 
     return stats.flipped;
 }
 
+void pool_input_report(const pool::PoolFile& file, const fs::path& path, Report& report) {
+    const std::string label = path.string();
+    report.records =
+        file.find(pool::SectionType::positions) ? file.find(pool::SectionType::positions)->count : 0;
+    report.reader = "pool";
+    report.pools.push_back(path);
+    std::string dropped;
+    for (const pool::SectionEntry& e : file.sections()) {
+        const auto t = static_cast<pool::SectionType>(e.type);
+        using ST = pool::SectionType;
+        if (t == ST::provenance || t == ST::model_info || t == ST::positions || t == ST::normals ||
+            t == ST::colors || t == ST::intensities || t == ST::sensors || t == ST::scan_ids)
+            continue;
+        dropped += (dropped.empty() ? "" : ", ") + std::string(e.name, strnlen(e.name, sizeof e.name));
+    }
+    if (!dropped.empty())
+        report.notes.push_back(label + ": not carried over: " + dropped +
+                               " (computed again by the later steps: prt-radii, prt-octree, ...)");
+    const auto sensors = file.array<pool::Sensor>(pool::SectionType::sensors);
+    if (!sensors.empty())
+        report.sensor_source = "the pool's sensors section (" + std::to_string(sensors.size()) + ")";
+}
+
 float median_streamed(std::uint64_t n, const std::function<float(std::uint64_t)>& value) {
     if (n == 0) return 0;
     const std::uint64_t rank = (n - 1) / 2;
@@ -566,10 +589,20 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options, boo
             p = eol + 1;
         }
         drop_mapped_pages(file.data(), file.size());
+    } else if (format == Format::pool) {
+        const pool::PoolFile file = pool::PoolFile::open(path);
+        const pool::SectionEntry* positions = file.find(pool::SectionType::positions);
+        e.points = positions ? positions->count : 0;
+        has_normals = file.has(pool::SectionType::normals);
+        const auto sensors = file.array<pool::Sensor>(pool::SectionType::sensors);
+        has_sensor = !sensors.empty();
+        if (sensors.size() > 1 && file.has(pool::SectionType::scan_ids))
+            e.unsupported = label + ": a pool of several scans (scan_ids) is not imported out of core";
+        drop_mapped_pages(file.file_bytes().data(), file.file_bytes().size());
     } else {
         // PCD: the header's point count; pools and meshes: from the size (a pool holds at least 12
         // bytes of position per point, a mesh file about 24 bytes per vertex or more with faces).
-        e.points = file_bytes / (format == Format::pool ? 16 : 24);
+        e.points = file_bytes / 24;
         if (format == Format::pcd) {
             const MappedFile file = MappedFile::open(path);
             Report unused;
@@ -580,11 +613,8 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options, boo
             }
             drop_mapped_pages(file.data(), file.size());
         }
-        e.unsupported = label + ": " +
-                        (format == Format::pcd    ? std::string("PCD")
-                         : format == Format::pool ? std::string("a pool")
-                                                  : std::string("a mesh")) +
-                        " is not imported out of core (only PLY and XYZ point sets are)";
+        e.unsupported = label + ": " + (format == Format::pcd ? std::string("PCD") : std::string("a mesh")) +
+                        " is not imported out of core (only PLY, XYZ and pool point sets are)";
     }
     if (sensor_given) has_sensor = true;
     if (options.no_sensor) has_sensor = false;
@@ -616,6 +646,40 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options, boo
 }
 
 namespace {
+
+/// read_point_sections() of a pool of one scan in chunks (the radii, stale once points go, are
+/// not read); the mapped pool's pages leave the resident set after each chunk.
+PointCloud read_pool_chunks(const fs::path& path, Report& report, std::size_t chunk,
+                            const std::function<void(const PointCloud&)>& flush) {
+    const pool::PoolFile file = pool::PoolFile::open(path);
+    const pool::ModelInfo& info = file.model_info();
+    const auto pos = file.require<pool::Float3>(pool::SectionType::positions, "reading points");
+    const auto nrm = file.array<pool::Float3>(pool::SectionType::normals);
+    const auto col = file.array<pool::Rgba8>(pool::SectionType::colors);
+    const auto inten = file.array<float>(pool::SectionType::intensities);
+    pool_input_report(file, path, report);
+    PointCloud c;
+    for (std::size_t begin = 0; begin < pos.size(); begin += chunk) {
+        const std::size_t end = std::min(pos.size(), begin + chunk);
+        c.positions.resize(end - begin);
+        for (std::size_t i = begin; i < end; ++i)
+            c.positions[i - begin] = {info.origin[0] + pos[i].x, info.origin[1] + pos[i].y,
+                                      info.origin[2] + pos[i].z};
+        if (!nrm.empty())
+            c.normals.assign(nrm.begin() + std::ptrdiff_t(begin), nrm.begin() + std::ptrdiff_t(end));
+        if (!col.empty())
+            c.colors.assign(col.begin() + std::ptrdiff_t(begin), col.begin() + std::ptrdiff_t(end));
+        if (!inten.empty())
+            c.intensities.assign(inten.begin() + std::ptrdiff_t(begin), inten.begin() + std::ptrdiff_t(end));
+        flush(c);
+        drop_mapped_pages(file.file_bytes().data(), file.file_bytes().size());
+    }
+    PointCloud head;
+    const auto sensors = file.array<pool::Sensor>(pool::SectionType::sensors);
+    head.sensors.assign(sensors.begin(), sensors.end());
+    head.flags = info.flags;
+    return head;
+}
 
 /// One scan read, cleaned and rid of outliers out of core (import.cpp read_scan() + prepare_scan()
 /// up to the pose), in its own frame.
@@ -694,8 +758,16 @@ ScanStage read_and_filter(const fs::path& path, const Options& options, const Me
         }
         arrays.drop();
     };
-    PointCloud head = format == Format::ply ? read_ply_chunks(path, report, quiet, chunk, flush)
-                                            : read_xyz_chunks(path, report, quiet, chunk, flush);
+    bool file_normals = false;  // the file has normals (NormalsMode::estimate drops them)
+    auto flush_first = [&](const PointCloud& c) {
+        if (first) file_normals = c.has_normals();
+        flush(c);
+    };
+    PointCloud head = format == Format::ply   ? read_ply_chunks(path, report, quiet, chunk, flush_first)
+                      : format == Format::xyz ? read_xyz_chunks(path, report, quiet, chunk, flush_first)
+                                              : read_pool_chunks(path, report, chunk, flush_first);
+    if (drop_file_normals && file_normals)
+        head.flags &= ~static_cast<std::uint32_t>(pool::k_model_normals_estimated);
     report.read_seconds = tool::now_seconds() - t0;
     stage.peaks = "peak RSS: read " + tool::format_bytes(peak_rss_bytes());
     if (first) out.positions = make_spill<std::array<double, 3>>(memory, 1, "the positions");
@@ -964,6 +1036,7 @@ SpilledCloud import_merged_out_of_core(const fs::path& poses, const std::vector<
             for (auto& sn : st.sensors) sn = entry.pose.apply(sn);
         }
     }
+    for (const Report& r : per) report.pools.insert(report.pools.end(), r.pools.begin(), r.pools.end());
     // The merge (import.cpp finish()): attributes all scans have, sensors and scan_ids when every
     // scan has a sensor, the file's normals flagged when only some scans have them.
     bool all_normals = true, any_normals = false, all_sensors = true, any_sensor = false;

@@ -1,4 +1,4 @@
-// PointRT prt-import out of core (issue 17, prt-import --memory): one PLY or XYZ point set larger
+// PointRT prt-import out of core (issue 17, prt-import --memory): one PLY, XYZ or pool point set larger
 // than the memory allowed, streamed and worked tile by tile, with the result of the in-core import
 // (import_file) bit for bit:
 //
@@ -15,7 +15,8 @@
 // input, a bucket of duplicate keys or a tile of the k-NN search, each within --memory.
 // Merged scans (--poses) go the same way scan by scan, then are concatenated and finished as
 // import_merged() does (import_merged_out_of_core).
-// Not out of core (estimate_import says why, one line): meshes, PCD and pool inputs, normals
+// Pools of one scan are read the same way (read_point_sections() in chunks).
+// Not out of core (estimate_import says why, one line): meshes, PCD, pools of several scans, normals
 // estimated without a sensor (orientation over the whole k-NN graph), grazing normals whose
 // edges do not fit in half the memory.
 #pragma once
@@ -32,8 +33,9 @@
 #include "spill_file.h"
 
 namespace prt::pool {
+class PoolFile;
 class PoolWriter;
-}
+}  // namespace prt::pool
 
 namespace prt::pre::import {
 
@@ -89,7 +91,7 @@ struct SpilledCloud {
     std::uint32_t flags = 0;
 };
 
-/// import_file() out of core for a PLY or XYZ point set (estimate_import().unsupported empty):
+/// import_file() out of core for a PLY, XYZ or one-scan pool point set (estimate_import().unsupported empty):
 /// the same points, attributes, order, counts in `report` (timings aside), within memory.memory.
 /// Throws prt::Error as import_file() does, and for inputs estimate_import() does not support.
 SpilledCloud import_file_out_of_core(const std::filesystem::path& path, const Options& options,
@@ -130,6 +132,9 @@ std::uint64_t propagate_grazing(std::vector<GrazingEdge> edges, std::span<const 
                                 std::span<pool::Float3> normals,
                                 const std::function<double(std::uint32_t)>& height_of, std::uint64_t memory,
                                 const std::function<void()>& too_big, bool quiet);
+
+/// The notes, counts and sensor source of a pool input (import.cpp's and the out-of-core reader's).
+void pool_input_report(const pool::PoolFile& file, const std::filesystem::path& path, Report& report);
 
 /// The median as median_of() in neighbours.cpp takes it (the element of rank (n - 1) / 2) of n
 /// non-negative floats given by `value(i)`, read twice in index order (two 16-bit radix passes).

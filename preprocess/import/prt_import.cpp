@@ -249,6 +249,21 @@ bool out_of_core(const Cli& cli, const imp::Options& options, const std::vector<
     return true;
 }
 
+/// A pool input's provenance comes first (prt-synth's scans keep their shape for the error
+/// measurements); its other sections are computed again by the later steps. `source` holds the
+/// pool the writer's carried views point into.
+void carry_provenance(imp::Report& report, prt::pool::PoolWriter& writer,
+                      std::optional<prt::pool::PoolFile>& source) {
+    if (report.pools.empty()) return;
+    source.emplace(prt::pool::PoolFile::open(report.pools.front()));
+    writer.carry_over(*source);
+    for (const prt::pool::SectionEntry& e : source->sections())
+        writer.remove(static_cast<prt::pool::SectionType>(e.type));
+    if (report.pools.size() > 1)
+        report.notes.push_back("provenance: kept that of " + report.pools.front().string() +
+                               "; the other pool inputs are named in prt-import's parameters");
+}
+
 void import_step(prt::tool::PoolStep& step, Cli& cli) {
     const imp::Options options = cli.import_options(step.quiet());
     imp::Report report;
@@ -266,6 +281,8 @@ void import_step(prt::tool::PoolStep& step, Cli& cli) {
         const imp::SpilledCloud cloud =
             cli.poses.empty() ? imp::import_file_out_of_core(paths[0], options, mem, report)
                               : imp::import_merged_out_of_core(cli.poses, paths, options, mem, report);
+        std::optional<prt::pool::PoolFile> source;
+        carry_provenance(report, step.writer(), source);
         imp::write_point_sections(cloud, mem, step.writer());
         const double t0 = prt::tool::now_seconds();
         const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));
@@ -282,18 +299,8 @@ void import_step(prt::tool::PoolStep& step, Cli& cli) {
                                            ? imp::import_file(paths[0], options, report)
                                            : imp::import_merged(cli.poses, paths, options, report);
     prt::pool::PoolWriter& writer = step.writer();
-    // A pool input's provenance comes first (prt-synth's scans keep their shape for the error
-    // measurements); its other sections are computed again by the later steps.
     std::optional<prt::pool::PoolFile> source;
-    if (!report.pools.empty()) {
-        source.emplace(prt::pool::PoolFile::open(report.pools.front()));
-        writer.carry_over(*source);
-        for (const prt::pool::SectionEntry& e : source->sections())
-            writer.remove(static_cast<prt::pool::SectionType>(e.type));
-        if (report.pools.size() > 1)
-            report.notes.push_back("provenance: kept that of " + report.pools.front().string() +
-                                   "; the other pool inputs are named in prt-import's parameters");
-    }
+    carry_provenance(report, writer, source);
     prt::pre::write_point_sections(cloud, writer);
     const double t0 = prt::tool::now_seconds();
     const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));

@@ -235,6 +235,26 @@ TEST_F(ImportOutOfCore, XyzWithSensorOptionsEqualsInCore) {
     EXPECT_TRUE(m_last.normals_from_file);
 }
 
+TEST_F(ImportOutOfCore, PoolInputEqualsInCore) {
+    // A pool written from the synthetic scan (normals estimated, the camera as its sensor, colours,
+    // intensities), imported again: the file's normals kept, or estimated afresh.
+    const auto ply = write("scan.ply", ply_bytes(synthetic_scan(false), &k_scanner));
+    Report first;
+    Options options;
+    options.quiet = true;
+    const prt::pre::PointCloud cloud = import_file(ply, options, first);
+    prt::pool::PoolWriter writer;
+    prt::pre::write_point_sections(cloud, writer);
+    writer.write(path("scan.pool"));
+    expect_equal(path("scan.pool"), Options{}, 300, std::uint64_t(16) << 20);
+    EXPECT_TRUE(m_last.normals_from_file);
+    EXPECT_EQ(m_last.pools.size(), 1u);
+    options.normals = NormalsMode::estimate;
+    options.keep_fraction = 0.8;
+    expect_equal(path("scan.pool"), options, 300, std::uint64_t(16) << 20);
+    EXPECT_TRUE(m_last.normals_estimated);
+}
+
 TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
     const auto ply = write("scan.ply", ply_bytes(synthetic_scan(false, 200), nullptr));
     Options options;
