@@ -236,6 +236,11 @@ bool out_of_core(const Cli& cli, const imp::Options& options, const std::vector<
                              ": raise --memory");
         return true;
     }
+    // Small files go in core without a look inside: the in-core import holds at most about 160
+    // bytes per byte of input (460 bytes per point, at least 3 bytes per point in any format).
+    std::error_code ec;
+    const std::uint64_t file_bytes = std::filesystem::file_size(paths[0], ec);
+    if (cli.tile_points == 0 && !ec && file_bytes <= memory / 160) return false;
     imp::ImportEstimate e;
     try {
         e = imp::estimate_import(paths[0], options);
