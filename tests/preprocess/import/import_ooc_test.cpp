@@ -493,6 +493,29 @@ TEST_F(ImportOutOfCoreTool, TilePointsGivesTheInCorePool) {
         ++compared;
     }
     EXPECT_EQ(compared, 6u);  // model_info, positions, normals, colors, intensities, sensors
+    // A pose list and a pool input go out of core too, with the in-core pool.
+    write("b.xyz", xyz_bytes(synthetic_scan(false, 600)));
+    const auto poses = write("poses.json", R"({"scans": [{"file": "scan.ply"},
+        {"file": "b.xyz", "translation": [3, 0, 0], "quaternion": {"w": 1, "x": 0, "y": 0, "z": 0},
+         "sensor": {"direction": [0, 0, 1]}}]})");
+    for (const std::string& input : {"--poses " + poses.string(), path("in.pool").string()}) {
+        SCOPED_TRACE(input);
+        ASSERT_EQ(run(input + " -o " + path("m_in.pool").string() + " --quiet"), 0) << m_stderr;
+        ASSERT_EQ(run(input + " -o " + path("m_out.pool").string() + " --tile-points 400 --memory 8M"), 0)
+            << m_stderr;
+        EXPECT_NE(m_stderr.find("out of core"), std::string::npos) << m_stderr;
+        const auto c = prt::pool::PoolFile::open(path("m_in.pool"));
+        const auto d = prt::pool::PoolFile::open(path("m_out.pool"));
+        ASSERT_EQ(c.sections().size(), d.sections().size());
+        for (const auto& e : c.sections()) {
+            const auto t = static_cast<prt::pool::SectionType>(e.type);
+            ASSERT_NE(d.find(t), nullptr) << e.name;
+            if (t == prt::pool::SectionType::provenance) continue;  // times differ
+            const auto sa = c.bytes(e), sb = d.bytes(*d.find(t));
+            ASSERT_EQ(sa.size(), sb.size()) << e.name;
+            EXPECT_TRUE(std::equal(sa.begin(), sa.end(), sb.begin())) << e.name;
+        }
+    }
     // Not out of core: one line, exit 1, nothing written.
     EXPECT_EQ(run(file.string() + " -o " + path("x.pool").string() + " --tile-points 300 --no-sensor"), 1);
     EXPECT_NE(m_stderr.find("raise --memory"), std::string::npos) << m_stderr;
