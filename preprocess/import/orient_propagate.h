@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -29,30 +30,31 @@ inline void flip(pool::Float3& n) {
 }
 
 /// Max-heap of points keyed by their best edge weight so far, with increase-key (eager Prim):
-/// at most one entry per point, so memory stays O(n) however dense the graph is.
+/// at most one entry per point, so memory stays O(n) however dense the graph is. Its arrays are
+/// given (n each; `pos` all -1, `key` all 0 at the start): vectors in core, spill files out of core.
 class IndexedMaxHeap {
 public:
-    explicit IndexedMaxHeap(std::size_t n) : m_pos(n, -1), m_key(n, 0.f) {}
-    bool empty() const { return m_heap.empty(); }
+    IndexedMaxHeap(std::span<std::int64_t> pos, std::span<float> key, std::span<std::uint32_t> heap)
+        : m_pos(pos), m_key(key), m_heap(heap) {}
+    bool empty() const { return m_size == 0; }
     bool contains(std::uint32_t v) const { return m_pos[v] >= 0; }
     float key(std::uint32_t v) const { return m_key[v]; }
     void push_or_raise(std::uint32_t v, float key) {
         if (m_pos[v] < 0) {
             m_key[v] = key;
-            m_pos[v] = static_cast<std::int64_t>(m_heap.size());
-            m_heap.push_back(v);
-            up(m_heap.size() - 1);
+            m_pos[v] = static_cast<std::int64_t>(m_size);
+            m_heap[m_size++] = v;
+            up(m_size - 1);
         } else if (key > m_key[v]) {
             m_key[v] = key;
             up(static_cast<std::size_t>(m_pos[v]));
         }
     }
     std::uint32_t pop() {
-        const std::uint32_t top = m_heap.front();
+        const std::uint32_t top = m_heap[0];
         m_pos[top] = -1;
-        const std::uint32_t last = m_heap.back();
-        m_heap.pop_back();
-        if (!m_heap.empty()) {
+        const std::uint32_t last = m_heap[--m_size];
+        if (m_size > 0) {
             m_heap[0] = last;
             m_pos[last] = 0;
             down(0);
@@ -77,7 +79,7 @@ private:
     }
     void down(std::size_t i) {
         const std::uint32_t v = m_heap[i];
-        const std::size_t n = m_heap.size();
+        const std::size_t n = m_size;
         while (true) {
             std::size_t child = 2 * i + 1;
             if (child >= n) break;
@@ -89,9 +91,10 @@ private:
         place(i, v);
     }
 
-    std::vector<std::uint32_t> m_heap;
-    std::vector<std::int64_t> m_pos;
-    std::vector<float> m_key;
+    std::span<std::int64_t> m_pos;
+    std::span<float> m_key;
+    std::span<std::uint32_t> m_heap;
+    std::size_t m_size = 0;
 };
 
 }  // namespace orient_detail
@@ -101,18 +104,52 @@ private:
 /// be null: all) marks the vertices with a valid normal (the others take no part and have no
 /// edges), `fixed` (may be null) the sources, height(v) orders the seeds of the components no
 /// source reaches (largest first, then the lower vertex number). Counts add to `stats`.
+/// `workspace` (may be null: vectors) holds the per-vertex arrays (out of core: spill files).
+/// The per-vertex arrays of propagate_signs() (n each), and what to call every 65536 vertices
+/// (out of core: drop the spill files' pages).
+struct PropagationWorkspace {
+    std::span<std::uint8_t> visited;
+    std::span<std::uint32_t> parent;
+    std::span<std::int64_t> pos;
+    std::span<float> key;
+    std::span<std::uint32_t> heap;
+    std::span<std::uint32_t> order;
+    std::function<void()> tick;
+};
+
 template <class Height>
 OrientStats propagate_signs(std::size_t n, std::span<const std::uint64_t> begin,
                             std::span<const std::uint32_t> adjacent, std::span<pool::Float3> normals,
                             const std::uint8_t* ok, const std::uint8_t* fixed, Height&& height, bool quiet,
-                            std::vector<std::uint32_t>* component, OrientStats stats = {}) {
+                            std::vector<std::uint32_t>* component, OrientStats stats = {},
+                            const PropagationWorkspace* workspace = nullptr) {
     using namespace orient_detail;
-    std::vector<std::uint8_t> visited(n, 0);
-    if (ok)
-        for (std::size_t i = 0; i < n; ++i) visited[i] = !ok[i];
+    std::vector<std::uint8_t> visited_v;
+    std::vector<std::uint32_t> parent_v, heap_v, order_v;
+    std::vector<std::int64_t> pos_v;
+    std::vector<float> key_v;
+    PropagationWorkspace ws;
+    if (workspace) {
+        ws = *workspace;
+    } else {
+        visited_v.resize(n);
+        parent_v.resize(n);
+        heap_v.resize(n);
+        order_v.resize(n);
+        pos_v.resize(n);
+        key_v.resize(n);
+        ws = {visited_v, parent_v, pos_v, key_v, heap_v, order_v, {}};
+    }
+    const std::span<std::uint8_t> visited = ws.visited;
+    const std::span<std::uint32_t> parent = ws.parent;
+    for (std::size_t i = 0; i < n; ++i) {
+        visited[i] = ok ? !ok[i] : 0;
+        parent[i] = k_no_neighbour;
+        ws.pos[i] = -1;
+        ws.key[i] = 0.f;
+    }
     if (component) component->assign(n, 0);
-    std::vector<std::uint32_t> parent(n, k_no_neighbour);
-    IndexedMaxHeap heap(n);
+    IndexedMaxHeap heap(ws.pos, ws.key, ws.heap);
     LazyProgress progress("orienting normals", n, quiet);
     std::uint64_t done = 0;
     auto push_neighbours = [&](std::uint32_t v) {
@@ -142,7 +179,10 @@ OrientStats propagate_signs(std::size_t n, std::span<const std::uint64_t> begin,
                 if (w < k_ambiguous_dot) ++stats.ambiguous;
             }
             push_neighbours(v);
-            if ((++done & 0xFFFF) == 0) progress.update(done);
+            if ((++done & 0xFFFF) == 0) {
+                progress.update(done);
+                if (ws.tick) ws.tick();
+            }
         }
     };
 
@@ -158,10 +198,10 @@ OrientStats propagate_signs(std::size_t n, std::span<const std::uint64_t> begin,
     }
 
     // Seeds: the unvisited point with the largest z is the top of its (wholly unvisited) component.
-    std::vector<std::uint32_t> by_height;
-    by_height.reserve(n);
+    std::size_t unvisited = 0;
     for (std::size_t i = 0; i < n; ++i)
-        if (!visited[i]) by_height.push_back(static_cast<std::uint32_t>(i));
+        if (!visited[i]) ws.order[unvisited++] = static_cast<std::uint32_t>(i);
+    const std::span<std::uint32_t> by_height = ws.order.subspan(0, unvisited);
     std::sort(by_height.begin(), by_height.end(), [&](std::uint32_t a, std::uint32_t b) {
         return height(a) > height(b) || (height(a) == height(b) && a < b);
     });
