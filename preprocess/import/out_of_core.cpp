@@ -7,6 +7,7 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <type_traits>
 
 #include "neighbours.h"
 #include "orient_propagate.h"
@@ -415,6 +416,134 @@ GrazingResult orient_grazing_tiled(std::span<const std::array<double, 3>> positi
     return result;
 }
 
+/// orient_by_propagation() over the whole k-NN graph out of core (normals estimated without a
+/// sensor, Hoppe 1992 sec. 3.3): the graph's rows from one tiled_knn() pass go to a spill file by
+/// point, the symmetric adjacency lists are built from them in two passes in point order exactly as
+/// orient_by_propagation() builds them (spill files too), and propagate_signs() runs over them with
+/// its per-point arrays in spill files: the same steps, so the same signs. Semi-external: every
+/// array is a file mapping whose pages are dropped as the passes go (about 4k + 8k + 25 bytes per
+/// point on disk); the propagation's random access makes it slow when they exceed the page cache.
+OrientStats orient_by_propagation_tiled(std::span<const std::array<double, 3>> positions,
+                                        std::span<pool::Float3> normals, std::span<const std::uint8_t> fixed,
+                                        std::uint32_t k, const std::array<double, 3>& centre,
+                                        const MemoryParams& memory, const Arrays& arrays, bool quiet) {
+    const std::uint64_t n = positions.size();
+    OrientStats stats;
+    SpillFile rows_file(memory.spill_folder, std::max<std::uint64_t>(n * k, 1) * 4, "the k-NN graph");
+    const std::span<std::uint32_t> rows = rows_file.as<std::uint32_t>();
+    {
+        const SpillFile offsets = float_offsets(positions, centre, memory);
+        tool::Progress progress("prt-import: orientation graph, k-NN by tiles (k=" + std::to_string(k) + ")",
+                                n, quiet);
+        tiled_knn(
+            offsets.as<const pool::Float3>(), tiling_of(memory, k),
+            [&](const KnnBatch& batch) {
+                for (std::size_t q = 0; q < batch.queries.size(); ++q) {
+                    const std::uint32_t g = batch.global[batch.queries[q]];
+                    for (std::uint32_t j = 0; j < k; ++j)
+                        rows[std::size_t(g) * k + j] = batch.global[batch.neighbours[q * k + j]];
+                }
+            },
+            [&](std::uint64_t done) {
+                progress.update(done);
+                rows_file.drop();
+                arrays.drop();
+            });
+        progress.finish();
+    }
+    rows_file.drop();
+    return orient_over_rows(
+        rows.subspan(0, n * k), k, normals, fixed, [&](std::uint32_t v) { return positions[v][2]; },
+        memory.spill_folder,
+        [&] {
+            rows_file.drop();
+            arrays.drop();
+        },
+        quiet);
+}
+
+}  // namespace
+
+OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t k,
+                             std::span<pool::Float3> normals, std::span<const std::uint8_t> fixed,
+                             const std::function<double(std::uint32_t)>& height,
+                             const std::filesystem::path& spill_folder, const std::function<void()>& drop,
+                             bool quiet) {
+    const std::uint64_t n = normals.size();
+    OrientStats stats;
+    MemoryParams memory;
+    memory.spill_folder = spill_folder;
+    SpillFile ok_file(memory.spill_folder, std::max<std::uint64_t>(n, 1), "the orientation flags");
+    const std::span<std::uint8_t> ok = ok_file.as<std::uint8_t>();
+    for (std::uint64_t i = 0; i < n; ++i) {
+        ok[i] = orient_detail::valid(normals[i]);
+        if (!ok[i]) ++stats.skipped;
+    }
+    // The symmetric adjacency (CSR), orient_by_propagation()'s each_edge in point order.
+    SpillFile begin_file(memory.spill_folder, (n + 1) * 8, "the adjacency offsets");
+    const std::span<std::uint64_t> begin = begin_file.as<std::uint64_t>();
+    auto each_edge = [&](auto&& fn) {
+        for (std::uint64_t i = 0; i < n; ++i) {
+            if (ok[i])
+                for (std::uint32_t j = 0; j < k; ++j) {
+                    const std::uint32_t m = rows[i * k + j];
+                    if (m == k_no_neighbour || m == i || m >= n || !ok[m]) continue;
+                    fn(static_cast<std::uint32_t>(i), m);
+                }
+            if ((i + 1) % k_drop_every == 0) {
+                drop();
+                begin_file.drop();
+            }
+        }
+    };
+    std::fill(begin.begin(), begin.end(), std::uint64_t{0});
+    each_edge([&](std::uint32_t a, std::uint32_t b) {
+        ++begin[a + 1];
+        ++begin[b + 1];
+    });
+    for (std::uint64_t i = 0; i < n; ++i) begin[i + 1] += begin[i];
+    SpillFile adjacent_file(memory.spill_folder, std::max<std::uint64_t>(begin[n], 1) * 4,
+                            "the adjacency lists");
+    const std::span<std::uint32_t> adjacent = adjacent_file.as<std::uint32_t>().subspan(0, begin[n]);
+    {
+        SpillFile fill_file(memory.spill_folder, std::max<std::uint64_t>(n, 1) * 8, "the adjacency fill");
+        const std::span<std::uint64_t> fill = fill_file.as<std::uint64_t>();
+        std::copy(begin.begin(), begin.begin() + std::ptrdiff_t(n), fill.begin());
+        each_edge([&](std::uint32_t a, std::uint32_t b) {
+            adjacent[fill[a]++] = b;
+            adjacent[fill[b]++] = a;
+        });
+    }
+    // propagate_signs() with its per-point arrays in one spill file.
+    const std::uint64_t per = 1 + 4 + 8 + 4 + 4 + 4;
+    SpillFile work(memory.spill_folder, std::max<std::uint64_t>(n, 1) * per + 64, "the orientation's arrays");
+    std::byte* w = work.data();
+    auto carve = [&](auto* type, std::uint64_t bytes_each) {
+        using T = std::remove_pointer_t<decltype(type)>;
+        const std::span<T> s(reinterpret_cast<T*>(w), static_cast<std::size_t>(n));
+        w += (n * bytes_each + 7) / 8 * 8;
+        return s;
+    };
+    PropagationWorkspace ws;
+    ws.pos = carve(static_cast<std::int64_t*>(nullptr), 8);
+    ws.parent = carve(static_cast<std::uint32_t*>(nullptr), 4);
+    ws.key = carve(static_cast<float*>(nullptr), 4);
+    ws.heap = carve(static_cast<std::uint32_t*>(nullptr), 4);
+    ws.order = carve(static_cast<std::uint32_t*>(nullptr), 4);
+    ws.visited = carve(static_cast<std::uint8_t*>(nullptr), 1);
+    ws.tick = [&] {
+        work.drop();
+        adjacent_file.drop();
+        begin_file.drop();
+        ok_file.drop();
+        drop();
+    };
+    return propagate_signs(n, begin, adjacent, normals, ok.data(), fixed.empty() ? nullptr : fixed.data(),
+                           height, quiet, nullptr, stats, &ws);
+}
+
+namespace {
+
 Format point_format(const fs::path& path, const Options& options) {
     return options.format == Format::automatic ? detect_format(path) : options.format;
 }
@@ -633,15 +762,8 @@ ImportEstimate estimate_import(const fs::path& path, const Options& options, boo
     if (estimate && (!has_sensor || options.grazing_cos > 0 || options.propagate_then_vote))
         per_point += 8 * k + 24;  // orientation by propagation: the symmetric adjacency, heap, flags
     e.bytes = e.points * per_point;
-    if (e.unsupported.empty() && estimate) {
-        if (!has_sensor)
-            e.unsupported =
-                label +
-                ": estimated normals without a sensor are oriented by propagation over the whole "
-                "k-NN graph, not out of core (give --sensor or --sensor-direction, or --normals keep)";
-        else if (options.propagate_then_vote)
-            e.unsupported = label + ": orientation by propagation is not out of core";
-    }
+    if (e.unsupported.empty() && estimate && options.propagate_then_vote)
+        e.unsupported = label + ": orientation by propagation then vote is not out of core";
     return e;
 }
 
@@ -841,11 +963,8 @@ void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams
                       const std::string& label, const std::array<double, 3>& centre) {
     SpilledCloud& out = arrays.cloud;
     const bool quiet = options.quiet;
-    if (out.sensors.empty())
-        throw Error(
-            label +
-            ": estimated normals without a sensor are oriented by propagation over the whole k-NN graph, "
-            "not out of core (give --sensor or --sensor-direction, or --normals keep)");
+    if (out.sensors.empty() && options.propagate_then_vote)
+        throw Error(label + ": orientation by propagation then vote is not out of core");
     const double t1 = tool::now_seconds();
     const std::uint32_t k = static_cast<std::uint32_t>(options.k);
     if (out.size < 3)
@@ -883,7 +1002,7 @@ void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams
         if (!given.empty() && given[i]) {
             normals[i] = file_normals.span()[i];
             ++kept;
-        } else {
+        } else if (!out.sensors.empty()) {
             ambiguous +=
                 orient_toward_one(positions[i], normals[i], out.sensors[ids.empty() ? 0 : ids[i]]) == 1;
         }
@@ -892,13 +1011,32 @@ void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams
             if (file_normals.file) file_normals.file->drop();
         }
     }
-    std::string how =
-        (out.sensors.size() == 1
-             ? "oriented toward the sensor (" + sensor_text(out.sensors[0]) + ")"
-             : "oriented toward each point's own sensor (" + std::to_string(out.sensors.size()) + " scans)") +
-        "; " + std::to_string(ambiguous) +
-        " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)";
-    if (options.grazing_cos > 0) {
+    std::string how;
+    if (out.sensors.empty()) {
+        // Without a sensor: propagation over the whole k-NN graph (orient_by_propagation()).
+        OrientStats stats;
+        try {
+            stats = orient_by_propagation_tiled(positions, normals,
+                                                kept > 0 ? given : std::span<const std::uint8_t>{}, k, centre,
+                                                memory, arrays, quiet);
+        } catch (const Error& e) {
+            throw Error(label + ": " + e.what());
+        }
+        report.components = stats.components;
+        report.ambiguous = stats.ambiguous;
+        how =
+            "oriented by propagation over the k-NN graph (Hoppe 1992): " +
+            (kept > 0 ? "from the file's normals, then " : std::string()) + std::to_string(stats.components) +
+            " components seeded at their highest point with +z outward; " + std::to_string(stats.ambiguous) +
+            " ambiguous (|n_i . n_j| < 0.1 to every neighbour oriented before)";
+    } else {
+        how = (out.sensors.size() == 1 ? "oriented toward the sensor (" + sensor_text(out.sensors[0]) + ")"
+                                       : "oriented toward each point's own sensor (" +
+                                             std::to_string(out.sensors.size()) + " scans)") +
+              "; " + std::to_string(ambiguous) +
+              " ambiguous (grazing: normal within 5.7 degrees of perpendicular to the line of sight)";
+    }
+    if (options.grazing_cos > 0 && !out.sensors.empty()) {
         GrazingResult g;
         try {
             g = orient_grazing_tiled(positions, normals, out.sensors, ids, given, options.grazing_cos, k,
@@ -915,8 +1053,10 @@ void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams
     }
     out.flags |= pool::k_model_normals_estimated;
     report.normals_estimated = true;
-    report.oriented_to_sensor = true;
-    report.ambiguous = ambiguous;
+    if (!out.sensors.empty()) {
+        report.oriented_to_sensor = true;
+        report.ambiguous = ambiguous;
+    }
     // clean(cloud, false): PCA's failures (no normal) go, the others are renormalised.
     SpillFile flag_file(memory.spill_folder, std::max<std::uint64_t>(out.size, 1), "the point flags");
     const auto flags = flag_file.as<std::uint8_t>();

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "import.h"
+#include "orient.h"
 #include "spill_file.h"
 
 namespace prt::pool {
@@ -132,6 +133,18 @@ std::uint64_t propagate_grazing(std::vector<GrazingEdge> edges, std::span<const 
                                 std::span<pool::Float3> normals,
                                 const std::function<double(std::uint32_t)>& height_of, std::uint64_t memory,
                                 const std::function<void()>& too_big, bool quiet);
+
+/// orient_by_propagation() out of core over a k-NN graph given as rows (rows[i * k + j], n =
+/// normals.size() points; a spill file when large): the symmetric adjacency lists built in two
+/// passes in point order as orient_by_propagation() builds them, and propagate_signs() with its
+/// per-point arrays, all in spill files in `spill_folder` (about 8k + 33 bytes per point); `fixed`
+/// (may be empty) the sources, height(i) point i's z. `drop()` is called between passes (the caller
+/// drops its mappings' pages). The same signs and counts as orient_by_propagation().
+OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t k,
+                             std::span<pool::Float3> normals, std::span<const std::uint8_t> fixed,
+                             const std::function<double(std::uint32_t)>& height,
+                             const std::filesystem::path& spill_folder, const std::function<void()>& drop,
+                             bool quiet);
 
 /// The notes, counts and sensor source of a pool input (import.cpp's and the out-of-core reader's).
 void pool_input_report(const pool::PoolFile& file, const std::filesystem::path& path, Report& report);

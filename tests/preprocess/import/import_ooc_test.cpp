@@ -202,6 +202,12 @@ TEST_F(ImportOutOfCore, PlyWithCameraEstimatedNormalsEqualsInCore) {
         EXPECT_NE(m_last.normals_detail.find("took their sign from the others"), std::string::npos);
     }
     EXPECT_GT(m_last.grazing_flipped, 0u);
+    // Without a sensor: propagation over the whole k-NN graph from each component's top.
+    options.no_sensor = true;
+    expect_equal(file, options, 150, 200000);
+    expect_equal(file, options, 2000, std::uint64_t(1) << 30);
+    EXPECT_GT(m_last.components, 0u);
+    EXPECT_NE(m_last.normals_detail.find("components seeded at their highest point"), std::string::npos);
 }
 
 TEST_F(ImportOutOfCore, PlyWithNormalsAndDecimationEqualsInCore) {
@@ -262,7 +268,7 @@ TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
     const ImportEstimate e = estimate_import(ply, options);
     EXPECT_EQ(e.points, 200u + 1200 + 12 + 40 + 2);
     EXPECT_GT(e.bytes, e.points * 100);
-    EXPECT_NE(e.unsupported.find("without a sensor"), std::string::npos) << e.unsupported;
+    EXPECT_EQ(e.unsupported, "");  // no sensor: propagation over the whole graph, out of core too
     options.sensor = k_scanner;
     EXPECT_EQ(estimate_import(ply, options).unsupported, "");
     const auto pcd = write("scan.pcd", "VERSION .7\n");
@@ -272,9 +278,9 @@ TEST_F(ImportOutOfCore, WhatIsNotOutOfCoreIsOneLineNamingTheOption) {
     MemoryParams mem;
     mem.spill_folder = m_dir;
     Report report;
-    options.sensor.reset();
-    const std::string err = error_of([&] { import_file_out_of_core(ply, options, mem, report); });
-    EXPECT_EQ(err.rfind(ply.string() + ": estimated normals without a sensor", 0), 0u) << err;
+    const auto obj = write("mesh.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    const std::string err = error_of([&] { import_file_out_of_core(obj, options, mem, report); });
+    EXPECT_EQ(err.rfind(obj.string() + ": a mesh", 0), 0u) << err;
     // The grazing normals' edges must fit the memory: else one line saying to raise it.
     options.sensor = k_scanner;
     options.grazing_cos = 0.9;
@@ -358,6 +364,12 @@ TEST_F(MergedOutOfCore, PoseListOfPlyAndXyzScansEqualsInCore) {
     options.normals = NormalsMode::estimate;
     options.sensor = k_scanner;
     expect_merged_equal(poses, options, 500, std::uint64_t(16) << 20);
+    // Without sensors: the file's normals kept and fixed, the others propagated over the graph.
+    options = Options{};
+    options.no_sensor = true;
+    expect_merged_equal(poses, options, 400, std::uint64_t(16) << 20);
+    EXPECT_NE(m_last.normals_detail.find("from the file's normals, then"), std::string::npos)
+        << m_last.normals_detail;
 }
 
 fs::path real_data(const std::string& rel) {
@@ -392,7 +404,9 @@ TEST_F(ImportOutOfCore, RealScansEqualInCore) {
     EXPECT_GT(m_last.written, 30000u);
 }
 
-TEST(GrazingPropagation, TakesTheStepsOfOrientByPropagation) {
+class GrazingPropagation : public TempDirTest {};
+
+TEST_F(GrazingPropagation, TakesTheStepsOfOrientByPropagation) {
     // A random graph (rows read in a shuffled order, as tiles give them) with normals from a small
     // set of opposite and oblique directions (ties of |n_i . n_j| everywhere, so the order of the
     // adjacency lists decides the signs), invalid normals, short rows and z ties for the seeds.
@@ -437,6 +451,21 @@ TEST(GrazingPropagation, TakesTheStepsOfOrientByPropagation) {
         EXPECT_GT(stats.flipped, 100u);
         EXPECT_EQ(flipped, stats.flipped);
         EXPECT_EQ(std::memcmp(got.data(), want.data(), n * sizeof(Float3)), 0);
+        // The whole graph's propagation out of core (normals without a sensor), with and without sources.
+        for (const bool sources : {true, false}) {
+            std::vector<Float3> ref = normals, out = normals;
+            const OrientStats a =
+                orient_by_propagation(positions, ref, graph, true, sources ? &fixed : nullptr);
+            const OrientStats b = orient_over_rows(
+                graph.neighbours, k, out,
+                sources ? std::span<const std::uint8_t>(fixed) : std::span<const std::uint8_t>{},
+                [&](std::uint32_t i) { return positions[i][2]; }, m_dir, [] {}, true);
+            EXPECT_EQ(a.components, b.components);
+            EXPECT_EQ(a.ambiguous, b.ambiguous);
+            EXPECT_EQ(a.flipped, b.flipped);
+            EXPECT_EQ(a.skipped, b.skipped);
+            EXPECT_EQ(std::memcmp(ref.data(), out.data(), n * sizeof(Float3)), 0);
+        }
     }
 }
 
@@ -517,7 +546,8 @@ TEST_F(ImportOutOfCoreTool, TilePointsGivesTheInCorePool) {
         }
     }
     // Not out of core: one line, exit 1, nothing written.
-    EXPECT_EQ(run(file.string() + " -o " + path("x.pool").string() + " --tile-points 300 --no-sensor"), 1);
+    const auto obj = write("mesh.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    EXPECT_EQ(run(obj.string() + " -o " + path("x.pool").string() + " --tile-points 300"), 1);
     EXPECT_NE(m_stderr.find("raise --memory"), std::string::npos) << m_stderr;
     EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
     EXPECT_FALSE(fs::exists(path("x.pool")));
