@@ -105,8 +105,8 @@ private:
 /// edges), `fixed` (may be null) the sources, height(v) orders the seeds of the components no
 /// source reaches (largest first, then the lower vertex number). Counts add to `stats`.
 /// `workspace` (may be null: vectors) holds the per-vertex arrays (out of core: spill files).
-/// The per-vertex arrays of propagate_signs() (n each), and what to call every 65536 vertices
-/// (out of core: drop the spill files' pages).
+/// The per-vertex arrays of propagate_signs() (n each), and what to call every 4096 vertices
+/// (out of core: drop the spill files' pages; the propagation reads them at random).
 struct PropagationWorkspace {
     std::span<std::uint8_t> visited;
     std::span<std::uint32_t> parent;
@@ -179,10 +179,8 @@ OrientStats propagate_signs(std::size_t n, std::span<const std::uint64_t> begin,
                 if (w < k_ambiguous_dot) ++stats.ambiguous;
             }
             push_neighbours(v);
-            if ((++done & 0xFFFF) == 0) {
-                progress.update(done);
-                if (ws.tick) ws.tick();
-            }
+            if ((++done & 0xFFFF) == 0) progress.update(done);
+            if (ws.tick && (done & 0xFFF) == 0) ws.tick();
         }
     };
 

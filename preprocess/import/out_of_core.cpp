@@ -482,6 +482,8 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     // The symmetric adjacency (CSR), orient_by_propagation()'s each_edge in point order.
     SpillFile begin_file(memory.spill_folder, (n + 1) * 8, "the adjacency offsets");
     const std::span<std::uint64_t> begin = begin_file.as<std::uint64_t>();
+    const SpillFile* pages = nullptr;  // the adjacency lists and their fill, once they exist
+    const SpillFile* fill_pages = nullptr;
     auto each_edge = [&](auto&& fn) {
         for (std::uint64_t i = 0; i < n; ++i) {
             if (ok[i])
@@ -490,9 +492,11 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
                     if (m == k_no_neighbour || m == i || m >= n || !ok[m]) continue;
                     fn(static_cast<std::uint32_t>(i), m);
                 }
-            if ((i + 1) % k_drop_every == 0) {
+            if ((i + 1) % (k_drop_every / 16) == 0) {  // random writes: drop often
                 drop();
                 begin_file.drop();
+                if (pages) pages->drop();
+                if (fill_pages) fill_pages->drop();
             }
         }
     };
@@ -505,15 +509,20 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     SpillFile adjacent_file(memory.spill_folder, std::max<std::uint64_t>(begin[n], 1) * 4,
                             "the adjacency lists");
     const std::span<std::uint32_t> adjacent = adjacent_file.as<std::uint32_t>().subspan(0, begin[n]);
+    pages = &adjacent_file;
     {
         SpillFile fill_file(memory.spill_folder, std::max<std::uint64_t>(n, 1) * 8, "the adjacency fill");
         const std::span<std::uint64_t> fill = fill_file.as<std::uint64_t>();
+        fill_pages = &fill_file;
         std::copy(begin.begin(), begin.begin() + std::ptrdiff_t(n), fill.begin());
         each_edge([&](std::uint32_t a, std::uint32_t b) {
             adjacent[fill[a]++] = b;
             adjacent[fill[b]++] = a;
         });
+        fill_pages = nullptr;
     }
+    adjacent_file.drop();
+    begin_file.drop();
     // propagate_signs() with its per-point arrays in one spill file.
     const std::uint64_t per = 1 + 4 + 8 + 4 + 4 + 4;
     SpillFile work(memory.spill_folder, std::max<std::uint64_t>(n, 1) * per + 64, "the orientation's arrays");

@@ -16,9 +16,10 @@
 // Merged scans (--poses) go the same way scan by scan, then are concatenated and finished as
 // import_merged() does (import_merged_out_of_core).
 // Pools of one scan are read the same way (read_point_sections() in chunks).
-// Not out of core (estimate_import says why, one line): meshes, PCD, pools of several scans, normals
-// estimated without a sensor (orientation over the whole k-NN graph), grazing normals whose
-// edges do not fit in half the memory.
+// Normals without a sensor: propagation over the whole k-NN graph with every array in spill files
+// (orient_over_rows; semi-external: its resident set is not bounded by the memory).
+// Not out of core (estimate_import says why, one line): meshes, PCD, pools of several scans,
+// grazing normals whose edges do not fit in half the memory.
 #pragma once
 
 #include <cstdint>
