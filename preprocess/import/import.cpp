@@ -8,13 +8,14 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "prt/mapped_file.h"
 #include "mesh.h"
 #include "orient.h"
+#include "out_of_core.h"
 #include "pcl_backend.h"
 #include "ply_reader.h"
 #include "poses.h"
 #include "prt/error.h"
+#include "prt/mapped_file.h"
 #include "prt/tool.h"
 #include "quote.h"
 #include "xyz_reader.h"
@@ -139,26 +140,8 @@ Scan read_scan(const fs::path& path, const Options& options, Report& report) {
         case Format::pool: {
             const pool::PoolFile file = pool::PoolFile::open(path);
             cloud = read_point_sections(file);
-            report.records = cloud.size();
-            report.reader = "pool";
-            report.pools.push_back(path);
-            std::string dropped;
-            for (const pool::SectionEntry& e : file.sections()) {
-                const auto t = static_cast<pool::SectionType>(e.type);
-                using ST = pool::SectionType;
-                if (t == ST::provenance || t == ST::model_info || t == ST::positions || t == ST::normals ||
-                    t == ST::colors || t == ST::intensities || t == ST::sensors || t == ST::scan_ids)
-                    continue;
-                dropped +=
-                    (dropped.empty() ? "" : ", ") + std::string(e.name, strnlen(e.name, sizeof e.name));
-            }
             cloud.radii.clear();  // stale once points move or go: prt-radii computes them again
-            if (!dropped.empty())
-                report.notes.push_back(label + ": not carried over: " + dropped +
-                                       " (computed again by the later steps: prt-radii, prt-octree, ...)");
-            if (!cloud.sensors.empty())
-                report.sensor_source =
-                    "the pool's sensors section (" + std::to_string(cloud.sensors.size()) + ")";
+            pool_input_report(file, path, report);
             break;
         }
         case Format::mesh: {
@@ -239,16 +222,9 @@ std::vector<Scan> split_by_scan(Scan&& whole) {
 /// Keeps the points whose hash of (seed, index) falls below `fraction` (a counter-based hash:
 /// the same points for the same file and seed); returns how many were dropped.
 std::uint64_t decimate(PointCloud& c, double fraction, std::uint64_t seed) {
-    auto keep = [&](std::size_t i) {
-        std::uint64_t h = seed * 0x9E3779B97F4A7C15ull + i;
-        h = (h ^ (h >> 30)) * 0xBF58476D1CE4E5B9ull;  // splitmix64's finalizer
-        h = (h ^ (h >> 27)) * 0x94D049BB133111EBull;
-        h ^= h >> 31;
-        return double(h >> 11) * 0x1.0p-53 < fraction;
-    };
     const std::size_t n = c.size();
     std::vector<std::uint8_t> keep_flags(n);
-    for (std::size_t i = 0; i < n; ++i) keep_flags[i] = keep(i) ? 1 : 0;
+    for (std::size_t i = 0; i < n; ++i) keep_flags[i] = decimation_keeps(i, fraction, seed) ? 1 : 0;
     return n - keep_points(c, keep_flags);
 }
 

@@ -205,28 +205,37 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
 
 void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
                        TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats,
-                       const std::function<void(std::uint64_t)>& progress) {
+                       const std::function<void(std::uint64_t)>& progress,
+                       const std::array<double, 3>* centre_in) {
     const std::size_t n = positions.size();
     if (k < 3) throw Error("--k must be at least 3 for PCA normals");
     if (normals.size() != n) throw Error("internal: pca_normals_tiled: normals of the wrong size");
     // The in-core KdTree's coordinates (knn.cpp): float offsets from the bounding-box centre.
+    const bool input_mapped = tiling.positions_mapped;
     std::array<double, 3> lo = n ? positions[0] : std::array<double, 3>{0, 0, 0}, hi = lo;
-    for (const auto& p : positions)
-        for (int a = 0; a < 3; ++a) {
-            lo[a] = std::min(lo[a], p[a]);
-            hi[a] = std::max(hi[a], p[a]);
-        }
-    const std::array<double, 3> centre = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
-                                          0.5 * (lo[2] + hi[2])};
+    if (!centre_in)
+        for (const auto& p : positions)
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], p[a]);
+                hi[a] = std::max(hi[a], p[a]);
+            }
+    const std::array<double, 3> centre =
+        centre_in
+            ? *centre_in
+            : std::array<double, 3>{0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     SpillFile offsets(tiling.spill_folder, std::uint64_t(n) * sizeof(pool::Float3), "the float positions");
     const std::span<pool::Float3> f = offsets.as<pool::Float3>();
     for (std::size_t i = 0; i < n; ++i) {
         f[i] = {static_cast<float>(positions[i][0] - centre[0]),
                 static_cast<float>(positions[i][1] - centre[1]),
                 static_cast<float>(positions[i][2] - centre[2])};
-        if ((i + 1) % (std::size_t{1} << 20) == 0) offsets.drop();  // written pages stay in the file
+        if ((i + 1) % (std::size_t{1} << 20) == 0) {
+            offsets.drop();  // written pages stay in the file
+            if (input_mapped) drop_pages(positions.data(), (i + 1) * sizeof positions[0]);
+        }
     }
     offsets.drop();
+    if (input_mapped) drop_pages(positions.data(), n * sizeof positions[0]);
     // PCA takes the k - 1 nearest others: the first k - 1 of the in-core graph's k (same ties).
     tiling.k = k - 1;
     tiling.positions_mapped = true;  // the spill file above

@@ -81,10 +81,15 @@ std::vector<pool::Float3> pca_normals(const std::vector<std::array<double, 3>>& 
 /// file in tiling.spill_folder; each point's normal is computed (pca_normal.h) as soon as its
 /// neighbours are final and written to `normals` (positions.size(); may be a spill file). Equal
 /// bit for bit to pca_normals() over the graph outliers_and_graph() builds with no outlier removed.
-/// `positions` may be a mapped file too (it is read in tile order). Throws prt::Error as
-/// pca_normals() and tiled_knn() do.
+/// `positions` may be a mapped file too (it is read in tile order). `centre`, when not null, is
+/// the centre of the float frame instead of the positions' bounding-box centre: the in-core
+/// KdTree's when outlier removal took points away after it was built (import out of core).
+/// tiling.positions_mapped says that `positions` is a file mapping (a spill file) whose pages may
+/// be dropped once read; never set it for positions in a vector.
+/// Throws prt::Error as pca_normals() and tiled_knn() do.
 void pca_normals_tiled(std::span<const std::array<double, 3>> positions, std::uint32_t k,
                        TiledKnnParams tiling, std::span<pool::Float3> normals, TiledKnnStats* stats = nullptr,
-                       const std::function<void(std::uint64_t)>& progress = {});
+                       const std::function<void(std::uint64_t)>& progress = {},
+                       const std::array<double, 3>* centre = nullptr);
 
 }  // namespace prt::pre::import

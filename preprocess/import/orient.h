@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -60,6 +61,22 @@ OrientStats orient_toward(const std::vector<std::array<double, 3>>& positions,
                           const std::vector<std::uint16_t>& scan_ids,
                           std::vector<std::uint8_t>* ambiguous = nullptr,
                           const std::vector<std::uint8_t>* only = nullptr);
+
+/// orient_toward() for one point: flips `normal` to face `sensor` from `position`. Returns 0 when
+/// the normal is valid and not ambiguous, 1 when ambiguous (grazing), 2 when not valid (untouched).
+inline int orient_toward_one(const std::array<double, 3>& position, pool::Float3& normal,
+                             const pool::Sensor& sensor) {
+    const float l = normal.x * normal.x + normal.y * normal.y + normal.z * normal.z;
+    if (!(std::isfinite(l) && l > 1e-12f)) return 2;
+    double d[3];
+    for (int a = 0; a < 3; ++a)
+        d[a] =
+            sensor.kind == pool::k_sensor_direction ? sensor.position[a] : sensor.position[a] - position[a];
+    const double len = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    const double c = normal.x * d[0] + normal.y * d[1] + normal.z * d[2];
+    if (c < 0.0) normal = {-normal.x, -normal.y, -normal.z};
+    return !(len > 0.0) || std::fabs(c) < k_ambiguous_dot * len ? 1 : 0;
+}
 
 /// orient_toward() with one point sensor.
 OrientStats orient_toward(const std::vector<std::array<double, 3>>& positions,

@@ -7,11 +7,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <limits>
 
-#include "prt/mapped_file.h"
 #include "progress.h"
 #include "prt/error.h"
+#include "prt/mapped_file.h"
 #include "quote.h"
 
 namespace prt::pre::import {
@@ -244,7 +245,14 @@ struct Sink {
     const VertexLayout& layout;
     const PlyElement& vertex;
     const std::string& label;
+    /// Chunked reading (read_ply_chunks): rows go to `cloud` `chunk` at a time, each full chunk
+    /// handed to `flush`; 0 keeps every row.
+    std::size_t chunk = 0;
+    const std::function<void(const PointCloud&)>* flush = nullptr;
+    std::uint64_t base = 0;    ///< global index of cloud's first row (chunked)
+    std::uint64_t stored = 0;  ///< rows stored so far (chunked)
     void resize(std::size_t n) {
+        if (chunk) n = std::min(n, chunk);
         cloud.positions.resize(n);
         if (layout.normals) cloud.normals.resize(n);
         if (layout.colors) cloud.colors.resize(n);
@@ -267,16 +275,32 @@ struct Sink {
         if (c < 0) bad_color(i, slot, value);
         return static_cast<std::uint8_t>(c);
     }
+    /// Hands the rows not yet flushed to `flush` (chunked reading, at the end of the element).
+    void finish_chunks() {
+        if (!chunk || stored == base) return;
+        resize(static_cast<std::size_t>(stored - base));
+        (*flush)(cloud);
+        base = stored;
+    }
     /// Stores one row from per-slot values.
-    inline void store(std::size_t i, const double* v) {
+    inline void store(std::size_t row, const double* v) {
+        std::size_t i = row;
+        if (chunk) {
+            if (row - base == chunk) {
+                (*flush)(cloud);
+                base += chunk;
+            }
+            i = static_cast<std::size_t>(row - base);
+            stored = row + 1;
+        }
         cloud.positions[i] = {v[s_x], v[s_y], v[s_z]};
         if (layout.normals)
             cloud.normals[i] = {static_cast<float>(v[s_nx]), static_cast<float>(v[s_ny]),
                                 static_cast<float>(v[s_nz])};
         if (layout.colors)
-            cloud.colors[i] = {channel(i, s_red, v[s_red]), channel(i, s_green, v[s_green]),
-                               channel(i, s_blue, v[s_blue]),
-                               layout.alpha ? channel(i, s_alpha, v[s_alpha]) : std::uint8_t{255}};
+            cloud.colors[i] = {channel(row, s_red, v[s_red]), channel(row, s_green, v[s_green]),
+                               channel(row, s_blue, v[s_blue]),
+                               layout.alpha ? channel(row, s_alpha, v[s_alpha]) : std::uint8_t{255}};
         if (layout.radius) cloud.radii[i] = static_cast<float>(v[s_radius]);
         if (layout.intensity) cloud.intensities[i] = static_cast<float>(v[s_intensity]);
     }
@@ -711,7 +735,10 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& label) {
 
 // ---- reader -------------------------------------------------------------------------------------
 
-PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quiet) {
+namespace {
+
+PointCloud read_ply_impl(const std::filesystem::path& path, Report& report, bool quiet, std::size_t chunk,
+                         const std::function<void(const PointCloud&)>* flush) {
     const MappedFile file = MappedFile::open(path);
     const std::string& label = file.label();
     const PlyHeader header = parse_ply_header(file.view(), label);
@@ -743,6 +770,15 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
 
     PointCloud cloud;
     Sink sink{cloud, layout, *vertex, label};
+    // Chunked: after each chunk the pages of the mapped file read so far leave the resident set.
+    const std::function<void(const PointCloud&)> flush_and_drop = [&](const PointCloud& c) {
+        (*flush)(c);
+        drop_mapped_pages(file.data(), file.size());
+    };
+    if (chunk) {
+        sink.chunk = chunk;
+        sink.flush = &flush_and_drop;
+    }
     LazyProgress progress("reading " + label, vertex->count, quiet);
     switch (header.encoding) {
         case PlyEncoding::ascii: {
@@ -766,6 +802,7 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
                 read_binary<false>(file, header, layout, sink, camera, camera_slots, view, report, progress);
             break;
     }
+    sink.finish_chunks();
     progress.finish();
     if (camera) {
         for (int a = 0; a < 3; ++a)
@@ -775,8 +812,25 @@ PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quie
         report.sensor_source = "the PLY camera element (view_px view_py view_pz)";
     }
     report.reader = std::string("ply (") + ply_encoding_name(header.encoding) + ")";
-    report.records = cloud.size();
+    report.records = chunk ? sink.stored : cloud.size();
+    if (chunk) {  // the rows went to `flush`; the sensor stays
+        PointCloud rest;
+        rest.sensors = std::move(cloud.sensors);
+        rest.flags = cloud.flags;
+        cloud = std::move(rest);
+    }
     return cloud;
+}
+
+}  // namespace
+
+PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quiet) {
+    return read_ply_impl(path, report, quiet, 0, nullptr);
+}
+
+PointCloud read_ply_chunks(const std::filesystem::path& path, Report& report, bool quiet, std::size_t chunk,
+                           const std::function<void(const PointCloud&)>& flush) {
+    return read_ply_impl(path, report, quiet, std::max<std::size_t>(chunk, 1), &flush);
 }
 
 }  // namespace prt::pre::import

@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -79,5 +80,13 @@ PlyHeader parse_ply_header(std::string_view bytes, const std::string& label);
 /// more rows than the data holds is an error naming the counts; data after the last declared
 /// element is a warning (the header may declare fewer rows than the file holds).
 PointCloud read_ply(const std::filesystem::path& path, Report& report, bool quiet);
+
+/// read_ply() streaming (out of core, issue 17): the vertex rows are handed to `flush` in file
+/// order, at most `chunk` at a time (the same values read_ply() gives; report.records counts them
+/// all), and the pages of the mapped file leave the resident set after each chunk. Returns a point
+/// set without points that holds the file's sensor. Throws as read_ply() does (possibly after some
+/// chunks were handed over).
+PointCloud read_ply_chunks(const std::filesystem::path& path, Report& report, bool quiet, std::size_t chunk,
+                           const std::function<void(const PointCloud&)>& flush);
 
 }  // namespace prt::pre::import

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "import.h"
+#include "out_of_core.h"
+#include "poses.h"
 #include "prt/pool_step.h"
 
 namespace imp = prt::pre::import;
@@ -23,6 +25,9 @@ struct Cli {
     std::vector<double> sensor, sensor_direction;
     imp::Options options;
     bool keep_outliers = false;
+    std::string memory;        ///< --memory text; empty = half the physical memory
+    std::string spill_folder;  ///< empty = the output's folder
+    std::uint64_t tile_points = 0;
 
     void declare(CLI::App& app);
     /// The import options the command line names.
@@ -54,7 +59,9 @@ void Cli::declare(CLI::App& app) {
         "neighbours; without a sensor, by propagation over the k-NN graph (Hoppe 1992) from each\n"
         "component's highest point (+z outward). Grazing (ambiguous) counts are reported. The\n"
         "measurements behind the defaults: preprocess/import/README.md. Dropped points (NaN/Inf,\n"
-        "zero normals, duplicates, outliers, malformed lines) are counted on stderr. On any error\n"
+        "zero normals, duplicates, outliers, malformed lines) are counted on stderr. Out of core\n"
+        "(--memory): PLY or XYZ point sets whose in-core import needs more are streamed and worked\n"
+        "tile by tile with the same result (preprocess/import/README.md). On any error\n"
         "nothing is written and the exit code is 1 (2 for bad usage).");
     app.add_option("inputs", inputs,
                    "Scan, mesh or pool to import (.ply .pcd .xyz .txt .obj .off .stl .pool); with --poses: "
@@ -131,6 +138,29 @@ void Cli::declare(CLI::App& app) {
         ->check(CLI::Range(1e-6, 1.0));
     app.add_flag("--keep-duplicates", options.keep_duplicates,
                  "Keep exactly coincident points (default: keep the first, drop and count the rest)");
+    app.add_option("--memory", memory,
+                   "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set (or a "
+                   "pose list of them) whose in-core import needs more is imported out of core: read in "
+                   "chunks, duplicates, "
+                   "outliers and normals tile by tile, the sections in spill files, with the in-core "
+                   "result; other inputs and options that need the whole point set fail naming it "
+                   "(default: half the physical memory)")
+        ->check(
+            [](const std::string& text) {
+                try {
+                    prt::tool::parse_byte_size(text, "--memory");
+                    return std::string();
+                } catch (const prt::Error& e) {
+                    return std::string(e.what());
+                }
+            },
+            "SIZE");
+    app.add_option("--spill-folder", spill_folder,
+                   "Folder of the out-of-core spill files (removed as soon as created; about 60 + 4k "
+                   "bytes per point) (default: the output's folder)");
+    app.add_option("--tile-points", tile_points,
+                   "Testing: force the out-of-core import with k-NN tiles of this many points")
+        ->group("");
     app.callback([&] {
         if (poses.empty() && inputs.size() != 1)
             throw CLI::ValidationError("inputs", inputs.empty()
@@ -166,26 +196,116 @@ imp::Options Cli::import_options(bool quiet) {
     return options;
 }
 
+/// Whether the import runs out of core (--memory, issue 17); throws the one-line error when it
+/// would have to and cannot.
+bool out_of_core(const Cli& cli, const imp::Options& options, const std::vector<std::filesystem::path>& paths,
+                 std::uint64_t memory) {
+    using prt::tool::format_bytes;
+    const std::string forced = cli.tile_points > 0 ? " (--tile-points forces the out-of-core import)" : "";
+    if (!cli.poses.empty()) {
+        // Merged scans: the sum of the scans' in-core estimates; out of core when every scan can be.
+        std::uint64_t bytes = 0;
+        std::string unsupported;
+        try {
+            const std::vector<imp::PoseEntry> entries = imp::read_poses(cli.poses);
+            if (entries.size() == 1 && entries[0].pose.is_identity())
+                unsupported = cli.poses +
+                              ": one scan at the identity pose is not merged out of core (import the "
+                              "scan itself)";
+            for (const imp::PoseEntry& entry : entries) {
+                if (!paths.empty()) {
+                    std::error_code ec;
+                    const auto a = std::filesystem::weakly_canonical(entry.file, ec);
+                    bool listed = false;
+                    for (const auto& p : paths)
+                        listed = listed || std::filesystem::weakly_canonical(p, ec) == a;
+                    if (!listed) continue;
+                }
+                const imp::ImportEstimate e =
+                    imp::estimate_import(entry.file, options, entry.sensor_given && entry.sensor.has_value());
+                bytes += e.bytes;
+                if (unsupported.empty()) unsupported = e.unsupported;
+            }
+        } catch (const prt::Error&) {
+            return false;  // the in-core import reports the bad pose list or scan
+        }
+        if (bytes <= memory && cli.tile_points == 0) return false;
+        if (!unsupported.empty())
+            throw prt::Error(unsupported + "; the in-core import of the merged scans needs about " +
+                             format_bytes(bytes) + ", --memory is " + format_bytes(memory) + forced +
+                             ": raise --memory");
+        return true;
+    }
+    // Small files go in core without a look inside: the in-core import holds at most about 160
+    // bytes per byte of input (460 bytes per point, at least 3 bytes per point in any format).
+    std::error_code ec;
+    const std::uint64_t file_bytes = std::filesystem::file_size(paths[0], ec);
+    if (cli.tile_points == 0 && !ec && file_bytes <= memory / 160) return false;
+    imp::ImportEstimate e;
+    try {
+        e = imp::estimate_import(paths[0], options);
+    } catch (const prt::Error&) {
+        return false;  // the in-core import reports the unreadable input
+    }
+    if (e.bytes <= memory && cli.tile_points == 0) return false;
+    if (!e.unsupported.empty())
+        throw prt::Error(e.unsupported + "; the in-core import needs about " + format_bytes(e.bytes) +
+                         ", --memory is " + format_bytes(memory) + forced + ": raise --memory");
+    return true;
+}
+
+/// A pool input's provenance comes first (prt-synth's scans keep their shape for the error
+/// measurements); its other sections are computed again by the later steps. `source` holds the
+/// pool the writer's carried views point into.
+void carry_provenance(imp::Report& report, prt::pool::PoolWriter& writer,
+                      std::optional<prt::pool::PoolFile>& source) {
+    if (report.pools.empty()) return;
+    source.emplace(prt::pool::PoolFile::open(report.pools.front()));
+    writer.carry_over(*source);
+    for (const prt::pool::SectionEntry& e : source->sections())
+        writer.remove(static_cast<prt::pool::SectionType>(e.type));
+    if (report.pools.size() > 1)
+        report.notes.push_back("provenance: kept that of " + report.pools.front().string() +
+                               "; the other pool inputs are named in prt-import's parameters");
+}
+
 void import_step(prt::tool::PoolStep& step, Cli& cli) {
     const imp::Options options = cli.import_options(step.quiet());
     imp::Report report;
     std::vector<std::filesystem::path> paths(cli.inputs.begin(), cli.inputs.end());
+    const std::uint64_t memory =
+        cli.memory.empty() ? std::max<std::uint64_t>(prt::tool::physical_memory_bytes() / 2, 256u << 20)
+                           : prt::tool::parse_byte_size(cli.memory, "--memory");
+    if (out_of_core(cli, options, paths, memory)) {
+        imp::MemoryParams mem;
+        mem.memory = memory;
+        mem.tile_points = cli.tile_points;
+        mem.spill_folder = !cli.spill_folder.empty()
+                               ? std::filesystem::path(cli.spill_folder)
+                               : std::filesystem::absolute(step.output_path()).parent_path();
+        const imp::SpilledCloud cloud =
+            cli.poses.empty() ? imp::import_file_out_of_core(paths[0], options, mem, report)
+                              : imp::import_merged_out_of_core(cli.poses, paths, options, mem, report);
+        std::optional<prt::pool::PoolFile> source;
+        carry_provenance(report, step.writer(), source);
+        imp::write_point_sections(cloud, mem, step.writer());
+        const double t0 = prt::tool::now_seconds();
+        const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));
+        for (const std::string& line : report.summary_lines()) step.note("%s", line.c_str());
+        step.note("wrote %s: %llu points%s%s%s%s, %llu bytes in %.3f s (out of core, peak RSS %s)",
+                  step.output_path().c_str(), static_cast<unsigned long long>(cloud.size),
+                  cloud.normals.file ? ", normals" : "", cloud.colors.file ? ", colors" : "",
+                  cloud.intensities.file ? ", intensities" : "", cloud.radii.file ? ", radii" : "",
+                  static_cast<unsigned long long>(bytes), prt::tool::now_seconds() - t0,
+                  prt::tool::format_bytes(prt::pre::peak_rss_bytes()).c_str());
+        return;
+    }
     const prt::pre::PointCloud cloud = cli.poses.empty()
                                            ? imp::import_file(paths[0], options, report)
                                            : imp::import_merged(cli.poses, paths, options, report);
     prt::pool::PoolWriter& writer = step.writer();
-    // A pool input's provenance comes first (prt-synth's scans keep their shape for the error
-    // measurements); its other sections are computed again by the later steps.
     std::optional<prt::pool::PoolFile> source;
-    if (!report.pools.empty()) {
-        source.emplace(prt::pool::PoolFile::open(report.pools.front()));
-        writer.carry_over(*source);
-        for (const prt::pool::SectionEntry& e : source->sections())
-            writer.remove(static_cast<prt::pool::SectionType>(e.type));
-        if (report.pools.size() > 1)
-            report.notes.push_back("provenance: kept that of " + report.pools.front().string() +
-                                   "; the other pool inputs are named in prt-import's parameters");
-    }
+    carry_provenance(report, writer, source);
     prt::pre::write_point_sections(cloud, writer);
     const double t0 = prt::tool::now_seconds();
     const std::uint64_t bytes = step.write(imp::options_json(paths, cli.poses, options));

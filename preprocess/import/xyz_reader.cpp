@@ -1,12 +1,14 @@
 #include "xyz_reader.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cstring>
+#include <functional>
 #include <limits>
 
-#include "prt/mapped_file.h"
 #include "progress.h"
 #include "prt/error.h"
+#include "prt/mapped_file.h"
 #include "quote.h"
 
 namespace prt::pre::import {
@@ -40,7 +42,10 @@ int parse_line(const char* p, const char* end, double* values) {
 
 }  // namespace
 
-PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quiet) {
+namespace {
+
+PointCloud read_xyz_impl(const std::filesystem::path& path, Report& report, bool quiet, std::size_t chunk,
+                         const std::function<void(const PointCloud&)>* flush) {
     const MappedFile file = MappedFile::open(path);
     const std::string& label = file.label();
     if (file.size() == 0) throw Error(label + ": file is empty");
@@ -50,7 +55,7 @@ PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quie
     PointCloud cloud;
     const char* p = file.data();
     const char* const end = p + file.size();
-    cloud.positions.reserve(file.size() / 24);
+    cloud.positions.reserve(chunk ? std::min<std::size_t>(chunk, file.size() / 24 + 1) : file.size() / 24);
     int columns = 0;  // fixed by the first data line
     std::size_t line = 0;
     std::size_t first_bad = 0;
@@ -77,6 +82,12 @@ PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quie
                     cloud.normals.push_back(
                         {static_cast<float>(v[3]), static_cast<float>(v[4]), static_cast<float>(v[5])});
                 ++valid;
+                if (chunk && cloud.size() == chunk) {
+                    (*flush)(cloud);
+                    cloud.positions.clear();
+                    cloud.normals.clear();
+                    drop_mapped_pages(file.data(), static_cast<std::size_t>(p - file.data()));
+                }
             } else {
                 ++report.malformed_lines;
                 if (first_bad == 0) {
@@ -90,6 +101,11 @@ PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quie
         }
         p = eol + 1;
         if ((line & 0xFFFF) == 0) progress.update(static_cast<std::uint64_t>(p - file.data()));
+    }
+    if (chunk && cloud.size() > 0) {
+        (*flush)(cloud);
+        cloud.positions.clear();
+        cloud.normals.clear();
     }
     progress.finish();
     const std::string bad =
@@ -107,8 +123,19 @@ PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quie
         report.notes.push_back(label + ": dropped " + std::to_string(report.malformed_lines) +
                                " malformed lines (not " + std::to_string(columns) + " numbers)" + bad);
     report.reader = columns == 6 ? "xyz (x y z nx ny nz)" : "xyz (x y z)";
-    report.records = cloud.size();
+    report.records = valid;
     return cloud;
+}
+
+}  // namespace
+
+PointCloud read_xyz(const std::filesystem::path& path, Report& report, bool quiet) {
+    return read_xyz_impl(path, report, quiet, 0, nullptr);
+}
+
+PointCloud read_xyz_chunks(const std::filesystem::path& path, Report& report, bool quiet, std::size_t chunk,
+                           const std::function<void(const PointCloud&)>& flush) {
+    return read_xyz_impl(path, report, quiet, std::max<std::size_t>(chunk, 1), &flush);
 }
 
 }  // namespace prt::pre::import
