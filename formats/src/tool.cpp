@@ -136,6 +136,11 @@ std::uint64_t physical_memory_bytes() {
     return pages > 0 && page > 0 ? std::uint64_t(pages) * std::uint64_t(page) : 0;
 }
 
+std::uint64_t memory_limit(const std::string& text) {
+    return text.empty() ? std::max<std::uint64_t>(physical_memory_bytes() / 2, std::uint64_t(256) << 20)
+                        : parse_byte_size(text, "--memory");
+}
+
 std::string format_bytes(std::uint64_t bytes) {
     char buf[64];
     const char* units[] = {"KiB", "MiB", "GiB", "TiB"};
@@ -192,6 +197,20 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
             if (m_output_in_place && m_output.empty()) m_output = m_input;
             body(*this);
         });
+}
+
+CLI::Option* PoolStep::add_memory(CLI::App& app, std::string& text, const std::string& help) {
+    return app.add_option("--memory", text, help)
+        ->check(
+            [](const std::string& value) {
+                try {
+                    tool::parse_byte_size(value, "--memory");
+                    return std::string();
+                } catch (const Error& e) {
+                    return std::string(e.what());
+                }
+            },
+            "SIZE");
 }
 
 CLI::Option* PoolStep::add_output(CLI::App& app, const std::string& help) {

@@ -92,8 +92,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     p.culling.policy = opt.policy == "votes"    ? pre::CullPolicy::votes
                        : opt.policy == "thesis" ? pre::CullPolicy::thesis
                                                 : pre::CullPolicy::greedy;
-    p.memory = opt.memory.empty() ? std::max<std::uint64_t>(tool::physical_memory_bytes() / 2, 256u << 20)
-                                  : tool::parse_byte_size(opt.memory, "--memory");
+    p.memory = tool::memory_limit(opt.memory);
     p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
                                                : std::filesystem::absolute(step.output_path()).parent_path();
     step.note(
@@ -339,13 +338,10 @@ int main(int argc, char** argv) {
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
                 ->capture_default_str()
                 ->group(from_points);
-            app.add_option("--memory", points.memory,
-                           "Memory for one octree cell's build (SIZE, e.g. 8G); larger models are split into "
-                           "cells of about SIZE / 840 points (default: half the physical memory)")
-                ->check([](const std::string& text) {
-                    prt::tool::parse_byte_size(text, "--memory");
-                    return std::string();
-                })
+            prt::tool::PoolStep::add_memory(
+                app, points.memory,
+                "Memory for one octree cell's build (SIZE, e.g. 8G); larger models are split into cells of "
+                "about SIZE / 840 points (default: half the physical memory)")
                 ->group(from_points);
             app.add_option("--spill-folder", points.spill_folder,
                            "Folder of the spill files (removed as soon as created; about 32 bytes per point "

@@ -690,22 +690,7 @@ PointCloud import_file(const fs::path& path, const Options& options, Report& rep
 
 PointCloud import_merged(const fs::path& poses, const std::vector<fs::path>& only, const Options& options,
                          Report& report) {
-    std::vector<PoseEntry> entries = read_poses(poses);
-    if (!only.empty()) {
-        std::vector<PoseEntry> chosen;
-        for (const fs::path& want : only) {
-            std::error_code ec;
-            const fs::path a = fs::weakly_canonical(want, ec);
-            auto it = std::find_if(entries.begin(), entries.end(), [&](const PoseEntry& e) {
-                std::error_code ec2;
-                return fs::weakly_canonical(e.file, ec2) == a;
-            });
-            if (it == entries.end())
-                throw Error(want.string() + ": not listed in the pose file " + poses.string());
-            chosen.push_back(*it);
-        }
-        entries = std::move(chosen);
-    }
+    std::vector<PoseEntry> entries = read_poses(poses, only);
     std::vector<Scan> scans;
     std::vector<Report> per;  // one per scan, in step with `scans`
     for (const PoseEntry& entry : entries) {

@@ -42,10 +42,7 @@ std::string OutlierReport::summary() const {
     return std::string(buf) + (range_scaled ? "; distances relative to the range from the scanner" : "");
 }
 
-void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uint32_t graph_k,
-                        KnnGraph* graph, OutlierReport& report, bool quiet) {
-    const double t0 = tool::now_seconds();
-    const std::size_t n = cloud.size();
+bool outlier_removal_runs(const OutlierParams& params, std::uint64_t n, OutlierReport& report) {
     report = OutlierReport{};
     report.input = n;
     bool run = params.enabled && (params.std_ratio > 0 || params.radius_factor > 0);
@@ -61,6 +58,14 @@ void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uin
     if (run && params.min_neighbours > params.k)
         throw Error("--outlier-min-neighbours (" + std::to_string(params.min_neighbours) +
                     ") must not exceed --outlier-k (" + std::to_string(params.k) + ")");
+    return run;
+}
+
+void outliers_and_graph(PointCloud& cloud, const OutlierParams& params, std::uint32_t graph_k,
+                        KnnGraph* graph, OutlierReport& report, bool quiet) {
+    const double t0 = tool::now_seconds();
+    const std::size_t n = cloud.size();
+    const bool run = outlier_removal_runs(params, n, report);
     if (!graph) graph_k = 0;
     if (!run && graph_k == 0) return;
     if (n > 0xFFFFFFFEull) throw Error("more than 2^32 - 2 points: the k-NN graph cannot index them");

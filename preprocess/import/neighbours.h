@@ -58,6 +58,11 @@ struct OutlierReport {
     std::string summary() const;  ///< one line
 };
 
+/// Whether outlier removal runs over `n` points: starts `report` (input count, and why it is
+/// skipped when it is not). Throws prt::Error when it runs with --outlier-min-neighbours above
+/// --outlier-k. Shared by outliers_and_graph() and the out-of-core import.
+bool outlier_removal_runs(const OutlierParams& params, std::uint64_t n, OutlierReport& report);
+
 /// One k-NN pass over `cloud` (kd-tree, knn.h) that removes the outliers of `params` from the
 /// cloud (all its per-point attributes) and, when `graph_k` > 0, fills `graph` with the k-NN graph
 /// of the points that remain (graph_k nearest other remaining points each, nearest first; a point

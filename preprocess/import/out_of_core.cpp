@@ -232,22 +232,7 @@ void remove_outliers_tiled(std::span<const std::array<double, 3>> positions,
                            bool quiet) {
     const double t0 = tool::now_seconds();
     const std::uint64_t n = positions.size();
-    report = OutlierReport{};
-    report.input = n;
-    bool run = params.enabled && (params.std_ratio > 0 || params.radius_factor > 0);
-    if (!params.enabled)
-        report.skipped = "not run (--keep-outliers)";
-    else if (!run)
-        report.skipped = "not run (both tests disabled)";
-    if (run && n <= params.k) {
-        report.skipped = "not run: " + std::to_string(n) + " points, need more than --outlier-k " +
-                         std::to_string(params.k);
-        run = false;
-    }
-    if (!run) return;
-    if (params.min_neighbours > params.k)
-        throw Error("--outlier-min-neighbours (" + std::to_string(params.min_neighbours) +
-                    ") must not exceed --outlier-k (" + std::to_string(params.k) + ")");
+    if (!outlier_removal_runs(params, n, report)) return;
     if (n > 0xFFFFFFFEull) throw Error("more than 2^32 - 2 points: the k-NN graph cannot index them");
 
     SpillFile distances(memory.spill_folder, n * 2 * sizeof(float), "the outlier distances");
@@ -1139,22 +1124,7 @@ SpilledCloud import_file_out_of_core(const fs::path& path, const Options& option
 
 SpilledCloud import_merged_out_of_core(const fs::path& poses, const std::vector<fs::path>& only,
                                        const Options& options, const MemoryParams& memory, Report& report) {
-    std::vector<PoseEntry> entries = read_poses(poses);
-    if (!only.empty()) {
-        std::vector<PoseEntry> chosen;
-        for (const fs::path& want : only) {
-            std::error_code ec;
-            const fs::path a = fs::weakly_canonical(want, ec);
-            auto it = std::find_if(entries.begin(), entries.end(), [&](const PoseEntry& e) {
-                std::error_code ec2;
-                return fs::weakly_canonical(e.file, ec2) == a;
-            });
-            if (it == entries.end())
-                throw Error(want.string() + ": not listed in the pose file " + poses.string());
-            chosen.push_back(*it);
-        }
-        entries = std::move(chosen);
-    }
+    std::vector<PoseEntry> entries = read_poses(poses, only);
     const std::string label = poses.string();
     if (entries.size() == 1 && entries[0].pose.is_identity())
         throw Error(label +

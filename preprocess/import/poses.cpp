@@ -336,4 +336,22 @@ std::vector<PoseEntry> read_poses(const fs::path& path) {
     return text[first] == '{' ? read_json(path, text) : read_conf(path, text);
 }
 
+std::vector<PoseEntry> read_poses(const fs::path& path, const std::vector<fs::path>& only) {
+    std::vector<PoseEntry> entries = read_poses(path);
+    if (only.empty()) return entries;
+    std::vector<PoseEntry> chosen;
+    for (const fs::path& want : only) {
+        std::error_code ec;
+        const fs::path a = fs::weakly_canonical(want, ec);
+        auto it = std::find_if(entries.begin(), entries.end(), [&](const PoseEntry& e) {
+            std::error_code ec2;
+            return fs::weakly_canonical(e.file, ec2) == a;
+        });
+        if (it == entries.end())
+            throw Error(want.string() + ": not listed in the pose file " + path.string());
+        chosen.push_back(*it);
+    }
+    return chosen;
+}
+
 }  // namespace prt::pre::import

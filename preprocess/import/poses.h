@@ -63,4 +63,9 @@ struct PoseEntry {
 /// first problem. At least one scan.
 std::vector<PoseEntry> read_poses(const std::filesystem::path& path);
 
+/// read_poses(), then only the entries of the scan files in `only` (in that order; all when empty):
+/// throws prt::Error "FILE: not listed in the pose file POSES" for a file the list lacks.
+std::vector<PoseEntry> read_poses(const std::filesystem::path& path,
+                                  const std::vector<std::filesystem::path>& only);
+
 }  // namespace prt::pre::import

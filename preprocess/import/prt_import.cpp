@@ -138,23 +138,13 @@ void Cli::declare(CLI::App& app) {
         ->check(CLI::Range(1e-6, 1.0));
     app.add_flag("--keep-duplicates", options.keep_duplicates,
                  "Keep exactly coincident points (default: keep the first, drop and count the rest)");
-    app.add_option("--memory", memory,
-                   "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set (or a "
-                   "pose list of them) whose in-core import needs more is imported out of core: read in "
-                   "chunks, duplicates, "
-                   "outliers and normals tile by tile, the sections in spill files, with the in-core "
-                   "result; other inputs and options that need the whole point set fail naming it "
-                   "(default: half the physical memory)")
-        ->check(
-            [](const std::string& text) {
-                try {
-                    prt::tool::parse_byte_size(text, "--memory");
-                    return std::string();
-                } catch (const prt::Error& e) {
-                    return std::string(e.what());
-                }
-            },
-            "SIZE");
+    prt::tool::PoolStep::add_memory(
+        app, memory,
+        "Memory the import may use (K, M, G suffixes: 512M, 4G); a PLY or XYZ point set (or a "
+        "pose list of them) whose in-core import needs more is imported out of core: read in "
+        "chunks, duplicates, outliers and normals tile by tile, the sections in spill files, with the "
+        "in-core result; other inputs and options that need the whole point set fail naming it "
+        "(default: half the physical memory)");
     app.add_option("--spill-folder", spill_folder,
                    "Folder of the out-of-core spill files (removed as soon as created; about 60 + 4k "
                    "bytes per point) (default: the output's folder)");
@@ -273,9 +263,7 @@ void import_step(prt::tool::PoolStep& step, Cli& cli) {
     const imp::Options options = cli.import_options(step.quiet());
     imp::Report report;
     std::vector<std::filesystem::path> paths(cli.inputs.begin(), cli.inputs.end());
-    const std::uint64_t memory =
-        cli.memory.empty() ? std::max<std::uint64_t>(prt::tool::physical_memory_bytes() / 2, 256u << 20)
-                           : prt::tool::parse_byte_size(cli.memory, "--memory");
+    const std::uint64_t memory = prt::tool::memory_limit(cli.memory);
     if (out_of_core(cli, options, paths, memory)) {
         imp::MemoryParams mem;
         mem.memory = memory;

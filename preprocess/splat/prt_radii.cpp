@@ -64,9 +64,7 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
         throw Error(step.input_path() + ": " + std::to_string(positions.size()) +
                     " points, need more than k = " + std::to_string(params.k) + " (lower --k)");
     params.scope = pre::parse_clamp_scope(scope);
-    const std::uint64_t memory = mem.memory.empty()
-                                     ? std::max<std::uint64_t>(tool::physical_memory_bytes() / 2, 256u << 20)
-                                     : tool::parse_byte_size(mem.memory, "--memory");
+    const std::uint64_t memory = tool::memory_limit(mem.memory);
     const std::uint64_t in_core = pre::radii_in_core_bytes(positions.size(), params);
     const bool tiled = mem.tile_points > 0 || in_core > memory;
     tool::Progress progress(tiled ? "prt-radii: k-NN search by tiles" : "prt-radii: k-NN search",
@@ -171,19 +169,10 @@ int main(int argc, char** argv) {
                    "local: the median raw radius of the point's k neighbours (uneven scans keep their "
                    "sparse regions); global: the whole model's median radius")
                 ->check(CLI::IsMember({"local", "global"}));
-            app.add_option("--memory", mem.memory,
-                           "Memory the k-NN search may use (K, M, G suffixes: 512M, 4G); above it the search "
-                           "runs out of core, tile by tile (default: half the physical memory)")
-                ->check(
-                    [](const std::string& text) {
-                        try {
-                            prt::tool::parse_byte_size(text, "--memory");
-                            return std::string();
-                        } catch (const prt::Error& e) {
-                            return std::string(e.what());
-                        }
-                    },
-                    "SIZE");
+            prt::tool::PoolStep::add_memory(
+                app, mem.memory,
+                "Memory the k-NN search may use (K, M, G suffixes: 512M, 4G); above it the search "
+                "runs out of core, tile by tile (default: half the physical memory)");
             app.add_option("--spill-folder", mem.spill_folder,
                            "Folder of the out-of-core spill files (removed as soon as created; about "
                            "16 + 8 + 4k bytes per point) (default: the output's folder)");

@@ -85,6 +85,9 @@ public:
                                     const std::string& help = "Worker threads (0 = all hardware threads)") {
         return app.add_option("-j,--threads", threads, help);
     }
+    /// The out-of-core tools' --memory SIZE (tool::memory_limit() reads it; empty: the default),
+    /// checked by tool::parse_byte_size when parsed; `help` says what the memory bounds and its default.
+    static CLI::Option* add_memory(CLI::App& app, std::string& text, const std::string& help);
 
     /// Declares an optional -o,--output here (for steps that give Help::output empty): without
     /// one, OUTPUT is INPUT (rewritten in place).

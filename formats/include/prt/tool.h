@@ -54,6 +54,10 @@ std::uint64_t parse_byte_size(const std::string& text, const char* what = "size"
 /// The machine's physical memory in bytes (sysconf), or 0 when unknown.
 std::uint64_t physical_memory_bytes();
 
+/// The --memory of the out-of-core tools: parse_byte_size(text, "--memory"), or when `text` is
+/// empty half the physical memory (at least 256 MiB).
+std::uint64_t memory_limit(const std::string& text);
+
 /// "1.50 GiB", "512.0 MiB", "12.0 KiB", "100 B" (messages).
 std::string format_bytes(std::uint64_t bytes);
 
