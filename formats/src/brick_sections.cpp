@@ -115,6 +115,71 @@ bool finite3(const Float3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
+/// The optional LOD prefixes (brick_lod, lod_nodes, lod_discs): present together as the flag says,
+/// one per brick inside lod_nodes, each a proper prefix of its brick's breadth-first node array.
+void check_lod_prefixes(const PoolFile& pool, BrickSections& s) {
+    const SectionEntry* eb = pool.find(SectionType::brick_lod);
+    const SectionEntry* en = pool.find(SectionType::lod_nodes);
+    const SectionEntry* ed = pool.find(SectionType::lod_discs);
+    const bool flagged = (s.info.flags & k_bricks_lod) != 0;
+    if (eb == nullptr && en == nullptr && ed == nullptr) {
+        if (flagged)
+            pool.fail(pool.find(SectionType::brick_info),
+                      "says LOD prefixes but brick_lod, lod_nodes and lod_discs are missing");
+        return;
+    }
+    if (eb == nullptr || en == nullptr || ed == nullptr)
+        pool.fail(eb ? eb : (en ? en : ed),
+                  "the LOD prefixes need all of brick_lod, lod_nodes and lod_discs");
+    if (!flagged) pool.fail(eb, "present but brick_info's flags do not say LOD prefixes");
+    s.lod_table = pool.array<BrickLod>(SectionType::brick_lod);
+    s.lod_nodes = pool.array<std::uint32_t>(SectionType::lod_nodes);
+    s.lod_discs = pool.array<CompressedSplat>(SectionType::lod_discs);
+    detail::check_count(pool, eb, s.lod_table.size(), s.info.brick_count, "prefixes", "brick_info");
+    detail::check_count(pool, ed, s.lod_discs.size(), s.lod_nodes.size(), "discs", "lod_nodes");
+    if (s.lod_nodes.size() > 0xFFFFFFFFull) pool.fail(en, "more than 2^32 - 1 nodes");
+    for (std::uint32_t b = 0; b < s.lod_table.size(); ++b) {
+        const BrickLod& l = s.lod_table[b];
+        const BrickEntry& e = s.table[b];
+        const auto fail = [&](const SectionEntry* where, const std::string& what) {
+            pool.fail(where, brick_label(b) + what);
+        };
+        if (l.node_count == 0 || l.node_count > e.node_count)
+            fail(eb, std::to_string(l.node_count) + " prefix nodes, the brick has " +
+                         std::to_string(e.node_count));
+        if (l.first > s.lod_nodes.size() || l.node_count > s.lod_nodes.size() - l.first)
+            fail(eb, "prefix [" + std::to_string(l.first) + ", +" + std::to_string(l.node_count) +
+                         ") outside lod_nodes (" + std::to_string(s.lod_nodes.size()) + ")");
+        if (!(l.quant_size > 0) || !std::isfinite(l.quant_size) || !std::isfinite(l.quant_min[0]) ||
+            !std::isfinite(l.quant_min[1]) || !std::isfinite(l.quant_min[2]))
+            fail(eb, "quantization cube not finite with a positive size");
+        if (l.radius_log2_min < -k_radius_log2_limit || l.radius_log2_min > k_radius_log2_limit - 32)
+            fail(eb, "radius exponent " + std::to_string(l.radius_log2_min) + " out of range");
+        for (std::uint32_t i = 0; i < l.node_count; ++i) {
+            const std::uint32_t w = s.lod_nodes[l.first + i];
+            const std::uint32_t a = node_address(w);
+            bool ok = true;
+            switch (node_type(w)) {
+                case NodeType::internal:
+                    ok = a > i && std::uint64_t(a) + 8 <= e.node_count;
+                    break;
+                case NodeType::filled_leaf:
+                    ok = a < e.leaf_count;
+                    break;
+                case NodeType::empty_leaf:
+                    break;
+                default:
+                    ok = false;
+                    break;
+            }
+            if (!ok) fail(en, "prefix node " + std::to_string(i) + ": bad node word");
+            const std::uint32_t nr = s.lod_discs[l.first + i].nr;
+            if ((nr & 1023u) > k_oct_max_code || ((nr >> 10) & 1023u) > k_oct_max_code)
+                fail(ed, "prefix node " + std::to_string(i) + ": normal code out of range");
+        }
+    }
+}
+
 }  // namespace
 
 BrickView brick_view(std::span<const std::byte> payload) {
@@ -174,11 +239,14 @@ BrickSections validate_brick_index(const PoolFile& pool) {
         if (!finite3(d.position) || !finite3(d.normal) || !std::isfinite(d.radius) || d.radius < 0)
             pool.fail(el, "disc " + std::to_string(i) + ": not finite or a negative radius");
     }
+    check_lod_prefixes(pool, s);
     return s;
 }
 
-void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntry& entry, std::uint32_t index,
+void validate_brick(const PoolFile& pool, const BrickSections& sections, std::uint32_t index,
                     std::span<const std::byte> payload) {
+    const BrickInfo& info = sections.info;
+    const BrickEntry& entry = sections.table[index];
     const SectionEntry* ed = pool.find(SectionType::brick_data);
     const std::string where = brick_label(index);
     const auto fail = [&](const std::string& what) { pool.fail(ed, where + what); };
@@ -223,12 +291,23 @@ void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntr
         if ((nr & 1023u) > k_oct_max_code || ((nr >> 10) & 1023u) > k_oct_max_code)
             fail("splat " + std::to_string(i) + ": normal code out of range");
     }
+    const std::span<const std::uint32_t> prefix = sections.lod_prefix(index);
+    for (std::size_t i = 0; i < prefix.size(); ++i)
+        if (prefix[i] != v.nodes[i])
+            pool.fail(pool.find(SectionType::lod_nodes),
+                      where + "prefix node " + std::to_string(i) + " differs from the brick's node");
+    if (!prefix.empty()) {
+        const BrickLod& l = sections.lod_table[index];
+        if (l.quant_size != h.quant_size || l.quant_min[0] != h.quant_min[0] ||
+            l.quant_min[1] != h.quant_min[1] || l.quant_min[2] != h.quant_min[2])
+            pool.fail(pool.find(SectionType::brick_lod),
+                      where + "quantization cube differs from the brick's");
+    }
 }
 
 BrickSections validate_bricks(const PoolFile& pool) {
     BrickSections s = validate_brick_index(pool);
-    for (std::uint32_t b = 0; b < s.table.size(); ++b)
-        validate_brick(pool, s.info, s.table[b], b, s.payload(b));
+    for (std::uint32_t b = 0; b < s.table.size(); ++b) validate_brick(pool, s, b, s.payload(b));
     return s;
 }
 

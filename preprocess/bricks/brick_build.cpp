@@ -10,6 +10,9 @@
 //    those counts (each brick 64-byte aligned); then every brick in parallel again: its splats
 //    encoded (and the codec's error measured against the float splats), its references, checksum
 //    and LOD disc.
+//    Each brick's level-of-detail prefix (its top levels, BrickParams::lod_splats) gets a disc per
+//    node in the same pass: sums of the points whose centre cell lies below the node, a radius over
+//    every splat below it.
 // 4. LOD discs of the top tree's internal nodes, bottom-up from their children's discs.
 #include "brick_build.h"
 
@@ -152,11 +155,27 @@ TopCut cut_top_tree(std::span<const std::uint32_t> nodes, const Subtrees& sub, s
     return cut;
 }
 
-/// Phase 3a: each brick's entry (cube, counts, 64-byte aligned payload offset); sizes out.data.
-/// `encoded[b]`: brick b's distinct splats (BrickEncoder::count).
+/// What phase 3a counts of a brick: its distinct splats and the nodes of its LOD prefix.
+struct BrickCounts {
+    std::uint32_t encoded = 0, lod_nodes = 0;
+};
+
+/// Phase 3a: each brick's entry (cube, counts, 64-byte aligned payload offset); sizes out.data, and
+/// the LOD prefixes' table (first node of each) and nodes when `lod`.
 void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeInfo& oi,
-                    const std::vector<std::uint32_t>& encoded, BrickedOctree& out) {
+                    const std::vector<BrickCounts>& counts, bool lod, BrickedOctree& out) {
     out.table.resize(cut.brick_top.size());
+    if (lod) {
+        out.lod_table.assign(cut.brick_top.size(), pool::BrickLod{});
+        std::uint64_t first = 0;
+        for (std::size_t b = 0; b < counts.size(); ++b) {
+            out.lod_table[b].first = first;
+            out.lod_table[b].node_count = counts[b].lod_nodes;
+            first += counts[b].lod_nodes;
+        }
+        out.lod_nodes.assign(first, 0);
+        out.lod_discs.assign(first, pool::CompressedSplat{});
+    }
     std::uint64_t offset = 0;
     for (std::size_t b = 0; b < cut.brick_top.size(); ++b) {
         const std::uint32_t t = cut.brick_top[b];
@@ -170,7 +189,7 @@ void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeIn
         e.node_count = sub.nodes[s];
         e.leaf_count = sub.leaves[s];
         e.splat_count = std::uint32_t(sub.splats[s]);
-        e.encoded_count = encoded[b];
+        e.encoded_count = counts[b].encoded;
         e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
         e.top_node = t;
         e.level = cut.level[t];
@@ -255,16 +274,23 @@ public:
         std::vector<std::uint32_t> refs;          // per reference: index into `encoded`
         std::vector<const pool::Splat*> encoded;  // the distinct splats, in order of first reference
         std::unordered_map<std::uint32_t, std::uint32_t> first;  // point -> its first encoded index
+        std::vector<std::uint32_t> parent;                       // per local node (root: itself)
+        std::vector<std::uint32_t> level_nodes;                  // non-empty nodes per local level
+        std::vector<LodSum> lod_sum, lod_any;                    // per LOD prefix node
+        std::vector<pool::LodSplat> lod_disc;
+        std::vector<double> lod_cover;
     };
 
     BrickEncoder(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
                  const TopCut& cut, BrickedOctree& out)
         : m_octree(octree), m_colors(colors), m_cut(cut), m_out(out) {}
 
-    /// The distinct splats of brick b (the one whose top node is `top_node`).
-    std::uint32_t count(std::uint32_t top_node, Scratch& scratch) const {
+    /// The distinct splats of brick b (the one whose top node is `top_node`) and its LOD prefix's nodes
+    /// (`lod_splats` M, 0: none).
+    BrickCounts count(std::uint32_t top_node, std::uint32_t lod_splats, Scratch& scratch) const {
         gather(top_node, scratch);
-        return std::uint32_t(scratch.encoded.size());
+        return BrickCounts{std::uint32_t(scratch.encoded.size()),
+                           lod_splats > 0 ? lod_prefix_nodes(lod_splats, scratch) : 0u};
     }
 
     /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
@@ -318,6 +344,7 @@ public:
             if (scratch.centre[k]) sum.add_point(w, p, nn, c);
         }
         e.checksum = pool::checksum({base, static_cast<std::size_t>(e.size)});
+        if (!m_out.lod_table.empty()) encode_lod_prefix(b, h, scratch);
         // the brick's LOD disc: its sphere holds every splat's disc
         pool::LodSplat disc = lod_from_sum(sum.w > 0 ? sum : any);
         double cover = 0;
@@ -329,6 +356,92 @@ public:
     }
 
 private:
+    /// The nodes of the brick's LOD prefix: levels 0..D (breadth first, so a prefix of the node
+    /// array), D the deepest level whose non-empty nodes hold at least `m` references on average
+    /// (level 0 always).
+    static std::uint32_t lod_prefix_nodes(std::uint32_t m, Scratch& s) {
+        s.level_nodes.assign(1, 0);
+        const std::uint32_t root_level = s.cells[0].level;
+        for (std::size_t i = 0; i < s.nodes.size(); ++i) {
+            const std::uint32_t l = s.cells[i].level - root_level;
+            if (l >= s.level_nodes.size()) s.level_nodes.resize(l + 1, 0);
+            if (pool::node_type(s.nodes[i]) != NodeType::empty_leaf) ++s.level_nodes[l];
+        }
+        std::uint32_t deepest = 0;
+        while (deepest + 1 < s.level_nodes.size() &&
+               std::uint64_t(s.level_nodes[deepest + 1]) * m <= s.splats.size())
+            ++deepest;
+        std::uint32_t k = 0;
+        while (k < s.nodes.size() && s.cells[k].level - root_level <= deepest) ++k;
+        return k;
+    }
+
+    /// The discs of brick b's LOD prefix (count() gave its size) into out.lod_nodes, its entry into
+    /// out.lod_table: each reference's sums go to its leaf's deepest prefix ancestor, then up the
+    /// prefix; each disc's radius covers every splat disc below its node.
+    void encode_lod_prefix(std::size_t b, const pool::BrickHeader& h, Scratch& s) const {
+        pool::BrickLod& lt = m_out.lod_table[b];
+        const std::uint32_t k = lt.node_count;
+        s.lod_sum.assign(k, LodSum{});
+        s.lod_any.assign(k, LodSum{});
+        const auto prefix_ancestor = [&](std::uint32_t n) {
+            while (n >= k) n = s.parent[n];
+            return n;
+        };
+        for (std::size_t l = 0; l < s.leaves.size(); ++l) {
+            const std::uint32_t n = prefix_ancestor(s.leaves[l].second);
+            for (std::uint32_t r = s.leaf_info[l]; r < s.leaf_info[l + 1]; ++r) {
+                const pool::Splat& sp = *s.splats[r];
+                const pool::Rgba8 col = color(sp);
+                const double w = std::max(k_pi * double(sp.radius) * sp.radius, 1e-300);
+                const double p[3] = {sp.position.x, sp.position.y, sp.position.z};
+                const double nn[3] = {sp.normal.x, sp.normal.y, sp.normal.z};
+                const double c[3] = {double(col.r), double(col.g), double(col.b)};
+                s.lod_any[n].add_point(w, p, nn, c);
+                if (s.centre[r]) s.lod_sum[n].add_point(w, p, nn, c);
+            }
+        }
+        for (std::uint32_t i = k; i-- > 1;) {  // children after their parent
+            s.lod_sum[s.parent[i]].add(s.lod_sum[i]);
+            s.lod_any[s.parent[i]].add(s.lod_any[i]);
+        }
+        s.lod_disc.assign(k, pool::LodSplat{});
+        s.lod_cover.assign(k, -1.0);
+        for (std::uint32_t i = 0; i < k; ++i)
+            if (s.lod_any[i].w > 0)
+                s.lod_disc[i] = lod_from_sum(s.lod_sum[i].w > 0 ? s.lod_sum[i] : s.lod_any[i]);
+        for (std::size_t l = 0; l < s.leaves.size(); ++l) {
+            const std::uint32_t n0 = prefix_ancestor(s.leaves[l].second);
+            for (std::uint32_t r = s.leaf_info[l]; r < s.leaf_info[l + 1]; ++r) {
+                const pool::Splat& sp = *s.splats[r];
+                for (std::uint32_t n = n0;; n = s.parent[n]) {
+                    s.lod_cover[n] =
+                        std::max(s.lod_cover[n], distance(sp.position, s.lod_disc[n].position) + sp.radius);
+                    if (n == 0) break;
+                }
+            }
+        }
+        float max_radius = 0;
+        for (std::uint32_t i = 0; i < k; ++i) {
+            s.lod_disc[i].radius = s.lod_cover[i] > 0 ? round_up(s.lod_cover[i]) : 0.0f;
+            max_radius = std::max(max_radius, s.lod_disc[i].radius);
+        }
+        for (int ax = 0; ax < 3; ++ax) lt.quant_min[ax] = h.quant_min[ax];
+        lt.quant_size = h.quant_size;
+        lt.radius_log2_min = pool::radius_log2_min_for(max_radius, h.quant_size);
+        pool::BrickHeader dh = h;  // the discs' decode cube: the brick's, with their own exponent
+        dh.radius_log2_min = lt.radius_log2_min;
+        for (std::uint32_t i = 0; i < k; ++i) {
+            m_out.lod_nodes[lt.first + i] = s.nodes[i];
+            pool::CompressedSplat& disc = m_out.lod_discs[lt.first + i];
+            disc = pool::CompressedSplat{};
+            const pool::LodSplat& d = s.lod_disc[i];
+            if (d.radius > 0 && !pool::encode_splat(d.position, d.radius, d.normal, d.color, dh, &disc))
+                throw Error("brick " + std::to_string(b) + ": LOD disc radius " + std::to_string(d.radius) +
+                            " not representable (internal error)");
+        }
+    }
+
     pool::Rgba8 color(const pool::Splat& sp) const {
         return sp.point < m_colors.size() ? m_colors[sp.point] : pool::Rgba8{255, 255, 255, 255};
     }
@@ -342,6 +455,7 @@ private:
     /// The brick's nodes (breadth first from 0), leaf ranges, references and distinct splats into `s`.
     void gather(std::uint32_t top_node, Scratch& s) const {
         s.src.assign(1, m_cut.src[top_node]);
+        s.parent.assign(1, 0);
         s.cells.assign(1, NodeCell{m_cut.level[top_node],
                                    {m_cut.cell[3 * top_node], m_cut.cell[3 * top_node + 1],
                                     m_cut.cell[3 * top_node + 2]}});
@@ -355,6 +469,7 @@ private:
                     s.nodes.push_back(pool::make_node(NodeType::internal, std::uint32_t(s.src.size())));
                     for (std::uint32_t c = 0; c < 8; ++c) {
                         s.src.push_back(a + c);
+                        s.parent.push_back(std::uint32_t(i));
                         const NodeCell& pc = s.cells[i];
                         s.cells.push_back(NodeCell{pc.level + 1,
                                                    {2 * pc.cell[0] + (c & 1u), 2 * pc.cell[1] + (c >> 1 & 1u),
@@ -450,6 +565,7 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, std::uint32
     info.top_node_count = std::uint32_t(out.top_nodes.size());
     info.brick_splat_limit = limit;
     info.flags = pool::k_bricks_indexed | (colors ? pool::k_bricks_colors : 0u) |
+                 (!out.lod_table.empty() ? pool::k_bricks_lod : 0u) |
                  ((oi.flags & pool::k_octree_culled) ? pool::k_bricks_culled : 0u) |
                  ((oi.flags & pool::k_octree_replicated) ? pool::k_bricks_replicated : 0u);
     info.unique_splats = oi.unique_splats;
@@ -467,6 +583,7 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, std::uint32
     stats.max_brick_splats = info.max_brick_splats;
     stats.splats = info.splat_count;
     stats.encoded = info.encoded_splats;
+    stats.lod_nodes = out.lod_nodes.size();
     stats.data_bytes = out.data.size();
     return stats;
 }
@@ -485,12 +602,13 @@ BrickPart build_brick_part(const pool::SplatOctreeSections& octree, std::span<co
     const std::size_t bricks = cut.brick_top.size();
     const unsigned threads = resolve_threads(params.threads);
     const BrickEncoder encoder(octree, colors, cut, out);
-    std::vector<std::uint32_t> encoded(bricks);
+    std::vector<BrickCounts> counts(bricks);
     parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {  // 3a
         BrickEncoder::Scratch scratch;
-        for (std::size_t b = begin; b < end; ++b) encoded[b] = encoder.count(cut.brick_top[b], scratch);
+        for (std::size_t b = begin; b < end; ++b)
+            counts[b] = encoder.count(cut.brick_top[b], params.lod_splats, scratch);
     });
-    lay_out_bricks(cut, sub, octree.info, encoded, out);
+    lay_out_bricks(cut, sub, octree.info, counts, params.lod_splats > 0, out);
     part.sums.assign(out.top_nodes.size(), LodSum{});
     out.lod.assign(out.top_nodes.size(), pool::LodSplat{});
     std::vector<CodecError> errors(threads);
@@ -528,11 +646,24 @@ BrickedOctree build_bricks(const pool::SplatOctreeSections& octree, std::span<co
 }
 
 void add_brick_sections(BrickedOctree bricks, pool::PoolWriter& writer) {
+    writer.add_array(pool::SectionType::brick_data, std::move(bricks.data));
+    add_brick_index_sections(std::move(bricks), writer);
+}
+
+void add_brick_index_sections(BrickedOctree bricks, pool::PoolWriter& writer) {
     writer.add_array(pool::SectionType::brick_info, std::vector<pool::BrickInfo>{bricks.info});
     writer.add_array(pool::SectionType::brick_top_nodes, std::move(bricks.top_nodes));
     writer.add_array(pool::SectionType::brick_table, std::move(bricks.table));
-    writer.add_array(pool::SectionType::brick_data, std::move(bricks.data));
     writer.add_array(pool::SectionType::lod_splats, std::move(bricks.lod));
+    if (!bricks.lod_table.empty()) {
+        writer.add_array(pool::SectionType::brick_lod, std::move(bricks.lod_table));
+        writer.add_array(pool::SectionType::lod_nodes, std::move(bricks.lod_nodes));
+        writer.add_array(pool::SectionType::lod_discs, std::move(bricks.lod_discs));
+    } else {
+        for (const pool::SectionType t :
+             {pool::SectionType::brick_lod, pool::SectionType::lod_nodes, pool::SectionType::lod_discs})
+            writer.remove(t);
+    }
 }
 
 }  // namespace prt::pre

@@ -1,8 +1,9 @@
 // PointRT preprocess: the brick builder (issue 17). Cuts a splat octree (prt-octree, prt-cull) into
 // a small resident top tree and bricks (subtrees of at most N splats, replicas counted), compresses
 // each brick's splats to 12 bytes (codec in formats/include/prt/formats/brick_layout.h) and computes
-// a level-of-detail disc per top node. Produces exactly the pool sections brick_info,
-// brick_top_nodes, brick_table, brick_data, lod_splats.
+// a level-of-detail disc per top node and per node of each brick's top levels. Produces exactly the
+// pool sections brick_info, brick_top_nodes, brick_table, brick_data, lod_splats (and brick_lod,
+// lod_nodes).
 #pragma once
 
 #include <cstdint>
@@ -23,6 +24,10 @@ struct BrickParams {
     /// middle of the issue's 64k-512k range; an upload of that size is well above the PCIe latency
     /// knee, and a 100M-splat model gets about 800 bricks.
     std::uint32_t brick_splats = 131072;
+    /// M of each brick's level-of-detail prefix (sections brick_lod, lod_nodes): the brick's top
+    /// levels down to the deepest whose non-empty nodes hold at least M splat references on average,
+    /// each node with a compressed disc. 0: no prefix (a ray then stops only at top nodes).
+    std::uint32_t lod_splats = 32;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
     /// Progress of the encoding, called from the calling thread with (bricks done, bricks); may be empty.
     std::function<void(std::uint64_t, std::uint64_t)> progress;
@@ -46,6 +51,8 @@ struct BrickStats {
     std::uint32_t min_brick_splats = 0, max_brick_splats = 0;
     std::uint64_t splats = 0, data_bytes = 0;
     std::uint64_t encoded = 0;  ///< compressed splats (each splat once per brick)
+    std::uint64_t lod_nodes =
+        0;  ///< nodes of the bricks' LOD prefixes (16 B each with their discs, resident when streaming)
     CodecError error;
     double seconds = 0;
 };
@@ -57,6 +64,9 @@ struct BrickedOctree {
     std::vector<pool::BrickEntry> table;
     std::vector<std::byte> data;
     std::vector<pool::LodSplat> lod;
+    std::vector<pool::BrickLod> lod_table;  ///< per brick (BrickParams::lod_splats > 0), else empty
+    std::vector<std::uint32_t> lod_nodes;
+    std::vector<pool::CompressedSplat> lod_discs;  ///< parallel to lod_nodes
 };
 
 /// Builds the bricks of `octree`; `colors` (per point, may be empty: white) gives the splats'
@@ -105,7 +115,9 @@ BrickPart build_brick_part(const pool::SplatOctreeSections& octree, std::span<co
 BrickStats finish_bricks(BrickedOctree& out, std::vector<LodSum>& sums, const pool::OctreeInfo& octree_info,
                          std::uint32_t top_depth, const BrickParams& params, bool colors);
 
-/// Adds (replacing) the five brick sections to a writer.
+/// Adds (replacing) the brick sections to a writer (five, eight with the LOD prefixes).
 void add_brick_sections(BrickedOctree bricks, pool::PoolWriter& writer);
+/// The same but brick_data (bricks.data is ignored: the caller adds brick_data, e.g. from a spill file).
+void add_brick_index_sections(BrickedOctree bricks, pool::PoolWriter& writer);
 
 }  // namespace prt::pre

@@ -315,6 +315,9 @@ private:
         std::vector<pool::BrickEntry> table;  // offset: into m_payloads
         std::vector<pool::LodSplat> lod;
         std::vector<LodSum> sums;
+        std::vector<pool::BrickLod> lod_table;  // first: into lod_nodes
+        std::vector<std::uint32_t> lod_nodes;
+        std::vector<pool::CompressedSplat> lod_discs;
     };
 
     void build_cells(PointBrickStats& stats) {
@@ -381,7 +384,9 @@ private:
             for (pool::BrickEntry& entry : part.bricks.table) entry.offset += base;
             stats.brick_seconds += tool::now_seconds() - t0;
             m_cells[c] = CellBricks{std::move(part.bricks.top_nodes), std::move(part.bricks.table),
-                                    std::move(part.bricks.lod), std::move(part.sums)};
+                                    std::move(part.bricks.lod),       std::move(part.sums),
+                                    std::move(part.bricks.lod_table), std::move(part.bricks.lod_nodes),
+                                    std::move(part.bricks.lod_discs)};
             stats.cell_records += e - b;
         }
         report("building cells", records_total, records_total);
@@ -453,6 +458,19 @@ private:
             br.table[b] = e;
             offset +=
                 (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
+        }
+        if (m_params.bricks.lod_splats > 0) {  // the LOD prefixes in brick order
+            br.lod_table.resize(brick_src.size());
+            for (std::size_t b = 0; b < brick_src.size(); ++b) {
+                const CellBricks& cb = m_cells[brick_src[b].first];
+                pool::BrickLod l = cb.lod_table[brick_src[b].second];
+                const auto nodes = std::span(cb.lod_nodes).subspan(l.first, l.node_count);
+                const auto discs = std::span(cb.lod_discs).subspan(l.first, l.node_count);
+                l.first = br.lod_nodes.size();
+                br.lod_table[b] = l;
+                br.lod_nodes.insert(br.lod_nodes.end(), nodes.begin(), nodes.end());
+                br.lod_discs.insert(br.lod_discs.end(), discs.begin(), discs.end());
+            }
         }
         for (std::size_t t = 0; t < br.top_nodes.size(); ++t)
             if (pool::node_type(br.top_nodes[t]) == pool::NodeType::brick)

@@ -13,6 +13,9 @@
 
 namespace {
 
+/// Bytes of one LOD prefix node: its word (lod_nodes) and its disc (lod_discs).
+constexpr std::uint64_t k_lod_node_bytes = sizeof(std::uint32_t) + sizeof(prt::pool::CompressedSplat);
+
 constexpr const char* k_description =
     "Cuts INPUT's splat octree (prt-octree, prt-cull) into a small resident top tree and bricks: "
     "greedily from the root, a node whose subtree holds at most --brick-splats stored splats "
@@ -112,16 +115,14 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     }
     pool::PoolWriter& writer = step.writer();
     pre::BrickedOctree& b = built.bricks;
-    writer.add_array(pool::SectionType::brick_info, std::vector<pool::BrickInfo>{b.info});
-    writer.add_array(pool::SectionType::brick_top_nodes, std::move(b.top_nodes));
-    writer.add_array(pool::SectionType::brick_table, std::move(b.table));
+    pre::add_brick_index_sections(std::move(b), writer);
     auto data = std::make_shared<pre::SpillFile>(std::move(built.data));
     writer.add_view(pool::SectionType::brick_data, 1, built.data_bytes,
                     {data->data(), static_cast<std::size_t>(built.data_bytes)},
                     std::shared_ptr<const void>(data, data->data()), true);
-    writer.add_array(pool::SectionType::lod_splats, std::move(b.lod));
     const std::uint64_t point_bytes = drop_points(step, keep_points);
     const nlohmann::json parameters = {{"brick_splats", p.bricks.brick_splats},
+                                       {"lod_splats", p.bricks.lod_splats},
                                        {"leaf_size", p.octree.max_leaf_splats},
                                        {"max_depth", p.octree.max_depth},
                                        {"min_cell", p.octree.min_cell_ratio},
@@ -139,10 +140,11 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         stats.cells, stats.partition_depth, ull(stats.max_cell_points),
         double(stats.cell_records) * per_point, ull(stats.stored_splats), ull(stats.culled_splats));
     step.note(
-        "prt-bricks: %u bricks, top tree %u nodes (depth %u); %llu encoded splats (%.2f per point); pool "
-        "%.2f B per point%s",
+        "prt-bricks: %u bricks, top tree %u nodes (depth %u); %llu encoded splats (%.2f per point); LOD "
+        "prefixes %llu nodes (%.2f B per point); pool %.2f B per point%s",
         stats.bricks.bricks, stats.bricks.top_nodes, stats.bricks.top_depth, ull(stats.bricks.encoded),
-        double(stats.bricks.encoded) * per_point, double(bytes) * per_point,
+        double(stats.bricks.encoded) * per_point, ull(stats.bricks.lod_nodes),
+        double(stats.bricks.lod_nodes * k_lod_node_bytes) * per_point, double(bytes) * per_point,
         point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
     const double seconds = step.seconds();
     step.note(
@@ -165,6 +167,8 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                       {"bricks", stats.bricks.bricks},
                       {"top_nodes", stats.bricks.top_nodes},
                       {"encoded_splats", stats.bricks.encoded},
+                      {"lod_nodes", stats.bricks.lod_nodes},
+                      {"lod_bytes", stats.bricks.lod_nodes * k_lod_node_bytes},
                       {"brick_data_bytes", built.data_bytes},
                       {"pool_bytes_after", bytes},
                       {"pool_bytes_per_point", double(bytes) * per_point},
@@ -218,8 +222,10 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
                                           pool::SectionType::leaf_info, pool::SectionType::splats})
             writer.remove(t);
     const std::uint64_t point_bytes = drop_points(step, keep_points);
-    const nlohmann::json parameters = {
-        {"brick_splats", params.brick_splats}, {"keep_float", keep_float}, {"keep_points", keep_points}};
+    const nlohmann::json parameters = {{"brick_splats", params.brick_splats},
+                                       {"lod_splats", params.lod_splats},
+                                       {"keep_float", keep_float},
+                                       {"keep_points", keep_points}};
     const std::uint64_t bytes = step.write(parameters);
 
     const pre::CodecError& e = stats.error;
@@ -229,10 +235,11 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
     const double per_point = 1.0 / double(points ? points : 1);
     step.note(
         "prt-bricks: %u bricks (%u to %u splat references), top tree %u nodes (depth %u); %llu references "
-        "to %llu encoded splats (%.2f and %.2f per point)",
+        "to %llu encoded splats (%.2f and %.2f per point); LOD prefixes %llu nodes (%.2f B per point)",
         stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.top_nodes, stats.top_depth,
         ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point,
-        double(stats.encoded) * per_point);
+        double(stats.encoded) * per_point, ull(stats.lod_nodes),
+        double(stats.lod_nodes * k_lod_node_bytes) * per_point);
     step.note(
         "prt-bricks: splats %.1f -> %.1f MiB (%.2f B per point with nodes, leaf ranges and references); "
         "pool %.1f -> %.1f MiB (%.2f B per point)%s",
@@ -259,6 +266,8 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
                       {"max_brick_splats", stats.max_brick_splats},
                       {"splats", stats.splats},
                       {"encoded_splats", stats.encoded},
+                      {"lod_nodes", stats.lod_nodes},
+                      {"lod_bytes", stats.lod_nodes * k_lod_node_bytes},
                       {"points", points},
                       {"point_section_bytes_dropped", point_bytes},
                       {"pool_bytes_per_point", double(bytes) * per_point},
@@ -291,6 +300,12 @@ int main(int argc, char** argv) {
                    "N: a node whose subtree holds at most N stored splats (replicas counted) becomes a "
                    "brick")
                 ->check(CLI::Range(1u, 0xFFFFFFFFu))
+                ->capture_default_str();
+            app.add_option("--lod-splats", params.lod_splats,
+                           "M: each brick's level-of-detail prefix (sections brick_lod, lod_nodes, resident "
+                           "when streaming) holds its top levels down to the deepest whose non-empty nodes "
+                           "hold >= M splat references on average, a compressed disc per node; rays stop at "
+                           "a node below a pixel (prt-play --lod-pixels). 0: no prefix")
                 ->capture_default_str();
             app.add_flag(
                 "--keep-float", keep_float,

@@ -35,6 +35,13 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
                    "leaving a surface skip it), 2 cones and slabs. The image is the same; for comparisons")
         ->check(CLI::Range(0u, 2u));
     app.add_option(
+           "--lod-pixels", o.lod_pixels,
+           "Bricked pools (prt-bricks): a ray stops at an octree node whose cell is at most this many "
+           "pixels wide where the ray enters it, and meets the node's level-of-detail disc instead of "
+           "its splats (a streamed view then needs no brick for its far parts). 0: always the splats")
+        ->check(CLI::Range(0.0f, 64.0f))
+        ->capture_default_str();
+    app.add_option(
            "--surface", o.surface,
            "Trace every model as this surface: splats (thesis 3), iso (thesis 4), mls (WS05), patches "
            "(seed 002) or auto (what each pool holds); default: each model's scene setting, and auto "
@@ -161,6 +168,7 @@ void apply(const RenderOverrides& o, core::RenderParams& p) {
     p.blend_window = o.blend_window;
     p.max_steps = o.max_steps;
     p.leaf_culling = o.leaf_culling;
+    p.lod_pixels = o.lod_pixels;
 }
 
 rt::BackendOptions backend_options(const BackendChoice& b) {

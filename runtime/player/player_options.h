@@ -25,6 +25,7 @@ struct RenderOverrides {
     float blend_window = 1.0f;
     std::uint32_t max_steps = 1u << 16;
     std::uint32_t leaf_culling = 2;  ///< core::LeafCulling
+    float lod_pixels = 1.0f;         ///< core::RenderParams::lod_pixels
     // Surfaces (issue 9's accuracy knobs); 0 / -1 keep the core's defaults.
     std::string surface;                 ///< rt::LoadOptions::surface ("" keeps the scene's)
     std::string point_colors;            ///< rt::LoadOptions::point_colors ("" keeps the materials')

@@ -53,19 +53,23 @@ protected:
         c.width = c.height = k_size;
     }
 
-    static rt::FrameRequest request(const rt::RenderScene& rs) {
-        return rt::FrameRequest{
-            .camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size};
+    /// The scene's frame, rays stopping at level-of-detail discs `lod_pixels` wide (0: never).
+    static rt::FrameRequest request(const rt::RenderScene& rs, float lod_pixels = 0.0f) {
+        rt::FrameRequest r{.camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size};
+        r.params.lod_pixels = lod_pixels;
+        return r;
     }
 
-    /// The in-core image at `angle` (RenderScene loads and checks every brick, as without streaming).
-    static rt::Image in_core(double angle, rt::FrameStats* stats = nullptr, const std::string& kind = "cpu") {
+    /// The in-core image at `angle` (RenderScene loads and checks every brick, as without streaming);
+    /// a negative angle: the default view, the whole sphere.
+    static rt::Image in_core(double angle, rt::FrameStats* stats = nullptr, const std::string& kind = "cpu",
+                             float lod_pixels = 0.0f) {
         rt::RenderScene rs = rt::RenderScene::from_pool(s_pool);
-        close_view(rs, angle);
+        if (angle >= 0) close_view(rs, angle);
         auto backend = rt::make_backend(kind);
         backend->set_scene(rs.view());
         rt::Image img;
-        const rt::FrameStats s = backend->render(request(rs), img);
+        const rt::FrameStats s = backend->render(request(rs, lod_pixels), img);
         if (stats) *stats = s;
         return img;
     }
@@ -77,8 +81,8 @@ protected:
     }
 
     /// The budget's terms, redone from the brick table: the always-resident bytes (top tree,
-    /// table, LOD discs, four per-brick tables), the largest brick's block and all blocks (a block:
-    /// the payload and its leaf bounds, each rounded up to 64 bytes).
+    /// table, LOD discs and prefixes, four per-brick tables), the largest brick's block and all blocks (a
+    /// block: the payload and its leaf bounds, each rounded up to 64 bytes).
     struct Terms {
         std::uint64_t fixed = 0, largest = 0, all = 0;
         std::uint32_t bricks = 0;
@@ -95,6 +99,7 @@ protected:
         }
         t.bricks = s.info.brick_count;
         t.fixed = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes() +
+                  s.lod_table.size_bytes() + s.lod_nodes.size_bytes() + s.lod_discs.size_bytes() +
                   std::uint64_t{t.bricks} * (sizeof(void*) + 12);
         return t;
     }
@@ -147,12 +152,13 @@ struct Converged {
     rt::StreamFrame last;
 };
 inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickStream& stream,
-                          std::uint32_t max_passes = 400) {
+                          std::uint32_t max_passes = 400, float lod_pixels = 0.0f) {
     Converged c;
     for (; c.passes < max_passes;) {
-        const rt::FrameStats s = backend.render(
-            rt::FrameRequest{.camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size},
-            c.image);
+        rt::FrameRequest request{
+            .camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size};
+        request.params.lod_pixels = lod_pixels;
+        const rt::FrameStats s = backend.render(request, c.image);
         const rt::StreamFrame f = stream.after_frame(s);
         EXPECT_LE(s.fallbacks, s.rays()) << "fallbacks count rays";
         if (c.passes++ == 0) c.first_fallbacks = s.fallbacks;

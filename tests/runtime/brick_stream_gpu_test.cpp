@@ -65,6 +65,31 @@ TEST_F(BrickStreamGpuTest, ConvergesToTheInCoreImage) {
     EXPECT_LT(differ, cpu_ref.rgba8.size() / 50) << "channels differing from the CPU by more than 8 of 255";
 }
 
+TEST_F(BrickStreamGpuTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
+    // As on the CPU (brick_stream_test.cpp): the whole sphere with rays stopping at discs six pixels
+    // wide converges under 40 % of the bricks to the CUDA in-core image with the same stop, which
+    // agrees with the CPU's (the stop level comes from float exponent bits: the same on both).
+    const Terms t = budget_terms();
+    const rt::Image ref = in_core(-1.0, nullptr, "cuda", 6.0f);
+    const rt::Image cpu_ref = in_core(-1.0, nullptr, "cpu", 6.0f);
+    rt::RenderScene rs = deferred();
+    auto backend = rt::make_backend("cuda");
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
+    const Converged c = converge(rs, *backend, stream, 50, 6.0f);
+    ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last);
+    EXPECT_GT(c.uploaded, 0u);
+    EXPECT_LT(c.uploaded, t.bricks / 2);
+    EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the CUDA in-core image, byte for byte";
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < cpu_ref.rgba8.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            const int a = int((cpu_ref.rgba8[i] >> (8 * ch)) & 255u),
+                      b = int((c.image.rgba8[i] >> (8 * ch)) & 255u);
+            differ += std::abs(a - b) > 8;
+        }
+    EXPECT_LT(differ, cpu_ref.rgba8.size() / 50) << "channels differing from the CPU by more than 8 of 255";
+}
+
 TEST_F(BrickStreamGpuTest, AMovingCameraEvictsAndStillConverges) {
     const Terms t = budget_terms();
     rt::RenderScene rs = deferred();

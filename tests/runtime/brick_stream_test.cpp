@@ -106,6 +106,30 @@ TEST_F(BrickStreamTest, ABudgetSmallerThanTheViewStalls) {
     EXPECT_GT(f.needed, f.resident_bricks);
 }
 
+/// Level of detail: the whole sphere (the default view) needs more bricks than 40 % of them, so it
+/// stalls; with rays stopping at discs six pixels wide it needs a few bricks (those whose prefixes
+/// are too coarse for the front of the sphere) and converges to the in-core image with the same
+/// stop, byte for byte.
+TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
+    const Terms t = budget_terms();
+    const rt::Image ref = in_core(-1.0, nullptr, "cpu", 6.0f);
+    auto backend = cpu::make_cpu_backend(2);
+    rt::RenderScene exact = deferred();
+    rt::BrickStream exact_stream(exact, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
+    const Converged without = converge(exact, *backend, exact_stream, 50, 0.0f);
+    EXPECT_FALSE(without.converged) << "the whole sphere's bricks do not fit";
+    rt::RenderScene rs = deferred();
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
+    const Converged c = converge(rs, *backend, stream, 50, 6.0f);
+    ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
+                             << c.last.needed;
+    EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the in-core image with the same stop";
+    EXPECT_LT(c.uploaded, without.last.needed) << "the far parts need no brick";
+    EXPECT_GT(c.uploaded, 0u) << "the near parts do";
+    std::printf("  without LOD: %u bricks needed; with: converged in %u passes, %u uploads of %u bricks\n",
+                without.last.needed, c.passes, c.uploaded, t.bricks);
+}
+
 /// Below the always-resident part and the largest brick: one line with the minimum.
 TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
     const Terms t = budget_terms();

@@ -82,7 +82,7 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds));
     // Bricks (issue 17), in core: every brick uploaded, so the resident table and the request
     // flags are dropped (null: every brick at data + offset). Streamed bricks (a host resident
-    // table: rt::BrickStream): only the top tree, table and LOD discs here; brick data, leaf bounds
+    // table: rt::BrickStream): only the top tree, table, LOD discs and prefixes here; brick data, leaf bounds
     // and the per-brick tables are the brick storage's (cuda_brick_storage.cpp), which sets them.
     core::BrickView& b = mv.bricks;
     const bool streamed = b.resident != nullptr;
@@ -90,6 +90,9 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(b.table, std::size_t{b.brick_count} * sizeof(pool::BrickEntry));
     f(b.data, streamed ? 0 : static_cast<std::size_t>(b.data_bytes));
     f(b.lod, std::size_t{b.top_node_count} * sizeof(pool::LodSplat));
+    f(b.lod_table, b.lod_table ? std::size_t{b.brick_count} * sizeof(pool::BrickLod) : 0);
+    f(b.lod_nodes, b.lod_nodes ? std::size_t{b.lod_node_count} * 4 : 0);
+    f(b.lod_discs, b.lod_discs ? std::size_t{b.lod_node_count} * sizeof(pool::CompressedSplat) : 0);
     // (leaf_bounds' size is read from the host's leaf_bounds_first: that one goes after it)
     const std::size_t brick_leaves =
         b.leaf_bounds_first && !streamed ? b.leaf_bounds_first[b.brick_count] : 0;

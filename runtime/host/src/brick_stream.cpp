@@ -339,7 +339,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             Upload& u = uploads[i];
             const Model& m = *u.model;
             const pool::BrickEntry& e = m.sections.table[u.brick];
-            pool::validate_brick(*m.pool, m.sections.info, e, u.brick, m.sections.payload(u.brick));
+            pool::validate_brick(*m.pool, m.sections, u.brick, m.sections.payload(u.brick));
             u.bounds = build_one_brick_leaf_bounds(
                 e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
         }

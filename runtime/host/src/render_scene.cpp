@@ -107,11 +107,15 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
 /// material ids do not apply (said once).
 void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::string>& warnings, bool defer) {
     const pool::BrickSections s = defer ? pool::validate_brick_index(pf) : pool::validate_bricks(pf);
-    lm.view.bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
-                                           reinterpret_cast<const unsigned char*>(s.data.data()),
-                                           s.data.size(), s.lod.data());
+    lm.view.bricks = core::make_brick_view(
+        s.info, s.top_nodes.data(), s.table.data(), reinterpret_cast<const unsigned char*>(s.data.data()),
+        s.data.size(), s.lod.data(), s.lod_table.empty() ? nullptr : s.lod_table.data(),
+        s.lod_table.empty() ? nullptr : s.lod_nodes.data(),
+        s.lod_table.empty() ? nullptr : s.lod_discs.data(), static_cast<std::uint32_t>(s.lod_nodes.size()));
     lm.bricks_deferred = defer;
-    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes();
+    // the resident index: top tree, table, top discs and the bricks' LOD prefixes
+    lm.bytes = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes() +
+               s.lod_table.size_bytes() + s.lod_nodes.size_bytes() + s.lod_discs.size_bytes();
     if (!defer) {
         // Leaf bounds over the decoded splats, so rays pass leaves unread as on the float path.
         lm.leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);

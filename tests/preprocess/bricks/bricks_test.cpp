@@ -291,11 +291,11 @@ TEST_F(Bricks, CorruptedBrickIsRefusedNamingIt) {
     const pool::BrickSections s = pool::validate_brick_index(bad);
     for (std::uint32_t b = 0; b < s.table.size(); ++b)
         if (b != victim) {
-            EXPECT_NO_THROW(pool::validate_brick(bad, s.info, s.table[b], b, s.payload(b)));
+            EXPECT_NO_THROW(pool::validate_brick(bad, s, b, s.payload(b)));
         }
     // a brick read alone with a wrong length
     EXPECT_NE(error_of([&] {
-                  pool::validate_brick(bad, s.info, s.table[1], 1, s.payload(1).first(40));
+                  pool::validate_brick(bad, s, 1, s.payload(1).first(40));
               }).find("brick 1: 40 bytes but its entry says"),
               std::string::npos);
 }
@@ -319,8 +319,7 @@ TEST_F(Bricks, StreamingOpenDefersTheBrickChecksumsToEachBrick) {
     const PoolFile pool = PoolFile::from_bytes(bytes, "disk.pool", streaming);
     const pool::BrickSections s = pool::validate_brick_index(pool);
     for (std::uint32_t b = 0; b < s.table.size(); ++b) {
-        const std::string e =
-            error_of([&] { pool::validate_brick(pool, s.info, s.table[b], b, s.payload(b)); });
+        const std::string e = error_of([&] { pool::validate_brick(pool, s, b, s.payload(b)); });
         EXPECT_EQ(e, b == victim ? "disk.pool: section brick_data: brick 3: checksum mismatch" : "") << b;
     }
     // Deferring skips brick_data only: a flipped byte in any other section is still refused at open.
@@ -509,3 +508,72 @@ TEST_F(BricksTool, BadInputWritesNothing) {
 }
 
 }  // namespace
+
+// ---- LOD prefixes (brick_lod, lod_nodes, lod_discs) ------------------------------------------------
+
+/// The pool with its LOD prefix sections changed (`keep`: whether they stay in the pool).
+PoolFile modified_lod(
+    const PoolFile& good, bool keep,
+    const std::function<void(std::vector<pool::BrickLod>&, std::vector<std::uint32_t>&)>& change) {
+    const pool::BrickSections s = pool::validate_bricks(good);
+    std::vector<pool::BrickLod> table(s.lod_table.begin(), s.lod_table.end());
+    std::vector<std::uint32_t> nodes(s.lod_nodes.begin(), s.lod_nodes.end());
+    change(table, nodes);
+    pool::PoolWriter w;
+    w.carry_over(good);
+    if (keep) {
+        w.add_array(SectionType::brick_lod, std::move(table));
+        w.add_array(SectionType::lod_nodes, std::move(nodes));
+    } else {
+        w.remove(SectionType::lod_nodes);
+    }
+    return PoolFile::from_bytes(w.serialize(), "bad.pool");
+}
+
+TEST_F(Bricks, LodPrefixesAreValidatedNamingTheBrick) {
+    const pool::BrickSections good = pool::validate_bricks(*s_bricked);
+    ASSERT_EQ(good.lod_table.size(), good.table.size()) << "prt-bricks writes LOD prefixes by default";
+    ASSERT_NE(good.info.flags & pool::k_bricks_lod, 0u);
+    // one of the three sections missing
+    EXPECT_EQ(error_of([&] { pool::validate_bricks(modified_lod(*s_bricked, false, [](auto&, auto&) {})); }),
+              "bad.pool: section brick_lod: the LOD prefixes need all of brick_lod, lod_nodes and lod_discs");
+    // a prefix longer than its brick
+    EXPECT_NE(error_of([&] {
+                  pool::validate_bricks(modified_lod(*s_bricked, true, [&](auto& t, auto&) {
+                      t[2].node_count = good.table[2].node_count + 1;
+                  }));
+              }).find("section brick_lod: brick 2: "),
+              std::string::npos);
+    // a node word that is not the brick's: refused by the index (bad address) or by the brick itself
+    const std::uint32_t first = std::uint32_t(good.lod_table[1].first);
+    EXPECT_NE(error_of([&] {
+                  pool::validate_bricks(modified_lod(*s_bricked, true, [&](auto&, auto& n) {
+                      n[first] = pool::make_node(pool::NodeType::internal, 0);  // the root pointing at itself
+                  }));
+              }).find("section lod_nodes: brick 1: prefix node 0: bad node word"),
+              std::string::npos);
+    std::uint32_t victim = 0xffffffffu, at = 0;  // a prefix holding an empty leaf: make it look filled
+    for (std::uint32_t b = 0; b < good.lod_table.size() && victim == 0xffffffffu; ++b)
+        for (std::uint32_t i = 0; i < good.lod_table[b].node_count; ++i)
+            if (pool::node_type(good.lod_nodes[good.lod_table[b].first + i]) == pool::NodeType::empty_leaf &&
+                good.table[b].leaf_count > 0) {
+                victim = b, at = i;
+                break;
+            }
+    ASSERT_NE(victim, 0xffffffffu);
+    const PoolFile bad = modified_lod(*s_bricked, true, [&](auto&, auto& n) {
+        n[good.lod_table[victim].first + at] = pool::make_node(pool::NodeType::filled_leaf, 0);
+    });
+    const pool::BrickSections s = pool::validate_brick_index(bad);  // a plausible word: the index passes
+    EXPECT_EQ(error_of([&] { pool::validate_brick(bad, s, victim, s.payload(victim)); }),
+              "bad.pool: section lod_nodes: brick " + std::to_string(victim) + ": prefix node " +
+                  std::to_string(at) + " differs from the brick's node");
+}
+
+TEST_F(Bricks, LodPrefixesCanBeLeftOut) {
+    const PoolFile none = PoolFile::from_bytes(bricked_bytes(*s_octree, 700, nullptr, true, 0), "none");
+    const pool::BrickSections s = pool::validate_bricks(none);
+    EXPECT_TRUE(s.lod_table.empty());
+    EXPECT_EQ(s.info.flags & pool::k_bricks_lod, 0u);
+    EXPECT_FALSE(none.has(SectionType::lod_discs));
+}

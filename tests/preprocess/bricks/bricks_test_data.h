@@ -51,9 +51,11 @@ inline std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max
 /// The pool with bricks added, float sections kept (so the tests can compare) unless `keep_float`
 /// is false (as prt-bricks without --keep-float).
 inline std::vector<std::byte> bricked_bytes(const pool::PoolFile& in, std::uint32_t brick_splats,
-                                            pre::BrickStats* stats = nullptr, bool keep_float = true) {
+                                            pre::BrickStats* stats = nullptr, bool keep_float = true,
+                                            std::uint32_t lod_splats = pre::BrickParams{}.lod_splats) {
     pre::BrickParams params;
     params.brick_splats = brick_splats;
+    params.lod_splats = lod_splats;
     params.threads = 2;
     pre::BrickedOctree b = pre::build_bricks(pool::splat_octree(in, "test"),
                                              in.array<pool::Rgba8>(pool::SectionType::colors), params, stats);

@@ -71,9 +71,11 @@ std::unique_ptr<Views> make_views(std::vector<std::byte> bytes) {
     v->colors = v->pool->array<pool::Rgba8>(pool::SectionType::colors).data();
     v->sections = pool::validate_bricks(*v->pool);
     const pool::BrickSections& s = v->sections;
-    v->bricks = core::make_brick_view(s.info, s.top_nodes.data(), s.table.data(),
-                                      reinterpret_cast<const unsigned char*>(s.data.data()), s.data.size(),
-                                      s.lod.data());
+    v->bricks = core::make_brick_view(
+        s.info, s.top_nodes.data(), s.table.data(), reinterpret_cast<const unsigned char*>(s.data.data()),
+        s.data.size(), s.lod.data(), s.lod_table.empty() ? nullptr : s.lod_table.data(),
+        s.lod_table.empty() ? nullptr : s.lod_nodes.data(),
+        s.lod_table.empty() ? nullptr : s.lod_discs.data(), std::uint32_t(s.lod_nodes.size()));
     v->brick_bounds = rt::build_brick_leaf_bounds(v->bricks, v->brick_first, 2);
     v->bricks.leaf_bounds = v->brick_bounds.data();
     v->bricks.leaf_bounds_first = v->brick_first.data();
@@ -123,12 +125,13 @@ std::vector<Pixel> render_float(const Views& v, const Grid& g) {
 }
 
 std::vector<Pixel> render_bricks(const core::BrickView& b, const Views& v, const Grid& g,
-                                 core::WalkStats& stats, std::uint32_t culling = core::k_cull_slabs) {
+                                 core::WalkStats& stats, std::uint32_t culling = core::k_cull_slabs,
+                                 core::LodCone cone = {}) {
     std::vector<Pixel> out(g.size * g.size);
     for (std::uint32_t i = 0; i < out.size(); ++i) {
         float rho;
         out[i].hit = core::closest_hit_bricks(b, g.origin(v, i, rho), g.d, false, core::k_inf, k_blend,
-                                              1u << 16, out[i].s, stats, culling);
+                                              1u << 16, out[i].s, stats, culling, cone);
     }
     return out;
 }
@@ -250,7 +253,19 @@ TEST_F(BrickTrace, OneWalkVisitsTheFloatOctreesLeaves) {
 }
 
 TEST_F(BrickTrace, NonResidentBricksFallBackToTheirLodDiscsAndAreRequested) {
-    const Views& v = *s_views;
+    // Without LOD prefixes (a pool of prt-bricks --lod-splats 0): a missing brick is met as its
+    // top-node disc.
+    Views& v = *s_views;
+    const core::BrickView with_prefixes = v.bricks;
+    v.bricks.lod_table = nullptr;
+    v.bricks.lod_nodes = nullptr;
+    v.bricks.lod_discs = nullptr;
+    v.bricks.lod_node_count = 0;
+    struct Restore {
+        Views& v;
+        core::BrickView b;
+        ~Restore() { v.bricks = b; }
+    } restore{v, with_prefixes};
     const Grid g(64);
     core::WalkStats all_st;
     const std::vector<Pixel> all = render_bricks(v.bricks, v, g, all_st);
@@ -420,3 +435,148 @@ TEST(BrickTraceScene, RenderSceneLoadsBrickedPools) {
 }
 
 }  // namespace
+
+// ---- Level of detail (LOD prefixes, the footprint stop) ------------------------------------------
+
+TEST(BrickLod, StopLevelIsTheShallowestCellWithinTheFootprint) {
+    EXPECT_EQ(core::lod_stop_level(0.0f), core::k_no_lod_stop);
+    EXPECT_EQ(core::lod_stop_level(-1.0f), core::k_no_lod_stop);
+    EXPECT_EQ(core::lod_stop_level(std::nanf("")), core::k_no_lod_stop);
+    EXPECT_EQ(core::lod_stop_level(1.0f), 0u);
+    EXPECT_EQ(core::lod_stop_level(1e30f), 0u);
+    for (int k = 0; k < 2000; ++k) {  // 2^-l <= f < 2^-(l-1), against ldexp
+        const float f = std::ldexp(1.0f + float(k % 97) / 97.0f, -(k % 40));
+        const std::uint32_t l = core::lod_stop_level(f);
+        if (f >= 1.0f) {
+            EXPECT_EQ(l, 0u) << f;
+            continue;
+        }
+        EXPECT_LE(std::ldexp(1.0, -int(l)), double(f)) << f;
+        EXPECT_GT(std::ldexp(1.0, -int(l) + 1), double(f)) << f;
+    }
+}
+
+TEST_F(BrickTrace, LodPrefixesAreTheBricksTopLevelsWithCoveringDiscs) {
+    // Checked from each brick's payload alone: the prefix is its nodes of levels 0..D, D the deepest
+    // level whose non-empty nodes hold >= 32 references on average (prt-bricks' default M), its
+    // words copies of the brick's, and each disc's sphere holds every decoded splat disc below it.
+    const pool::BrickSections& s = s_views->sections;
+    ASSERT_EQ(s.lod_table.size(), s.table.size());
+    std::size_t checked = 0, nodes_total = 0;
+    for (std::uint32_t b = 0; b < s.table.size(); ++b) {
+        const pool::BrickView bv = pool::brick_view(s.payload(b));
+        const pool::BrickLod& l = s.lod_table[b];
+        const std::size_t n = bv.nodes.size();
+        std::vector<std::uint32_t> level(n, 0), parent(n, 0);
+        std::vector<std::uint32_t> nonempty;
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t w = bv.nodes[i];
+            if (level[i] >= nonempty.size()) nonempty.resize(level[i] + 1, 0);
+            if (pool::node_type(w) != pool::NodeType::empty_leaf) ++nonempty[level[i]];
+            if (pool::node_type(w) != pool::NodeType::internal) continue;
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                level[pool::node_address(w) + c] = level[i] + 1;
+                parent[pool::node_address(w) + c] = std::uint32_t(i);
+            }
+        }
+        std::uint32_t deepest = 0;
+        while (deepest + 1 < nonempty.size() && nonempty[deepest + 1] * 32ull <= bv.header->splat_count)
+            ++deepest;
+        std::uint32_t k = 0;
+        for (std::size_t i = 0; i < n; ++i) k += level[i] <= deepest;
+        ASSERT_EQ(l.node_count, k) << "brick " << b;
+        for (std::uint32_t i = 0; i < k; ++i) {
+            ASSERT_LE(level[i], deepest) << "the prefix is the top levels, breadth first";
+            ASSERT_EQ(s.lod_nodes[l.first + i], bv.nodes[i]);
+        }
+        nodes_total += k;
+        const double quantum = double(bv.header->quant_size) / pool::k_position_max_code * std::sqrt(3.0);
+        for (std::size_t i = 0; i < n; ++i) {
+            if (pool::node_type(bv.nodes[i]) != pool::NodeType::filled_leaf) continue;
+            const std::uint32_t leaf = pool::node_address(bv.nodes[i]);
+            for (std::uint32_t r = bv.leaf_info[leaf]; r < bv.leaf_info[leaf + 1]; ++r) {
+                const pool::DecodedSplat sp = pool::decode_splat(bv.splats[bv.ref(r)], *bv.header);
+                for (std::uint32_t a = std::uint32_t(i);; a = parent[a]) {
+                    if (a < k) {
+                        const pool::CompressedSplat& c = s.lod_discs[l.first + a];
+                        ASSERT_NE(c.nr >> 20, 0u) << "a node with splats below has a disc";
+                        const pool::DecodedSplat d = pool::decode_lod_disc(c, l);
+                        const double dx = double(sp.position.x) - d.position.x,
+                                     dy = double(sp.position.y) - d.position.y,
+                                     dz = double(sp.position.z) - d.position.z;
+                        EXPECT_LE(std::sqrt(dx * dx + dy * dy + dz * dz) + sp.radius,
+                                  d.radius + 2 * quantum + 0.01 * sp.radius)
+                            << "brick " << b << " node " << a;
+                        ++checked;
+                    }
+                    if (a == 0) break;
+                }
+            }
+        }
+    }
+    EXPECT_GT(checked, s.info.splat_count);
+    EXPECT_LT(nodes_total, s.info.splat_count / 4) << "the prefixes are a small part of the bricks";
+    std::printf("  %zu prefix nodes for %llu references\n", nodes_total,
+                static_cast<unsigned long long>(s.info.splat_count));
+}
+
+TEST_F(BrickTrace, WhereARayStopsNeverDependsOnWhichBricksAreResident) {
+    // For footprints from a quarter of the root cube down to a few leaves: a render with no brick
+    // resident equals the in-core render on every ray that needed no brick (no fallback), and at
+    // the coarse footprints no ray needs one. The LOD hits lie on the sphere within the flatness of
+    // the cells they stopped in. So a streamed view converges to the in-core image.
+    const Views& v = *s_views;
+    const Grid g(64);
+    const std::uint32_t n = v.bricks.brick_count;
+    std::vector<const unsigned char*> none(n, nullptr);
+    std::vector<std::uint32_t> requests(n, 0);
+    core::BrickView empty = v.bricks;
+    empty.resident = none.data();
+    empty.requests = requests.data();
+    core::WalkStats full_st;
+    const std::vector<Pixel> full = render_bricks(v.bricks, v, g, full_st);
+    std::size_t previous_free = g.size * g.size + 1;
+    for (const float fraction : {1.0f / 4, 1.0f / 16, 1.0f / 64, 1.0f / 256}) {
+        const float w = v.bricks.root_size * fraction;
+        SCOPED_TRACE(::testing::Message() << "footprint " << w);
+        const core::LodCone cone{w, 0.0f};
+        core::WalkStats in_core_st;
+        const std::vector<Pixel> in_core =
+            render_bricks(v.bricks, v, g, in_core_st, core::k_cull_slabs, cone);
+        EXPECT_EQ(in_core_st.fallbacks, 0u);
+        std::size_t free = 0, hits = 0;
+        for (std::uint32_t i = 0; i < g.size * g.size; ++i) {
+            float rho;
+            const Vec3 o = g.origin(v, i, rho);
+            core::WalkStats st;
+            core::SplatSample s{};
+            const bool hit = core::closest_hit_bricks(empty, o, g.d, false, core::k_inf, k_blend, 1u << 16, s,
+                                                      st, core::k_cull_slabs, cone);
+            if (st.fallbacks != 0) continue;
+            ++free;
+            ASSERT_EQ(hit, in_core[i].hit) << i;
+            if (!hit) continue;
+            ++hits;
+            ASSERT_EQ(s.t, in_core[i].s.t) << i;
+            ASSERT_EQ(s.normal.x, in_core[i].s.normal.x) << i;
+            ASSERT_EQ(s.color.y, in_core[i].s.color.y) << i;
+            // on the sphere within the sagitta of a cell of the footprint (3 s^2 / 2R) and a splat radius
+            const Vec3 p = o + g.d * s.t;
+            EXPECT_NEAR(core::length(p - v.centre), k_sphere_radius,
+                        1.5 * w * w / k_sphere_radius + 2.0 * v.max_radius + 0.02 * w)
+                << i;
+        }
+        if (fraction >= 1.0f / 4) EXPECT_EQ(free, std::size_t(g.size) * g.size) << "no brick needed";
+        if (fraction >= 1.0f / 64) {
+            EXPECT_GT(hits, 0u);
+            if (PRT_COUNT_WORK)
+                EXPECT_LT(in_core_st.leaves, full_st.leaves) << "coarse stops visit fewer nodes";
+        }
+        EXPECT_LE(free, previous_free) << "finer footprints need more bricks";
+        previous_free = free;
+        std::printf("  footprint %.4f: %zu of %u rays need no brick, %zu hits\n", w, free, g.size * g.size,
+                    hits);
+    }
+    EXPECT_LT(previous_free, std::size_t(g.size) * g.size) << "the finest footprint needs bricks";
+    (void)full;
+}

@@ -21,6 +21,18 @@
 //                                                 however many leaves of the brick hold it
 //   lod_splats (132)       LodSplat[top node count] (32 B), parallel to brick_top_nodes: the
 //                          representative disc of top node i (radius 0 for an empty leaf)
+//   brick_lod (133)        optional, with lod_nodes and lod_discs: BrickLod[brick_count] (32 B):
+//                          brick b's level-of-detail prefix: its first node_count nodes (breadth
+//                          first: the brick's top levels) at lod_nodes[first..], and the cube and
+//                          radius exponent their discs decode with
+//   lod_nodes (134)        uint32: copies of the prefix nodes' words (addresses relative to the brick)
+//   lod_discs (135)        CompressedSplat (12 B), parallel to lod_nodes: the disc of the node's
+//                          subtree (radius code 0: an empty node): centre = area-weighted mean of
+//                          the centres of the points whose centre cell is in the subtree, normal and
+//                          colour their area-weighted means, radius covering every splat disc of the
+//                          subtree. Resident with the top tree, so a ray stops at a node whose
+//                          footprint is below a pixel (bricks.h) with no brick data, and the far
+//                          parts of a view need no brick.
 //
 // CompressedSplat (12 bytes, little-endian):
 //   +0  uint16 q[3]       position: quant_min + q * quant_size / 65535 per axis (round to nearest)
@@ -93,6 +105,8 @@ enum BrickFlags : std::uint32_t {
     /// Leaves reference their splats by index (the layout above). Required: bricks written before
     /// the index (a splat copied into every leaf) are refused, prt-bricks writes them again.
     k_bricks_indexed = 1u << 4,
+    /// The optional sections brick_lod, lod_nodes and lod_discs are present (prt-bricks --lod-splats).
+    k_bricks_lod = 1u << 5,
 };
 
 /// One brick (section brick_table, 64 bytes).
@@ -152,6 +166,23 @@ struct LodSplat {
 };
 static_assert(sizeof(LodSplat) == 32);
 static_assert(offsetof(LodSplat, color) == 28);
+
+/// Brick b's level-of-detail prefix (section brick_lod, 32 bytes): the brick's nodes 0..node_count-1
+/// (its top levels: bricks are numbered breadth first) are lod_nodes[first + i], their discs
+/// lod_discs[first + i]. A prefix node whose
+/// children lie past node_count (or a filled leaf) needs the brick's payload below it. The discs
+/// decode with the brick's quantization cube (BrickHeader::quant_min/quant_size) and their own
+/// radius exponent.
+struct BrickLod {
+    float quant_min[3];            ///< 0: = the brick's BrickHeader::quant_min
+    float quant_size;              ///< 12: = BrickHeader::quant_size
+    std::int32_t radius_log2_min;  ///< 16: exponent of radius code 1 of the discs
+    std::uint32_t node_count;      ///< 20: nodes in the prefix (>= 1, <= the brick's node_count)
+    std::uint64_t first;           ///< 24: index of the brick's first node in lod_nodes and lod_discs
+};
+static_assert(sizeof(BrickLod) == 32);
+static_assert(offsetof(BrickLod, radius_log2_min) == 16);
+static_assert(offsetof(BrickLod, first) == 24);
 
 /// A decoded splat.
 struct DecodedSplat {
@@ -313,15 +344,24 @@ PRT_BRICK_HD inline bool encode_splat(const Float3& position, float radius, cons
     return rc <= k_radius_max_code;
 }
 
-PRT_BRICK_HD inline DecodedSplat decode_splat(const CompressedSplat& s, const BrickHeader& h) {
+/// Decodes a splat quantized in the cube (quant_min, quant_size) with radius exponent log2_min.
+PRT_BRICK_HD inline DecodedSplat decode_splat(const CompressedSplat& s, const float quant_min[3],
+                                              float quant_size, std::int32_t log2_min) {
     DecodedSplat d;
-    d.position = Float3{decode_coordinate(s.q[0], h.quant_min[0], h.quant_size),
-                        decode_coordinate(s.q[1], h.quant_min[1], h.quant_size),
-                        decode_coordinate(s.q[2], h.quant_min[2], h.quant_size)};
-    d.radius = decode_radius(s.nr >> 20, h.quant_size, h.radius_log2_min);
+    d.position = Float3{decode_coordinate(s.q[0], quant_min[0], quant_size),
+                        decode_coordinate(s.q[1], quant_min[1], quant_size),
+                        decode_coordinate(s.q[2], quant_min[2], quant_size)};
+    d.radius = decode_radius(s.nr >> 20, quant_size, log2_min);
     d.normal = decode_octahedral(s.nr & 0xFFFFFu);
     d.color = decode_rgb565(s.color);
     return d;
+}
+PRT_BRICK_HD inline DecodedSplat decode_splat(const CompressedSplat& s, const BrickHeader& h) {
+    return decode_splat(s, h.quant_min, h.quant_size, h.radius_log2_min);
+}
+/// A level-of-detail disc of a brick's prefix.
+PRT_BRICK_HD inline DecodedSplat decode_lod_disc(const CompressedSplat& s, const BrickLod& l) {
+    return decode_splat(s, l.quant_min, l.quant_size, l.radius_log2_min);
 }
 
 }  // namespace prt::pool

@@ -15,10 +15,19 @@ namespace prt::pool {
 /// The brick sections of a pool: views into the mapped file, valid while the PoolFile lives.
 struct BrickSections {
     BrickInfo info{};
-    std::span<const std::uint32_t> top_nodes;  ///< info.top_node_count node words, node 0 the root
-    std::span<const BrickEntry> table;         ///< info.brick_count entries
-    std::span<const std::byte> data;           ///< brick_data: every brick's payload
-    std::span<const LodSplat> lod;             ///< one per top node (parallel to top_nodes)
+    std::span<const std::uint32_t> top_nodes;    ///< info.top_node_count node words, node 0 the root
+    std::span<const BrickEntry> table;           ///< info.brick_count entries
+    std::span<const std::byte> data;             ///< brick_data: every brick's payload
+    std::span<const LodSplat> lod;               ///< one per top node (parallel to top_nodes)
+    std::span<const BrickLod> lod_table;         ///< per brick, or empty (no LOD prefixes)
+    std::span<const std::uint32_t> lod_nodes;    ///< the bricks' LOD prefix node words
+    std::span<const CompressedSplat> lod_discs;  ///< parallel to lod_nodes
+
+    /// Brick b's LOD prefix node words (empty without LOD prefixes).
+    std::span<const std::uint32_t> lod_prefix(std::uint32_t b) const {
+        if (lod_table.empty()) return {};
+        return lod_nodes.subspan(static_cast<std::size_t>(lod_table[b].first), lod_table[b].node_count);
+    }
 
     /// The payload bytes of brick `b` (entry's offset and size; checked by validate_brick_index).
     std::span<const std::byte> payload(std::uint32_t b) const {
@@ -44,7 +53,7 @@ struct BrickView {
 };
 BrickView brick_view(std::span<const std::byte> payload);
 
-/// Whether the pool holds any of the brick sections (128-132).
+/// Whether the pool holds any of the brick sections (128-134).
 bool has_bricks(const PoolFile& pool);
 
 /// Validates the brick sections except the bricks' payloads: all five present together, exactly
@@ -54,8 +63,11 @@ bool has_bricks(const PoolFile& pool);
 /// nodes address every brick exactly once, each entry naming that node, its level and cube; the
 /// table's payloads 64-byte aligned, inside brick_data and not overlapping, of the size their counts
 /// give; splat counts adding up to brick_info's; LOD discs finite; the index layout flag set (bricks
-/// of an older prt-bricks are refused: write them again). Throws prt::Error
-/// "FILE: section NAME: [brick I: ]what is wrong".
+/// of an older prt-bricks are refused: write them again); the optional LOD prefixes (brick_lod,
+/// lod_nodes and lod_discs together, as the k_bricks_lod flag says): one per brick inside lod_nodes, of 1 to
+/// the brick's node count nodes, a finite cube and an exponent in range, node words addressing the brick's
+/// nodes (children after their parent) and leaves, disc normal codes in range. Throws prt::Error "FILE:
+/// section NAME: [brick I: ]what is wrong".
 BrickSections validate_brick_index(const PoolFile& pool);
 
 /// Validates one brick alone (streaming: a brick read or uploaded by itself): `payload` holds the
@@ -63,9 +75,10 @@ BrickSections validate_brick_index(const PoolFile& pool);
 /// quantization cube, the radius exponent in range, its nodes a proper tree of at most
 /// info.depth - entry.level levels whose filled leaves address leaf_info exactly once, leaf_info
 /// monotone and covering the references exactly, every reference naming an encoded splat and every
-/// encoded splat referenced, every octahedral code in range. Throws prt::Error
+/// encoded splat referenced, every octahedral code in range; its LOD prefix (if any) the copy of its
+/// first nodes, with its quantization cube. Throws prt::Error
 /// "FILE: section brick_data: brick I: what is wrong".
-void validate_brick(const PoolFile& pool, const BrickInfo& info, const BrickEntry& entry, std::uint32_t index,
+void validate_brick(const PoolFile& pool, const BrickSections& sections, std::uint32_t index,
                     std::span<const std::byte> payload);
 
 /// validate_brick_index, then validate_brick on every brick.

@@ -75,6 +75,9 @@ inline constexpr SectionTypeInfo k_section_types[] = {
     {SectionType::brick_table,     "brick_table",     1, sizeof(BrickEntry),    false, "prt-bricks"},
     {SectionType::brick_data,      "brick_data",      1, 1,                     false, "prt-bricks"},
     {SectionType::lod_splats,      "lod_splats",      1, sizeof(LodSplat),      false, "prt-bricks"},
+    {SectionType::brick_lod,       "brick_lod",       1, sizeof(BrickLod),      false, "prt-bricks"},
+    {SectionType::lod_nodes,       "lod_nodes",       1, sizeof(std::uint32_t), false, "prt-bricks"},
+    {SectionType::lod_discs,       "lod_discs",       1, sizeof(CompressedSplat), false, "prt-bricks"},
 };
 // clang-format on
 

@@ -9,12 +9,21 @@
 // fly (brick_layout.h) and go through the float path's leaf code (splat.h: intersect_splat, thesis
 // 3.3 blending, thesis 3.5 deep blending across leaves and bricks alike).
 //
+// Level of detail: a ray carries a footprint (LodCone: width + spread * t, a pixel's width for camera
+// rays). The descent stops at the first node whose cell is no wider than the footprint where the
+// walk enters it, if the node has a disc: a top node (lod_splats) or a node of a brick's LOD prefix
+// (brick_lod, lod_nodes, lod_discs: the brick's top levels, resident with the top tree). The node's
+// disc is then met as one splat inside the node's cell. Which node a ray stops at depends only on
+// the ray and the resident index, never on which bricks are resident, so a streamed view converges
+// to the in-core image.
+//
 // Which bricks are resident is the view's `resident` table (null: every brick, at data + offset),
-// so streaming changes only that table. A ray reaching a brick that is not resident intersects the
-// brick's level-of-detail disc (lod_splats[top node]) as one splat, hits accepted from t = 0 to the
-// end of the brick's cell, counts a fallback and, when the view has a request array, flags the
-// brick. Colours come from the splats (RGB565; white in a pool without colors); bricks carry no
-// source point, so hits shade with the model's material.
+// so streaming changes only that table. The descent walks a brick's prefix from the resident copy
+// and reads the brick's payload only below it; a ray that needs a brick that is not resident meets
+// the deepest disc it reached (the prefix node, else the brick's top-node disc) inside that node's
+// cell, counts a fallback and, when the view has a request array, flags the brick. Colours come from
+// the splats (RGB565; white in a pool without colors); bricks carry no source point, so hits shade
+// with the model's material.
 #pragma once
 
 #include <cstdint>
@@ -36,6 +45,12 @@ struct BrickView {
     const unsigned char* data = nullptr;  ///< brick_data: brick b at data + table[b].offset
     std::uint64_t data_bytes = 0;
     const pool::LodSplat* lod = nullptr;  ///< lod_splats, parallel to top_nodes
+    /// Brick LOD prefixes (brick_lod per brick, lod_nodes and lod_discs), or null: resident with the
+    /// top tree (streaming never evicts them).
+    const pool::BrickLod* lod_table = nullptr;
+    const std::uint32_t* lod_nodes = nullptr;
+    const pool::CompressedSplat* lod_discs = nullptr;
+    std::uint32_t lod_node_count = 0;
     /// Per brick: its payload's address, or null when it is not resident. A null table: every
     /// brick is resident at data + table[b].offset.
     const unsigned char* const* resident = nullptr;
@@ -55,10 +70,15 @@ struct BrickView {
     std::uint32_t flags = 0;  ///< pool::BrickFlags
 };
 
-/// The brick view over a pool's validated brick sections, every brick resident. Host only.
+/// The brick view over a pool's validated brick sections, every brick resident (LOD prefixes: null
+/// when the pool has none). Host only.
 inline BrickView make_brick_view(const pool::BrickInfo& info, const std::uint32_t* top_nodes,
                                  const pool::BrickEntry* table, const unsigned char* data,
-                                 std::uint64_t data_bytes, const pool::LodSplat* lod) {
+                                 std::uint64_t data_bytes, const pool::LodSplat* lod,
+                                 const pool::BrickLod* lod_table = nullptr,
+                                 const std::uint32_t* lod_nodes = nullptr,
+                                 const pool::CompressedSplat* lod_discs = nullptr,
+                                 std::uint32_t lod_node_count = 0) {
     return BrickView{.top_nodes = top_nodes,
                      .top_node_count = info.top_node_count,
                      .table = table,
@@ -66,6 +86,10 @@ inline BrickView make_brick_view(const pool::BrickInfo& info, const std::uint32_
                      .data = data,
                      .data_bytes = data_bytes,
                      .lod = lod,
+                     .lod_table = lod_table,
+                     .lod_nodes = lod_nodes,
+                     .lod_discs = lod_discs,
+                     .lod_node_count = lod_node_count,
                      .root_min = Vec3{info.root_min[0], info.root_min[1], info.root_min[2]},
                      .root_size = info.root_size,
                      .inv_root_size = 1.0f / info.root_size,
@@ -148,15 +172,6 @@ PRT_HD PRT_INLINE OctreeView brick_top_octree(const BrickView& v) {
     return t;
 }
 
-/// The LOD disc of top node `node` as a one-splat source; false for an empty disc.
-PRT_HD PRT_INLINE bool lod_disc(const BrickView& v, std::uint32_t node, LodSplats& out) {
-    if (v.lod == nullptr || node >= v.top_node_count) return false;
-    const pool::LodSplat l = v.lod[node];
-    if (!(l.radius > 0.0f)) return false;
-    out.disc = pool::Splat{l.position, l.radius, l.normal, pool::encode_rgb565(l.color)};
-    return true;
-}
-
 /// Sets flags[b] to 1 (streaming's request and use flags; many rays set the same flag: it is read
 /// first, so a flag already set costs no write).
 PRT_HD PRT_INLINE void flag_brick(std::uint32_t* flags, std::uint32_t b) {
@@ -197,67 +212,187 @@ PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSpla
     return true;
 }
 
-/// Where a walk through a bricked tree is (descend_bricked): in the top tree (level k_top_tree) or
-/// inside resident brick `brick`, whose root is at `level`: the walk's path entries below that level
-/// index the brick's nodes, the entry at it the top tree's brick node.
-struct BrickCursor {
-    static constexpr std::uint32_t k_top_tree = 0xffffffffu;
-    std::uint32_t level = k_top_tree;
-    std::uint32_t brick = 0;
-    const unsigned char* payload = nullptr;
+/// A ray's footprint for level of detail, in the model's local units: width(t) = width + spread * t
+/// (Ray::cone_width, cone_spread scaled by RenderParams::lod_pixels). 0, 0: no stop.
+struct LodCone {
+    float width = 0.0f;
+    float spread = 0.0f;
 };
 
-/// thesis 2.2.2 over a bricked tree: descends from path[level] to the leaf holding `p`, entering a
-/// resident brick's subtree at its brick node (the cursor then names it) and leaving it when the
-/// walk's restart level is above the brick's root. Returns the leaf's node word: a filled or empty
-/// leaf (in the cursor's brick for a filled one), or a brick node when that brick is not resident.
-/// Corrupt addresses end in an empty leaf, as descend does.
+/// The level at which a descent stops for footprint `f` (in units of the root cube): the shallowest
+/// level whose cell size 2^-level is <= f, from f's exponent bits (exact, host and device alike);
+/// k_no_lod_stop for f <= 0 or not finite.
+inline constexpr std::uint32_t k_no_lod_stop = 0xffu;
+PRT_HD PRT_INLINE std::uint32_t lod_stop_level(float f) {
+    if (!(f > 0.0f)) return k_no_lod_stop;
+#if PRT_DEVICE_CODE
+    const std::uint32_t bits = __float_as_uint(f);
+#else
+    std::uint32_t bits;
+    __builtin_memcpy(&bits, &f, sizeof(bits));
+#endif
+    const std::uint32_t e = (bits >> 23) & 0xffu;  // f = 1.m * 2^(e - 127) = 0.1m * 2^(e - 126)
+    if (e == 0u) return k_no_lod_stop;             // subnormal: far below any cell
+    return e >= 127u ? 0u : 127u - e;              // 2^-l <= f  <=>  l >= 127 - e
+}
+
+/// Where a walk through a bricked tree is (descend_bricked): in the top tree (level k_top_tree) or
+/// inside brick `brick`, whose root is at `level`: the walk's path entries below that level index
+/// the brick's nodes, the entry at it the top tree's brick node. Inside a brick the walk reads its
+/// LOD prefix (payload null) until it needs the brick's payload. After each descent, `stop` says
+/// whether the walk ended at a disc instead of a leaf (and `request` whether for want of the brick).
+struct BrickCursor {
+    static constexpr std::uint32_t k_top_tree = 0xffffffffu;
+    enum Stop : std::uint32_t { k_none = 0, k_top_disc = 1, k_prefix_disc = 2 };
+    std::uint32_t level = k_top_tree;
+    std::uint32_t brick = 0;
+    const unsigned char* payload = nullptr;      ///< the brick's payload once the walk needed it
+    std::uint32_t lod_first = 0, lod_count = 0;  ///< the brick's prefix in lod_nodes (count 0: none)
+    std::uint32_t stop = k_none;
+    std::uint32_t stop_node = 0;  ///< top node (k_top_disc) or index into lod_nodes (k_prefix_disc)
+    bool request = false;
+};
+
+/// thesis 2.2.2 over a bricked tree, with the level-of-detail stop: descends from path[level] to the
+/// leaf holding `p`, entering a brick at its brick node (its LOD prefix first, its payload where the
+/// walk needs nodes below the prefix or a filled leaf's splats, when resident) and leaving it when
+/// the walk's restart level is above the brick's root. At levels >= `stop_level` the first node
+/// with a disc ends the descent (cur.stop). Returns the node word where it ended: a filled or empty
+/// leaf (in the cursor's brick for a filled one), or the node of the disc (cur.stop set). Corrupt
+/// addresses end in an empty leaf, as descend does.
 PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3& p, std::uint32_t* path,
-                                                std::uint32_t& level, BrickCursor& cur) {
+                                                std::uint32_t& level, BrickCursor& cur,
+                                                std::uint32_t stop_level = k_no_lod_stop) {
     std::uint32_t l = level;
+    cur.stop = BrickCursor::k_none;
+    cur.request = false;
     if (l < cur.level) cur.level = BrickCursor::k_top_tree;  // the next cell is outside the brick
     bool in_brick = cur.level != BrickCursor::k_top_tree;
-    const std::uint32_t* nodes =
-        in_brick ? reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset())
-                 : v.top_nodes;
-    std::uint32_t count =
-        in_brick ? reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count : v.top_node_count;
-    std::uint32_t node = load_node_word(nodes, in_brick && l == cur.level ? 0u : path[l]);
-    for (;;) {  // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick once
-        if (node_is_internal(node)) {
-            const std::uint32_t addr = node_addr(node);
-            if (l >= k_fixed_bits || addr >= count || count - addr < 8u) return level = l, k_empty_leaf_node;
-            const std::uint32_t shift = k_fixed_bits - 1u - l;
-            const std::uint32_t c =
-                ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
-            path[++l] = addr + c;
-            node = load_node_word(nodes, addr + c);
-        } else if (!in_brick && node_is_brick(node)) {
-            const std::uint32_t b = node_addr(node);
-            if (b >= v.brick_count) return level = l, k_empty_leaf_node;
-            const unsigned char* payload = brick_payload(v, b);
-            if (payload == nullptr) break;                 // not resident: the brick node is the leaf
-            if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
-            cur.level = l;
-            cur.brick = b;
-            cur.payload = payload;
-            in_brick = true;
-            nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
-            count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
-            node = load_node_word(nodes, 0);
-        } else {
-            break;
+    const std::uint32_t* nodes = v.top_nodes;
+    std::uint32_t count = v.top_node_count;
+    if (in_brick && cur.payload != nullptr) {
+        nodes = reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset());
+        count = reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count;
+    } else if (in_brick) {
+        nodes = v.lod_nodes + cur.lod_first;
+        count = cur.lod_count;
+    }
+    std::uint32_t index = in_brick && l == cur.level ? 0u : path[l];
+    std::uint32_t node = load_node_word(nodes, index);
+    // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick (then its payload) once
+    for (;;) {
+        const bool stop = l >= stop_level;
+        if (!in_brick) {
+            if (node_is_brick(node)) {
+                const std::uint32_t b = node_addr(node);
+                if (b >= v.brick_count) return level = l, k_empty_leaf_node;
+                if (stop && v.lod != nullptr) {
+                    cur.stop = BrickCursor::k_top_disc;
+                    cur.stop_node = index;
+                    break;
+                }
+                cur.brick = b;
+                cur.payload = nullptr;
+                cur.lod_first = cur.lod_count = 0;
+                if (v.lod_table != nullptr) {  // the brick's resident prefix first
+                    cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
+                    cur.lod_count = v.lod_table[b].node_count;
+                    nodes = v.lod_nodes + cur.lod_first;
+                    count = cur.lod_count;
+                } else {  // no prefix: the payload at once
+                    const unsigned char* payload = brick_payload(v, b);
+                    if (payload == nullptr) {  // not resident: the brick's top-node disc
+                        cur.request = true;
+                        cur.stop = BrickCursor::k_top_disc;
+                        cur.stop_node = index;
+                        break;
+                    }
+                    if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
+                    cur.payload = payload;
+                    nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
+                    count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
+                }
+                cur.level = l;
+                in_brick = true;
+                index = 0;
+                node = load_node_word(nodes, 0);
+                continue;
+            }
+            if (!node_is_internal(node)) break;  // an empty top node
+            if (stop && v.lod != nullptr) {
+                cur.stop = BrickCursor::k_top_disc;
+                cur.stop_node = index;
+                break;
+            }
+        } else if (cur.payload == nullptr) {  // in the brick's prefix
+            if (node_is_internal(node) && stop) {
+                cur.stop = BrickCursor::k_prefix_disc;
+                cur.stop_node = cur.lod_first + index;
+                break;
+            }
+            if (!node_is_internal(node) && !node_is_filled(node)) break;  // an empty leaf
+            if (!node_is_internal(node) || node_addr(node) + 8u > count) {
+                // the payload is needed: below this node, or for this filled leaf's splats
+                const unsigned char* payload = brick_payload(v, cur.brick);
+                if (payload == nullptr) {  // not resident: this node's disc
+                    cur.request = true;
+                    cur.stop = BrickCursor::k_prefix_disc;
+                    cur.stop_node = cur.lod_first + index;
+                    break;
+                }
+                if (v.used != nullptr) flag_brick(v.used, cur.brick);  // streaming: kept by this frame (LRU)
+                cur.payload = payload;
+                nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
+                count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
+                node = load_node_word(nodes, index);  // the same word: the prefix is a copy
+                if (!node_is_internal(node)) break;   // the filled leaf
+            }
+        } else {                                 // in the brick's payload
+            if (!node_is_internal(node)) break;  // a leaf
+            if (stop && index < cur.lod_count) {
+                cur.stop = BrickCursor::k_prefix_disc;
+                cur.stop_node = cur.lod_first + index;
+                break;
+            }
         }
+        const std::uint32_t addr = node_addr(node);
+        if (l >= k_fixed_bits || addr >= count || count - addr < 8u) return level = l, k_empty_leaf_node;
+        const std::uint32_t shift = k_fixed_bits - 1u - l;
+        const std::uint32_t c =
+            ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
+        index = addr + c;
+        path[++l] = index;
+        node = load_node_word(nodes, index);
     }
     level = l;
     return node;
 }
 
-/// thesis 2.2.1 over a bricked tree: the next leaf along the walk (walk_next with descend_bricked).
+/// The disc a descent stopped at (cur.stop) as a one-splat source (its colour rounded to RGB565, as
+/// a brick's); false for an empty node's disc.
+PRT_HD PRT_INLINE bool stop_disc(const BrickView& v, const BrickCursor& cur, LodSplats& out) {
+    if (cur.stop == BrickCursor::k_top_disc) {
+        if (v.lod == nullptr || cur.stop_node >= v.top_node_count) return false;
+        const pool::LodSplat l = v.lod[cur.stop_node];
+        if (!(l.radius > 0.0f)) return false;
+        out.disc = pool::Splat{l.position, l.radius, l.normal, pool::encode_rgb565(l.color)};
+        return true;
+    }
+    if (cur.stop_node >= v.lod_node_count) return false;
+    const pool::CompressedSplat c = v.lod_discs[cur.stop_node];
+    if ((c.nr >> 20) == 0u) return false;
+    const pool::DecodedSplat d = pool::decode_lod_disc(c, v.lod_table[cur.brick]);
+    out.disc = pool::Splat{d.position, d.radius, d.normal, c.color};
+    return true;
+}
+
+/// thesis 2.2.1 over a bricked tree: the next leaf (or LOD stop) along the walk (walk_next with
+/// descend_bricked), the stop level from the footprint where the walk enters the next cell.
 PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, BrickCursor& cur,
-                                         OctreeLeaf& leaf) {
-    return walk_step(w, leaf,
-                     [&](std::uint32_t& level) { return descend_bricked(v, w.p, w.path, level, cur); });
+                                         const LodCone& cone, OctreeLeaf& leaf) {
+    return walk_step(w, leaf, [&](std::uint32_t& level) {
+        return descend_bricked(v, w.p, w.path, level, cur, lod_stop_level(cone.width + cone.spread * w.t));
+    });
 }
 
 /// The reference range [begin, end) of filled leaf `node` of the cursor's brick, or, with the
@@ -288,33 +423,41 @@ PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& c
     return begin < end;
 }
 
+/// A disc the walk stopped at (LOD stop, or a missing brick): its hits are accepted inside the
+/// stopping node's cell only, [max(t0, lo), min(t1, hi)], so neighbouring discs never stack.
+PRT_HD PRT_INLINE bool stopped_at_disc(const BrickView& v, const BrickCursor& cur, WalkStats& stats,
+                                       LodSplats& disc) {
+    if (cur.request) note_fallback(v, cur.brick, stats);
+    return stop_disc(v, cur, disc);
+}
+
 /// Closest hit of a ray with a bricked model's splats (model local frame; d need not be unit), as
 /// closest_hit_splats does it over the float octree: t in [0, t_max), the same blending, the same
-/// leaves visited. A brick that is not resident is met as one leaf: its LOD disc, hits accepted from
-/// the search's nearest hit (or 0) to the end of the brick's cell. Returns false on a miss.
+/// leaves visited, but where the descent stops at a disc (level of detail: `cone`; or a brick that
+/// is not resident), which is met as one splat inside its node's cell. Returns false on a miss.
 PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool inside, float t_max,
                                       const BlendOptions& blend, std::uint32_t max_steps, SplatSample& out,
-                                      WalkStats& stats, std::uint32_t culling = k_cull_slabs) {
+                                      WalkStats& stats, std::uint32_t culling = k_cull_slabs,
+                                      LodCone cone = {}) {
     const OctreeView top = brick_top_octree(v);
     OctreeWalk walk;
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
     // Without the flag (prt-octree --no-replicate) each disk is in one leaf only: hits from t = 0.
     const bool replicated = (v.flags & pool::k_bricks_replicated) != 0;
     const float inv_dlen = 1.0f / length(d);
+    cone.width *= v.inv_root_size;  // in units of the root cube, as the walk's cells
+    cone.spread *= v.inv_root_size;
     detail::NearestHit h;
     BrickCursor cur;
     OctreeLeaf leaf;
-    while (walk_next_bricked(v, walk, cur, leaf)) {  // bounded by max_steps
+    while (walk_next_bricked(v, walk, cur, cone, leaf)) {  // bounded by max_steps
         PRT_COUNT(stats.leaves);
         if (h.found && leaf.t0 > h.window_end) break;
         const float hi = fminf(leaf.t1, t_max);
-        if (node_is_brick(leaf.node)) {  // not resident
-            const std::uint32_t b = node_addr(leaf.node);
-            note_fallback(v, b, stats);
-            LodSplats lod;
-            if (lod_disc(v, walk.path[leaf.level], lod) &&
-                detail::closest_in_leaf(lod, 0, 1, o, d, inside, inv_dlen, h.found ? h.t_near : 0.0f, hi,
-                                        blend, h, stats))
+        if (cur.stop != BrickCursor::k_none) {
+            LodSplats disc;
+            if (stopped_at_disc(v, cur, stats, disc) &&
+                detail::closest_in_leaf(disc, 0, 1, o, d, inside, inv_dlen, leaf.t0, hi, blend, h, stats))
                 break;
             continue;
         }
@@ -333,27 +476,28 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
 }
 
 /// Any hit of a ray with a bricked model's splats in t in [0, t_max) (shadow rays, thesis 5.2), as
-/// any_hit_splats does it over the float octree.
+/// any_hit_splats does it over the float octree, with the same discs as closest_hit_bricks.
 PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool inside, float t_max,
                                   std::uint32_t max_steps, WalkStats& stats,
-                                  std::uint32_t culling = k_cull_slabs) {
+                                  std::uint32_t culling = k_cull_slabs, LodCone cone = {}) {
     const OctreeView top = brick_top_octree(v);
     OctreeWalk walk;
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
     const float hi = nextafterf(t_max, 0.0f);
     const float inv_dlen = 1.0f / length(d);
+    cone.width *= v.inv_root_size;
+    cone.spread *= v.inv_root_size;
     // as any_hit_splats: a fully replicated, unculled tree passes a leaf by its own t range
     const bool own_range =
         (v.flags & pool::k_bricks_replicated) != 0 && (v.flags & pool::k_bricks_culled) == 0;
     BrickCursor cur;
     OctreeLeaf leaf;
-    while (walk_next_bricked(v, walk, cur, leaf)) {  // bounded by max_steps
+    while (walk_next_bricked(v, walk, cur, cone, leaf)) {  // bounded by max_steps
         PRT_COUNT(stats.leaves);
-        if (node_is_brick(leaf.node)) {  // not resident
-            note_fallback(v, node_addr(leaf.node), stats);
-            LodSplats lod;
-            if (lod_disc(v, walk.path[leaf.level], lod) &&
-                detail::any_in_leaf(lod, 0, 1, o, d, inside, 0.0f, fminf(leaf.t1, hi), stats))
+        if (cur.stop != BrickCursor::k_none) {
+            LodSplats disc;
+            if (stopped_at_disc(v, cur, stats, disc) &&
+                detail::any_in_leaf(disc, 0, 1, o, d, inside, leaf.t0, fminf(leaf.t1, hi), stats))
                 return true;
             continue;
         }

@@ -47,7 +47,9 @@ PRT_HD PRT_INLINE Ray primary_ray(const PinholeCamera& c, std::uint32_t x, std::
     const float u = (static_cast<float>(x) + sx) / static_cast<float>(width);
     const float v = (static_cast<float>(y) + sy) / static_cast<float>(height);
     const Vec3 d = c.forward + c.right * (2.0f * u - 1.0f) + c.up * (1.0f - 2.0f * v);
-    return Ray{c.position, normalize(d), k_inf, 0u};
+    Ray r{c.position, normalize(d), k_inf, 0u};
+    r.cone_spread = 2.0f * length(c.up) / static_cast<float>(height);  // a pixel's angle at the centre
+    return r;
 }
 
 /// thesis 2.3: de-interleaves the even bits of a 32-bit index (Morton / Z-order decode).
