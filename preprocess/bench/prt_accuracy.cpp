@@ -410,6 +410,9 @@ void run_surface(const Options& o, const View& view, Measured& m,
 }
 
 void accuracy(const Options& o, const tool::CommonOptions& common) {
+    // Outputs that cannot be written are refused before the measurement runs.
+    if (!o.json.empty()) check_writable(o.json);
+    if (!o.image.empty()) check_writable(o.image);
     auto shared = std::make_shared<const pool::PoolFile>(pool::PoolFile::open(o.pool));
     const pool::PoolFile& p = *shared;
     const pool::ModelInfo& mi = p.model_info();
@@ -573,6 +576,7 @@ std::vector<float> display_values(const std::string& path, std::uint32_t& w, std
 }
 
 void compare(const std::string& a, const std::string& b, const std::string& json) {
+    if (!json.empty()) check_writable(json);
     std::uint32_t wa, ha, wb, hb;
     const std::vector<float> va = display_values(a, wa, ha), vb = display_values(b, wb, hb);
     if (wa != wb || ha != hb)

@@ -744,5 +744,8 @@ int main(int argc, char** argv) {
                            "(default: none)");
             prt::bench::add_surface_options(app, o.s);
         },
-        [&](const prt::tool::CommonOptions& common) { Fidelity(o, common).run(); });
+        [&](const prt::tool::CommonOptions& common) {
+            if (!o.json.empty()) prt::check_writable(o.json);  // before the (long) measurement
+            Fidelity(o, common).run();
+        });
 }

@@ -235,6 +235,7 @@ static_assert(keys::escape == GLFW_KEY_ESCAPE && keys::home == GLFW_KEY_HOME && 
 struct WindowContext {
     ViewState view, start_view;  ///< start_view: reset (R, Home)
     bool dragging_left = false, dragging_right = false;
+    bool drag_moved = false;  ///< the left button left the click zone since it was pressed
     double last_x = 0, last_y = 0, press_x = 0, press_y = 0;
     bool dirty = true;
     double fly_speed = 1;  ///< world units per second
@@ -326,7 +327,8 @@ void on_mouse_button(GLFWwindow* w, int button, int action, int) {
         if (down) {
             ctx->press_x = x;
             ctx->press_y = y;
-        } else if (is_click(ctx->press_x, ctx->press_y, x, y)) {
+            ctx->drag_moved = false;
+        } else if (!ctx->drag_moved && is_click(ctx->press_x, ctx->press_y, x, y)) {
             ctx->picks.emplace_back(x, y);
         }
     }
@@ -338,7 +340,8 @@ void on_cursor(GLFWwindow* w, double x, double y) {
     const double dx = x - ctx->last_x, dy = y - ctx->last_y;
     ctx->last_x = x;
     ctx->last_y = y;
-    if (ctx->dragging_left && !is_click(ctx->press_x, ctx->press_y, x, y)) {
+    if (ctx->dragging_left && !is_click(ctx->press_x, ctx->press_y, x, y)) ctx->drag_moved = true;
+    if (ctx->dragging_left && ctx->drag_moved) {
         orbit(ctx->view, dx, dy);
         ctx->dirty = true;
     } else if (ctx->dragging_right) {
@@ -440,6 +443,7 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
     core::RenderParams last_params{};
     double smoothed_ms = 0, last_time = tool::now_seconds();
     std::uint32_t shown = 0;
+    std::size_t next_key = 0;  ///< --keys: the next scripted key (one before each frame)
     bool recording = false;
     std::vector<CameraKey> recorded;
     const auto save_recording = [&] {
@@ -460,7 +464,8 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
     const std::uint32_t frames = options.screenshot.empty() ? options.frames : std::max(options.frames, 1u);
     while (!glfwWindowShouldClose(window)) {
         glfwPollEvents();
-        if (shown < options.keys.size()) apply_action(window, ctx, key_action(options.keys[shown]));
+        if (next_key < options.keys.size() && next_key <= shown)
+            apply_action(window, ctx, key_action(options.keys[next_key++]));
         if (ctx.next_surface) {
             ctx.next_surface = false;
             stream.reset();  // it holds the old scene's bricks
