@@ -356,48 +356,25 @@ void on_scroll(GLFWwindow* w, double, double dy) {
     ctx->dirty = true;
 }
 
-/// "name surface" of every model (the title, K).
-std::string surfaces_of(const rt::RenderScene& rs) {
-    std::string s;
-    for (const rt::LoadedModel& m : rs.models())
-        s += (s.empty() ? "" : ", ") + m.name + " " + std::string(scene::surface_name(m.view.surface));
-    return s;
-}
-
-/// K: reloads the models as the next surface (after the first model's, in the order splats, iso,
-/// mls, patches) that every model's pool holds; the camera and render settings stay. False (and
-/// a note) when no other surface loads.
+/// K: the scene reloaded as the next surface its pools hold (window_controls.h next_surface), the
+/// camera and render settings kept. False (and a note) when none other loads.
 bool cycle_surface(rt::RenderScene& rs, const WindowOptions& options) {
     if (!options.reload) {
         tool::note(options.quiet, "prt-play: this scene cannot switch surfaces");
         return false;
     }
-    const char* order[] = {"splats", "iso", "mls", "patches"};
-    const std::string current(scene::surface_name(rs.models().front().view.surface));
-    int at = 0;
-    while (at < 4 && current != order[at]) ++at;
-    for (int i = 1; i < 4; ++i) {
-        const char* name = order[(at + i) % 4];
-        try {
-            rt::RenderScene next = options.reload(name);
-            const bool all =
-                std::all_of(next.models().begin(), next.models().end(), [&](const rt::LoadedModel& m) {
-                    return std::string(scene::surface_name(m.view.surface)) == name;
-                });
-            if (!all) continue;  // a pool without it fell back to another surface
-            const scene::Camera cam = rs.scene().camera;
-            const core::RenderParams params = rs.params();
-            rs = std::move(next);
-            rs.scene().camera = cam;
-            rs.params() = params;
-            tool::note(options.quiet, "prt-play: surface %s: %s", name, surfaces_of(rs).c_str());
-            return true;
-        } catch (const Error&) {
-            // this surface's sections are not in every pool: try the next one
-        }
+    std::optional<rt::RenderScene> next = next_surface(rs, options.reload);
+    if (!next) {
+        tool::note(options.quiet, "prt-play: no other surface in the pools (%s)", surfaces_of(rs).c_str());
+        return false;
     }
-    tool::note(options.quiet, "prt-play: no other surface in the pools (%s)", surfaces_of(rs).c_str());
-    return false;
+    const scene::Camera cam = rs.scene().camera;
+    const core::RenderParams params = rs.params();
+    rs = std::move(*next);
+    rs.scene().camera = cam;
+    rs.params() = params;
+    tool::note(options.quiet, "prt-play: surfaces now: %s", surfaces_of(rs).c_str());
+    return true;
 }
 
 }  // namespace

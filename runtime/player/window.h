@@ -12,6 +12,7 @@
 #include "prt/runtime/backend.h"
 #include "prt/runtime/brick_stream.h"
 #include "prt/runtime/render_scene.h"
+#include "window_controls.h"
 
 namespace prt::player {
 
@@ -33,7 +34,7 @@ struct WindowOptions {
     std::string save_prefix = "prt-play";
     /// Loads the scene again with every model as this surface (LoadOptions::surface), for K; throws
     /// prt::Error when a pool lacks it. Empty: K says the scene cannot switch.
-    std::function<rt::RenderScene(const std::string& surface)> reload;
+    SurfaceReload reload;
 };
 
 /// Opens a window and renders until it is closed. The controls are window_controls.h's (key_help()

@@ -200,6 +200,35 @@ std::string describe(const Pick& p, const rt::RenderScene& rs, double x, double 
     return buf;
 }
 
+std::string surfaces_of(const rt::RenderScene& rs) {
+    std::string s;
+    for (const rt::LoadedModel& m : rs.models())
+        s += (s.empty() ? "" : ", ") + m.name + " " + std::string(scene::surface_name(m.view.surface));
+    return s;
+}
+
+std::optional<rt::RenderScene> next_surface(const rt::RenderScene& rs, const SurfaceReload& reload) {
+    if (!reload || rs.models().empty()) return std::nullopt;
+    const std::string order[] = {"splats", "iso", "mls", "patches"};
+    const std::string current(scene::surface_name(rs.models().front().view.surface));
+    int at = 0;
+    while (at < 4 && current != order[at]) ++at;
+    for (int i = 1; i < 4; ++i) {
+        const std::string& name = order[(at + i) % 4];
+        try {
+            rt::RenderScene next = reload(name);
+            const bool all =
+                std::all_of(next.models().begin(), next.models().end(), [&](const rt::LoadedModel& m) {
+                    return std::string(scene::surface_name(m.view.surface)) == name;
+                });
+            if (all) return next;  // else a pool without it fell back to another surface
+        } catch (const Error&) {
+            // this surface's sections are not in every pool: try the next one
+        }
+    }
+    return std::nullopt;
+}
+
 bool is_click(double x0, double y0, double x1, double y1) {
     return std::fabs(x1 - x0) <= 3.0 && std::fabs(y1 - y0) <= 3.0;
 }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -100,6 +101,16 @@ Pick pick(const rt::RenderScene& scene, const scene::Camera& camera, double x, d
 /// One line for stdout: "pick: pixel (X, Y): position ..., normal ..., model NAME, distance T" or
 /// "pick: pixel (X, Y): nothing hit".
 std::string describe(const Pick& p, const rt::RenderScene& scene, double x, double y);
+
+/// Loads a scene again with every model as one surface (LoadOptions::surface); throws prt::Error
+/// when a pool lacks it.
+using SurfaceReload = std::function<rt::RenderScene(const std::string& surface)>;
+/// K: the scene reloaded as the next surface after the first model's, in the order splats, iso, mls,
+/// patches (cycling), that every model's pool holds; nullopt when no other one loads. The caller
+/// keeps its camera and render settings.
+std::optional<rt::RenderScene> next_surface(const rt::RenderScene& scene, const SurfaceReload& reload);
+/// "name surface, ..." of the models.
+std::string surfaces_of(const rt::RenderScene& scene);
 
 /// A press and release this close (pixels, each axis) is a click (pick), farther a drag.
 bool is_click(double x0, double y0, double x1, double y1);
