@@ -116,6 +116,33 @@ void AtomicFile::commit() {
     remove_stale_temporaries(m_path, m_host);
 }
 
+void check_writable(const std::filesystem::path& path) {
+    const auto refuse = [&](const std::string& why) {
+        throw Error(path.string() + ": cannot write: " + why);
+    };
+    if (path.empty()) throw Error("cannot write: the output path is empty");
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) refuse("it is a folder");
+    const std::filesystem::path folder = path.parent_path();
+    if (!folder.empty()) {
+        const auto st = std::filesystem::status(folder, ec);
+        if (!std::filesystem::exists(st)) refuse("folder " + folder.string() + " does not exist");
+        if (!std::filesystem::is_directory(st)) refuse(folder.string() + " is not a folder");
+    }
+    // The temporary name AtomicFile uses, with a suffix of its own: creating it proves the folder
+    // takes new files (permission, read-only mounts); it is removed at once.
+    const std::string probe =
+        path.string() + ".tmp." + host_tag() + "." + std::to_string(::getpid()) + ".probe";
+    const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+    if (fd < 0) {
+        const int err = errno;
+        if (err != EEXIST) refuse(std::strerror(err));
+        return;  // a leftover probe of this very process: the folder took a file before
+    }
+    ::close(fd);
+    ::unlink(probe.c_str());
+}
+
 void write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes) {
     AtomicFile f(path);
     f.write(bytes.data(), bytes.size());

@@ -4,18 +4,39 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <filesystem>
 #include <fstream>
 #include <new>
+#include <vector>
 
+#include "prt/atomic_file.h"
 #include "prt/pool_step.h"
 #include "prt/scene_pools.h"
 
 namespace prt::tool {
+
+namespace {
+
+/// The paths ExistingInput saw during the current parse, checked by run() before the body.
+std::vector<std::string>& pending_inputs() {
+    static std::vector<std::string> paths;
+    return paths;
+}
+
+}  // namespace
+
+const CLI::Validator ExistingInput(
+    [](std::string& path) {
+        pending_inputs().push_back(path);
+        return std::string();
+    },
+    "FILE", "EXISTING_INPUT");
 
 int run(int argc, char** argv, const std::string& tool, const std::string& description,
         const std::function<void(CLI::App&, CommonOptions&)>& setup,
@@ -29,6 +50,7 @@ int run(int argc, char** argv, const std::string& tool, const std::string& descr
     app.failure_message([tool](const CLI::App*, const CLI::Error& e) {
         return tool + ": error: " + e.what() + " (see --help)\n";
     });
+    pending_inputs().clear();
     try {
         setup(app, common);
         app.parse(argc, argv);
@@ -40,6 +62,7 @@ int run(int argc, char** argv, const std::string& tool, const std::string& descr
         return k_exit_usage_error;
     }
     try {
+        for (const std::string& path : pending_inputs()) check_input_file(path);
         body(common);
     } catch (const std::bad_alloc&) {
         std::fprintf(stderr, "%s: error: out of memory\n", tool.c_str());
@@ -55,25 +78,41 @@ Progress::Progress(std::string label, std::uint64_t total, bool quiet)
     : m_label(std::move(label)),
       m_total(total),
       m_quiet(quiet),
+      m_terminal(::isatty(::fileno(stderr)) != 0),
       m_start(std::chrono::steady_clock::now()),
       m_last(m_start) {}
 
 Progress::~Progress() {
-    if (!m_finished && m_printed) std::fputc('\n', stderr);
+    if (!m_finished && m_printed && m_terminal) std::fputc('\n', stderr);
+}
+
+bool Progress::log_line_due(double since_last_s, double pct, double last_pct) {
+    // A log gets few, whole lines: at most one a second, and then only once the step moved on by
+    // 10 % or 10 s passed without a line (a slow step still shows it is alive).
+    return since_last_s >= 1.0 && (pct - last_pct >= 10.0 || since_last_s >= 10.0);
 }
 
 void Progress::update(std::uint64_t done) {
     if (m_quiet) return;
     const auto now = std::chrono::steady_clock::now();
-    if (now - m_last < std::chrono::milliseconds(250)) return;
-    m_last = now;
     const double pct = m_total ? 100.0 * static_cast<double>(done) / static_cast<double>(m_total) : 100.0;
+    if (m_terminal) {
+        if (now - m_last < std::chrono::milliseconds(250)) return;
+    } else if (!log_line_due(std::chrono::duration<double>(now - m_last).count(), pct, m_last_pct)) {
+        return;
+    }
+    m_last = now;
+    m_last_pct = pct;
     const double elapsed = std::chrono::duration<double>(now - m_start).count();
+    // A terminal: one line rewritten in place ('\r'); a file or pipe: one whole line per update.
+    const char* start = m_terminal ? "\r" : "";
+    const char* end = m_terminal ? "   " : "\n";
     if (elapsed >= 1.0 && pct >= 1.0 && pct < 100.0) {
         const double left = elapsed * (100.0 - pct) / pct;
-        std::fprintf(stderr, "\r%s: %5.1f%%, about %.0f s left   ", m_label.c_str(), pct, std::ceil(left));
+        std::fprintf(stderr, "%s%s: %5.1f%%, about %.0f s left%s", start, m_label.c_str(), pct,
+                     std::ceil(left), end);
     } else {
-        std::fprintf(stderr, "\r%s: %5.1f%%", m_label.c_str(), pct);
+        std::fprintf(stderr, "%s%s: %5.1f%%%s", start, m_label.c_str(), pct, m_terminal ? "" : "\n");
     }
     m_printed = true;
     std::fflush(stderr);
@@ -84,7 +123,7 @@ void Progress::finish() {
     m_finished = true;
     if (m_quiet) return;
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
-    std::fprintf(stderr, "\r%s: done in %.3f s\n", m_label.c_str(), s);
+    std::fprintf(stderr, "%s%s: done in %.3f s\n", m_terminal ? "\r" : "", m_label.c_str(), s);
 }
 
 namespace {
@@ -155,6 +194,15 @@ std::string format_bytes(std::uint64_t bytes) {
     return buf;
 }
 
+void check_input_file(const std::filesystem::path& path) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(st)) throw Error(path.string() + ": no such file");
+    if (std::filesystem::is_directory(st)) throw Error(path.string() + ": is a folder, not a file");
+    if (::access(path.c_str(), R_OK) != 0)
+        throw Error(path.string() + ": cannot read: " + std::strerror(errno));
+}
+
 double now_seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -195,6 +243,10 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
             m_common = common;
             m_start = now_seconds();
             if (m_output_in_place && m_output.empty()) m_output = m_input;
+            // Refused before any work: a missing input, then an output that cannot be written.
+            if (!m_input.empty()) check_input_file(m_input);
+            if (!m_output.empty()) check_writable(m_output);
+            if (!m_stats.empty()) check_writable(m_stats);
             body(*this);
         });
 }
@@ -242,9 +294,7 @@ bool PoolStep::drop_sections(std::initializer_list<pool::SectionType> types) {
 }
 
 void PoolStep::check_output_folder() const {
-    const std::filesystem::path folder = std::filesystem::path(m_output).parent_path();
-    if (!folder.empty() && !std::filesystem::is_directory(folder))
-        throw Error(m_output + ": cannot write: folder " + folder.string() + " does not exist");
+    check_writable(m_output);
 }
 
 std::uint64_t PoolStep::write(const nlohmann::json& parameters) {

@@ -13,8 +13,9 @@ namespace prt::player {
 
 void add_scene_options(CLI::App& app, BenchSceneOptions& o, const char* pool_help, const char* max_leaf_help,
                        bool save_pool) {
-    app.add_option("pool", o.pool, pool_help)->check(CLI::ExistingFile);
-    app.add_option("--scene", o.scene, "Scene JSON (camera, lights, materials)")->check(CLI::ExistingFile);
+    app.add_option("pool", o.pool, pool_help)->check(prt::tool::ExistingInput);
+    app.add_option("--scene", o.scene, "Scene JSON (camera, lights, materials)")
+        ->check(prt::tool::ExistingInput);
     app.add_option("--synthetic", o.synthetic, "Points of the synthetic room when no pool is given")
         ->check(CLI::Range(std::uint64_t{1000}, std::uint64_t{1} << 31));
     app.add_option("--max-leaf", o.max_leaf, max_leaf_help)->check(CLI::Range(1u, 100000u));
@@ -82,8 +83,8 @@ rt::RenderScene bench_scene(const BenchSceneOptions& o, bool quiet) {
         light.position = {0.2, 0.8, 0.3};
         sc.point_lights.push_back(light);
         // The synthetic room holds splats only: the load options refuse another surface.
-        rs = rt::RenderScene::from_pools(sc, {synthetic_room_pool(o.synthetic, o.max_leaf, o.save_pool, quiet)},
-                                         o.load);
+        rs = rt::RenderScene::from_pools(
+            sc, {synthetic_room_pool(o.synthetic, o.max_leaf, o.save_pool, quiet)}, o.load);
     }
     rs.scene().camera.width = o.width;
     rs.scene().camera.height = o.height;

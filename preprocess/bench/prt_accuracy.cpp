@@ -42,13 +42,13 @@
 
 #include "analytic.h"
 #include "prt/atomic_file.h"
-#include "prt/parallel.h"
 #include "prt/core/camera.h"
 #include "prt/core/iso.h"
 #include "prt/core/mls.h"
 #include "prt/core/patch.h"
 #include "prt/core/splat.h"
 #include "prt/formats/pool.h"
+#include "prt/parallel.h"
 #include "prt/runtime/image.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/runtime/surface_pools.h"
@@ -383,7 +383,8 @@ struct Measured {
 };
 
 /// The surface's image (warm-up) and --repeat timed runs, through the core's per-ray functions.
-void run_surface(const Options& o, const View& view, Measured& m, std::shared_ptr<const pool::PoolFile> shared) {
+void run_surface(const Options& o, const View& view, Measured& m,
+                 std::shared_ptr<const pool::PoolFile> shared) {
     const bench::SurfaceProbe probe(std::move(shared), o.surface, o.s);
     m.bytes = probe.bytes();
     m.settings = probe.settings();
@@ -409,6 +410,9 @@ void run_surface(const Options& o, const View& view, Measured& m, std::shared_pt
 }
 
 void accuracy(const Options& o, const tool::CommonOptions& common) {
+    // Outputs that cannot be written are refused before the measurement runs.
+    if (!o.json.empty()) check_writable(o.json);
+    if (!o.image.empty()) check_writable(o.image);
     auto shared = std::make_shared<const pool::PoolFile>(pool::PoolFile::open(o.pool));
     const pool::PoolFile& p = *shared;
     const pool::ModelInfo& mi = p.model_info();
@@ -476,7 +480,8 @@ void accuracy(const Options& o, const tool::CommonOptions& common) {
     for (std::size_t i = 0; i < m.px.size(); ++i) {
         const PixelResult& r = m.px[i];
         if (r.hit) ++hits;
-        if (r.hit && (!std::isfinite(r.t) || !std::isfinite(length(r.position)) || !core::is_finite(r.normal)))
+        if (r.hit &&
+            (!std::isfinite(r.t) || !std::isfinite(length(r.position)) || !core::is_finite(r.normal)))
             ++nan;
         if (truth == "none") continue;
         if (ref[i].hit) ++true_hits;
@@ -571,6 +576,7 @@ std::vector<float> display_values(const std::string& path, std::uint32_t& w, std
 }
 
 void compare(const std::string& a, const std::string& b, const std::string& json) {
+    if (!json.empty()) check_writable(json);
     std::uint32_t wa, ha, wb, hb;
     const std::vector<float> va = display_values(a, wa, ha), vb = display_values(b, wb, hb);
     if (wa != wb || ha != hb)
@@ -612,19 +618,17 @@ int main(int argc, char** argv) {
         "error and hole rate against the analytic shape of a prt-synth pool (or a tessellated reference for "
         "patches), and a shaded image. `prt-accuracy compare A B` gives the RMSE and PSNR of two images.",
         [&](CLI::App& app, prt::tool::CommonOptions&) {
-            app.add_option("pool", o.pool, "Pool with the sections of --surface")->check(CLI::ExistingFile);
+            app.add_option("pool", o.pool, "Pool with the sections of --surface")
+                ->check(prt::tool::ExistingInput);
             app.add_option("--surface", o.surface, "splats, iso, mls or patches")
                 ->check(CLI::IsMember({"splats", "iso", "mls", "patches"}));
             app.add_option("--width", o.width, "Image width")->check(CLI::Range(1u, 8192u));
             app.add_option("--height", o.height, "Image height")->check(CLI::Range(1u, 8192u));
             app.add_option("--fov", o.fov, "Vertical field of view, degrees")
                 ->check(CLI::Range(1.0f, 120.0f));
-            app.add_option("--view", o.view,
-                           "Direction from the model's centre to the eye")
-                ->expected(3);
+            app.add_option("--view", o.view, "Direction from the model's centre to the eye")->expected(3);
             app.add_option("-j,--threads", o.threads, "Threads (0 = all hardware threads)");
-            app.add_option("--repeat", o.repeat,
-                           "Timed runs after one warm-up; the median is reported")
+            app.add_option("--repeat", o.repeat, "Timed runs after one warm-up; the median is reported")
                 ->check(CLI::Range(1u, 1000u));
             app.add_option("--json", o.json, "Write the figures as JSON to this file (default: none)");
             app.add_option(
@@ -638,8 +642,10 @@ int main(int argc, char** argv) {
                                      "RMSE and PSNR (peak 1, display encoding) of image B against A");
             cmp->add_option("a", cmp_a, "Reference image (.ppm, .pfm; more with OpenImageIO)")
                 ->required()
-                ->check(CLI::ExistingFile);
-            cmp->add_option("b", cmp_b, "Image to measure, same size")->required()->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
+            cmp->add_option("b", cmp_b, "Image to measure, same size")
+                ->required()
+                ->check(prt::tool::ExistingInput);
             cmp->add_option("--json", cmp_json, "Write the figures as JSON to this file (default: none)");
             app.final_callback([&] {
                 if (!cmp->parsed() && o.pool.empty())

@@ -231,6 +231,8 @@ void profile_scenarios(const Options& o, const rt::RenderScene& rs,
 }
 
 void run(Options o, const tool::CommonOptions& common) {
+    if (!o.json.empty()) check_writable(o.json);  // refused before the (long) benchmark runs
+    if (!o.scene.save_pool.empty()) check_writable(o.scene.save_pool);
     o.scene.load = player::load_options(o.render);
     o.scene.load.defer_bricks = true;  // rt::BrickStream loads them in core or streams them (--gpu-budget)
     rt::RenderScene rs = player::bench_scene(o.scene, common.quiet);
@@ -290,7 +292,8 @@ void run(Options o, const tool::CommonOptions& common) {
             "prt-bench: streaming %u bricks under a budget of %s (always resident %s, bricks %s; in core "
             "%s)\n",
             stream.brick_count(), tool::format_bytes(stream_options.budget).c_str(),
-            tool::format_bytes(stream.fixed_bytes()).c_str(), tool::format_bytes(stream.arena_bytes()).c_str(),
+            tool::format_bytes(stream.fixed_bytes()).c_str(),
+            tool::format_bytes(stream.arena_bytes()).c_str(),
             tool::format_bytes(stream.in_core_bytes()).c_str());
     std::printf(
         "prt-bench: %s on %s, %ux%u, %llu points (%llu splats, %llu filled leaves), leaf culling %u, median "

@@ -702,12 +702,12 @@ int main(int argc, char** argv) {
         [&](CLI::App& app, prt::tool::CommonOptions&) {
             app.add_option("pool", o.pool, "Pool with the surfaces' sections")
                 ->required()
-                ->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
             app.add_option(
                    "--reference", o.reference,
                    "Reference mesh (.ply with faces, .obj, .off, .stl), in the pool's world frame (default: "
                    "the analytic shape of a prt-synth pool's provenance, ray cast exactly)")
-                ->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
             app.add_option("--views-from", o.views_from,
                            "orbit: --views views spread over a sphere around the reference, looking at it; "
                            "sensors: the six faces of a cube map (fov 90) at each point sensor of the pool")
@@ -722,7 +722,7 @@ int main(int argc, char** argv) {
                    "--points", o.points,
                    "Pool whose points say where the scan has data and its spacing (default: the pool's "
                    "own points)")
-                ->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
             app.add_option("--views", o.views, "Views, spread over the sphere around the reference")
                 ->check(CLI::Range(1u, 256u));
             app.add_option("--width", o.width, "Image width")->check(CLI::Range(8u, 8192u));
@@ -744,5 +744,8 @@ int main(int argc, char** argv) {
                            "(default: none)");
             prt::bench::add_surface_options(app, o.s);
         },
-        [&](const prt::tool::CommonOptions& common) { Fidelity(o, common).run(); });
+        [&](const prt::tool::CommonOptions& common) {
+            if (!o.json.empty()) prt::check_writable(o.json);  // before the (long) measurement
+            Fidelity(o, common).run();
+        });
 }

@@ -8,12 +8,14 @@
 #include "accumulate.h"
 #include "camera_path.h"
 #include "player_options.h"
+#include "prt/atomic_file.h"
 #include "prt/formats/scene.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/brick_stream.h"
 #include "prt/runtime/image.h"
 #include "prt/runtime/render_scene.h"
 #include "prt/tool.h"
+#include "window_controls.h"
 #ifdef PRT_HAVE_GLFW
 #include "window.h"
 #endif
@@ -35,7 +37,9 @@ struct Options {
     std::filesystem::path screenshot;
     bool frames_given = false;  ///< --frames on the command line (the window then closes after them)
     bool no_interop = false;
-    bool converge = false;  ///< headless: render each view until no ray falls back to a brick's LOD
+    bool converge = false;          ///< headless: render each view until no ray falls back to a brick's LOD
+    std::vector<std::string> keys;  ///< window: keys pressed by script, one per frame
+    std::string save_prefix = "prt-play";  ///< window: screenshots (C) and camera paths (L)
 };
 
 /// "frame_%04d.png" -> "frame_0007.png"; names without '%' are returned unchanged.
@@ -66,6 +70,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
     if (!o.out.empty()) {
         std::string why;
         if (!rt::can_write_image(frame_name(o.out, 0), &why)) throw Error(why);
+        check_writable(frame_name(o.out, 0));  // before the scene loads and the frames render
     }
     if (!o.screenshot.empty()) {
 #ifndef PRT_HAVE_GLFW
@@ -82,6 +87,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
                 "pixels, not linear radiance");
         std::string why;
         if (!rt::can_write_image(o.screenshot, &why)) throw Error(why);
+        check_writable(o.screenshot);
     }
     rt::LoadOptions load = player::load_options(o.render);
     load.defer_bricks = true;  // rt::BrickStream loads them in core or streams them (--gpu-budget)
@@ -140,6 +146,14 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         wo.frames = o.frames_given || !o.screenshot.empty() ? o.frames : 0;
         wo.screenshot = o.screenshot;
         wo.interop = !o.no_interop;
+        for (const std::string& k : o.keys) wo.keys.push_back(player::key_code(k));
+        wo.save_prefix = o.save_prefix;
+        wo.reload = [&o, load](const std::string& surface) {
+            rt::LoadOptions l = load;
+            l.surface = surface;
+            return o.scene.empty() ? rt::RenderScene::from_pool(o.pool, l)
+                                   : rt::RenderScene::load(scene::load_scene(o.scene), o.pool, l);
+        };
         player::run_window(rs, backend, stream, wo);
         return;
 #endif
@@ -245,8 +259,9 @@ int main(int argc, char** argv) {
             app.add_option(
                    "pool", o.pool,
                    "Pool file with a surface's sections (prt-octree, prt-iso, prt-mls or prt-patches)")
-                ->check(CLI::ExistingFile);
-            app.add_option("--scene", o.scene, "Scene JSON (formats/SCENE.md)")->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
+            app.add_option("--scene", o.scene, "Scene JSON (formats/SCENE.md)")
+                ->check(prt::tool::ExistingInput);
             app.add_flag(
                 "--headless", o.headless,
                 "Render to files without a window (implied by --out; always on in builds without GLFW)");
@@ -259,6 +274,25 @@ int main(int argc, char** argv) {
                            "Window: after --frames frames (default 1), read the displayed framebuffer back "
                            "(glReadPixels), write it to this 8-bit image (.ppm always, .png ... with "
                            "OpenImageIO) and exit");
+            app.add_option("--keys", o.keys,
+                           "Window: keys pressed by script, one before each of the first frames (e.g. "
+                           "P,C: path tracing on, then a screenshot; names as --help-keys lists them: a "
+                           "letter or digit, Esc, Home, F1, F12)")
+                ->delimiter(',')
+                ->check([](const std::string& k) {
+                    return prt::player::key_code(k) < 0 ? "unknown key '" + k + "'" : std::string();
+                });
+            app.add_option("--save-prefix", o.save_prefix,
+                           "Window: the C key writes screenshots to PREFIX-NNNN.png (.ppm without "
+                           "OpenImageIO), the L key camera paths to PREFIX-path-NNNN.txt (the first free "
+                           "numbers)");
+            app.add_flag_callback(
+                "--help-keys",
+                [] {
+                    std::fputs(prt::player::key_help().c_str(), stdout);
+                    throw CLI::Success();
+                },
+                "Print the window's mouse and key controls and exit");
             app.add_flag(
                 "--no-interop", o.no_interop,
                 "Window with --backend cuda: show frames by a texture upload from host memory instead "
@@ -285,7 +319,7 @@ int main(int argc, char** argv) {
             app.add_option("--camera-path", o.camera_path,
                            "Headless: camera path file, one frame per line 'px py pz lx ly lz [fov]' (world "
                            "frame; frames cycle)")
-                ->check(CLI::ExistingFile);
+                ->check(prt::tool::ExistingInput);
             prt::player::add_camera_options(app, o.camera);
             prt::player::add_backend_options(app, o.backend);
             prt::player::add_render_options(app, o.render);

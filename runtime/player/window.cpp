@@ -1,6 +1,7 @@
 #include "window.h"
 
 #include "accumulate.h"
+#include "window_controls.h"
 
 #define GLFW_INCLUDE_GLEXT  // GL 1.5+ buffer-object types and enums (GL_PIXEL_UNPACK_BUFFER)
 #include <GLFW/glfw3.h>
@@ -223,122 +224,157 @@ void write_screenshot(const std::filesystem::path& path, int fw, int fh) {
     rt::write_image(path, shot);
 }
 
-/// The orbit about the look-at point, in a frame of the camera's up k: e1, k, e2 right-handed
-/// (for +y up: x, y, z). Yaw turns about k from e2 toward e1; pitch lifts toward k.
-struct OrbitState {
-    scene::Vec3 target{0, 0, 0};
-    double distance = 1, yaw = 0, pitch = 0;  // radians
-    scene::Vec3 e1{1, 0, 0}, k{0, 1, 0}, e2{0, 0, 1};
-    bool dragging_left = false, dragging_right = false;
-    double last_x = 0, last_y = 0;
-    bool dirty = true;
+static_assert(keys::escape == GLFW_KEY_ESCAPE && keys::home == GLFW_KEY_HOME && keys::f1 == GLFW_KEY_F1 &&
+                  keys::f12 == GLFW_KEY_F12 && keys::kp_add == GLFW_KEY_KP_ADD &&
+                  keys::kp_subtract == GLFW_KEY_KP_SUBTRACT && GLFW_KEY_A == 'A' && GLFW_KEY_1 == '1' &&
+                  GLFW_KEY_EQUAL == '=' && GLFW_KEY_MINUS == '-',
+              "window_controls.h key codes are GLFW's");
 
-    /// The frame of an up direction: e1 = k x z (k x -y when k is near z), e2 = e1 x k.
-    void set_up(const scene::Vec3& up) {
-        const double l = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
-        k = l > 0 ? scene::Vec3{up[0] / l, up[1] / l, up[2] / l} : scene::Vec3{0, 1, 0};
-        const scene::Vec3 ref = std::fabs(k[2]) < 0.9 ? scene::Vec3{0, 0, 1} : scene::Vec3{0, -1, 0};
-        e1 = cross(k, ref);
-        const double el = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
-        for (double& c : e1) c /= el;
-        e2 = cross(e1, k);
-    }
-    static scene::Vec3 cross(const scene::Vec3& a, const scene::Vec3& b) {
-        return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-    }
-    /// a e1 + b k + c e2
-    scene::Vec3 in_frame(double a, double b, double c) const {
-        return {a * e1[0] + b * k[0] + c * e2[0], a * e1[1] + b * k[1] + c * e2[1],
-                a * e1[2] + b * k[2] + c * e2[2]};
-    }
-};
-
-scene::Vec3 orbit_position(const OrbitState& o) {
-    const scene::Vec3 d = o.in_frame(std::cos(o.pitch) * std::sin(o.yaw), std::sin(o.pitch),
-                                     std::cos(o.pitch) * std::cos(o.yaw));
-    return {o.target[0] + o.distance * d[0], o.target[1] + o.distance * d[1],
-            o.target[2] + o.distance * d[2]};
-}
-
+/// The window's state between callbacks: the view the mouse and fly keys move (window_controls.h)
+/// and the requests the keys and clicks leave for the render loop.
 struct WindowContext {
-    OrbitState orbit;
+    ViewState view, start_view;  ///< start_view: reset (R, Home)
+    bool dragging_left = false, dragging_right = false;
+    bool drag_moved = false;  ///< the left button left the click zone since it was pressed
+    double last_x = 0, last_y = 0, press_x = 0, press_y = 0;
+    bool dirty = true;
+    double fly_speed = 1;  ///< world units per second
     std::vector<std::string> backends;
     std::size_t backend_index = 0;
     bool switch_backend = false;
+    bool next_surface = false;
+    bool screenshot = false;
+    bool toggle_recording = false;
+    std::vector<std::pair<double, double>> picks;  ///< clicks (window coordinates) not yet picked
     core::RenderParams* params = nullptr;
     bool quiet = false;
-    std::string surfaces;  ///< "model: surface" of every model (key K)
 };
+
+/// What a key press does (the window's key callback and --keys).
+void apply_action(GLFWwindow* w, WindowContext& ctx, Action a) {
+    core::RenderParams& p = *ctx.params;
+    switch (a) {
+        case Action::none:
+            return;
+        case Action::quit:
+            glfwSetWindowShouldClose(w, 1);
+            break;
+        case Action::toggle_shadows:
+            p.shadows ^= 1u;
+            break;
+        case Action::toggle_reflections:
+            p.reflections ^= 1u;
+            break;
+        case Action::toggle_refractions:
+            p.refractions ^= 1u;
+            break;
+        case Action::toggle_deep_blending:
+            p.deep_blending ^= 1u;
+            break;
+        case Action::toggle_path_tracing:
+            p.path_tracing ^= 1u;
+            break;
+        case Action::next_surface:
+            ctx.next_surface = true;
+            break;
+        case Action::next_backend:
+            if (ctx.backends.size() > 1) {
+                ctx.backend_index = (ctx.backend_index + 1) % ctx.backends.size();
+                ctx.switch_backend = true;
+            } else {
+                tool::note(ctx.quiet, "prt-play: only the cpu backend runs on this machine");
+            }
+            break;
+        case Action::screenshot:
+            ctx.screenshot = true;
+            break;
+        case Action::reset_view:
+            ctx.view = ctx.start_view;
+            break;
+        case Action::toggle_recording:
+            ctx.toggle_recording = true;
+            break;
+        case Action::print_keys:
+            std::fputs(key_help().c_str(), stdout);
+            std::fflush(stdout);
+            break;
+        case Action::faster:
+            ctx.fly_speed *= 2;
+            tool::note(ctx.quiet, "prt-play: fly speed %.4g units/s", ctx.fly_speed);
+            break;
+        case Action::slower:
+            ctx.fly_speed *= 0.5;
+            tool::note(ctx.quiet, "prt-play: fly speed %.4g units/s", ctx.fly_speed);
+            break;
+    }
+    ctx.dirty = true;
+}
 
 void on_key(GLFWwindow* w, int key, int, int action, int) {
     if (action != GLFW_PRESS) return;
-    auto* ctx = static_cast<WindowContext*>(glfwGetWindowUserPointer(w));
-    core::RenderParams& p = *ctx->params;
-    switch (key) {
-        case GLFW_KEY_ESCAPE:
-            glfwSetWindowShouldClose(w, 1);
-            break;
-        case GLFW_KEY_S:
-            p.shadows ^= 1u;
-            break;
-        case GLFW_KEY_R:
-            p.reflections ^= 1u;
-            break;
-        case GLFW_KEY_T:
-            p.refractions ^= 1u;
-            break;
-        case GLFW_KEY_D:
-            p.deep_blending ^= 1u;
-            break;
-        case GLFW_KEY_K:
-            tool::note(ctx->quiet, "prt-play: surfaces: %s", ctx->surfaces.c_str());
-            break;
-        case GLFW_KEY_B:
-            if (ctx->backends.size() > 1) {
-                ctx->backend_index = (ctx->backend_index + 1) % ctx->backends.size();
-                ctx->switch_backend = true;
-            }
-            break;
-        default:
-            return;
-    }
-    ctx->orbit.dirty = true;
+    apply_action(w, *static_cast<WindowContext*>(glfwGetWindowUserPointer(w)), key_action(key));
 }
 
 void on_mouse_button(GLFWwindow* w, int button, int action, int) {
     auto* ctx = static_cast<WindowContext*>(glfwGetWindowUserPointer(w));
-    glfwGetCursorPos(w, &ctx->orbit.last_x, &ctx->orbit.last_y);
+    double x = 0, y = 0;
+    glfwGetCursorPos(w, &x, &y);
+    ctx->last_x = x;
+    ctx->last_y = y;
     const bool down = action == GLFW_PRESS;
-    if (button == GLFW_MOUSE_BUTTON_LEFT) ctx->orbit.dragging_left = down;
-    if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE)
-        ctx->orbit.dragging_right = down;
+    if (button == GLFW_MOUSE_BUTTON_LEFT) {
+        ctx->dragging_left = down;
+        if (down) {
+            ctx->press_x = x;
+            ctx->press_y = y;
+            ctx->drag_moved = false;
+        } else if (!ctx->drag_moved && is_click(ctx->press_x, ctx->press_y, x, y)) {
+            ctx->picks.emplace_back(x, y);
+        }
+    }
+    if (button == GLFW_MOUSE_BUTTON_RIGHT || button == GLFW_MOUSE_BUTTON_MIDDLE) ctx->dragging_right = down;
 }
 
 void on_cursor(GLFWwindow* w, double x, double y) {
     auto* ctx = static_cast<WindowContext*>(glfwGetWindowUserPointer(w));
-    OrbitState& o = ctx->orbit;
-    const double dx = x - o.last_x, dy = y - o.last_y;
-    o.last_x = x;
-    o.last_y = y;
-    if (o.dragging_left) {
-        o.yaw -= dx * 0.01;
-        o.pitch = std::clamp(o.pitch + dy * 0.01, -1.55, 1.55);
-        o.dirty = true;
-    } else if (o.dragging_right) {
-        // Pan in the camera's image plane, scaled by the distance.
-        const double s = o.distance * 0.002;
-        const scene::Vec3 right = o.in_frame(std::cos(o.yaw), 0, -std::sin(o.yaw));
-        const scene::Vec3 up = o.in_frame(-std::sin(o.pitch) * std::sin(o.yaw), std::cos(o.pitch),
-                                          -std::sin(o.pitch) * std::cos(o.yaw));
-        for (int i = 0; i < 3; ++i) o.target[i] += -dx * s * right[i] + dy * s * up[i];
-        o.dirty = true;
+    const double dx = x - ctx->last_x, dy = y - ctx->last_y;
+    ctx->last_x = x;
+    ctx->last_y = y;
+    if (ctx->dragging_left && !is_click(ctx->press_x, ctx->press_y, x, y)) ctx->drag_moved = true;
+    if (ctx->dragging_left && ctx->drag_moved) {
+        orbit(ctx->view, dx, dy);
+        ctx->dirty = true;
+    } else if (ctx->dragging_right) {
+        pan(ctx->view, dx, dy);
+        ctx->dirty = true;
     }
 }
 
 void on_scroll(GLFWwindow* w, double, double dy) {
     auto* ctx = static_cast<WindowContext*>(glfwGetWindowUserPointer(w));
-    ctx->orbit.distance *= std::pow(0.9, dy);
-    ctx->orbit.dirty = true;
+    zoom(ctx->view, dy);
+    ctx->dirty = true;
+}
+
+/// K: the scene reloaded as the next surface its pools hold (window_controls.h next_surface), the
+/// camera and render settings kept. False (and a note) when none other loads.
+bool cycle_surface(rt::RenderScene& rs, const WindowOptions& options) {
+    if (!options.reload) {
+        tool::note(options.quiet, "prt-play: this scene cannot switch surfaces");
+        return false;
+    }
+    std::optional<rt::RenderScene> next = next_surface(rs, options.reload);
+    if (!next) {
+        tool::note(options.quiet, "prt-play: no other surface in the pools (%s)", surfaces_of(rs).c_str());
+        return false;
+    }
+    const scene::Camera cam = rs.scene().camera;
+    const core::RenderParams params = rs.params();
+    rs = std::move(*next);
+    rs.scene().camera = cam;
+    rs.params() = params;
+    tool::note(options.quiet, "prt-play: surfaces now: %s", surfaces_of(rs).c_str());
+    return true;
 }
 
 }  // namespace
@@ -359,9 +395,6 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
     WindowContext ctx;
     ctx.quiet = options.quiet;
     ctx.params = &rs.params();
-    for (const rt::LoadedModel& m : rs.models())
-        ctx.surfaces += (ctx.surfaces.empty() ? "" : ", ") + m.name + " " +
-                        std::string(scene::surface_name(m.view.surface));
     const rt::BackendAvailability avail = rt::backend_availability();
     ctx.backends = {"cpu"};
     if (avail.cuda_device) {
@@ -370,29 +403,57 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
     }
     const auto it = std::find(ctx.backends.begin(), ctx.backends.end(), backend->name());
     ctx.backend_index = it == ctx.backends.end() ? 0 : static_cast<std::size_t>(it - ctx.backends.begin());
-    const scene::Vec3 d{cam.position[0] - cam.look_at[0], cam.position[1] - cam.look_at[1],
-                        cam.position[2] - cam.look_at[2]};
-    ctx.orbit.target = cam.look_at;
-    ctx.orbit.set_up(cam.up);  // the orbit turns about the camera's up (--up, a scene's camera.up)
-    ctx.orbit.distance = std::max(1e-30, std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]));
-    auto along = [&](const scene::Vec3& e) { return d[0] * e[0] + d[1] * e[1] + d[2] * e[2]; };
-    ctx.orbit.yaw = std::atan2(along(ctx.orbit.e1), along(ctx.orbit.e2));
-    ctx.orbit.pitch = std::asin(std::clamp(along(ctx.orbit.k) / ctx.orbit.distance, -1.0, 1.0));
+    ctx.view = ctx.start_view = ViewState::from_camera(cam);  // turns about the camera's up
+    ctx.fly_speed = fly_speed(rs.robust_bounds());
     glfwSetWindowUserPointer(window, &ctx);
     glfwSetKeyCallback(window, on_key);
     glfwSetMouseButtonCallback(window, on_mouse_button);
     glfwSetCursorPosCallback(window, on_cursor);
     glfwSetScrollCallback(window, on_scroll);
+    tool::note(options.quiet,
+               "prt-play: window controls: press H (or run prt-play --help-keys) for the list");
 
     FrameDisplay display(options.quiet, options.interop);
     rt::Image image;
     Accumulator acc;  // sampled frames (path tracing, spp > 1) converge while the view stays still
     core::PinholeCamera last_camera{};
-    double smoothed_ms = 0;
+    core::RenderParams last_params{};
+    double smoothed_ms = 0, last_time = tool::now_seconds();
     std::uint32_t shown = 0;
+    std::size_t next_key = 0;  ///< --keys: the next scripted key (one before each frame)
+    bool recording = false;
+    std::vector<CameraKey> recorded;
+    const auto save_recording = [&] {
+        std::filesystem::path file;
+        try {
+            file = next_numbered(options.save_prefix + "-path-%04d.txt");
+            write_camera_path(file, recorded);
+        } catch (const Error& e) {
+            std::fprintf(stderr, "prt-play: camera path not written: %s\n", e.what());
+            return;
+        }
+        tool::note(options.quiet,
+                   "prt-play: recorded %zu frames to %s (replay headless: prt-play ... --camera-path %s "
+                   "--frames %zu --out 'frame_%%04d.png')",
+                   recorded.size(), file.string().c_str(), file.string().c_str(), recorded.size());
+    };
+    const std::string image_ext = rt::have_oiio() ? ".png" : ".ppm";
     const std::uint32_t frames = options.screenshot.empty() ? options.frames : std::max(options.frames, 1u);
     while (!glfwWindowShouldClose(window)) {
         glfwPollEvents();
+        if (next_key < options.keys.size() && next_key <= shown)
+            apply_action(window, ctx, key_action(options.keys[next_key++]));
+        if (ctx.next_surface) {
+            ctx.next_surface = false;
+            stream.reset();  // it holds the old scene's bricks
+            if (cycle_surface(rs, options)) {
+                backend = rt::make_backend(ctx.backends[ctx.backend_index], backend_options(options.backend));
+                ctx.switch_backend = false;
+            }
+            stream =
+                std::make_unique<rt::BrickStream>(rs, *backend, stream_options(options.backend, *backend));
+            acc.reset();
+        }
         if (ctx.switch_backend) {
             ctx.switch_backend = false;
             stream.reset();  // its storage belongs to the old backend
@@ -401,29 +462,76 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
                 std::make_unique<rt::BrickStream>(rs, *backend, stream_options(options.backend, *backend));
             acc.reset();
         }
+        // Fly keys held: a move of speed x the time since the last frame (at most 0.1 s of it).
+        const double now = tool::now_seconds();
+        const double dt = std::min(0.1, now - last_time);
+        last_time = now;
+        const auto held = [&](int key) { return glfwGetKey(window, key) == GLFW_PRESS; };
+        const bool w = held(GLFW_KEY_W), a = held(GLFW_KEY_A), s_key = held(GLFW_KEY_S), d = held(GLFW_KEY_D),
+                   q = held(GLFW_KEY_Q), e = held(GLFW_KEY_E);
+        if (w || a || s_key || d || q || e) fly_step(ctx.view, w, a, s_key, d, q, e, ctx.fly_speed, dt);
+        if (ctx.toggle_recording) {
+            ctx.toggle_recording = false;
+            recording = !recording;
+            if (recording) {
+                recorded.clear();
+                tool::note(options.quiet, "prt-play: recording the camera path (L stops)");
+            } else if (!recorded.empty()) {
+                save_recording();
+            }
+        }
         int fw = 0, fh = 0;
         glfwGetFramebufferSize(window, &fw, &fh);
         if (fw <= 0 || fh <= 0) continue;
         cam.width = static_cast<std::uint32_t>(fw);
         cam.height = static_cast<std::uint32_t>(fh);
-        cam.position = orbit_position(ctx.orbit);
-        cam.look_at = ctx.orbit.target;
+        cam = ctx.view.apply(cam);
+        if (recording) recorded.push_back(key_of(cam));
         rt::FrameRequest req;
         req.camera = rs.camera(cam);
         req.params = rs.params();
         req.width = cam.width;
         req.height = cam.height;
         const bool sampled = req.params.path_tracing != 0 || req.params.spp > 1;
-        if (std::memcmp(&req.camera, &last_camera, sizeof(last_camera)) != 0) acc.reset();
+        if (std::memcmp(&req.camera, &last_camera, sizeof(last_camera)) != 0 ||
+            std::memcmp(&req.params, &last_params, sizeof(last_params)) != 0)
+            acc.reset();  // the view or a setting changed: start the mean again
         last_camera = req.camera;
+        last_params = req.params;
         req.params.frame = acc.frames();
         const rt::FrameStats s = display.render(*backend, req, image, fw, fh, sampled ? &acc : nullptr);
         ++shown;
+        // Clicks: the hit under the cursor, on the host view (the CPU backend's traversal).
+        if (!ctx.picks.empty()) {
+            int ww = 0, wh = 0;
+            glfwGetWindowSize(window, &ww, &wh);
+            for (const auto& [x, y] : ctx.picks) {
+                const double px = ww > 0 ? x * fw / ww : x, py = wh > 0 ? y * fh / wh : y;
+                if (stream->streaming() && backend->name() != "cpu") {
+                    std::printf("pick: pixel (%.0f, %.0f): not available while bricks stream to the GPU\n",
+                                px, py);
+                } else {
+                    std::printf("%s\n", describe(pick(rs, cam, px, py), rs, px, py).c_str());
+                }
+            }
+            std::fflush(stdout);
+            ctx.picks.clear();
+        }
         // Streaming: the bricks this frame asked for are there for the next one (progressive).
         const rt::StreamFrame sf = stream->after_frame(s);
         if (sf.streaming && sf.uploaded > 0)
             tool::note(options.quiet, "prt-play: frame %u: %s", shown, rt::describe(sf).c_str());
         if (sf.streaming && sf.fallback_rays > 0) acc.reset();  // the image is still refining
+        if (ctx.screenshot) {
+            ctx.screenshot = false;
+            try {  // a failed capture is said, and the window stays
+                const std::filesystem::path file = next_numbered(options.save_prefix + "-%04d" + image_ext);
+                write_screenshot(file, fw, fh);
+                tool::note(options.quiet, "prt-play: wrote %s (%dx%d)", file.string().c_str(), fw, fh);
+            } catch (const Error& e) {
+                std::fprintf(stderr, "prt-play: screenshot failed: %s\n", e.what());
+            }
+        }
         const bool last = frames > 0 && shown >= frames;
         if (last && !options.screenshot.empty()) {
             write_screenshot(options.screenshot, fw, fh);
@@ -440,16 +548,25 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
             std::snprintf(streaming, sizeof(streaming), " - bricks %u/%u resident, %llu rays coarse",
                           sf.resident_bricks, sf.brick_count,
                           static_cast<unsigned long long>(sf.fallback_rays));
-        char title[384];
+        char samples[64] = "";
+        if (sampled)
+            std::snprintf(samples, sizeof(samples), " - %s %u samples",
+                          p.path_tracing ? "path tracing," : "accumulating,",
+                          acc.frames() * std::max(1u, p.spp));
+        char title[512];
         std::snprintf(
             title, sizeof(title),
-            "prt-play - %s (%s) - %.2f ms (%.1f fps) - shadows %s, reflections %s, refractions %s%s%s",
-            backend->name().c_str(), display.path(), smoothed_ms, 1e3 / std::max(smoothed_ms, 1e-3),
+            "prt-play - %s (%s) - %s - %.2f ms (%.1f fps), %.1f Mrays/s - shadows %s, reflections %s, "
+            "refractions %s%s%s%s%s",
+            backend->name().c_str(), display.path(),
+            scene::surface_name(rs.models().front().view.surface).data(), smoothed_ms,
+            1e3 / std::max(smoothed_ms, 1e-3), s.seconds > 0 ? s.rays() / s.seconds * 1e-6 : 0.0,
             p.shadows ? "on" : "off", p.reflections ? "on" : "off", p.refractions ? "on" : "off",
-            p.deep_blending ? ", deep blending" : "", streaming);
+            p.deep_blending ? ", deep blending" : "", samples, recording ? " - recording" : "", streaming);
         glfwSetWindowTitle(window, title);
         if (last) break;
     }
+    if (recording && !recorded.empty()) save_recording();
 }
 
 }  // namespace prt::player

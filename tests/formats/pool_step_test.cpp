@@ -6,13 +6,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 #include <vector>
 
 #include "point_cloud.h"
+#include "prt/tool.h"
 #include "runtime/tool_fixture.h"
 
 namespace {
@@ -39,7 +42,7 @@ protected:
 
     /// Runs a step that adds a radii section of `radius` (or throws `error` when non-empty).
     int run_step(std::vector<std::string> args, tool::PoolStep::Help help = {}, const std::string& error = {},
-                 bool optional_output = false) {
+                 bool optional_output = false, bool* body_ran = nullptr) {
         std::vector<char*> argv{const_cast<char*>("prt-test-step")};
         for (std::string& a : args) argv.push_back(a.data());
         float radius = 0.5f;
@@ -51,6 +54,7 @@ protected:
                 if (optional_output) step.add_output(app, "Output (default: INPUT)");
             },
             [&](tool::PoolStep& s) {
+                if (body_ran) *body_ran = true;
                 const auto positions = s.input().require<pool::Float3>(pool::SectionType::positions, "test");
                 if (!error.empty()) s.about_input([&] { throw Error(error); });
                 s.writer().add_array(pool::SectionType::radii, std::vector<float>(positions.size(), radius));
@@ -106,6 +110,86 @@ TEST_F(PoolStepTest, OptionalOutputRewritesInputInPlace) {
     ASSERT_EQ(run_step({path("in.pool"), "-q"}, in_place, {}, true), 0);
     const pool::PoolFile out = pool::PoolFile::open(path("in.pool"));
     EXPECT_EQ(out.array<float>(pool::SectionType::radii).size(), 10u);
+}
+
+TEST_F(PoolStepTest, UnwritableOutputIsRefusedBeforeTheWork) {
+    const auto refused = [&](std::vector<std::string> args, const std::string& named) {
+        SCOPED_TRACE(named);
+        bool ran = false;
+        testing::internal::CaptureStderr();
+        const int code = run_step(std::move(args), {}, {}, false, &ran);
+        const std::string err = testing::internal::GetCapturedStderr();
+        EXPECT_EQ(code, k_exit_runtime_error);
+        EXPECT_FALSE(ran) << "the body ran before the output was checked";
+        EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+        EXPECT_NE(err.find("prt-test-step: error: " + named + ": cannot write"), std::string::npos) << err;
+    };
+    // A folder that does not exist, a path that is a folder, --stats-json in a missing folder.
+    refused({path("in.pool"), "-o", path("no/such/out.pool")}, path("no/such/out.pool"));
+    fs::create_directory(path("taken"));
+    refused({path("in.pool"), "-o", path("taken")}, path("taken"));
+    refused({path("in.pool"), "-o", path("out.pool"), "--stats-json", path("none/s.json")},
+            path("none/s.json"));
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+    // A folder without write permission (root writes anyway: then only the message is checked above).
+    if (::geteuid() != 0) {
+        fs::create_directory(path("ro"));
+        fs::permissions(path("ro"), fs::perms::owner_read | fs::perms::owner_exec);
+        refused({path("in.pool"), "-o", path("ro/out.pool")}, path("ro/out.pool"));
+        fs::permissions(path("ro"), fs::perms::owner_all);
+    }
+    // Nothing of the probe is left behind, and a writable output still works.
+    ASSERT_EQ(run_step({path("in.pool"), "-o", path("out.pool"), "-q"}), 0);
+    std::size_t files = 0;
+    for (const auto& e : fs::directory_iterator(m_dir)) files += e.is_regular_file();
+    EXPECT_EQ(files, 2u) << "in.pool and out.pool only";
+}
+
+TEST_F(PoolStepTest, MissingInputIsOneLineWithStatus1) {
+    bool ran = false;
+    testing::internal::CaptureStderr();
+    const int code = run_step({path("none.pool"), "-o", path("out.pool")}, {}, {}, false, &ran);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(code, k_exit_runtime_error);
+    EXPECT_FALSE(ran);
+    EXPECT_EQ(err, "prt-test-step: error: " + path("none.pool") + ": no such file\n");
+}
+
+/// prt::tool::Progress with stderr not a terminal (captured to a file): whole lines, no '\r'.
+TEST(Progress, LogLinesWhenStderrIsNotATerminal) {
+    testing::internal::CaptureStderr();
+    {
+        tool::Progress bar("step", 100, false);
+        const double t0 = tool::now_seconds();
+        // 100 updates over about 2.5 s: a terminal would get ~10 '\r' updates.
+        for (int i = 1; i <= 100; ++i) {
+            while (tool::now_seconds() - t0 < 0.025 * i) ::usleep(2000);
+            bar.update(std::uint64_t(i));
+        }
+        bar.finish();
+    }
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(err.find('\r'), std::string::npos) << err;
+    ASSERT_FALSE(err.empty());
+    EXPECT_EQ(err.back(), '\n') << err;
+    std::vector<std::string> lines;
+    std::istringstream in(err);
+    for (std::string l; std::getline(in, l);) lines.push_back(l);
+    // At most one line a second (2.5 s: 2 progress lines at most) plus the final one.
+    ASSERT_GE(lines.size(), 2u) << err;
+    EXPECT_LE(lines.size(), 3u) << err;
+    for (std::size_t i = 0; i + 1 < lines.size(); ++i) {
+        EXPECT_EQ(lines[i].rfind("step: ", 0), 0u) << lines[i];
+        EXPECT_NE(lines[i].find('%'), std::string::npos) << lines[i];
+    }
+    EXPECT_EQ(lines.back().rfind("step: done in ", 0), 0u) << lines.back();
+}
+
+TEST(Progress, LogLineRateLimit) {
+    EXPECT_FALSE(tool::Progress::log_line_due(0.5, 50, 0));   // under a second: never
+    EXPECT_TRUE(tool::Progress::log_line_due(1.0, 10, 0));    // a second and 10 %
+    EXPECT_FALSE(tool::Progress::log_line_due(3.0, 19, 10));  // under 10 % more
+    EXPECT_TRUE(tool::Progress::log_line_due(10.0, 11, 10));  // a slow step: every 10 s
 }
 
 }  // namespace

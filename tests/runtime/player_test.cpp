@@ -1,6 +1,7 @@
 // prt-play and prt-bench end to end (label cpu): headless rendering of a pool to PPM, the default
 // scene, one-line errors (no GPU, missing sections, unwritable formats), and the benchmark's JSON.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <fstream>
@@ -97,6 +98,70 @@ TEST_F(PlayerTest, ErrorsNameTheFileAndTheProblem) {
     // No input at all is a usage error.
     const ToolRun none = run_tool("prt-play", "--headless", m_dir);
     EXPECT_NE(none.code, 0);
+}
+
+TEST_F(PlayerTest, MissingInputFilesExitWithStatus1AndOneLine) {
+    const std::string none = (m_dir / "none.pool").string();
+    const std::string out = " --out " + (m_dir / "x.ppm").string();
+    // The pool, the scene file and the camera path of prt-play; prt-bench's pool and scene.
+    for (const std::string& args :
+         {none + " --headless" + out, (m_dir / "ball.pool").string() + " --scene " + none + out,
+          (m_dir / "ball.pool").string() + " --camera-path " + none + out}) {
+        SCOPED_TRACE(args);
+        const ToolRun r = run_tool("prt-play", args, m_dir);
+        expect_one_line_error(r, {"prt-play: error: ", "none.pool: no such file"});
+    }
+    for (const std::string& args : {none + " --frames 1", "--scene " + none}) {
+        SCOPED_TRACE(args);
+        expect_one_line_error(run_tool("prt-bench", args, m_dir),
+                              {"prt-bench: error: ", "none.pool: no such file"});
+    }
+    // A folder given as the pool.
+    expect_one_line_error(run_tool("prt-play", m_dir.string() + out, m_dir), {"is a folder"});
+    EXPECT_FALSE(fs::exists(m_dir / "x.ppm"));
+}
+
+TEST_F(PlayerTest, UnwritableOutputIsRefusedBeforeRendering) {
+    const std::string pool = (m_dir / "ball.pool").string() + " --backend cpu --width 16 --height 16";
+    fs::create_directory(m_dir / "taken.ppm");
+    for (const fs::path& out : {m_dir / "no" / "such" / "x.ppm", m_dir / "taken.ppm"}) {
+        SCOPED_TRACE(out.string());
+        const ToolRun r = run_tool("prt-play", pool + " --out " + out.string(), m_dir);
+        // One line, and nothing before it: the pool was not even loaded, no frame rendered.
+        expect_one_line_error(r, {"prt-play: error: ", out.string().c_str(), "cannot write"});
+    }
+    const ToolRun frames =
+        run_tool("prt-play", pool + " --frames 2 --out " + (m_dir / "none" / "f_%02d.ppm").string(), m_dir);
+    expect_one_line_error(frames, {"none/f_00.ppm", "cannot write"});
+    const ToolRun bench =
+        run_tool("prt-bench", pool + " --frames 1 --json " + (m_dir / "no" / "b.json").string(), m_dir);
+    expect_one_line_error(bench, {"prt-bench: error: ", "b.json", "cannot write"});
+    if (::geteuid() != 0) {  // root writes into read-only folders anyway
+        fs::create_directory(m_dir / "ro");
+        fs::permissions(m_dir / "ro", fs::perms::owner_read | fs::perms::owner_exec);
+        const ToolRun r = run_tool("prt-play", pool + " --out " + (m_dir / "ro" / "x.ppm").string(), m_dir);
+        fs::permissions(m_dir / "ro", fs::perms::owner_all);
+        expect_one_line_error(r, {"ro/x.ppm", "cannot write", "Permission denied"});
+    }
+}
+
+TEST_F(PlayerTest, ProgressOnAPipeIsWholeLines) {
+    // Enough frames for the progress (stderr to a file: not a terminal) to print more than once.
+    const ToolRun r = play("ball.pool", "--backend cpu --width 24 --height 24 --frames 300", "p.ppm");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find('\r'), std::string::npos) << r.err;
+    ASSERT_FALSE(r.err.empty());
+    EXPECT_EQ(r.err.back(), '\n');
+    EXPECT_NE(r.err.find("prt-play: rendering: done in"), std::string::npos) << r.err;
+}
+
+TEST_F(PlayerTest, HelpKeysListsTheWindowControls) {
+    const ToolRun r = run_tool("prt-play", "--help-keys", m_dir);
+    EXPECT_EQ(r.code, 0) << r.err;
+    for (const char* k : {"W A S D", "pick", "path tracing", "screenshot", "camera path", "Esc"})
+        EXPECT_NE(r.out.find(k), std::string::npos) << k << ": " << r.out;
+    const ToolRun bad = run_tool("prt-play", (m_dir / "ball.pool").string() + " --keys Xyz", m_dir);
+    EXPECT_EQ(bad.code, 2) << bad.err;
 }
 
 /// Whether pixel (x, y) of a PPM render is the red ball (red well above green).

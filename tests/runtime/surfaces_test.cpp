@@ -7,20 +7,22 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "prt/core/render.h"
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
 #include "surface_fixtures.h"
+#include "window_controls.h"
 
 namespace prt::test {
 namespace {
 
 struct SphereErrors {
     std::size_t rays = 0, analytic_hits = 0, holes = 0, extra = 0;
-    double max_err = 0;      ///< |t - t_true| over rays both hit, relative to the radius
-    double max_normal = 0;   ///< 1 - cos(normal, true normal)
+    double max_err = 0;     ///< |t - t_true| over rays both hit, relative to the radius
+    double max_normal = 0;  ///< 1 - cos(normal, true normal)
 };
 
 /// Primary rays of a w x w camera against the unit sphere at the world origin. Rays within
@@ -109,6 +111,34 @@ TEST_F(SurfacesTest, EverySurfaceOfASphereMatchesTheAnalyticSphere) {
     }
 }
 
+TEST_F(SurfacesTest, WindowKeyKCyclesTheSurfacesThePoolHolds) {
+    ASSERT_FALSE(HasFatalFailure());
+    // The window's K (runtime/player/window_controls.h): splats -> iso -> mls -> splats on a pool
+    // holding the three; patches are skipped (not in the pool).
+    const player::SurfaceReload reload = [](const std::string& surface) {
+        rt::LoadOptions lo;
+        lo.surface = surface;
+        return rt::RenderScene::from_pool(s_sphere, lo);
+    };
+    std::optional<rt::RenderScene> rs = reload("splats");
+    for (const char* expected : {"iso", "mls", "splats"}) {
+        rs = player::next_surface(*rs, reload);
+        ASSERT_TRUE(rs.has_value()) << expected;
+        EXPECT_EQ(scene::surface_name(rs->models()[0].view.surface), expected);
+    }
+    // A pool with splats only has no other surface.
+    const std::filesystem::path splats = s_dir->path / "splats_only.pool";
+    must_run("prt-synth", "sphere -n 2000 -q -o " + splats.string(), s_dir->path);
+    must_run("prt-radii", splats.string() + " -q -o " + splats.string(), s_dir->path);
+    must_run("prt-octree", splats.string() + " -q -o " + splats.string(), s_dir->path);
+    const rt::RenderScene only = rt::RenderScene::from_pool(splats);
+    EXPECT_FALSE(player::next_surface(only, [&](const std::string& surface) {
+                     rt::LoadOptions lo;
+                     lo.surface = surface;
+                     return rt::RenderScene::from_pool(splats, lo);
+                 }).has_value());
+}
+
 TEST_F(SurfacesTest, FloatAndQuantizedIsoLeavesBothRender) {
     ASSERT_FALSE(HasFatalFailure());
     for (bool fl : {false, true}) {
@@ -152,7 +182,8 @@ TEST_F(SurfacesTest, ShadowsFallFromEverySurface) {
         const core::SceneView s = rs.view();
         const auto& org = rs.render_origin();
         auto ray_up = [&](double x) {
-            core::Ray r{{static_cast<float>(x - org[0]), static_cast<float>(-3 - org[1]), static_cast<float>(-org[2])},
+            core::Ray r{{static_cast<float>(x - org[0]), static_cast<float>(-3 - org[1]),
+                         static_cast<float>(-org[2])},
                         {0, 1, 0},
                         6.0f,
                         0};
@@ -176,7 +207,8 @@ TEST(Patches, AFlatPatchIsHitOnItsPlaneAndMixesWithPointModels) {
     must_run("prt-patches", bpt.string() + " -o " + patch_pool.string() + " -q", dir.path);
     must_run("prt-synth", "sphere -n 20000 -o " + (dir.path / "s.pool").string() + " -q", dir.path);
     for (const char* t : {"prt-radii", "prt-octree"})
-        must_run(t, (dir.path / "s.pool").string() + " -o " + (dir.path / "s.pool").string() + " -q", dir.path);
+        must_run(t, (dir.path / "s.pool").string() + " -o " + (dir.path / "s.pool").string() + " -q",
+                 dir.path);
     ASSERT_FALSE(HasFatalFailure());
 
     scene::Scene sc;
@@ -191,10 +223,11 @@ TEST(Patches, AFlatPatchIsHitOnItsPlaneAndMixesWithPointModels) {
     const core::SceneView s = rs.view();
     const auto& org = rs.render_origin();
     auto shoot = [&](double x, double y, core::SurfaceHit& h) {
-        core::Ray r{{static_cast<float>(x - org[0]), static_cast<float>(y - org[1]), static_cast<float>(5 - org[2])},
-                    {0, 0, -1},
-                    core::k_inf,
-                    0};
+        core::Ray r{
+            {static_cast<float>(x - org[0]), static_cast<float>(y - org[1]), static_cast<float>(5 - org[2])},
+            {0, 0, -1},
+            core::k_inf,
+            0};
         core::RayCounters c;
         return core::closest_hit_scene(s, r, h, c);
     };

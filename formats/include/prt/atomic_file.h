@@ -44,6 +44,12 @@ private:
     bool m_committed = false;
 };
 
+/// Checks up front that AtomicFile(path) can be written and committed, so that a tool refuses an
+/// unwritable output before it does the work: `path` is not a folder, its folder exists and is a
+/// folder, and a temporary file can be created there (created and removed at once; this catches
+/// missing permission and read-only file systems). Throws prt::Error "PATH: cannot write: reason".
+void check_writable(const std::filesystem::path& path);
+
 /// Writes `bytes` to `path` atomically (AtomicFile).
 void write_file_atomic(const std::filesystem::path& path, std::span<const std::byte> bytes);
 /// Writes `text` to `path` atomically (AtomicFile).

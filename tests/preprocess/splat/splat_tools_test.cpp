@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -201,6 +202,26 @@ TEST_F(SplatTools, BadInputAndUsage) {
     EXPECT_FALSE(fs::exists(path("out.pool")));
     EXPECT_EQ(run("prt-octree", path("tiny.pool") + " -o " + path("out.pool") + " --max-depth 40"), 2);
     EXPECT_EQ(run("prt-radii", path("tiny.pool")), 2);  // -o missing
+}
+
+TEST_F(SplatTools, MissingInputAndUnwritableOutputAreOneLineBeforeTheWork) {
+    if (!built("prt-octree")) GTEST_SKIP() << "prt-octree is not built in " << PRT_BIN_DIR;
+    write_pool(sphere_cloud(500), "in.pool");
+    for (const char* tool : {"prt-octree", "prt-radii", "prt-cull"}) {
+        if (!built(tool)) continue;
+        SCOPED_TRACE(tool);
+        // A missing input: status 1, the tool's one line (not CLI11's usage wording, status 2).
+        EXPECT_EQ(run(tool, path("none.pool") + " -o " + path("out.pool")), 1);
+        EXPECT_EQ(m_stderr, std::string(tool) + ": error: " + path("none.pool") + ": no such file\n");
+        // An output in a folder that does not exist, or a folder: refused before any work (one line).
+        EXPECT_EQ(run(tool, path("in.pool") + " -o " + path("no/out.pool")), 1);
+        EXPECT_EQ(m_stderr, std::string(tool) + ": error: " + path("no/out.pool") +
+                                ": cannot write: folder " + path("no") + " does not exist\n");
+        EXPECT_EQ(run(tool, path("in.pool") + " -o " + m_dir.string()), 1);
+        EXPECT_NE(m_stderr.find("cannot write: it is a folder"), std::string::npos) << m_stderr;
+        EXPECT_EQ(std::count(m_stderr.begin(), m_stderr.end(), '\n'), 1) << m_stderr;
+    }
+    EXPECT_FALSE(fs::exists(path("out.pool")));
 }
 
 TEST_F(SplatTools, RealKittenScan) {
