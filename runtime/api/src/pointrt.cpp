@@ -12,6 +12,10 @@
 #include "prt/runtime/backend.h"
 #include "prt/runtime/render_scene.h"
 
+#ifdef PRT_HAVE_CUDA
+#include <cuda_runtime.h>
+#endif
+
 #ifndef PRT_API_VERSION
 #define PRT_API_VERSION "0.0.0"
 #endif
@@ -47,12 +51,12 @@ prt::core::CastRays to_cast_rays(const RayArrays& r, const prt::rt::DVec3& offse
     c.directions = r.directions;
     c.origins_f64 = r.origins_f64 ? 1 : 0;
     c.directions_f64 = r.directions_f64 ? 1 : 0;
-    c.origin_stride = r.origin_stride ? r.origin_stride : (r.origins_f64 ? 24 : 12);
-    c.direction_stride = r.direction_stride ? r.direction_stride : (r.directions_f64 ? 24 : 12);
+    c.origin_stride = r.origin_stride != packed ? r.origin_stride : (r.origins_f64 ? 24 : 12);
+    c.direction_stride = r.direction_stride != packed ? r.direction_stride : (r.directions_f64 ? 24 : 12);
     c.t_min = r.t_min;
     c.t_max = r.t_max;
-    c.t_min_stride = r.t_min_stride ? r.t_min_stride : 4;
-    c.t_max_stride = r.t_max_stride ? r.t_max_stride : 4;
+    c.t_min_stride = r.t_min_stride != packed ? r.t_min_stride : 4;
+    c.t_max_stride = r.t_max_stride != packed ? r.t_max_stride : 4;
     c.t_min_value = r.t_min_value;
     c.t_max_value = r.t_max_value;
     c.offset[0] = offset[0];
@@ -254,6 +258,38 @@ std::vector<std::string> available_backends() {
         out.emplace_back("hybrid");
     }
     return out;
+}
+
+void* device_malloc(std::size_t bytes) {
+#ifdef PRT_HAVE_CUDA
+    if (!prt::rt::backend_availability().cuda_device) throw Error("device memory: no CUDA device here");
+    void* p = nullptr;
+    const cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
+    if (e != cudaSuccess)
+        throw Error("device memory: cudaMalloc of " + std::to_string(bytes) + " bytes: " + cudaGetErrorString(e));
+    return p;
+#else
+    (void)bytes;
+    throw Error("device memory: this build has no CUDA backend");
+#endif
+}
+
+void device_free(void* pointer) noexcept {
+#ifdef PRT_HAVE_CUDA
+    if (pointer) cudaFree(pointer);
+#else
+    (void)pointer;
+#endif
+}
+
+void device_to_host(void* host, const void* device, std::size_t bytes) {
+#ifdef PRT_HAVE_CUDA
+    const cudaError_t e = cudaMemcpy(host, device, bytes, cudaMemcpyDeviceToHost);
+    if (e != cudaSuccess) throw Error(std::string("device memory: copy to the host: ") + cudaGetErrorString(e));
+#else
+    (void)host, (void)device, (void)bytes;
+    throw Error("device memory: this build has no CUDA backend");
+#endif
 }
 
 }  // namespace pointrt

@@ -111,6 +111,10 @@ rt::CastStats cast_batch(const CastContext& ctx, const core::CastRays& rays, con
         o.color = stage_out(out.color, s.color, n * 3);
         o.model = stage_out(out.model, s.model, n);
         o.element = stage_out(out.element, s.element, n);
+    } else {
+        // The caller's arrays may have been written on another stream (PyTorch's, CuPy's): wait
+        // for the device, as this backend's stream does not synchronize with the others.
+        PRT_CUDA_CHECK(cudaDeviceSynchronize());
     }
     PRT_CUDA_CHECK(cudaEventRecord(ctx.start, ctx.stream));
     launch_kernel(launch_1d(n, k_cast_block, ctx.stream),
@@ -149,6 +153,8 @@ rt::CastStats occluded_batch(const CastContext& ctx, const core::CastRays& rays,
         d = stage_rays(rays, s, ctx.stream);
         f = stage_out(flags, s.hit, n);
         v = stage_out(valid, s.valid, n);
+    } else {
+        PRT_CUDA_CHECK(cudaDeviceSynchronize());  // as in cast_batch
     }
     PRT_CUDA_CHECK(cudaEventRecord(ctx.start, ctx.stream));
     launch_kernel(launch_1d(n, k_cast_block, ctx.stream),

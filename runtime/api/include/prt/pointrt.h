@@ -73,16 +73,20 @@ struct Hit {
     std::int64_t element = -1;        ///< source point (splats, MLS), patch index (patches), else -1
 };
 
-/// A batch of rays as arrays (the fast interface): structure of arrays, strides in bytes (0: packed).
+/// RayArrays' strides: the default, values of consecutive rays back to back.
+inline constexpr std::size_t packed = ~std::size_t{0};
+
+/// A batch of rays as arrays (the fast interface): structure of arrays, strides in bytes between
+/// rays (`packed`: back to back; 0: the same value for every ray, e.g. one origin for all).
 struct RayArrays {
     std::size_t count = 0;
     const void* origins = nullptr;     ///< 3 values per ray: float, or double when origins_f64
     const void* directions = nullptr;  ///< 3 values per ray: float, or double when directions_f64
     bool origins_f64 = false, directions_f64 = false;
-    std::size_t origin_stride = 0, direction_stride = 0;
+    std::size_t origin_stride = packed, direction_stride = packed;
     const float* t_min = nullptr;  ///< per ray (stride t_min_stride), or null: t_min_value for all
     const float* t_max = nullptr;  ///< per ray, or null: t_max_value for all
-    std::size_t t_min_stride = 0, t_max_stride = 0;
+    std::size_t t_min_stride = packed, t_max_stride = packed;
     float t_min_value = 0.0f;
     float t_max_value = std::numeric_limits<float>::infinity();
     Memory memory = Memory::host;
@@ -168,7 +172,15 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
-/// Which backends this build and machine can run: "cpu" always, "cuda" with a GPU.
+/// Which backends this build and machine can run: "cpu" always, "cuda" and "hybrid" with a GPU.
 std::vector<std::string> available_backends();
+
+/// Device memory on the CUDA backend's GPU (outputs for Memory::device batches when the caller has
+/// none). Throws Error in builds or on machines without CUDA.
+void* device_malloc(std::size_t bytes);
+/// Frees device_malloc()'s memory (null: nothing).
+void device_free(void* pointer) noexcept;
+/// Copies `bytes` from device memory to host memory.
+void device_to_host(void* host, const void* device, std::size_t bytes);
 
 }  // namespace pointrt
