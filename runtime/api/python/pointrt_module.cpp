@@ -17,8 +17,8 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
-#include <cstring>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -220,10 +220,12 @@ Range range_arg(const py::handle& o, const char* name, std::size_t n, bool devic
         return r;
     }
     if (a.dtype().kind() != 'f' && a.dtype().kind() != 'i' && a.dtype().kind() != 'u')
-        throw py::type_error(std::string(name) + ": expected numbers, got dtype " + std::string(py::str(a.dtype())));
+        throw py::type_error(std::string(name) + ": expected numbers, got dtype " +
+                             std::string(py::str(a.dtype())));
     py::array_t<float, py::array::c_style | py::array::forcecast> f(a);
     if (f.ndim() != 1 || static_cast<std::size_t>(f.shape(0)) != n)
-        throw py::value_error(std::string(name) + ": expected a number or shape (" + std::to_string(n) + ",)");
+        throw py::value_error(std::string(name) + ": expected a number or shape (" + std::to_string(n) +
+                              ",)");
     r.ptr = f.data();
     r.keep = f;
     return r;
@@ -242,8 +244,9 @@ Batch make_batch(const py::handle& origins, const py::handle& directions, const 
     Batch b;
     const bool od = has_cuda_interface(origins), dd = has_cuda_interface(directions);
     if (od != dd)
-        throw py::type_error("origins, directions: both host arrays or both device arrays "
-                             "(__cuda_array_interface__), not one of each");
+        throw py::type_error(
+            "origins, directions: both host arrays or both device arrays "
+            "(__cuda_array_interface__), not one of each");
     b.device = od;
     b.o = b.device ? device_vectors(origins, "origins") : host_vectors(origins, "origins");
     b.d = b.device ? device_vectors(directions, "directions") : host_vectors(directions, "directions");
@@ -282,15 +285,15 @@ struct Field {
     std::size_t width;
 };
 constexpr Field k_fields[] = {
-    {"hit", "|b1", 1, 1},     {"valid", "|b1", 1, 1},  {"t", "<f4", 4, 1},     {"position", "<f4", 4, 3},
-    {"normal", "<f4", 4, 3},  {"color", "<f4", 4, 3},  {"model", "<i4", 4, 1}, {"element", "<i8", 8, 1},
+    {"hit", "|b1", 1, 1},    {"valid", "|b1", 1, 1}, {"t", "<f4", 4, 1},     {"position", "<f4", 4, 3},
+    {"normal", "<f4", 4, 3}, {"color", "<f4", 4, 3}, {"model", "<i4", 4, 1}, {"element", "<i8", 8, 1},
 };
 
 void* field_pointer(pointrt::HitArrays& h, std::size_t i) {
-    void** slots[] = {reinterpret_cast<void**>(&h.hit),      reinterpret_cast<void**>(&h.valid),
-                      reinterpret_cast<void**>(&h.t),        reinterpret_cast<void**>(&h.position),
-                      reinterpret_cast<void**>(&h.normal),   reinterpret_cast<void**>(&h.color),
-                      reinterpret_cast<void**>(&h.model),    reinterpret_cast<void**>(&h.element)};
+    void** slots[] = {reinterpret_cast<void**>(&h.hit),    reinterpret_cast<void**>(&h.valid),
+                      reinterpret_cast<void**>(&h.t),      reinterpret_cast<void**>(&h.position),
+                      reinterpret_cast<void**>(&h.normal), reinterpret_cast<void**>(&h.color),
+                      reinterpret_cast<void**>(&h.model),  reinterpret_cast<void**>(&h.element)};
     return slots[i];
 }
 
@@ -310,7 +313,8 @@ void* out_pointer(const py::handle& o, const Field& f, std::size_t n, bool devic
         if (!has_cuda_interface(o)) throw py::type_error(name + ": expected a device array (device rays)");
         const DeviceView d = device_view(o, name.c_str());
         const std::string want = f.typestr;
-        const bool same_type = d.typestr == want || (want == "|b1" && (d.typestr == "|u1" || d.typestr == "|i1"));
+        const bool same_type =
+            d.typestr == want || (want == "|b1" && (d.typestr == "|u1" || d.typestr == "|i1"));
         if (!same_type) throw py::type_error(name + ": expected typestr " + want + ", got " + d.typestr);
         if (d.shape != shape) throw py::value_error(name + ": wrong shape");
         std::size_t st = f.itemsize;
@@ -364,7 +368,8 @@ py::dict make_outputs(pointrt::HitArrays& h, std::size_t n, bool device, const p
     return result;
 }
 
-const std::vector<std::string> k_all_fields = {"hit", "valid", "t", "position", "normal", "color", "model", "element"};
+const std::vector<std::string> k_all_fields = {"hit",    "valid", "t",     "position",
+                                               "normal", "color", "model", "element"};
 
 // ---- The scene --------------------------------------------------------------------------------------
 
@@ -374,7 +379,8 @@ public:
         : m_scene(pointrt::Scene::open(path, pointrt::Options{backend, surface, threads})) {}
 
     py::dict cast(const py::object& origins, const py::object& directions, const py::object& t_min,
-                  const py::object& t_max, const py::object& out, const std::optional<std::vector<std::string>>& fields) {
+                  const py::object& t_max, const py::object& out,
+                  const std::optional<std::vector<std::string>>& fields) {
         const std::vector<std::string>& f = fields ? *fields : k_all_fields;
         for (const std::string& name : f) {
             bool known = false;
@@ -425,9 +431,10 @@ public:
         return result;
     }
 
-    py::array render(const std::optional<std::array<double, 3>>& eye, const std::optional<std::array<double, 3>>& look_at,
-                     const std::optional<std::array<double, 3>>& up, std::optional<double> fov, std::uint32_t width,
-                     std::uint32_t height) {
+    py::array render(const std::optional<std::array<double, 3>>& eye,
+                     const std::optional<std::array<double, 3>>& look_at,
+                     const std::optional<std::array<double, 3>>& up, std::optional<double> fov,
+                     std::uint32_t width, std::uint32_t height) {
         pointrt::Camera cam = m_scene.default_camera(width, height);
         if (eye) cam.eye = *eye;
         if (look_at) cam.look_at = *look_at;
@@ -438,7 +445,8 @@ public:
             py::gil_scoped_release release;
             img = m_scene.render(cam, width, height);
         }
-        py::array_t<std::uint8_t> a({static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width), py::ssize_t{4}});
+        py::array_t<std::uint8_t> a(
+            {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width), py::ssize_t{4}});
         std::memcpy(a.mutable_data(), img.rgba.data(), img.rgba.size());
         return a;
     }
@@ -484,25 +492,28 @@ PYBIND11_MODULE(pointrt, m) {
     py::register_exception<pointrt::Error>(m, "Error", PyExc_RuntimeError);
     m.attr("__version__") = pointrt::version();
 
-    py::class_<DeviceArray, std::shared_ptr<DeviceArray>>(m, "DeviceArray",
-                                                          "GPU memory the library allocated (outputs of device rays)")
+    py::class_<DeviceArray, std::shared_ptr<DeviceArray>>(
+        m, "DeviceArray", "GPU memory the library allocated (outputs of device rays)")
         .def_property_readonly("__cuda_array_interface__", &DeviceArray::interface)
         .def_property_readonly("shape", [](const DeviceArray& a) { return py::tuple(py::cast(a.shape())); })
         .def("numpy", &DeviceArray::numpy, "A host copy as a numpy array");
 
     py::class_<PyScene>(m, "Scene", "An open pool or scene file, uploaded to its backend")
-        .def(py::init<const std::string&, const std::string&, const std::string&, unsigned>(), py::arg("path"),
-             py::arg("backend") = "auto", py::arg("surface") = "", py::arg("threads") = 0u)
-        .def("cast", &PyScene::cast, py::arg("origins"), py::arg("directions"), py::arg("t_min") = 0.0,
-             py::arg("t_max") = std::numeric_limits<double>::infinity(), py::arg("out") = py::none(),
-             py::arg("fields") = py::none(),
-             "Closest hits of rays origin + t * direction, t in [t_min, t_max) (t in units of the direction's "
-             "length). origins, directions: (N, 3) or (3,) float32/float64, numpy or (CUDA backend) "
-             "__cuda_array_interface__ objects. Returns a dict: hit (bool), valid (bool), t (float32, inf for "
-             "misses), position, normal, color ((N, 3) float32, world frame), model (int32, -1), element "
-             "(int64: source point, patch, or -1). fields= limits the outputs; out= gives arrays to write into.")
-        .def("occluded", &PyScene::occluded, py::arg("origins"), py::arg("directions"), py::arg("t_min") = 0.0,
-             py::arg("t_max") = std::numeric_limits<double>::infinity(), py::arg("out") = py::none(),
+        .def(py::init<const std::string&, const std::string&, const std::string&, unsigned>(),
+             py::arg("path"), py::arg("backend") = "auto", py::arg("surface") = "", py::arg("threads") = 0u)
+        .def(
+            "cast", &PyScene::cast, py::arg("origins"), py::arg("directions"), py::arg("t_min") = 0.0,
+            py::arg("t_max") = std::numeric_limits<double>::infinity(), py::arg("out") = py::none(),
+            py::arg("fields") = py::none(),
+            "Closest hits of rays origin + t * direction, t in [t_min, t_max) (t in units of the direction's "
+            "length). origins, directions: (N, 3) or (3,) float32/float64, numpy or (CUDA backend) "
+            "__cuda_array_interface__ objects. Returns a dict: hit (bool), valid (bool), t (float32, inf for "
+            "misses), position, normal, color ((N, 3) float32, world frame), model (int32, -1), element "
+            "(int64: source point, patch, or -1). fields= limits the outputs; out= gives arrays to write "
+            "into.")
+        .def("occluded", &PyScene::occluded, py::arg("origins"), py::arg("directions"),
+             py::arg("t_min") = 0.0, py::arg("t_max") = std::numeric_limits<double>::infinity(),
+             py::arg("out") = py::none(),
              "Whether anything lies on [t_min, t_max) of each ray: a bool array (invalid rays: False).")
         .def("render", &PyScene::render, py::arg("eye") = py::none(), py::arg("look_at") = py::none(),
              py::arg("up") = py::none(), py::arg("fov") = py::none(), py::arg("width") = 512u,
@@ -516,21 +527,22 @@ PYBIND11_MODULE(pointrt, m) {
 
     m.def(
         "open",
-        [](const std::string& path, const std::string& backend, const std::string& surface, unsigned threads) {
-            return std::make_unique<PyScene>(path, backend, surface, threads);
-        },
+        [](const std::string& path, const std::string& backend, const std::string& surface,
+           unsigned threads) { return std::make_unique<PyScene>(path, backend, surface, threads); },
         py::arg("path"), py::arg("backend") = "auto", py::arg("surface") = "", py::arg("threads") = 0u,
         "Opens a pool (*.pool) or a scene file (*.json) on a backend: cpu, cuda, hybrid or auto.");
     m.def(
         "render",
         [](const std::string& path, const std::optional<std::array<double, 3>>& eye,
-           const std::optional<std::array<double, 3>>& look_at, const std::optional<std::array<double, 3>>& up,
-           std::optional<double> fov, std::uint32_t width, std::uint32_t height, const std::string& backend) {
+           const std::optional<std::array<double, 3>>& look_at,
+           const std::optional<std::array<double, 3>>& up, std::optional<double> fov, std::uint32_t width,
+           std::uint32_t height, const std::string& backend) {
             PyScene s(path, backend, "", 0);
             return s.render(eye, look_at, up, fov, width, height);
         },
-        py::arg("path"), py::arg("eye") = py::none(), py::arg("look_at") = py::none(), py::arg("up") = py::none(),
-        py::arg("fov") = py::none(), py::arg("width") = 512u, py::arg("height") = 512u, py::arg("backend") = "auto",
+        py::arg("path"), py::arg("eye") = py::none(), py::arg("look_at") = py::none(),
+        py::arg("up") = py::none(), py::arg("fov") = py::none(), py::arg("width") = 512u,
+        py::arg("height") = 512u, py::arg("backend") = "auto",
         "Opens a pool or scene file and renders one image (H x W x 4 uint8).");
     m.def("available_backends", &pointrt::available_backends);
 }

@@ -266,7 +266,8 @@ void* device_malloc(std::size_t bytes) {
     void* p = nullptr;
     const cudaError_t e = cudaMalloc(&p, bytes ? bytes : 1);
     if (e != cudaSuccess)
-        throw Error("device memory: cudaMalloc of " + std::to_string(bytes) + " bytes: " + cudaGetErrorString(e));
+        throw Error("device memory: cudaMalloc of " + std::to_string(bytes) +
+                    " bytes: " + cudaGetErrorString(e));
     return p;
 #else
     (void)bytes;
@@ -285,7 +286,8 @@ void device_free(void* pointer) noexcept {
 void device_to_host(void* host, const void* device, std::size_t bytes) {
 #ifdef PRT_HAVE_CUDA
     const cudaError_t e = cudaMemcpy(host, device, bytes, cudaMemcpyDeviceToHost);
-    if (e != cudaSuccess) throw Error(std::string("device memory: copy to the host: ") + cudaGetErrorString(e));
+    if (e != cudaSuccess)
+        throw Error(std::string("device memory: copy to the host: ") + cudaGetErrorString(e));
 #else
     (void)host, (void)device, (void)bytes;
     throw Error("device memory: this build has no CUDA backend");

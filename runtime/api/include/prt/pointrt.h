@@ -5,7 +5,7 @@
 //     find_package(PointRT REQUIRED)
 //     target_link_libraries(app PRIVATE PointRT::pointrt)
 //
-//     auto scene = pointrt::Scene::open("room.pool", {.backend = "auto"});
+//     pointrt::Scene scene = pointrt::Scene::open("room.pool");  // backend "auto"
 //     std::vector<pointrt::Ray> rays = {{{0, 0, 5}, {0, 0, -1}}};
 //     std::vector<pointrt::Hit> hits = scene.cast(rays);
 //
