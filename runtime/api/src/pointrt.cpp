@@ -294,4 +294,15 @@ void device_to_host(void* host, const void* device, std::size_t bytes) {
 #endif
 }
 
+void host_to_device(void* device, const void* host, std::size_t bytes) {
+#ifdef PRT_HAVE_CUDA
+    const cudaError_t e = cudaMemcpy(device, host, bytes, cudaMemcpyHostToDevice);
+    if (e != cudaSuccess)
+        throw Error(std::string("device memory: copy to the device: ") + cudaGetErrorString(e));
+#else
+    (void)host, (void)device, (void)bytes;
+    throw Error("device memory: this build has no CUDA backend");
+#endif
+}
+
 }  // namespace pointrt

@@ -182,5 +182,7 @@ void* device_malloc(std::size_t bytes);
 void device_free(void* pointer) noexcept;
 /// Copies `bytes` from device memory to host memory.
 void device_to_host(void* host, const void* device, std::size_t bytes);
+/// Copies `bytes` from host memory to device memory.
+void host_to_device(void* device, const void* host, std::size_t bytes);
 
 }  // namespace pointrt
