@@ -29,3 +29,22 @@ def sphere_pool(tmp_path_factory):
 def far_sphere_pool(tmp_path_factory):
     """The unit sphere a million units from the world origin (double precision at the boundary)."""
     return make_sphere(str(tmp_path_factory.mktemp("far")), "far", extra=("--offset", "1000000,-2000000,500000"))
+
+
+@pytest.fixture(scope="session")
+def surface_pools(tmp_path_factory, sphere_pool):
+    """The sphere pool with ISO and MLS sections added, and a bricked copy; a kind whose tool is
+    not built is left out."""
+    d = str(tmp_path_factory.mktemp("surfaces"))
+    tool = lambda t: os.path.join(BIN, t)
+    pools = {}
+    if os.path.exists(tool("prt-iso")) and os.path.exists(tool("prt-mls")):
+        p = os.path.join(d, "iso_mls.pool")
+        subprocess.run([tool("prt-iso"), sphere_pool, "-o", p, "-q"], check=True)
+        subprocess.run([tool("prt-mls"), p, "-o", p, "-q"], check=True)
+        pools["iso"] = pools["mls"] = p
+    if os.path.exists(tool("prt-bricks")):
+        p = os.path.join(d, "bricked.pool")
+        subprocess.run([tool("prt-bricks"), sphere_pool, "-o", p, "--brick-splats", "4000", "-q"], check=True)
+        pools["bricks"] = p
+    return pools

@@ -169,3 +169,24 @@ def test_info_and_backends(sphere_pool):
     s = pointrt.open(sphere_pool, backend="cpu")
     assert s.backend == "cpu" and s.info["surfaces"] == ["splats"] and s.info["points"] == 20000
     assert "cpu" in pointrt.available_backends()
+
+
+@pytest.mark.parametrize("kind", ["iso", "mls", "bricks"])
+def test_every_surface_against_the_analytic_sphere(surface_pools, kind):
+    if kind not in surface_pools:
+        pytest.skip("the tool that builds %s is not built" % kind)
+    surface = "" if kind == "bricks" else kind
+    s = pointrt.open(surface_pools[kind], backend="cpu", surface=surface)
+    assert s.info["surfaces"] == ["splats" if kind == "bricks" else kind]
+    o, d = sphere_rays(1000, 21)
+    h = s.cast(o, d)
+    assert h["hit"].all()
+    err = np.abs(h["t"] - analytic_t(o, d)) * np.linalg.norm(d, axis=1)
+    assert np.median(err) < 2e-3 and err.max() < 1e-2, (kind, np.median(err), err.max())
+    p_ref = o + analytic_t(o, d)[:, None] * d
+    assert np.sum(h["normal"] * p_ref, axis=1).min() > 0.99
+    if kind == "mls":
+        assert (h["element"] >= 0).all()  # the source point of the largest weight
+    if kind in ("iso", "bricks"):
+        assert (h["element"] == -1).all()  # no source point
+    assert s.occluded(o, d).all()

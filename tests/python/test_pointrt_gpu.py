@@ -41,14 +41,19 @@ def test_torch_tensors_in_and_out_without_copies(sphere_pool):
     assert torch.equal(out_t, t)
     flags = s.occluded(to, td)
     assert torch.as_tensor(flags, device="cuda").all()
+    # DeviceArray's host copy.
+    assert h["hit"].numpy().all() and h["position"].shape == (10000, 3)
+    # float64 tensors and one origin for every ray (shape (3,)).
+    h64 = s.cast(torch.as_tensor(o[0], device="cuda"), torch.as_tensor(d, device="cuda"), fields=["hit"])
+    assert h64["hit"].numpy().shape == (10000,)
 
 
-def test_device_array_fallback(sphere_pool):
-    # Without torch: DeviceArray outputs of DeviceArray-like inputs are checked through .numpy().
+def test_host_arrays_give_numpy_on_the_gpu(sphere_pool):
     s = pointrt.open(sphere_pool, backend="cuda")
     o, d = sphere_rays(100, 13)
     h = s.cast(o, d)
-    assert h["hit"].all()
+    assert isinstance(h["t"], np.ndarray) and h["hit"].all()
+    assert s.last_stats["device_ms"] > 0
 
 
 def test_device_arrays_on_the_cpu_backend_fail(sphere_pool):

@@ -44,16 +44,7 @@ std::size_t span_bytes(std::size_t count, std::size_t stride, std::size_t record
     return count == 0 ? 0 : (count - 1) * stride + record;
 }
 
-/// Device copies of a host batch's inputs (same strides) and of its outputs.
-struct Staging {
-    DeviceBuffer<unsigned char> origins, directions, t_min, t_max;
-    DeviceBuffer<std::uint8_t> hit, valid;
-    DeviceBuffer<float> t, position, normal, color;
-    DeviceBuffer<std::int32_t> model;
-    DeviceBuffer<std::int64_t> element;
-};
-
-core::CastRays stage_rays(const core::CastRays& rays, Staging& s, cudaStream_t stream) {
+core::CastRays stage_rays(const core::CastRays& rays, CastStaging& s, cudaStream_t stream) {
     core::CastRays d = rays;
     const std::size_t n = rays.count;
     const std::size_t osz = rays.origins_f64 ? 24 : 12, dsz = rays.directions_f64 ? 24 : 12;
@@ -79,7 +70,7 @@ core::CastRays stage_rays(const core::CastRays& rays, Staging& s, cudaStream_t s
 template <class T>
 T* stage_out(T* host, DeviceBuffer<T>& buffer, std::size_t count) {
     if (!host) return nullptr;
-    buffer.resize(count);
+    buffer.reserve(count);
     return buffer.data();
 }
 
@@ -97,7 +88,7 @@ rt::CastStats cast_batch(const CastContext& ctx, const core::CastRays& rays, con
     stats.rays = rays.count;
     if (rays.count == 0) return stats;
     const bool splats = ctx.surface_mask == core::k_mask_splats;
-    Staging s;
+    CastStaging& s = *ctx.staging;
     core::CastRays d = rays;
     core::CastOutputs o = out;
     const std::size_t n = rays.count;
@@ -145,7 +136,7 @@ rt::CastStats occluded_batch(const CastContext& ctx, const core::CastRays& rays,
     stats.rays = rays.count;
     if (rays.count == 0) return stats;
     const bool splats = ctx.surface_mask == core::k_mask_splats;
-    Staging s;
+    CastStaging& s = *ctx.staging;
     core::CastRays d = rays;
     std::uint8_t *f = flags, *v = valid;
     const std::size_t n = rays.count;

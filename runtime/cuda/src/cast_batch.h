@@ -6,10 +6,21 @@
 
 #include <cstdint>
 
+#include "device_buffer.h"
 #include "prt/core/scene_view.h"
 #include "prt/runtime/backend.h"
 
 namespace prt::cuda {
+
+/// Device copies of a host batch's inputs and outputs, kept by the backend between batches (they
+/// only grow), so repeated batches do not allocate.
+struct CastStaging {
+    DeviceBuffer<unsigned char> origins, directions, t_min, t_max;
+    DeviceBuffer<std::uint8_t> hit, valid;
+    DeviceBuffer<float> t, position, normal, color;
+    DeviceBuffer<std::int32_t> model;
+    DeviceBuffer<std::int64_t> element;
+};
 
 /// What a batch runs on: the backend's device scene, its surfaces (core::scene_mask), its stream
 /// and timing events.
@@ -18,6 +29,7 @@ struct CastContext {
     std::uint32_t surface_mask = 0;
     cudaStream_t stream = nullptr;
     cudaEvent_t start = nullptr, stop = nullptr;
+    CastStaging* staging = nullptr;  ///< the backend's (host batches)
 };
 
 /// Closest hits of a batch (Backend::cast); host arrays are staged through device copies.

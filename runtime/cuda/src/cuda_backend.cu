@@ -477,6 +477,7 @@ private:
     DeviceBuffer<WaveHit> m_hits;
     DeviceBuffer<float> m_accum;
     DeviceBuffer<std::uint32_t> m_queue_count;
+    CastStaging m_staging;  ///< ray batches' device copies (cast.cu)
 };
 
 }  // namespace

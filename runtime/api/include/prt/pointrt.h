@@ -135,7 +135,8 @@ struct SceneInfo {
     std::uint64_t points = 0;  ///< points over all models
 };
 
-/// An open scene: its pools mapped, uploaded to the backend. Move-only.
+/// An open scene: its pools mapped, uploaded to the backend. Move-only. One call at a time per
+/// Scene (the CUDA backend's stream and buffers are the scene's); open one Scene per thread otherwise.
 class Scene {
 public:
     /// Opens a pool (*.pool, as built by the prt-* tools) or a scene file (*.json, formats/SCENE.md).
