@@ -190,3 +190,34 @@ def test_every_surface_against_the_analytic_sphere(surface_pools, kind):
     if kind in ("iso", "bricks"):
         assert (h["element"] == -1).all()  # no source point
     assert s.occluded(o, d).all()
+
+
+def test_patches_give_their_patch_index(tmp_path):
+    # Two flat bicubic patches side by side in the plane z = 0 (seed 002's .bpt format: the count,
+    # then per patch its degrees and 16 control points, evenly spaced so Q(u, v) is affine; front
+    # faces look up +z): rays from z = 3 straight down meet them at t = 3 with normal +z.
+    import os
+    import subprocess
+
+    tool = os.path.join(os.environ.get("PRT_BIN_DIR", ""), "prt-patches")
+    if not os.path.exists(tool):
+        pytest.skip("prt-patches not built")
+    lines = ["2"]
+    for x0 in (-2.0, 0.0):
+        lines.append("3 3")
+        for i in range(4):
+            for j in range(4):
+                lines.append("%r %r 0" % (x0 + 2.0 * i / 3, -1.0 + 2.0 * j / 3))
+    bpt = tmp_path / "two.bpt"
+    bpt.write_text("\n".join(lines) + "\n")
+    pool = tmp_path / "two.pool"
+    subprocess.run([tool, str(bpt), "-o", str(pool), "-q"], check=True)
+    s = pointrt.open(str(pool), backend="cpu")
+    assert s.info["surfaces"] == ["patches"]
+    o = np.array([[-1.0, 0.3, 3.0], [1.0, -0.4, 3.0], [3.0, 0.0, 3.0]])
+    h = s.cast(o, np.array([0.0, 0.0, -1.0]))
+    assert h["hit"].tolist() == [True, True, False]
+    assert np.allclose(h["t"][:2], 3.0, atol=1e-5)
+    assert np.allclose(h["normal"][:2], [0, 0, 1], atol=1e-5)
+    assert h["element"].tolist() == [0, 1, -1]
+    assert np.allclose(h["position"][:2], [[-1.0, 0.3, 0.0], [1.0, -0.4, 0.0]], atol=1e-5)
