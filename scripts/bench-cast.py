@@ -75,8 +75,9 @@ def main():
     for _ in range(a.repeat):
         t0 = time.perf_counter()
         h = s.cast(origins, directions)
-        best = min(best, time.perf_counter() - t0)
-        print("python: %d rays in %.4f s = %.2f Mrays/s (hits %d)" % (n, time.perf_counter() - t0, n / (time.perf_counter() - t0) * 1e-6, int(h["hit"].sum())))
+        dt = time.perf_counter() - t0
+        best = min(best, dt)
+        print("python: %d rays in %.4f s = %.2f Mrays/s (hits %d)" % (n, dt, n / dt * 1e-6, int(h["hit"].sum())))
     py_rate = n / best
     del h
 
