@@ -63,8 +63,8 @@ enum class Memory { host, device };
 struct CastStats {
     double seconds = 0;    ///< wall time of the call (host clock), copies included
     double device_ms = 0;  ///< GPU time of the kernel (0 for the CPU backend)
-    std::uint64_t rays = 0, valid = 0;
-    std::uint64_t leaves = 0, splat_tests = 0;
+    std::uint64_t rays = 0;
+    std::uint64_t leaves = 0, splat_tests = 0;  ///< CPU backend only (the kernels keep no counters)
 };
 
 /// Load statistics of set_scene().
