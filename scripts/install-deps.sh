@@ -9,6 +9,7 @@ packages=(
     libglfw3-dev libgl-dev
     nlohmann-json3-dev libcli11-dev libxxhash-dev libgtest-dev
     libembree-dev
+    pybind11-dev python3-dev python3-numpy python3-pytest
     xvfb xauth
 )
 sudo=""

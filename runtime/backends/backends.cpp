@@ -29,6 +29,13 @@ public:
     std::string device() const override { return m_cpu->device() + " (--backend auto: " + m_why + ")"; }
     UploadStats set_scene(const core::SceneView& scene) override { return m_cpu->set_scene(scene); }
     FrameStats render(const FrameRequest& req, Image& image) override { return m_cpu->render(req, image); }
+    CastStats cast(const core::CastRays& rays, const core::CastOutputs& out, Memory memory) override {
+        return m_cpu->cast(rays, out, memory);
+    }
+    CastStats occluded(const core::CastRays& rays, std::uint8_t* flags, std::uint8_t* valid,
+                       Memory memory) override {
+        return m_cpu->occluded(rays, flags, valid, memory);
+    }
 
 private:
     std::unique_ptr<Backend> m_cpu;
@@ -50,6 +57,14 @@ public:
     UploadStats set_scene(const core::SceneView& scene) override {
         m_cpu->set_scene(scene);
         return m_gpu->set_scene(scene);
+    }
+    // Ray batches go to the GPU (the caller's arrays may be device memory).
+    CastStats cast(const core::CastRays& rays, const core::CastOutputs& out, Memory memory) override {
+        return m_gpu->cast(rays, out, memory);
+    }
+    CastStats occluded(const core::CastRays& rays, std::uint8_t* flags, std::uint8_t* valid,
+                       Memory memory) override {
+        return m_gpu->occluded(rays, flags, valid, memory);
     }
     // Both sides read the same bricks: the hybrid backend loads them in core.
     bool can_stream() const override { return false; }

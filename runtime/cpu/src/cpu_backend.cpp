@@ -4,7 +4,9 @@
 #include <chrono>
 #include <vector>
 
+#include "prt/core/cast.h"
 #include "prt/core/render.h"
+#include "prt/error.h"
 #include "prt/parallel.h"
 
 namespace prt::cpu {
@@ -63,7 +65,43 @@ public:
         return stats;
     }
 
+    // Ray batches (issue 18): the core's cast_one / occluded_one over all threads, 1024 rays a chunk.
+    rt::CastStats cast(const core::CastRays& rays, const core::CastOutputs& out, rt::Memory memory) override {
+        return run_batch(rays, memory, [&](std::size_t i, core::RayCounters& c) {
+            core::cast_one(m_scene, rays, out, i, c);
+        });
+    }
+    rt::CastStats occluded(const core::CastRays& rays, std::uint8_t* flags, std::uint8_t* valid,
+                           rt::Memory memory) override {
+        return run_batch(rays, memory, [&](std::size_t i, core::RayCounters& c) {
+            core::occluded_one(m_scene, rays, flags, valid, i, c);
+        });
+    }
+
 private:
+    template <class One>
+    rt::CastStats run_batch(const core::CastRays& rays, rt::Memory memory, One&& one) {
+        if (memory != rt::Memory::host)
+            throw Error("the cpu backend reads host memory only: device arrays need the cuda backend");
+        const auto start = std::chrono::steady_clock::now();
+        std::vector<rt::FrameStats> totals(m_threads);
+        constexpr std::size_t k_chunk = 1024;
+        parallel_chunks(rays.count, k_chunk, m_threads,
+                        [&](std::size_t first, std::size_t last, unsigned worker) {
+                            core::RayCounters c;  // per chunk: the 32-bit counters never wrap
+                            for (std::size_t i = first; i < last; ++i) one(i, c);
+                            totals[worker] += c;
+                        });
+        rt::FrameStats sum;
+        for (const rt::FrameStats& s : totals) sum += s;
+        rt::CastStats stats;
+        stats.rays = rays.count;
+        stats.leaves = sum.leaves;
+        stats.splat_tests = sum.splat_tests;
+        stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        return stats;
+    }
+
     unsigned m_threads;
     core::SceneView m_scene;
 };

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <vector>
 
+#include "cast_batch.h"
 #include "cuda_brick_storage.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
@@ -381,7 +382,20 @@ public:
         return stats;
     }
 
+    // Ray batches (issue 18): cast.cu's kernels on this device scene and stream.
+    rt::CastStats cast(const core::CastRays& rays, const core::CastOutputs& out, rt::Memory memory) override {
+        return cast_batch(cast_context(), rays, out, memory);
+    }
+    rt::CastStats occluded(const core::CastRays& rays, std::uint8_t* flags, std::uint8_t* valid,
+                           rt::Memory memory) override {
+        return occluded_batch(cast_context(), rays, flags, valid, memory);
+    }
+
 private:
+    CastContext cast_context() const {
+        return CastContext{m_scene, m_surface_mask, m_stream, m_start, m_stop};
+    }
+
     /// Where the kernels write the display-encoded frame: the caller's device buffer (a mapped GL
     /// pixel buffer in the window) or the backend's own.
     std::uint32_t* rgba_target(const rt::FrameRequest& req) {
@@ -463,6 +477,7 @@ private:
     DeviceBuffer<WaveHit> m_hits;
     DeviceBuffer<float> m_accum;
     DeviceBuffer<std::uint32_t> m_queue_count;
+    CastStaging m_staging;  ///< ray batches' device copies (cast.cu)
 };
 
 }  // namespace

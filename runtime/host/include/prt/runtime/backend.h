@@ -13,6 +13,8 @@
 namespace prt::core {
 struct RayCounters;
 struct BrickView;
+struct CastRays;
+struct CastOutputs;
 }  // namespace prt::core
 
 namespace prt::rt {
@@ -53,6 +55,18 @@ struct FrameRequest {
     void* device_rgba8 = nullptr;
 };
 
+/// Where a ray batch's arrays live (Backend::cast): host memory, or device memory of the CUDA
+/// backend's GPU (no copies; the CPU backend refuses it).
+enum class Memory { host, device };
+
+/// Statistics of one Backend::cast() or Backend::occluded() batch.
+struct CastStats {
+    double seconds = 0;    ///< wall time of the call (host clock), copies included
+    double device_ms = 0;  ///< GPU time of the kernel (0 for the CPU backend)
+    std::uint64_t rays = 0;
+    std::uint64_t leaves = 0, splat_tests = 0;  ///< CPU backend only (the kernels keep no counters)
+};
+
 /// Load statistics of set_scene().
 struct UploadStats {
     std::uint64_t bytes = 0;
@@ -72,6 +86,17 @@ public:
     virtual UploadStats set_scene(const core::SceneView& scene) = 0;
     /// Renders the requested rows into `image` (already sized width x height).
     virtual FrameStats render(const FrameRequest& request, Image& image) = 0;
+    /// Casts a batch of the caller's rays (prt/core/cast.h: world-frame arrays, t in [t_min, t_max))
+    /// against the current scene: closest hits over every surface, answers into `out`. `memory`
+    /// says where all the arrays live: device memory only on the CUDA backend (others throw
+    /// prt::Error); host arrays are copied to the GPU and back by the CUDA backend. The default
+    /// throws prt::Error (a backend without ray casting).
+    virtual CastStats cast(const core::CastRays& rays, const core::CastOutputs& out,
+                           Memory memory = Memory::host);
+    /// Occlusion (any hit in [t_min, t_max)) of a batch: flags[i] 1 when blocked; `valid` (optional)
+    /// 0 for invalid rays (cast.h), whose flag is 0.
+    virtual CastStats occluded(const core::CastRays& rays, std::uint8_t* flags, std::uint8_t* valid,
+                               Memory memory = Memory::host);
     /// Streamed bricks (brick_stream.h): after set_scene(), this backend's storage for model m's
     /// bricks (`host`: the model's host brick view). Null (the default): the backend reads the host
     /// views in place, so host storage serves (CPU).
