@@ -107,12 +107,12 @@ TEST_F(BrickStreamTest, ABudgetSmallerThanTheViewStalls) {
 }
 
 /// Level of detail: the whole sphere (the default view) needs more bricks than 40 % of them, so it
-/// stalls; with rays stopping at discs six pixels wide it needs a few bricks (those whose prefixes
+/// stalls; with rays stopping at discs eight pixels wide it needs a few bricks (those whose prefixes
 /// are too coarse for the front of the sphere) and converges to the in-core image with the same
 /// stop, byte for byte.
 TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
     const Terms t = budget_terms();
-    const rt::Image ref = in_core(-1.0, nullptr, "cpu", 6.0f);
+    const rt::Image ref = in_core(-1.0, nullptr, "cpu", 8.0f);
     auto backend = cpu::make_cpu_backend(2);
     rt::RenderScene exact = deferred();
     rt::BrickStream exact_stream(exact, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
@@ -120,7 +120,7 @@ TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
     EXPECT_FALSE(without.converged) << "the whole sphere's bricks do not fit";
     rt::RenderScene rs = deferred();
     rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all * 2 / 5});
-    const Converged c = converge(rs, *backend, stream, 50, 6.0f);
+    const Converged c = converge(rs, *backend, stream, 50, 8.0f);
     ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
                              << c.last.needed;
     EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the in-core image with the same stop";

@@ -347,6 +347,7 @@ public:
         m_rgba.reserve(pixels);
         core::SceneView scene = m_scene;
         scene.params = req.params;
+        scene.params.lod_spread = req.params.lod_pixels * core::pixel_angle(req.camera, req.height);
         PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
         PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
         // Sampled frames (spp > 1, path tracing: seed 002, 7) run in the megakernel only.
@@ -392,8 +393,8 @@ public:
     }
 
 private:
-    CastContext cast_context() const {
-        return CastContext{m_scene, m_surface_mask, m_stream, m_start, m_stop};
+    CastContext cast_context() {
+        return CastContext{m_scene, m_surface_mask, m_stream, m_start, m_stop, &m_staging};
     }
 
     /// Where the kernels write the display-encoded frame: the caller's device buffer (a mapped GL

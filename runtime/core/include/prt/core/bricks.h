@@ -9,17 +9,18 @@
 // fly (brick_layout.h) and go through the float path's leaf code (splat.h: intersect_splat, thesis
 // 3.3 blending, thesis 3.5 deep blending across leaves and bricks alike).
 //
-// Level of detail: a ray carries a footprint (LodCone: width + spread * t, a pixel's width for camera
-// rays). The descent stops at the first node whose cell is no wider than the footprint where the
-// walk enters it, if the node has a disc: a top node (lod_splats) or a node of a brick's LOD prefix
-// (brick_lod, lod_nodes, lod_discs: the brick's top levels, resident with the top tree). The node's
-// disc is then met as one splat inside the node's cell. Which node a ray stops at depends only on
-// the ray and the resident index, never on which bricks are resident, so a streamed view converges
-// to the in-core image.
+// Level of detail: a ray has a footprint (LodCone: width + spread * t; the renderer's rays a pixel's
+// angle times the distance from their origin, RenderParams::lod_spread). The descent stops at the first node
+// whose cell is no wider than the footprint where the walk enters it, if the node has a disc: a top node
+// (lod_splats) or a node of a brick's LOD prefix (brick_lod, lod_nodes, lod_discs: the brick's top levels,
+// resident with the top tree). The node's disc is then met as one splat inside the node's cell. Which node a
+// ray stops at depends only on the ray and the resident index, never on which bricks are resident, so a
+// streamed view converges to the in-core image.
 //
 // Which bricks are resident is the view's `resident` table (null: every brick, at data + offset),
-// so streaming changes only that table. The descent walks a brick's prefix from the resident copy
-// and reads the brick's payload only below it; a ray that needs a brick that is not resident meets
+// so streaming changes only that table. A resident brick's first nodes are its prefix (the stops
+// there read the prefix's discs); the descent walks a missing brick's prefix from its resident
+// copy, and a ray that needs a brick that is not resident meets
 // the deepest disc it reached (the prefix node, else the brick's top-node disc) inside that node's
 // cell, counts a fallback and, when the view has a request array, flags the brick. Colours come from
 // the splats (RGB565; white in a pool without colors); bricks carry no source point, so hits shade
@@ -213,7 +214,7 @@ PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSpla
 }
 
 /// A ray's footprint for level of detail, in the model's local units: width(t) = width + spread * t
-/// (Ray::cone_width, cone_spread scaled by RenderParams::lod_pixels). 0, 0: no stop.
+/// (the renderer: 0 and RenderParams::lod_spread, render.h). 0, 0: no stop.
 struct LodCone {
     float width = 0.0f;
     float spread = 0.0f;
@@ -238,15 +239,16 @@ PRT_HD PRT_INLINE std::uint32_t lod_stop_level(float f) {
 
 /// Where a walk through a bricked tree is (descend_bricked): in the top tree (level k_top_tree) or
 /// inside brick `brick`, whose root is at `level`: the walk's path entries below that level index
-/// the brick's nodes, the entry at it the top tree's brick node. Inside a brick the walk reads its
-/// LOD prefix (payload null) until it needs the brick's payload. After each descent, `stop` says
-/// whether the walk ended at a disc instead of a leaf (and `request` whether for want of the brick).
+/// the brick's nodes, the entry at it the top tree's brick node. Inside a resident brick the walk
+/// reads its payload (whose first nodes are the LOD prefix), inside one that is not resident its
+/// resident LOD prefix (payload null). After each descent, `stop` says whether the walk ended at a
+/// disc instead of a leaf (and `request` whether for want of the brick).
 struct BrickCursor {
     static constexpr std::uint32_t k_top_tree = 0xffffffffu;
     enum Stop : std::uint32_t { k_none = 0, k_top_disc = 1, k_prefix_disc = 2 };
     std::uint32_t level = k_top_tree;
     std::uint32_t brick = 0;
-    const unsigned char* payload = nullptr;      ///< the brick's payload once the walk needed it
+    const unsigned char* payload = nullptr;      ///< the brick's payload, null when it is not resident
     std::uint32_t lod_first = 0, lod_count = 0;  ///< the brick's prefix in lod_nodes (count 0: none)
     std::uint32_t stop = k_none;
     std::uint32_t stop_node = 0;  ///< top node (k_top_disc) or index into lod_nodes (k_prefix_disc)
@@ -254,9 +256,9 @@ struct BrickCursor {
 };
 
 /// thesis 2.2.2 over a bricked tree, with the level-of-detail stop: descends from path[level] to the
-/// leaf holding `p`, entering a brick at its brick node (its LOD prefix first, its payload where the
-/// walk needs nodes below the prefix or a filled leaf's splats, when resident) and leaving it when
-/// the walk's restart level is above the brick's root. At levels >= `stop_level` the first node
+/// leaf holding `p`, entering a brick at its brick node (its payload when resident, else its LOD
+/// prefix, ending at the prefix node below which the payload is needed) and leaving it when the
+/// walk's restart level is above the brick's root. At levels >= `stop_level` the first node
 /// with a disc ends the descent (cur.stop). Returns the node word where it ended: a filled or empty
 /// leaf (in the cursor's brick for a filled one), or the node of the disc (cur.stop set). Corrupt
 /// addresses end in an empty leaf, as descend does.
@@ -292,25 +294,25 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
                     break;
                 }
                 cur.brick = b;
-                cur.payload = nullptr;
                 cur.lod_first = cur.lod_count = 0;
-                if (v.lod_table != nullptr) {  // the brick's resident prefix first
+                if (v.lod_table != nullptr) {
                     cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
                     cur.lod_count = v.lod_table[b].node_count;
-                    nodes = v.lod_nodes + cur.lod_first;
-                    count = cur.lod_count;
-                } else {  // no prefix: the payload at once
-                    const unsigned char* payload = brick_payload(v, b);
-                    if (payload == nullptr) {  // not resident: the brick's top-node disc
-                        cur.request = true;
-                        cur.stop = BrickCursor::k_top_disc;
-                        cur.stop_node = index;
-                        break;
-                    }
+                }
+                const unsigned char* payload = brick_payload(v, b);
+                cur.payload = payload;
+                if (payload != nullptr) {  // resident: its payload (its first nodes are the prefix)
                     if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
-                    cur.payload = payload;
                     nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
                     count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
+                } else if (cur.lod_count > 0) {  // not resident: its resident prefix
+                    nodes = v.lod_nodes + cur.lod_first;
+                    count = cur.lod_count;
+                } else {  // not resident, no prefix: the brick's top-node disc
+                    cur.request = true;
+                    cur.stop = BrickCursor::k_top_disc;
+                    cur.stop_node = index;
+                    break;
                 }
                 cur.level = l;
                 in_brick = true;
@@ -324,7 +326,7 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
                 cur.stop_node = index;
                 break;
             }
-        } else if (cur.payload == nullptr) {  // in the brick's prefix
+        } else if (cur.payload == nullptr) {  // in the prefix of a brick that is not resident
             if (node_is_internal(node) && stop) {
                 cur.stop = BrickCursor::k_prefix_disc;
                 cur.stop_node = cur.lod_first + index;
@@ -332,20 +334,11 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
             }
             if (!node_is_internal(node) && !node_is_filled(node)) break;  // an empty leaf
             if (!node_is_internal(node) || node_addr(node) + 8u > count) {
-                // the payload is needed: below this node, or for this filled leaf's splats
-                const unsigned char* payload = brick_payload(v, cur.brick);
-                if (payload == nullptr) {  // not resident: this node's disc
-                    cur.request = true;
-                    cur.stop = BrickCursor::k_prefix_disc;
-                    cur.stop_node = cur.lod_first + index;
-                    break;
-                }
-                if (v.used != nullptr) flag_brick(v.used, cur.brick);  // streaming: kept by this frame (LRU)
-                cur.payload = payload;
-                nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
-                count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
-                node = load_node_word(nodes, index);  // the same word: the prefix is a copy
-                if (!node_is_internal(node)) break;   // the filled leaf
+                // the payload is needed below this node, or for this filled leaf: this node's disc
+                cur.request = true;
+                cur.stop = BrickCursor::k_prefix_disc;
+                cur.stop_node = cur.lod_first + index;
+                break;
             }
         } else {                                 // in the brick's payload
             if (!node_is_internal(node)) break;  // a leaf

@@ -47,9 +47,13 @@ PRT_HD PRT_INLINE Ray primary_ray(const PinholeCamera& c, std::uint32_t x, std::
     const float u = (static_cast<float>(x) + sx) / static_cast<float>(width);
     const float v = (static_cast<float>(y) + sy) / static_cast<float>(height);
     const Vec3 d = c.forward + c.right * (2.0f * u - 1.0f) + c.up * (1.0f - 2.0f * v);
-    Ray r{c.position, normalize(d), k_inf, 0u};
-    r.cone_spread = 2.0f * length(c.up) / static_cast<float>(height);  // a pixel's angle at the centre
-    return r;
+    return Ray{c.position, normalize(d), k_inf, 0u};
+}
+
+/// The angle a pixel subtends at the image centre (radians): a ray's footprint grows by this much
+/// per unit of distance (level of detail, RenderParams::lod_spread).
+PRT_HD PRT_INLINE float pixel_angle(const PinholeCamera& c, std::uint32_t height) {
+    return height > 0 ? 2.0f * length(c.up) / static_cast<float>(height) : 0.0f;
 }
 
 /// thesis 2.3: de-interleaves the even bits of a 32-bit index (Morton / Z-order decode).

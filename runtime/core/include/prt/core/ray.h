@@ -31,12 +31,6 @@ struct Ray {
     std::uint32_t from_model = 0xffffffffu;
     std::uint32_t from_prim = 0;
     float from_u = 0.0f, from_v = 0.0f;
-    /// The ray's footprint for level of detail (issue 17, bricks.h): width(t) = cone_width +
-    /// cone_spread * t, render-frame units, a pixel's width for camera rays (primary_ray: spread = the
-    /// pixel's angle); rays that leave a surface start with the footprint at their hit. 0, 0: a ray
-    /// that never stops at a coarse level (photons, light maps, probes).
-    float cone_width = 0.0f;
-    float cone_spread = 0.0f;
 };
 
 /// Ray::from_model of rays that leave no surface.

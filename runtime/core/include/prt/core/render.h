@@ -91,8 +91,6 @@ struct SurfaceHit {
     std::uint32_t model = 0;   ///< index into SceneView::models
     std::uint32_t prim = 0;    ///< patch index (patches), else 0
     float u = 0.0f, v = 0.0f;  ///< patch parameters (patches), else 0
-    float cone_width = 0.0f;   ///< the ray's footprint at the hit (Ray::cone_width), handed on
-    float cone_spread = 0.0f;  ///< the ray's Ray::cone_spread, handed on
 };
 
 /// The ray in a model's local frame (t is unchanged: d is scaled, not normalized).
@@ -280,21 +278,19 @@ PRT_HD PRT_INLINE bool closest_on(BricksTag, const SceneView& s, const ModelRay&
                                   ModelHit& out, RayCounters& c) {
     WalkStats ws;
     SplatSample h{};
-    const float lod = s.params.lod_pixels * q.mv.inv_scale;  // footprint in the model's local units
     const bool hit = closest_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, t_max,
                                         BlendOptions{s.params.blend_window, s.params.deep_blending != 0},
                                         s.params.max_steps, h, ws, s.params.leaf_culling,
-                                        LodCone{q.ray.cone_width * lod, q.ray.cone_spread * lod});
+                                        LodCone{0.0f, s.params.lod_spread * q.mv.inv_scale});
     add_stats(c, ws);
     if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
     return hit;
 }
 PRT_HD PRT_INLINE bool occluded_on(BricksTag, const SceneView& s, const ModelRay& q, RayCounters& c) {
     WalkStats ws;
-    // Shadow rays keep the footprint at the point they leave (toward a point light the cone narrows).
-    const bool hit = any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
-                                    s.params.leaf_culling,
-                                    LodCone{q.ray.cone_width * s.params.lod_pixels * q.mv.inv_scale, 0.0f});
+    const bool hit =
+        any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                       s.params.leaf_culling, LodCone{0.0f, s.params.lod_spread * q.mv.inv_scale});
     add_stats(c, ws);
     return hit;
 }
@@ -370,8 +366,6 @@ PRT_HD inline bool closest_hit_scene(const SceneView& s, const Ray& r, SurfaceHi
     hit.prim = sample.prim;
     hit.u = sample.u;
     hit.v = sample.v;
-    hit.cone_width = r.cone_width + r.cone_spread * sample.t;
-    hit.cone_spread = r.cone_spread;
     const bool colors = s.material_count > 0 && s.materials[mat].use_point_colors != 0;
     hit.base_color = colors ? srgb_to_linear(sample.color) : Vec3{1, 1, 1};
     return true;
@@ -385,16 +379,13 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
 }
 
 /// A ray leaving the surface point h (shadow, reflected, refracted): starts exactly at the hit,
-/// no offset (thesis 3.6), remembers where it left (Ray::from_model) and goes on with the
-/// footprint the incoming ray had there (level of detail).
+/// no offset (thesis 3.6), and remembers where it left (Ray::from_model).
 PRT_HD PRT_INLINE Ray leave_surface(const SurfaceHit& h, Vec3 dir, float t_max, std::uint32_t flags) {
     Ray r{h.position, dir, t_max, flags};
     r.from_model = h.model;
     r.from_prim = h.prim;
     r.from_u = h.u;
     r.from_v = h.v;
-    r.cone_width = h.cone_width;
-    r.cone_spread = h.cone_spread;
     return r;
 }
 

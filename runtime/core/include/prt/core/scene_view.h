@@ -85,9 +85,13 @@ struct RenderParams {
     /// change the image; 0 turns them off, for comparison).
     std::uint32_t leaf_culling = 2;
     /// Level of detail (issue 17, bricks.h): a ray stops at a bricked model's node whose cell is at
-    /// most this many pixels wide at the ray's distance (Ray::cone_spread) and takes the node's disc.
-    /// 0 (the core's default): never; prt-play and prt-bench default to 1.
+    /// most this many pixels wide at the ray's distance and takes the node's disc. 0 (the core's
+    /// default): never; prt-play and prt-bench default to 1.
     float lod_pixels = 0.0f;
+    /// Set by the backends from the frame's camera: lod_pixels * pixel_angle(). A ray's footprint is
+    /// lod_spread * t, t from its origin: rays leaving a surface start a new cone (narrower than
+    /// the true one: they stop no coarser than a camera ray would there).
+    float lod_spread = 0.0f;
     /// seed 002, 7: path trace (path.h) instead of Whitted ray tracing; samples per pixel (both
     /// modes: stratified and jittered, so spp > 1 antialiases the ray tracer too); the depth at
     /// which a path gathers direct light and ends; the frame number (progressive accumulation:
