@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -141,6 +142,17 @@ protected:
     static inline std::filesystem::path s_dir, s_pool;
     static inline std::vector<std::byte> s_bytes;
 };
+
+/// Colour channels (RGB of every pixel) of two same-size images differing by more than `tolerance`.
+inline std::size_t channels_differing(const rt::Image& x, const rt::Image& y, int tolerance) {
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < x.rgba8.size(); ++i)
+        for (int ch = 0; ch < 3; ++ch) {
+            const int a = int((x.rgba8[i] >> (8 * ch)) & 255u), b = int((y.rgba8[i] >> (8 * ch)) & 255u);
+            differ += std::abs(a - b) > tolerance;
+        }
+    return differ;
+}
 
 /// Renders passes at the scene's camera until one has no fallback (at most `max_passes`).
 struct Converged {

@@ -55,14 +55,8 @@ TEST_F(BrickStreamGpuTest, ConvergesToTheInCoreImage) {
     EXPECT_GT(c.passes, 2u);
     EXPECT_GT(c.first_fallbacks, 0u);
     EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the CUDA in-core image, byte for byte";
-    std::size_t differ = 0;
-    for (std::size_t i = 0; i < cpu_ref.rgba8.size(); ++i)
-        for (int ch = 0; ch < 3; ++ch) {
-            const int a = int((cpu_ref.rgba8[i] >> (8 * ch)) & 255u),
-                      b = int((c.image.rgba8[i] >> (8 * ch)) & 255u);
-            differ += std::abs(a - b) > 8;
-        }
-    EXPECT_LT(differ, cpu_ref.rgba8.size() / 50) << "channels differing from the CPU by more than 8 of 255";
+    EXPECT_LT(channels_differing(cpu_ref, c.image, 8), cpu_ref.rgba8.size() / 50)
+        << "channels differing from the CPU by more than 8 of 255";
 }
 
 TEST_F(BrickStreamGpuTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
@@ -80,14 +74,8 @@ TEST_F(BrickStreamGpuTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt
     EXPECT_GT(c.uploaded, 0u);
     EXPECT_LT(c.uploaded, t.bricks / 2);
     EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the CUDA in-core image, byte for byte";
-    std::size_t differ = 0;
-    for (std::size_t i = 0; i < cpu_ref.rgba8.size(); ++i)
-        for (int ch = 0; ch < 3; ++ch) {
-            const int a = int((cpu_ref.rgba8[i] >> (8 * ch)) & 255u),
-                      b = int((c.image.rgba8[i] >> (8 * ch)) & 255u);
-            differ += std::abs(a - b) > 8;
-        }
-    EXPECT_LT(differ, cpu_ref.rgba8.size() / 50) << "channels differing from the CPU by more than 8 of 255";
+    EXPECT_LT(channels_differing(cpu_ref, c.image, 8), cpu_ref.rgba8.size() / 50)
+        << "channels differing from the CPU by more than 8 of 255";
 }
 
 TEST_F(BrickStreamGpuTest, AMovingCameraEvictsAndStillConverges) {
