@@ -438,6 +438,9 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
                    recorded.size(), file.string().c_str(), file.string().c_str(), recorded.size());
     };
     const std::string image_ext = rt::have_oiio() ? ".png" : ".ppm";
+    // --frames: the window's own speed, said at the end (frame-to-frame time: render, display, swap).
+    std::vector<double> loop_ms, render_ms;
+    double loop_start = 0;
     const std::uint32_t frames = options.screenshot.empty() ? options.frames : std::max(options.frames, 1u);
     while (!glfwWindowShouldClose(window)) {
         glfwPollEvents();
@@ -564,9 +567,31 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
             p.shadows ? "on" : "off", p.reflections ? "on" : "off", p.refractions ? "on" : "off",
             p.deep_blending ? ", deep blending" : "", samples, recording ? " - recording" : "", streaming);
         glfwSetWindowTitle(window, title);
+        if (frames > 0) {
+            const double t = tool::now_seconds();
+            if (shown > 1) loop_ms.push_back((t - loop_start) * 1e3);
+            loop_start = t;
+            render_ms.push_back(ms);
+        }
         if (last) break;
     }
     if (recording && !recorded.empty()) save_recording();
+    if (!loop_ms.empty()) {
+        // The first frame is left out of the loop times (the window's and the kernels' first use).
+        const auto median = [](std::vector<double> v) {
+            std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+            return v[v.size() / 2];
+        };
+        const double frame = median(loop_ms);
+        int fw = 0, fh = 0;
+        glfwGetFramebufferSize(window, &fw, &fh);
+        tool::note(options.quiet,
+                   "prt-play: window %dx%d, %zu frames after the first: median %.2f ms a frame (%.1f fps), "
+                   "slowest %.2f ms; render %.2f ms of it (%s, %s)",
+                   fw, fh, loop_ms.size(), frame, 1e3 / std::max(frame, 1e-6),
+                   *std::max_element(loop_ms.begin(), loop_ms.end()), median(render_ms),
+                   backend->name().c_str(), display.path());
+    }
 }
 
 }  // namespace prt::player

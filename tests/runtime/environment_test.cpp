@@ -150,6 +150,25 @@ protected:
     fs::path m_dir, m_exr;
 };
 
+TEST(ImageFiles, PpmReadsAsLevelsOver255InEveryBuild) {
+    // The screenshot format of builds without OpenImageIO reads back as 8-bit levels / 255.
+    rt::Image img;
+    img.resize(3, 2);
+    for (std::uint32_t i = 0; i < 6; ++i)
+        img.rgba8[i] = (i * 40u) | ((255u - i * 30u) << 8) | ((i * 7u) << 16) | 0xff000000u;
+    const fs::path file = fs::temp_directory_path() / ("prt_ppm_" + std::to_string(::getpid()) + ".ppm");
+    rt::write_ppm(file, img);
+    const rt::FloatImage r = rt::read_float_image(file);
+    fs::remove(file);
+    ASSERT_EQ(r.width, 3u);
+    ASSERT_EQ(r.height, 2u);
+    for (std::uint32_t i = 0; i < 6; ++i) {
+        EXPECT_FLOAT_EQ(r.rgb[3 * i], float(i * 40u) / 255.0f) << i;
+        EXPECT_FLOAT_EQ(r.rgb[3 * i + 1], float(255u - i * 30u) / 255.0f) << i;
+        EXPECT_FLOAT_EQ(r.rgb[3 * i + 2], float(i * 7u) / 255.0f) << i;
+    }
+}
+
 TEST_F(Environment, HdrAndExrLoadAsLinearRowZeroUp) {
     // An HDR image with values above 1 and a marked top row, through the .hdr and .exr readers.
     rt::Image img;

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -53,6 +54,17 @@ inline void expect_one_line(const std::string& err, std::initializer_list<const 
 /// Whether `program` is on the PATH.
 inline bool on_path(const std::string& program) {
     return std::system(("command -v " + program + " >/dev/null 2>&1").c_str()) == 0;
+}
+
+/// How a test runs a windowed tool: directly on the X display in $DISPLAY when one is set (e.g.
+/// an Xvfb started with the NVIDIA GLX vendor library on the GPU machine), else under xvfb-run
+/// with a 24-bit screen of `screen` (xvfb-run's default is 8-bit; -a picks a free display
+/// number); nullopt when neither exists.
+inline std::optional<std::string> display_prefix(const std::string& screen = "640x480") {
+    const char* display = std::getenv("DISPLAY");
+    if (display != nullptr && *display != '\0') return std::string();
+    if (on_path("xvfb-run")) return "xvfb-run -a -s '-screen 0 " + screen + "x24'";
+    return std::nullopt;
 }
 
 }  // namespace prt::test

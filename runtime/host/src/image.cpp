@@ -210,10 +210,22 @@ void write_image(const std::filesystem::path& path, const Image& image, float ex
 }
 
 FloatImage read_float_image(const std::filesystem::path& path) {
-    if (lower_extension(path) == ".pfm") return read_pfm(path);
+    const std::string ext = lower_extension(path);
+    if (ext == ".pfm") return read_pfm(path);
+    if (ext == ".ppm") {
+        // 8-bit levels over 255, as OpenImageIO gives them for 8-bit files (no sRGB decoding).
+        const Image im = read_ppm(path);
+        FloatImage f;
+        f.width = im.width;
+        f.height = im.height;
+        f.rgb.resize(std::size_t{3} * im.width * im.height);
+        for (std::size_t i = 0; i < im.rgba8.size(); ++i)
+            for (int c = 0; c < 3; ++c)
+                f.rgb[3 * i + c] = static_cast<float>((im.rgba8[i] >> (8 * c)) & 0xffu) / 255.0f;
+        return f;
+    }
     if (!have_oiio()) {
-        throw Error(path.string() +
-                    ": this build has no OpenImageIO, so it reads only .pfm environment images");
+        throw Error(path.string() + ": this build has no OpenImageIO, so it reads only .pfm and .ppm images");
     }
     return detail::read_oiio(path);
 }

@@ -42,7 +42,8 @@ bool can_write_image(const std::filesystem::path& path, std::string* why = nullp
 /// (.pfm, .exr, .hdr) the linear radiance times `exposure`. Throws prt::Error naming the file.
 void write_image(const std::filesystem::path& path, const Image& image, float exposure = 1.0f);
 
-/// Reads a linear RGB image: .pfm always, anything OpenImageIO reads when built with it.
+/// Reads a linear RGB image: .pfm and .ppm (8-bit levels / 255) always, anything OpenImageIO reads
+/// when built with it.
 /// Throws prt::Error naming the file.
 FloatImage read_float_image(const std::filesystem::path& path);
 
