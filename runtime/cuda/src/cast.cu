@@ -79,48 +79,25 @@ void fetch_out(T* host, const DeviceBuffer<T>& buffer, std::size_t count, cudaSt
     if (host) buffer.download(host, count, 0, stream);
 }
 
-}  // namespace
-
-rt::CastStats cast_batch(const CastContext& ctx, const core::CastRays& rays, const core::CastOutputs& out,
-                         rt::Memory memory) {
+/// The frame of a batch: `stage` (host arrays: copy the rays in, point the outputs at staging
+/// buffers), then `launch` timed with the context's events, then `fetch` (host arrays: copy the
+/// outputs back); device arrays wait for the device first, as the caller's arrays may have been
+/// written on another stream (PyTorch's, CuPy's) that this backend's stream does not follow.
+template <class Stage, class Launch, class Fetch>
+rt::CastStats timed_batch(const CastContext& ctx, std::size_t n, rt::Memory memory, Stage&& stage,
+                          Launch&& launch, Fetch&& fetch) {
     const auto t0 = std::chrono::steady_clock::now();
     rt::CastStats stats;
-    stats.rays = rays.count;
-    if (rays.count == 0) return stats;
-    const bool splats = ctx.surface_mask == core::k_mask_splats;
-    CastStaging& s = *ctx.staging;
-    core::CastRays d = rays;
-    core::CastOutputs o = out;
-    const std::size_t n = rays.count;
-    if (memory == rt::Memory::host) {
-        d = stage_rays(rays, s, ctx.stream);
-        o.hit = stage_out(out.hit, s.hit, n);
-        o.valid = stage_out(out.valid, s.valid, n);
-        o.t = stage_out(out.t, s.t, n);
-        o.position = stage_out(out.position, s.position, n * 3);
-        o.normal = stage_out(out.normal, s.normal, n * 3);
-        o.color = stage_out(out.color, s.color, n * 3);
-        o.model = stage_out(out.model, s.model, n);
-        o.element = stage_out(out.element, s.element, n);
-    } else {
-        // The caller's arrays may have been written on another stream (PyTorch's, CuPy's): wait
-        // for the device, as this backend's stream does not synchronize with the others.
+    stats.rays = n;
+    if (n == 0) return stats;
+    if (memory == rt::Memory::host)
+        stage();
+    else
         PRT_CUDA_CHECK(cudaDeviceSynchronize());
-    }
     PRT_CUDA_CHECK(cudaEventRecord(ctx.start, ctx.stream));
-    launch_kernel(launch_1d(n, k_cast_block, ctx.stream),
-                  splats ? cast_kernel<core::k_mask_splats> : cast_kernel<core::k_mask_all>, ctx.scene, d, o);
+    launch();
     PRT_CUDA_CHECK(cudaEventRecord(ctx.stop, ctx.stream));
-    if (memory == rt::Memory::host) {
-        fetch_out(out.hit, s.hit, n, ctx.stream);
-        fetch_out(out.valid, s.valid, n, ctx.stream);
-        fetch_out(out.t, s.t, n, ctx.stream);
-        fetch_out(out.position, s.position, n * 3, ctx.stream);
-        fetch_out(out.normal, s.normal, n * 3, ctx.stream);
-        fetch_out(out.color, s.color, n * 3, ctx.stream);
-        fetch_out(out.model, s.model, n, ctx.stream);
-        fetch_out(out.element, s.element, n, ctx.stream);
-    }
+    if (memory == rt::Memory::host) fetch();
     PRT_CUDA_CHECK(cudaStreamSynchronize(ctx.stream));
     float ms = 0;
     PRT_CUDA_CHECK(cudaEventElapsedTime(&ms, ctx.start, ctx.stop));
@@ -129,39 +106,68 @@ rt::CastStats cast_batch(const CastContext& ctx, const core::CastRays& rays, con
     return stats;
 }
 
+}  // namespace
+
+rt::CastStats cast_batch(const CastContext& ctx, const core::CastRays& rays, const core::CastOutputs& out,
+                         rt::Memory memory) {
+    const bool splats = ctx.surface_mask == core::k_mask_splats;
+    CastStaging& s = *ctx.staging;
+    core::CastRays d = rays;
+    core::CastOutputs o = out;
+    const std::size_t n = rays.count;
+    return timed_batch(
+        ctx, n, memory,
+        [&] {
+            d = stage_rays(rays, s, ctx.stream);
+            o.hit = stage_out(out.hit, s.hit, n);
+            o.valid = stage_out(out.valid, s.valid, n);
+            o.t = stage_out(out.t, s.t, n);
+            o.position = stage_out(out.position, s.position, n * 3);
+            o.normal = stage_out(out.normal, s.normal, n * 3);
+            o.color = stage_out(out.color, s.color, n * 3);
+            o.model = stage_out(out.model, s.model, n);
+            o.element = stage_out(out.element, s.element, n);
+        },
+        [&] {
+            launch_kernel(launch_1d(n, k_cast_block, ctx.stream),
+                          splats ? cast_kernel<core::k_mask_splats> : cast_kernel<core::k_mask_all>,
+                          ctx.scene, d, o);
+        },
+        [&] {
+            fetch_out(out.hit, s.hit, n, ctx.stream);
+            fetch_out(out.valid, s.valid, n, ctx.stream);
+            fetch_out(out.t, s.t, n, ctx.stream);
+            fetch_out(out.position, s.position, n * 3, ctx.stream);
+            fetch_out(out.normal, s.normal, n * 3, ctx.stream);
+            fetch_out(out.color, s.color, n * 3, ctx.stream);
+            fetch_out(out.model, s.model, n, ctx.stream);
+            fetch_out(out.element, s.element, n, ctx.stream);
+        });
+}
+
 rt::CastStats occluded_batch(const CastContext& ctx, const core::CastRays& rays, std::uint8_t* flags,
                              std::uint8_t* valid, rt::Memory memory) {
-    const auto t0 = std::chrono::steady_clock::now();
-    rt::CastStats stats;
-    stats.rays = rays.count;
-    if (rays.count == 0) return stats;
     const bool splats = ctx.surface_mask == core::k_mask_splats;
     CastStaging& s = *ctx.staging;
     core::CastRays d = rays;
     std::uint8_t *f = flags, *v = valid;
     const std::size_t n = rays.count;
-    if (memory == rt::Memory::host) {
-        d = stage_rays(rays, s, ctx.stream);
-        f = stage_out(flags, s.hit, n);
-        v = stage_out(valid, s.valid, n);
-    } else {
-        PRT_CUDA_CHECK(cudaDeviceSynchronize());  // as in cast_batch
-    }
-    PRT_CUDA_CHECK(cudaEventRecord(ctx.start, ctx.stream));
-    launch_kernel(launch_1d(n, k_cast_block, ctx.stream),
-                  splats ? occluded_kernel<core::k_mask_splats> : occluded_kernel<core::k_mask_all>,
-                  ctx.scene, d, f, v);
-    PRT_CUDA_CHECK(cudaEventRecord(ctx.stop, ctx.stream));
-    if (memory == rt::Memory::host) {
-        fetch_out(flags, s.hit, n, ctx.stream);
-        fetch_out(valid, s.valid, n, ctx.stream);
-    }
-    PRT_CUDA_CHECK(cudaStreamSynchronize(ctx.stream));
-    float ms = 0;
-    PRT_CUDA_CHECK(cudaEventElapsedTime(&ms, ctx.start, ctx.stop));
-    stats.device_ms = ms;
-    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return stats;
+    return timed_batch(
+        ctx, n, memory,
+        [&] {
+            d = stage_rays(rays, s, ctx.stream);
+            f = stage_out(flags, s.hit, n);
+            v = stage_out(valid, s.valid, n);
+        },
+        [&] {
+            launch_kernel(launch_1d(n, k_cast_block, ctx.stream),
+                          splats ? occluded_kernel<core::k_mask_splats> : occluded_kernel<core::k_mask_all>,
+                          ctx.scene, d, f, v);
+        },
+        [&] {
+            fetch_out(flags, s.hit, n, ctx.stream);
+            fetch_out(valid, s.valid, n, ctx.stream);
+        });
 }
 
 }  // namespace prt::cuda
