@@ -162,6 +162,7 @@ struct Converged {
     std::uint32_t evicted = 0, uploaded = 0;
     bool converged = false;
     rt::StreamFrame last;
+    rt::FrameStats stats;  ///< the last frame's
 };
 inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickStream& stream,
                           std::uint32_t max_passes = 400, float lod_pixels = 0.0f) {
@@ -172,6 +173,7 @@ inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickSt
         request.params.lod_pixels = lod_pixels;
         const rt::FrameStats s = backend.render(request, c.image);
         const rt::StreamFrame f = stream.after_frame(s);
+        c.stats = s;
         EXPECT_LE(s.fallbacks, s.rays()) << "fallbacks count rays";
         if (c.passes++ == 0) c.first_fallbacks = s.fallbacks;
         c.evicted += f.evicted;

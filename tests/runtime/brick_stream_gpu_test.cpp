@@ -4,7 +4,8 @@
 // the CUDA in-core image byte for byte (the same kernels read the same bytes), also with a moving
 // camera that forces evictions; the converged image agrees with the CPU's in-core one (fast math:
 // isolated pixels may differ); a corrupted brick is refused at upload; the default budget (free
-// memory minus a margin) holds this small scene in core. Skips with a message where no CUDA device
+// memory minus a margin) holds this small scene in core; the leaf bounds the GPU derives for streamed
+// bricks pass as many leaves as the host's. Skips with a message where no CUDA device
 // exists.
 #include <gtest/gtest.h>
 
@@ -41,7 +42,8 @@ TEST_F(BrickStreamGpuTest, TheDefaultBudgetHoldsASmallSceneInCore) {
 
 TEST_F(BrickStreamGpuTest, ConvergesToTheInCoreImage) {
     const Terms t = budget_terms();
-    const rt::Image ref = in_core(0.3, nullptr, "cuda");
+    rt::FrameStats ref_stats;
+    const rt::Image ref = in_core(0.3, &ref_stats, "cuda");
     const rt::Image cpu_ref = in_core(0.3, nullptr, "cpu");
     rt::RenderScene rs = deferred();
     close_view(rs, 0.3);
@@ -57,6 +59,13 @@ TEST_F(BrickStreamGpuTest, ConvergesToTheInCoreImage) {
     EXPECT_TRUE(c.image.rgba8 == ref.rgba8) << "converged: the CUDA in-core image, byte for byte";
     EXPECT_LT(channels_differing(cpu_ref, c.image, 8), cpu_ref.rgba8.size() / 50)
         << "channels differing from the CPU by more than 8 of 255";
+    // The streamed bricks' leaf bounds, derived on the GPU from the payloads (brick_bounds.cu),
+    // pass as many leaves unread as the host's bounds of the in-core scene (the same arithmetic;
+    // the GPU decodes the splats with fast math, so a leaf at a bound's last bit may differ).
+    EXPECT_GT(ref_stats.culled, 0u);
+    EXPECT_NEAR(double(c.stats.culled), double(ref_stats.culled), 1e-3 * double(ref_stats.culled) + 2)
+        << "leaves passed by their bounds: streamed " << c.stats.culled << ", in core " << ref_stats.culled;
+    EXPECT_NEAR(double(c.stats.leaves), double(ref_stats.leaves), 1e-3 * double(ref_stats.leaves) + 2);
 }
 
 TEST_F(BrickStreamGpuTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {

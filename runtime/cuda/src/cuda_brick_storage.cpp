@@ -1,13 +1,16 @@
 // PointRT CUDA: streamed bricks' storage on the GPU (rt::BrickStorage, prt/runtime/brick_stream.h):
 // a device arena for payloads and leaf bounds, filled through pinned staging memory with
-// asynchronous copies on a copy stream of its own; the resident table, first leaf bounds and the
-// use / request flags on the device, their host mirrors pinned. Host code over the CUDA runtime.
+// asynchronous copies on a copy stream of its own (a ring of staging slots: the host fills one while
+// the copies of the others run); the leaf bounds derived from the payloads on the GPU after the
+// copies (brick_bounds.h); the resident table, first leaf bounds and the use / request flags on the
+// device, their host mirrors pinned. Host code over the CUDA runtime.
 #include "cuda_brick_storage.h"
 
 #include <algorithm>
 #include <cstring>
 #include <vector>
 
+#include "brick_bounds.h"
 #include "cuda_check.h"
 #include "device_buffer.h"
 #include "prt/runtime/brick_stream.h"
@@ -33,7 +36,9 @@ public:
         m_host_flags = PinnedBuffer(m_flags.size() * 4);
         std::memset(m_host_resident.data(), 0, m_resident.size() * sizeof(unsigned long long));
         std::memset(m_host_first.data(), 0, m_first.size() * 4);
-        m_staging = PinnedBuffer(k_staging);
+        m_staging = PinnedBuffer(k_slots * k_slot);
+        for (cudaEvent_t& e : m_slot_done)
+            PRT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
         reattach();
     }
     ~CudaBrickStorage() override {
@@ -41,15 +46,28 @@ public:
             cudaStreamSynchronize(m_copy);
             cudaStreamDestroy(m_copy);
         }
+        for (cudaEvent_t e : m_slot_done)
+            if (e) cudaEventDestroy(e);
     }
     CudaBrickStorage(const CudaBrickStorage&) = delete;
     CudaBrickStorage& operator=(const CudaBrickStorage&) = delete;
 
+    bool derives_leaf_bounds() const override { return true; }
     void upload(std::uint64_t offset, std::span<const unsigned char> payload, std::uint64_t bounds_offset,
                 std::span<const core::LeafBounds> bounds) override {
         stage(m_arena.data() + offset, payload.data(), payload.size());
-        stage(m_arena.data() + bounds_offset, reinterpret_cast<const unsigned char*>(bounds.data()),
-              bounds.size_bytes());
+        if (!bounds.empty()) {
+            stage(m_arena.data() + bounds_offset, reinterpret_cast<const unsigned char*>(bounds.data()),
+                  bounds.size_bytes());
+            return;
+        }
+        // Derived on the device at commit(), from the payload once its copy has run.
+        pool::BrickHeader h;
+        std::memcpy(&h, payload.data(), sizeof(h));  // a validated payload (BrickStream checks it first)
+        m_jobs.push_back(BrickBoundsJob{m_arena.data() + offset,
+                                        reinterpret_cast<core::LeafBounds*>(m_arena.data() + bounds_offset),
+                                        m_job_leaves, h.leaf_count});
+        m_job_leaves += h.leaf_count;
     }
     void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) override {
         auto* resident = static_cast<unsigned long long*>(m_host_resident.data());
@@ -62,6 +80,21 @@ public:
         m_dirty = true;
     }
     void commit() override {
+        if (!m_jobs.empty()) {
+            if (m_job_capacity < m_jobs.size()) {  // the copy stream is idle here (commit waits for it)
+                m_job_capacity = std::max<std::size_t>(m_jobs.size(), 2 * m_job_capacity);
+                m_device_jobs = DeviceBuffer<BrickBoundsJob>(m_job_capacity);
+                m_host_jobs = PinnedBuffer(m_job_capacity * sizeof(BrickBoundsJob));
+            }
+            std::memcpy(m_host_jobs.data(), m_jobs.data(), m_jobs.size() * sizeof(BrickBoundsJob));
+            PRT_CUDA_CHECK(cudaMemcpyAsync(m_device_jobs.data(), m_host_jobs.data(),
+                                           m_jobs.size() * sizeof(BrickBoundsJob), cudaMemcpyHostToDevice,
+                                           m_copy));
+            derive_brick_leaf_bounds(m_device_jobs.data(), static_cast<std::uint32_t>(m_jobs.size()),
+                                     m_job_leaves, m_copy);
+            m_jobs.clear();
+            m_job_leaves = 0;
+        }
         if (m_dirty) {
             PRT_CUDA_CHECK(cudaMemcpyAsync(m_resident.data(), m_host_resident.data(),
                                            m_resident.size() * sizeof(unsigned long long),
@@ -71,7 +104,7 @@ public:
             m_dirty = false;
         }
         PRT_CUDA_CHECK(cudaStreamSynchronize(m_copy));  // the next frame reads what was copied
-        m_staged = 0;
+        m_slot_used = 0;                                // every slot's copies are done
     }
     void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) override {
         // The frame's kernels finished (the backend's render() waits for its stream).
@@ -99,21 +132,25 @@ public:
     }
 
 private:
-    static constexpr std::size_t k_staging = 64u << 20;
+    static constexpr std::size_t k_slots = 4, k_slot = 16u << 20;
 
-    /// Copies host bytes to the device through the staging buffer; when it is full, waits for the
-    /// copies in flight and starts again at its beginning.
+    /// Copies host bytes to the device through the staging ring: each piece is copied into the
+    /// current slot and its asynchronous copy queued at once; a full slot is closed with an event,
+    /// and the next slot is reused once its own earlier copies have finished.
     void stage(unsigned char* device, const unsigned char* host, std::size_t bytes) {
         for (std::size_t done = 0; done < bytes;) {
-            if (m_staged >= k_staging) {
-                PRT_CUDA_CHECK(cudaStreamSynchronize(m_copy));
-                m_staged = 0;
+            if (m_slot_used >= k_slot) {
+                PRT_CUDA_CHECK(cudaEventRecord(m_slot_done[m_slot], m_copy));
+                m_slot = (m_slot + 1) % k_slots;
+                PRT_CUDA_CHECK(cudaEventSynchronize(m_slot_done[m_slot]));
+                m_slot_used = 0;
             }
-            const std::size_t n = std::min(bytes - done, k_staging - m_staged);
-            unsigned char* staging = static_cast<unsigned char*>(m_staging.data()) + m_staged;
+            const std::size_t n = std::min(bytes - done, k_slot - m_slot_used);
+            unsigned char* staging =
+                static_cast<unsigned char*>(m_staging.data()) + m_slot * k_slot + m_slot_used;
             std::memcpy(staging, host + done, n);
             PRT_CUDA_CHECK(cudaMemcpyAsync(device + done, staging, n, cudaMemcpyHostToDevice, m_copy));
-            m_staged += (n + 255) / 256 * 256;
+            m_slot_used += (n + 255) / 256 * 256;
             done += n;
         }
     }
@@ -127,7 +164,13 @@ private:
     DeviceBuffer<std::uint32_t> m_first;
     DeviceBuffer<std::uint32_t> m_flags;  ///< used, then requested: brick_count each
     PinnedBuffer m_host_resident, m_host_first, m_host_flags, m_staging;
-    std::size_t m_staged = 0;
+    cudaEvent_t m_slot_done[k_slots] = {};
+    std::size_t m_slot = 0, m_slot_used = 0;
+    std::vector<BrickBoundsJob> m_jobs;  ///< this frame's uploads whose bounds the device derives
+    std::uint32_t m_job_leaves = 0;
+    std::size_t m_job_capacity = 0;
+    DeviceBuffer<BrickBoundsJob> m_device_jobs;
+    PinnedBuffer m_host_jobs;
     bool m_dirty = false;
 };
 

@@ -332,7 +332,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         f.missing += static_cast<std::uint32_t>(missing.size() - taken);
     }
     // Each brick checked by its own checksum and its leaf bounds computed from it alone (in
-    // parallel), then copied into its block.
+    // parallel; on the device by the CUDA storage), then copied into its block.
     const auto prepare_start = std::chrono::steady_clock::now();
     parallel_chunks(uploads.size(), 1, resolve_threads(0), [&](std::size_t i0, std::size_t i1, unsigned) {
         for (std::size_t i = i0; i < i1; ++i) {
@@ -340,8 +340,9 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             const Model& m = *u.model;
             const pool::BrickEntry& e = m.sections.table[u.brick];
             pool::validate_brick(*m.pool, m.sections, u.brick, m.sections.payload(u.brick));
-            u.bounds = build_one_brick_leaf_bounds(
-                e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
+            if (!m.storage->derives_leaf_bounds())
+                u.bounds = build_one_brick_leaf_bounds(
+                    e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
         }
     });
     const auto copy_start = std::chrono::steady_clock::now();

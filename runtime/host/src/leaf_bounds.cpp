@@ -4,100 +4,10 @@
 #include <cmath>
 #include <limits>
 
+#include "prt/core/leaf_bounds.h"
 #include "prt/parallel.h"
 
 namespace prt::rt {
-
-namespace {
-
-constexpr double k_dinf = std::numeric_limits<double>::infinity();
-
-/// A leaf whose splats the tests must always read (non-finite data, or no cone and no slab).
-core::LeafBounds open_bounds() {
-    return core::LeafBounds{0.0f,
-                            0.0f,
-                            1.0f,
-                            2.0f,
-                            -std::numeric_limits<float>::infinity(),
-                            std::numeric_limits<float>::infinity(),
-                            0,
-                            0};
-}
-
-core::LeafBounds leaf(const core::OctreeView& v, std::uint32_t begin, std::uint32_t end) {
-    // Pass 1: which splats can ever be hit (intersect_splat needs r*r > 0 and dot(d, n) != 0),
-    // and the mean of their unit normals.
-    double sum[3] = {0, 0, 0};
-    std::uint32_t hittable = 0;
-    for (std::uint32_t i = begin; i < end; ++i) {
-        const pool::Splat& s = v.splats[i];
-        const float r2 = s.radius * s.radius;
-        const double n[3] = {s.normal.x, s.normal.y, s.normal.z};
-        if (!(r2 > 0.0f) || std::isnan(n[0]) || std::isnan(n[1]) || std::isnan(n[2])) continue;
-        if (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0) continue;
-        if (!std::isfinite(s.radius) || !std::isfinite(s.position.x) || !std::isfinite(s.position.y) ||
-            !std::isfinite(s.position.z) || !std::isfinite(n[0]) || !std::isfinite(n[1]) ||
-            !std::isfinite(n[2]))
-            return open_bounds();
-        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        for (int a = 0; a < 3; ++a) sum[a] += n[a] / len;
-        ++hittable;
-    }
-    if (hittable == 0) {  // nothing here can be hit: every ray may pass
-        return core::LeafBounds{0.0f, 0.0f, 1.0f, -1.0f, 1.0f, -1.0f, 0, 0};
-    }
-    double axis[3] = {0, 0, 1};
-    const double slen = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
-    if (slen > 1e-6 * hittable) {
-        for (int a = 0; a < 3; ++a) axis[a] = sum[a] / slen;
-    }
-    // The axis as the core reads it (float), renormalized in double: cone and slab are computed
-    // about exactly the stored vector.
-    const float af[3] = {static_cast<float>(axis[0]), static_cast<float>(axis[1]),
-                         static_cast<float>(axis[2])};
-    const double alen = std::sqrt(double(af[0]) * af[0] + double(af[1]) * af[1] + double(af[2]) * af[2]);
-    // Pass 2: the widest normal from the axis, and the slab of the disks along it.
-    double min_cos = k_dinf, lo = k_dinf, hi = -k_dinf, scale = 0;
-    for (std::uint32_t i = begin; i < end; ++i) {
-        const pool::Splat& s = v.splats[i];
-        const double n[3] = {s.normal.x, s.normal.y, s.normal.z};
-        if (!(s.radius * s.radius > 0.0f) || std::isnan(n[0]) || std::isnan(n[1]) || std::isnan(n[2]))
-            continue;
-        if (n[0] == 0.0 && n[1] == 0.0 && n[2] == 0.0) continue;
-        const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        const double c = (af[0] * n[0] + af[1] * n[1] + af[2] * n[2]) / (len * alen);
-        min_cos = std::min(min_cos, c);
-        // A disk of radius r with unit normal n spans r * sqrt(1 - (a.n)^2) either side of its centre
-        // along the unit axis a.
-        const double centre =
-            (af[0] * double(s.position.x) + af[1] * double(s.position.y) + af[2] * double(s.position.z)) /
-            alen;
-        const double extent = std::fabs(double(s.radius)) * std::sqrt(std::max(0.0, 1.0 - c * c));
-        lo = std::min(lo, centre - extent);
-        hi = std::max(hi, centre + extent);
-        scale = std::max({scale, std::fabs(double(s.position.x)), std::fabs(double(s.position.y)),
-                          std::fabs(double(s.position.z)), std::fabs(double(s.radius))});
-    }
-    core::LeafBounds b{};
-    b.axis_x = af[0];
-    b.axis_y = af[1];
-    b.axis_z = af[2];
-    // Cone: normals within theta of the axis, cos(theta) = min_cos. A margin of 1e-4 covers the
-    // float rounding of the core's dot products (and the axis not being exactly unit in float).
-    if (min_cos > 1e-3) {
-        b.sin_theta = static_cast<float>(std::sqrt(std::max(0.0, 1.0 - min_cos * min_cos)) + 1e-4);
-    } else {
-        b.sin_theta = 2.0f;  // a half-space or more: never passes
-    }
-    // Slab, widened by a relative margin (the float splat data and the core's float arithmetic)
-    // and rounded outward to float.
-    const double margin = 1e-6 * scale + 1e-6 * std::max(std::fabs(lo), std::fabs(hi));
-    b.lo = std::nextafter(static_cast<float>(lo - margin), -std::numeric_limits<float>::infinity());
-    b.hi = std::nextafter(static_cast<float>(hi + margin), std::numeric_limits<float>::infinity());
-    return b;
-}
-
-}  // namespace
 
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads) {
     std::vector<core::LeafBounds> out(v.filled_leaves);
@@ -108,7 +18,7 @@ std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsig
                             std::uint32_t b = v.leaf_info[l], e = v.leaf_info[l + 1];
                             e = std::min(e, v.splat_count);  // as core::leaf_splats clamps
                             b = std::min(b, e);
-                            out[l] = leaf(v, b, e);
+                            out[l] = core::leaf_bounds_of(core::SplatArray{v.splats}, b, e);
                             out[l].begin = b;
                             out[l].end = e;
                         }

@@ -41,8 +41,11 @@ class BrickStorage {
 public:
     static constexpr std::uint64_t k_not_resident = ~std::uint64_t{0};
     virtual ~BrickStorage() = default;
-    /// Copies a validated payload to `offset` and its leaf bounds to `bounds_offset`; visible to
-    /// frames after commit().
+    /// Whether the storage derives a brick's leaf bounds from its payload itself (the CUDA storage,
+    /// on the GPU): upload() then gets no bounds and the host does not compute them.
+    virtual bool derives_leaf_bounds() const { return false; }
+    /// Copies a validated payload to `offset` and its leaf bounds to `bounds_offset` (empty `bounds`
+    /// where derives_leaf_bounds(): derived there at commit()); visible to frames after commit().
     virtual void upload(std::uint64_t offset, std::span<const unsigned char> payload,
                         std::uint64_t bounds_offset, std::span<const core::LeafBounds> bounds) = 0;
     /// Brick b's payload is now at `offset` (k_not_resident: not resident) and its first leaf bound
