@@ -210,3 +210,39 @@ def test_resume_does_nothing_then_only_the_changed_chain(tmp_path):
     code, summary, _ = batch("-j", "3", "-s", "import,radii", "--radii-args", "-k 6", "--force", src, out)
     assert code == 0 and "6 ok, 0 failed, 0 skipped" in summary, summary
     assert leftovers(out) == []
+
+
+def crashing_tools(folder, crashes):
+    """A bin folder whose prt-import dies of SIGSEGV `crashes` times, then runs the real one."""
+    os.makedirs(folder)
+    fake = os.path.join(folder, "prt-import")
+    with open(fake, "w") as f:
+        f.write("#!/bin/bash\n[ \"$1\" = --version ] && exec '%s' --version\n"
+                "n=$(cat '%s/count' 2>/dev/null || echo 0); echo $((n + 1)) >'%s/count'\n"
+                "if [ $n -lt %d ]; then echo 'about to crash' >&2; kill -SEGV $$; fi\n"
+                "exec '%s' \"$@\"\n" % (tool("prt-import"), folder, folder, crashes, tool("prt-import")))
+    os.chmod(fake, 0o755)
+    return folder
+
+
+def test_a_crashing_step_is_retried_then_reported(tmp_path):
+    src = str(tmp_path / "in")
+    os.makedirs(src)
+    sphere_xyz(os.path.join(src, "one.xyz"), 300)
+    # Two crashes, two retries: the third run succeeds.
+    bin2 = crashing_tools(str(tmp_path / "bin2"), 2)
+    p = subprocess.run([BATCH, "-b", bin2, "-j", "2", "--retries", "2", src, str(tmp_path / "out2")],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
+    summary = p.stdout.decode()
+    assert p.returncode == 0 and "1 ok, 0 failed" in summary, summary + p.stderr.decode()
+    assert open(os.path.join(bin2, "count")).read().strip() == "3"
+    assert valid(str(tmp_path / "out2" / "one.pool"))
+    # Three crashes, one retry: reported after two runs with the signal and the tool's last line.
+    bin3 = crashing_tools(str(tmp_path / "bin3"), 3)
+    p = subprocess.run([BATCH, "-b", bin3, "-j", "2", "--retries", "1", src, str(tmp_path / "out3")],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
+    summary = p.stdout.decode()
+    assert p.returncode == 1, summary
+    assert "failed  %s: prt-import killed by signal 11 (last output: about to crash)" % os.path.join(src, "one.xyz") in summary
+    assert open(os.path.join(bin3, "count")).read().strip() == "2"
+    assert leftovers(str(tmp_path / "out3")) == []
