@@ -246,3 +246,36 @@ def test_a_crashing_step_is_retried_then_reported(tmp_path):
     assert "failed  %s: prt-import killed by signal 11 (last output: about to crash)" % os.path.join(src, "one.xyz") in summary
     assert open(os.path.join(bin3, "count")).read().strip() == "2"
     assert leftovers(str(tmp_path / "out3")) == []
+
+
+def test_current_reason_names_what_differs(tmp_path):
+    """scripts/lib/prt_provenance.py's skip decision on a pool written with a tag by prt-import."""
+    src = str(tmp_path / "a.xyz")
+    sphere_xyz(src, 200)
+    digest = prt_provenance.file_hash(src)
+    assert digest.startswith(prt_provenance.hash_name() + ":")
+    tag = prt_provenance.chain_tag(digest, ["prt-import"], {"prt-import": ["--normals", "keep"]})
+    pool = str(tmp_path / "a.pool")
+    version = subprocess.run([tool("prt-import"), "--version"], stdout=subprocess.PIPE).stdout.decode().strip()
+    assert prt_provenance.current_reason(pool, [{"tool": "prt-import", "version": version, "tag": tag}]) == "no output yet"
+    subprocess.run([tool("prt-import"), src, "-o", pool, "-q", "--normals", "keep", "--provenance-tag",
+                    prt_provenance.json_text(tag)], check=True)
+    want = {"tool": "prt-import", "version": version, "tag": tag}
+    assert prt_provenance.current_reason(pool, [want]) is None
+    other_input = dict(want, tag=dict(tag, input="xxh3_64:0"))
+    assert prt_provenance.current_reason(pool, [other_input]) == "the input changed (content hash differs)"
+    other_args = dict(want, tag=dict(tag, args={"prt-import": []}))
+    assert prt_provenance.current_reason(pool, [other_args]) == "prt-import ran with other parameters"
+    assert "version" in prt_provenance.current_reason(pool, [dict(want, version="0.0-other")])
+    longer = [want, {"tool": "prt-radii", "version": version, "tag": tag}]
+    assert "provenance has 1 steps, the chain has 2" in prt_provenance.current_reason(pool, longer)
+    with open(str(tmp_path / "junk.pool"), "wb") as f:
+        f.write(b"junk")
+    assert "bad magic" in prt_provenance.current_reason(str(tmp_path / "junk.pool"), [want])
+    # Changing one byte of the input changes the hash.
+    with open(src, "r+b") as f:
+        f.seek(3)
+        c = f.read(1)
+        f.seek(3)
+        f.write(b"7" if c != b"7" else b"8")
+    assert prt_provenance.file_hash(src) != digest
