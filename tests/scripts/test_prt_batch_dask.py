@@ -155,6 +155,8 @@ def test_a_killed_worker_loses_nothing(tmp_path):
     assert not os.path.exists("/proc/%d" % tool_pid) or open("/proc/%d/stat" % tool_pid).read().split()[2] == "Z"
     assert again, "the killed task was not run again\n" + summary
     assert "ok      %s" % big in summary, summary
+    assert "1 worker(s) lost during the run; Dask ran their tasks again" in summary
+    assert "lost with " in stderr.decode() and big in stderr.decode()
     assert p.returncode == 1, summary + stderr.decode()
     assert "10 files in %s: 6 ok, 4 failed, 0 skipped" % src in summary, summary + stderr.decode()
     for f in os.listdir(src):
