@@ -1,6 +1,7 @@
 """scripts/prt-batch on Dask (issue 21): a local cluster of 3 worker processes against a serial run
 of the tools, a worker killed mid-task, resuming. Run by ctest (prt_batch_dask_test) with Debian's
 python3 (dask, distributed, pytest); PRT_BIN_DIR names the tools, PRT_BATCH the script."""
+import json
 import math
 import os
 import signal
@@ -281,3 +282,41 @@ def test_current_reason_names_what_differs(tmp_path):
         f.seek(3)
         f.write(b"7" if c != b"7" else b"8")
     assert prt_provenance.file_hash(src) != digest
+
+
+def test_an_existing_cluster_through_scheduler(tmp_path):
+    """The several-machines path of the README on one machine: `dask scheduler`, `dask worker
+    ADDRESS` (2 processes), then prt-batch --scheduler ADDRESS."""
+    tool("prt-import")
+    dask_cli = os.path.join(os.path.dirname(os.path.realpath(sys.executable)), "dask")
+    if not os.access(dask_cli, os.X_OK):
+        pytest.skip("no dask command beside %s" % sys.executable)
+    src = str(tmp_path / "in")
+    names = make_scans(src, good=4)
+    info = str(tmp_path / "scheduler.json")
+    procs = []
+    try:
+        procs.append(subprocess.Popen([dask_cli, "scheduler", "--port", "0", "--dashboard-address", ":0",
+                                       "--scheduler-file", info], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        deadline = time.time() + 60
+        while not os.path.exists(info) and time.time() < deadline:
+            time.sleep(0.1)
+        time.sleep(0.2)
+        address = json.load(open(info))["address"]
+        procs.append(subprocess.Popen([dask_cli, "worker", address, "--nworkers", "2", "--nthreads", "1",
+                                       "--local-directory", str(tmp_path / "dask")],
+                                      stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        code, summary, progress = batch("--scheduler", address, src, str(tmp_path / "out"))
+        assert code == 1, summary + progress
+        assert "8 files in %s: 4 ok, 4 failed, 0 skipped" % src in summary, summary + progress
+        assert "on %s (2 workers x 1 threads)" % address in progress
+        for n in names:
+            assert valid(str(tmp_path / "out" / (os.path.splitext(n)[0] + ".pool")))
+        assert leftovers(str(tmp_path / "out")) == []
+    finally:
+        for p in reversed(procs):
+            p.terminate()
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
