@@ -192,25 +192,25 @@ def test_resume_does_nothing_then_only_the_changed_chain(tmp_path):
     for name in BAD:
         os.remove(os.path.join(src, name))
     out = str(tmp_path / "out")
-    code, summary, _ = batch("-j", "3", "-s", "import,radii", src, out)
+    code, summary, _ = batch("-j", "2", "-s", "import,radii", src, out)
     assert code == 0 and "6 ok, 0 failed, 0 skipped" in summary, summary
     pools = {n: os.path.join(out, os.path.splitext(n)[0] + ".pool") for n in names}
     before = {n: os.stat(p).st_mtime_ns for n, p in pools.items()}
-    code, summary, _ = batch("-j", "3", "-s", "import,radii", src, out)
+    code, summary, _ = batch("-j", "2", "-s", "import,radii", src, out)
     assert code == 0 and "0 ok, 0 failed, 6 skipped" in summary, summary
     assert "nothing to do: every output is current" in summary
     assert {n: os.stat(p).st_mtime_ns for n, p in pools.items()} == before
     # New content (the modification time alone would not do: the check is the content's hash).
     sphere_xyz(os.path.join(src, names[2]), 500, 3.0)
-    code, summary, _ = batch("-j", "3", "-s", "import,radii", src, out)
+    code, summary, _ = batch("-j", "2", "-s", "import,radii", src, out)
     assert code == 0 and "1 ok, 0 failed, 5 skipped" in summary, summary
     assert "ok      %s -> %s" % (os.path.join(src, names[2]), pools[names[2]]) in summary
     after = {n: os.stat(p).st_mtime_ns for n, p in pools.items()}
     assert [n for n in names if after[n] != before[n]] == [names[2]]
     # Other parameters are another result; --force redoes everything.
-    code, summary, _ = batch("-j", "3", "-s", "import,radii", "--radii-args", "-k 6", src, out)
+    code, summary, _ = batch("-j", "2", "-s", "import,radii", "--radii-args", "-k 6", src, out)
     assert code == 0 and "6 ok, 0 failed, 0 skipped" in summary, summary
-    code, summary, _ = batch("-j", "3", "-s", "import,radii", "--radii-args", "-k 6", "--force", src, out)
+    code, summary, _ = batch("-j", "2", "-s", "import,radii", "--radii-args", "-k 6", "--force", src, out)
     assert code == 0 and "6 ok, 0 failed, 0 skipped" in summary, summary
     assert leftovers(out) == []
 
@@ -234,7 +234,7 @@ def test_a_crashing_step_is_retried_then_reported(tmp_path):
     sphere_xyz(os.path.join(src, "one.xyz"), 300)
     # Two crashes, two retries: the third run succeeds.
     bin2 = crashing_tools(str(tmp_path / "bin2"), 2)
-    p = subprocess.run([BATCH, "-b", bin2, "-j", "2", "--retries", "2", src, str(tmp_path / "out2")],
+    p = subprocess.run([BATCH, "-b", bin2, "-j", "1", "--retries", "2", src, str(tmp_path / "out2")],
                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
     summary = p.stdout.decode()
     assert p.returncode == 0 and "1 ok, 0 failed" in summary, summary + p.stderr.decode()
@@ -242,7 +242,7 @@ def test_a_crashing_step_is_retried_then_reported(tmp_path):
     assert valid(str(tmp_path / "out2" / "one.pool"))
     # Three crashes, one retry: reported after two runs with the signal and the tool's last line.
     bin3 = crashing_tools(str(tmp_path / "bin3"), 3)
-    p = subprocess.run([BATCH, "-b", bin3, "-j", "2", "--retries", "1", src, str(tmp_path / "out3")],
+    p = subprocess.run([BATCH, "-b", bin3, "-j", "1", "--retries", "1", src, str(tmp_path / "out3")],
                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, timeout=300)
     summary = p.stdout.decode()
     assert p.returncode == 1, summary
