@@ -306,6 +306,10 @@ def test_an_existing_cluster_through_scheduler(tmp_path):
         procs.append(subprocess.Popen([dask_cli, "worker", address, "--nworkers", "2", "--nthreads", "1",
                                        "--local-directory", str(tmp_path / "dask")],
                                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL))
+        from distributed import Client
+
+        with Client(address, timeout="30s") as c:  # both worker processes joined
+            c.wait_for_workers(2, timeout=60)
         code, summary, progress = batch("--scheduler", address, src, str(tmp_path / "out"))
         assert code == 1, summary + progress
         assert "8 files in %s: 4 ok, 4 failed, 0 skipped" % src in summary, summary + progress
