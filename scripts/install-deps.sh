@@ -10,6 +10,7 @@ packages=(
     nlohmann-json3-dev libcli11-dev libxxhash-dev libgtest-dev
     libembree-dev
     pybind11-dev python3-dev python3-numpy python3-pytest
+    python3-dask python3-distributed python3-xxhash python3-psutil
     xvfb xauth
 )
 sudo=""

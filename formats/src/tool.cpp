@@ -238,6 +238,16 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
             if (!m_help.output.empty()) app.add_option("-o,--output", m_output, m_help.output)->required();
             options(app);
             if (!m_help.stats.empty()) app.add_option("--stats-json", m_stats, m_help.stats);
+            if (!m_help.output.empty() || !m_help.input.empty())
+                app.add_option("--provenance-tag", m_tag,
+                               "JSON value recorded as \"tag\" in this step's provenance parameters "
+                               "(scripts/prt-batch records the input's hash and its arguments there) "
+                               "[none]")
+                    ->check([](const std::string& value) {
+                        return nlohmann::json::accept(value)
+                                   ? std::string()
+                                   : std::string("--provenance-tag is not valid JSON");
+                    });
         },
         [&](const CommonOptions& common) {
             m_common = common;
@@ -303,7 +313,14 @@ std::uint64_t PoolStep::write(const nlohmann::json& parameters) {
 
 std::uint64_t PoolStep::write(const std::string& parameters_json) {
     pool::PoolWriter& w = writer();
-    w.add_provenance(m_tool, PRT_VERSION, parameters_json);
+    if (m_tag.empty()) {
+        w.add_provenance(m_tool, PRT_VERSION, parameters_json);
+    } else {
+        nlohmann::json parameters = nlohmann::json::parse(parameters_json, nullptr, false);
+        if (!parameters.is_object()) parameters = {{"parameters", parameters_json}};
+        parameters["tag"] = nlohmann::json::parse(m_tag);  // checked when parsed
+        w.add_provenance(m_tool, PRT_VERSION, parameters.dump());
+    }
     return w.write(m_output);
 }
 

@@ -81,6 +81,27 @@ TEST_F(PoolStepTest, CarriesOverAddsItsSectionAndProvenance) {
     EXPECT_FALSE(fs::exists(path("stats.json")));
 }
 
+TEST_F(PoolStepTest, ProvenanceTagIsRecordedInTheParameters) {
+    ASSERT_EQ(run_step({path("in.pool"), "-o", path("out.pool"), "-q", "--provenance-tag",
+                        R"({"input_xxh3": "00ff", "args": ["-k", "8"]})"}),
+              0);
+    const nlohmann::json prov =
+        nlohmann::json::parse(pool::PoolFile::open(path("out.pool")).provenance_json());
+    ASSERT_EQ(prov.size(), 2u);
+    EXPECT_EQ(prov[1]["parameters"]["radius"], 0.5);  // the step's own parameters stay
+    EXPECT_EQ(prov[1]["parameters"]["tag"]["input_xxh3"], "00ff");
+    EXPECT_EQ(prov[1]["parameters"]["tag"]["args"][1], "8");
+    EXPECT_FALSE(prov[0]["parameters"].contains("tag"));
+    // Without the option no tag; a tag that is not JSON is a usage error and writes nothing.
+    ASSERT_EQ(run_step({path("in.pool"), "-o", path("plain.pool"), "-q"}), 0);
+    EXPECT_FALSE(
+        nlohmann::json::parse(pool::PoolFile::open(path("plain.pool")).provenance_json())[1]["parameters"]
+            .contains("tag"));
+    EXPECT_EQ(run_step({path("in.pool"), "-o", path("bad.pool"), "--provenance-tag", "{not json"}),
+              k_exit_usage_error);
+    EXPECT_FALSE(fs::exists(path("bad.pool")));
+}
+
 TEST_F(PoolStepTest, StatsJsonNamesTheTool) {
     ASSERT_EQ(run_step({path("in.pool"), "-o", path("out.pool"), "--stats-json", path("stats.json"), "-q"}),
               0);

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Tests scripts/prt-batch (issue 10) against the tools of a build: a folder of good and bad scans,
+# Tests scripts/prt-batch (issue 10; on Dask since issue 21, whose own tests are
+# test_prt_batch_dask.py) against the tools of a build: a folder of good and bad scans,
 # outputs only for the good ones (each a valid pool), every failure named with its reason, exit
 # statuses, usage errors, --help documenting every option, an existing output of a failing input
 # left untouched, the optional steps, and an interrupted batch leaving no partial output.
@@ -104,7 +105,9 @@ check "missing tool named" bash -c "'$batch' -b '$work/only-import' -s import,ra
 check "--help exits 0" [ $? = 0 ]
 while read -r option; do
     check "--help documents $option" grep -qE -- "$option( |,|$)" "$work/help.txt"
-done < <(grep -oE '^ +(-[a-z] \| )?--[a-z-]+\)' "$batch" | grep -oE -- '--[a-z-]+')
+done < <(grep -oE 'add_argument\("(-[a-z]", ")?--[a-z-]+"' "$batch" | grep -oE -- '--[a-z-]+')
+check "--help: the options were found in the script" \
+    [ "$(grep -cE 'add_argument\("(-[a-z]", ")?--[a-z-]+"' "$batch")" -ge 16 ]
 check "--help gives defaults" [ "$(grep -cE '\[[^]]+\]$' "$work/help.txt")" -ge 11 ]
 
 # -- optional steps: radii and octree (when the build has them) ----------------------------------

@@ -98,6 +98,10 @@ public:
     const std::string& input_path() const { return m_input; }
     const std::string& output_path() const { return m_output; }
     const std::string& stats_path() const { return m_stats; }
+    /// --provenance-tag: JSON text recorded as "tag" in this step's provenance parameters (empty:
+    /// none). Batch tools (scripts/prt-batch) put there what they need to recognise their own
+    /// results: the input's content hash and the arguments of the chain of steps.
+    const std::string& provenance_tag() const { return m_tag; }
 
     /// INPUT, opened (and validated) on first use.
     const pool::PoolFile& input();
@@ -109,7 +113,8 @@ public:
     /// Throws "OUTPUT: cannot write: folder F does not exist" (to fail before a long build).
     void check_output_folder() const;
     /// Appends the provenance record {tool, version, `parameters`} and writes OUTPUT atomically
-    /// (PoolWriter::write). Returns the bytes written.
+    /// (PoolWriter::write). With --provenance-tag, `parameters` (a JSON object) gets "tag" set to
+    /// the tag's JSON value. Returns the bytes written.
     std::uint64_t write(const nlohmann::json& parameters);
     /// write() with the parameters given as JSON object text.
     std::uint64_t write(const std::string& parameters_json);
@@ -135,7 +140,7 @@ private:
     std::string m_tool, m_description;
     Help m_help;
     CommonOptions m_common;
-    std::string m_input, m_output, m_stats;
+    std::string m_input, m_output, m_stats, m_tag;
     double m_start = 0;
     bool m_output_in_place = false;  ///< add_output(): OUTPUT defaults to INPUT
     std::optional<pool::PoolFile> m_in;

@@ -1,0 +1,151 @@
+"""prt_provenance: reading a pool's sections and provenance (formats/POOL.md), hashing inputs, and
+deciding whether an output is current (issue 21). Standard library only, plus python3-xxhash for
+the content hashes when it is installed (hashlib's SHA-256 otherwise).
+
+Used by scripts/prt-batch; written so that scripts/prt-bake can adopt it (its PoolState reads the
+same header, table and provenance).
+
+How a batch recognises its own result: every tool built on prt::tool::PoolStep takes
+`--provenance-tag JSON` and records that value as "tag" in its provenance parameters. prt-batch
+passes each step a tag naming the input's content hash and the arguments of the chain of steps
+up to it (`chain_tag`); an output is current (`current_reason` returns None) when its provenance
+ends with the expected tools, at the expected versions, each carrying the expected tag.
+"""
+import hashlib
+import json
+import os
+import struct
+
+try:
+    import xxhash  # python3-xxhash
+except ImportError:  # pragma: no cover - depends on the machine
+    xxhash = None
+
+# Pool layout (formats/POOL.md): 64-byte header, then a table of 64-byte section entries.
+MAGIC = b"PRTPOOL\0"
+HEADER_BYTES = 64
+ENTRY_BYTES = 64
+MAX_SECTIONS = 4096
+S_PROVENANCE = 1
+
+
+class PoolError(Exception):
+    """A file that cannot be read as a pool; the message names the file and the problem."""
+
+
+def read_table(path):
+    """The section table of the pool at `path`: a list of (type, version, offset, size)."""
+    try:
+        with open(path, "rb") as f:
+            head = f.read(HEADER_BYTES)
+            if len(head) < HEADER_BYTES or head[:8] != MAGIC:
+                raise ValueError("not a pool file (bad magic)")
+            count = struct.unpack_from("<I", head, 24)[0]
+            table_offset = struct.unpack_from("<Q", head, 32)[0]
+            if count > MAX_SECTIONS:
+                raise ValueError("section count %d" % count)
+            f.seek(table_offset)
+            table = f.read(ENTRY_BYTES * count)
+            if len(table) != ENTRY_BYTES * count:
+                raise ValueError("truncated section table")
+    except (OSError, ValueError) as e:
+        raise PoolError("%s: cannot read the pool: %s" % (path, e))
+    return [struct.unpack_from("<IIQQ", table, ENTRY_BYTES * i) for i in range(count)]
+
+
+def read_sections(path, skip=(S_PROVENANCE,)):
+    """{section type: payload bytes} of every section of the pool at `path` except those in
+    `skip` (by default the provenance, whose entries carry the time they were written): two
+    pools with equal results compare equal."""
+    out = {}
+    with open(path, "rb") as f:
+        for stype, _version, offset, size in read_table(path):
+            if stype in skip:
+                continue
+            f.seek(offset)
+            data = f.read(size)
+            if len(data) != size:
+                raise PoolError("%s: section %d is truncated" % (path, stype))
+            out[stype] = data
+    return out
+
+
+def read_provenance(path):
+    """The provenance of the pool at `path`: the JSON list of {tool, version, parameters, time},
+    oldest first ([] when the pool has none). Raises PoolError for a file that is not a pool."""
+    for stype, _version, offset, size in read_table(path):
+        if stype != S_PROVENANCE:
+            continue
+        try:
+            with open(path, "rb") as f:
+                f.seek(offset)
+                provenance = json.loads(f.read(size).decode("utf-8"))
+        except (OSError, ValueError, UnicodeDecodeError) as e:  # JSONDecodeError is a ValueError
+            raise PoolError("%s: cannot read the provenance: %s" % (path, e))
+        if not isinstance(provenance, list):
+            raise PoolError("%s: the provenance is not a JSON list" % path)
+        return provenance
+    return []
+
+
+def hash_name():
+    """The content hash used here: "xxh3_64" (python3-xxhash), else "sha256"."""
+    return "xxh3_64" if xxhash is not None else "sha256"
+
+
+def file_hash(path, block=1 << 22):
+    """"NAME:HEX", the content hash of the file at `path` (hash_name(); read in 4 MiB blocks)."""
+    h = xxhash.xxh3_64() if xxhash is not None else hashlib.sha256()
+    with open(path, "rb") as f:
+        while True:
+            chunk = f.read(block)
+            if not chunk:
+                break
+            h.update(chunk)
+    return "%s:%s" % (hash_name(), h.hexdigest())
+
+
+def json_text(value):
+    """`value` as compact JSON text with sorted keys (what a tool's --provenance-tag takes)."""
+    return json.dumps(value, sort_keys=True, separators=(",", ":"))
+
+
+def chain_tag(input_hash, steps, args):
+    """The tag prt-batch records with the last of `steps` (tool names, in order): the input's
+    content hash and each step's extra arguments (`args`: tool -> list of strings). Thread counts
+    and file names are left out: they do not change the result."""
+    return {
+        "batch": "prt-batch",
+        "input": input_hash,
+        "steps": list(steps),
+        "args": {s: list(args.get(s, [])) for s in steps},
+    }
+
+
+def current_reason(path, expected):
+    """Why the pool at `path` is not the result `expected` describes, or None when it is.
+
+    `expected` is the chain of steps, oldest first, each a dict {tool, version, tag}: the pool's
+    provenance must end with these tools, written by these versions, each entry's parameters
+    holding this tag (version None: any version)."""
+    if not os.path.exists(path):
+        return "no output yet"
+    try:
+        provenance = read_provenance(path)
+    except PoolError as e:
+        return str(e)
+    if len(provenance) < len(expected):
+        return "its provenance has %d steps, the chain has %d" % (len(provenance), len(expected))
+    tail = provenance[len(provenance) - len(expected):]
+    for got, want in zip(tail, expected):
+        if not isinstance(got, dict) or got.get("tool") != want["tool"]:
+            return "its provenance does not end with %s" % ", ".join(w["tool"] for w in expected)
+        if want.get("version") is not None and got.get("version") != want["version"]:
+            return "%s was version %s, now %s" % (want["tool"], got.get("version"), want["version"])
+        params = got.get("parameters")
+        tag = params.get("tag") if isinstance(params, dict) else None
+        if tag != want["tag"]:
+            if isinstance(tag, dict) and isinstance(want["tag"], dict) and tag.get("input") != want["tag"].get("input"):
+                return "the input changed (content hash differs)"
+            return "%s ran with other parameters" % want["tool"]
+    return None
