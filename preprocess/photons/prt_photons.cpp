@@ -1,5 +1,6 @@
 // prt-photons: caustics (thesis 5.4): shoots photons from every point light of a scene (cube faces
-// of pixels, jittered photons per pixel), keeps the L S+ D paths, and writes a caustic octree
+// of pixels, jittered photons per pixel) and every area light (uniform over its area, cosine-weighted
+// about its normal; issue 20), keeps the L S+ D paths, and writes a caustic octree
 // (density estimates at leaf corners, eq. 5.1-5.2) into each model's pool, in place.
 #include <algorithm>
 #include <cmath>
@@ -20,12 +21,13 @@
 namespace {
 
 constexpr const char* k_description =
-    "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light (area lights as "
-    "their "
-    "point samples) with a cube whose 6 faces are --face-res x --face-res pixels, shoots --per-pixel "
-    "photons "
-    "per pixel with jittered directions, each carrying the power of its pixel's solid angle (a light of "
-    "color I emits 4 pi I), and traces them with the renderer's core (on the GPU when there is one). "
+    "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light with a cube whose 6 "
+    "faces are --face-res x --face-res pixels, shoots --per-pixel photons per pixel with jittered "
+    "directions, each carrying the power of its pixel's solid angle (a light of color I emits 4 pi I); "
+    "every area light shoots as many photons, from points uniform over its area (--face-res x --face-res "
+    "cells) in directions cosine-distributed about its normal edge_u x edge_v (a Lambertian emitter of "
+    "power pi I: along its normal as bright as a point light of color I). Photons are traced with the "
+    "renderer's core (on the GPU when there is one). "
     "Only L "
     "S+ D paths are kept: photons whose first hit is not specular, or that leave the scene, are dropped; "
     "specular hits reflect or refract (power x reflectivity + transmissivity) up to --max-bounces; after "
@@ -81,12 +83,13 @@ prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scen
         job.scale = static_cast<float>(sc.models[m].transform.scale);
     }
     const core::SceneView view = rs.view();
-    lights = view.light_count;
+    lights = core::photon_light_count(view);
     load_seconds = step.seconds();
-    const std::uint64_t total = photons::photons_per_light(o.shoot.params) * view.light_count;
-    step.note("prt-photons: %u lights x %llu photons (%u x %u x 6 faces x %u), backend %s", view.light_count,
-              ull(photons::photons_per_light(o.shoot.params)), o.shoot.params.face_res,
-              o.shoot.params.face_res, o.shoot.params.per_pixel, o.shoot.backend.c_str());
+    const std::uint64_t total = photons::photons_per_light(o.shoot.params) * lights;
+    step.note("prt-photons: %u point + %u area lights x %llu photons (%u x %u x 6 faces x %u), backend %s",
+              view.point_light_count, view.area_light_count, ull(photons::photons_per_light(o.shoot.params)),
+              o.shoot.params.face_res, o.shoot.params.face_res, o.shoot.params.per_pixel,
+              o.shoot.backend.c_str());
     tool::Progress progress("prt-photons: shooting", total, step.quiet());
     photons::ShootResult shot =
         photons::shoot_photons(view, o.shoot, [&](std::uint64_t d, std::uint64_t) { progress.update(d); });
