@@ -663,6 +663,77 @@ TEST(Photons, LoaderRejectsBrokenSections) {
     EXPECT_THROW(rt::load_caustic_view(pool_with(bad)), Error);
 }
 
+TEST(Photons, APoolHoldsOneCausticMapPerPlacement) {
+    // Issue 20: caustic_info holds one GiInfo per map, the nodes and leaves follow one another; each
+    // map is found by its placement key, a map keyed 0 serves any placement; keys must be distinct
+    // and non-zero when there are several maps.
+    auto tree_with = [](std::uint32_t leaf_count, std::uint32_t placement) {
+        std::vector<gi::LeafValues> leaves(leaf_count);
+        for (std::uint32_t k = 0; k < leaf_count; ++k) {
+            leaves[k] = {};
+            leaves[k].key = k * 9;
+        }
+        const double root_min[3] = {0, 0, 0};
+        gi::GiOctree t = gi::build_octree(leaves, root_min, 1.0, 2);
+        t.info.gather_radius = 0.1f;
+        t.info.placement = placement;
+        return t;
+    };
+    test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1, 500), {0, 0, 0});
+    const auto base = test::make_pool(m);
+    auto pool_with = [&](const std::vector<gi::GiOctree>& trees) {
+        std::vector<pool::GiInfo> infos;
+        std::vector<std::uint32_t> nodes;
+        std::vector<pool::GiLeaf> leaves;
+        for (const gi::GiOctree& t : trees) {
+            infos.push_back(t.info);
+            nodes.insert(nodes.end(), t.nodes.begin(), t.nodes.end());
+            leaves.insert(leaves.end(), t.leaves.begin(), t.leaves.end());
+        }
+        pool::PoolWriter w;
+        w.carry_over(*base);
+        w.add_array(pool::SectionType::caustic_info, infos);
+        w.add_array(pool::SectionType::caustic_nodes, nodes);
+        w.add_array(pool::SectionType::caustic_leaves, leaves);
+        return pool::PoolFile::from_bytes(w.serialize(), "m.pool");
+    };
+    const pool::PoolFile two = pool_with({tree_with(3, 7), tree_with(1, 9)});
+    const std::vector<pool::GiSections> maps = pool::validate_caustic_maps(two);
+    ASSERT_EQ(maps.size(), 2u);
+    EXPECT_EQ(maps[0].leaves.size(), 3u);
+    EXPECT_EQ(maps[1].leaves.size(), 1u);
+    EXPECT_EQ(maps[1].nodes.data(), maps[0].nodes.data() + maps[0].nodes.size());
+    EXPECT_EQ(rt::load_caustic_view(two, 7).tree.leaf_count, 3u);
+    EXPECT_EQ(rt::load_caustic_view(two, 9).tree.leaf_count, 1u);
+    EXPECT_EQ(rt::load_caustic_view(two, 8).tree.nodes, nullptr) << "no map for that placement";
+    EXPECT_THROW((void)pool::validate_caustics(two), Error) << "the single-map reader";
+    // One map keyed 0 serves every placement (pools written before issue 20, or placed once).
+    const pool::PoolFile any = pool_with({tree_with(2, 0)});
+    EXPECT_EQ(rt::load_caustic_view(any, 12345).tree.leaf_count, 2u);
+    // Broken: equal keys, a zero key among several, the arrays longer than the infos say.
+    for (const auto& [bad, what] : std::vector<std::pair<std::vector<gi::GiOctree>, std::string>>{
+             {{tree_with(2, 7), tree_with(1, 7)}, "map 1: the placement key of map 0"},
+             {{tree_with(2, 7), tree_with(1, 0)}, "map 1: placement key 0 among several maps"}}) {
+        try {
+            (void)pool::validate_caustic_maps(pool_with(bad));
+            FAIL() << "accepted: " << what;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("m.pool: section caustic_info: " + what), std::string::npos)
+                << e.what();
+        }
+    }
+    gi::GiOctree short_info = tree_with(2, 7);
+    short_info.info.leaf_count = 1;
+    short_info.info.node_count = 1;
+    EXPECT_THROW((void)pool::validate_caustic_maps(pool_with({short_info, tree_with(1, 9)})), Error);
+    // Keys: a hash of the transform, never 0; different placements differ.
+    scene::Transform a, b;
+    b.translate = {1, 0, 0};
+    EXPECT_NE(pool::placement_key(a), 0u);
+    EXPECT_NE(pool::placement_key(a), pool::placement_key(b));
+    EXPECT_EQ(pool::placement_key(b), pool::placement_key(b));
+}
+
 TEST(GiBuild, RadixOrderAndSortUniqueAgreeWithTheStandardLibrary) {
     std::vector<std::uint64_t> keys(300000);
     for (std::size_t i = 0; i < keys.size(); ++i)

@@ -59,7 +59,8 @@ struct GiInfo {
     float scale;                 ///< 36: decoded corner value = RGB9E5 value x scale (> 0)
     float cos_threshold;         ///< 40: a lookup whose normal n has dot(n, leaf normal) below this
                                  ///<     finds nothing (leaves with a zero normal accept every n)
-    std::uint32_t reserved0;     ///< 44: 0
+    std::uint32_t placement;     ///< 44: caustics: the scene placement this map belongs to
+                                 ///<     (pool::placement_key), 0: any placement; light map: 0
     std::uint64_t sample_count;  ///< 48: photons deposited (caustics) or samples traced (light map)
     float total[2];              ///< 56: caustics: deposited flux (luminance) and emitted flux of
                                  ///<     all lights; light map: mean and max corner luminance
