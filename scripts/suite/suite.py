@@ -378,7 +378,8 @@ class Suite:
         for surface, setting, extra in runs:
             tag = "fidelity_%s__%s__%s" % (label, surface, setting)
             js = os.path.join(self.out, "runs", tag + ".json")
-            cmd = [self.tool("prt-fidelity"), pool_of.get(setting, pool), "--surface", surface, "--width", str(res), "--height", str(res),
+            cmd = [self.tool("prt-fidelity"), pool_of.get(setting, pool), "--surface", surface,
+                   "--width", str(res), "--height", str(res),
                    "--views-from", views, "--json", js, "--quiet"] + extra
             if reference:
                 cmd += ["--reference", os.path.join(SHARED, reference)]
