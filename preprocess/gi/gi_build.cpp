@@ -275,16 +275,32 @@ void splat_root(const pool::PoolFile& pool, double root_min[3], double& root_siz
 
 void write_gi_pool(const std::filesystem::path& path, const GiSectionTypes& types, const GiOctree* tree,
                    const std::string& tool, const std::string& parameters_json) {
+    const GiOctree* const one[1] = {tree};
+    write_gi_pool(path, types, std::span<const GiOctree* const>(one, tree != nullptr ? 1 : 0), tool,
+                  parameters_json);
+}
+
+void write_gi_pool(const std::filesystem::path& path, const GiSectionTypes& types,
+                   std::span<const GiOctree* const> trees, const std::string& tool,
+                   const std::string& parameters_json) {
     const pool::PoolFile in = pool::PoolFile::open(path);
     pool::PoolWriter w;
     w.carry_over(in);
     w.remove(types.info);
     w.remove(types.nodes);
     w.remove(types.leaves);
-    if (tree != nullptr) {
-        w.add_array(types.info, std::vector<pool::GiInfo>{tree->info});
-        w.add_array(types.nodes, tree->nodes);
-        w.add_array(types.leaves, tree->leaves);
+    if (!trees.empty()) {
+        std::vector<pool::GiInfo> infos;
+        std::vector<std::uint32_t> nodes;
+        std::vector<pool::GiLeaf> leaves;
+        for (const GiOctree* t : trees) {
+            infos.push_back(t->info);
+            nodes.insert(nodes.end(), t->nodes.begin(), t->nodes.end());
+            leaves.insert(leaves.end(), t->leaves.begin(), t->leaves.end());
+        }
+        w.add_array(types.info, infos);
+        w.add_array(types.nodes, nodes);
+        w.add_array(types.leaves, leaves);
     }
     w.add_provenance(tool, PRT_VERSION, parameters_json);
     w.write(path);

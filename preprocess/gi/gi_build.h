@@ -149,4 +149,11 @@ inline constexpr GiSectionTypes k_light_map_sections{pool::SectionType::light_ma
 void write_gi_pool(const std::filesystem::path& path, const GiSectionTypes& types, const GiOctree* tree,
                    const std::string& tool, const std::string& parameters_json);
 
+/// The same with any number of maps (issue 20: a caustic map per placement of the pool, each
+/// GiInfo::placement set): their infos in one section, their nodes and leaves one after the other
+/// (formats/POOL.md); no map removes the sections.
+void write_gi_pool(const std::filesystem::path& path, const GiSectionTypes& types,
+                   std::span<const GiOctree* const> trees, const std::string& tool,
+                   const std::string& parameters_json);
+
 }  // namespace prt::gi

@@ -172,7 +172,7 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
     ShootParams params = options.params;
     params.solid_angle_norm = solid_angle_norm(params.face_res);
     const std::uint64_t per_light = photons_per_light(params);
-    const std::uint64_t total = per_light * scene.light_count;
+    const std::uint64_t total = per_light * core::photon_light_count(scene);
     result.tally.photons = total;
     const std::string backend = resolve_backend(options.backend);
     const double start = tool::now_seconds();

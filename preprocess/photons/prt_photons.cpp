@@ -1,5 +1,6 @@
 // prt-photons: caustics (thesis 5.4): shoots photons from every point light of a scene (cube faces
-// of pixels, jittered photons per pixel), keeps the L S+ D paths, and writes a caustic octree
+// of pixels, jittered photons per pixel) and every area light (uniform over its area, cosine-weighted
+// about its normal; issue 20), keeps the L S+ D paths, and writes a caustic octree
 // (density estimates at leaf corners, eq. 5.1-5.2) into each model's pool, in place.
 #include <algorithm>
 #include <cmath>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "photons.h"
+#include "prt/formats/gi_sections.h"
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
@@ -20,12 +22,13 @@
 namespace {
 
 constexpr const char* k_description =
-    "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light (area lights as "
-    "their "
-    "point samples) with a cube whose 6 faces are --face-res x --face-res pixels, shoots --per-pixel "
-    "photons "
-    "per pixel with jittered directions, each carrying the power of its pixel's solid angle (a light of "
-    "color I emits 4 pi I), and traces them with the renderer's core (on the GPU when there is one). "
+    "Caustics (thesis 5.4). Loads SCENE.json and its pools, covers every point light with a cube whose 6 "
+    "faces are --face-res x --face-res pixels, shoots --per-pixel photons per pixel with jittered "
+    "directions, each carrying the power of its pixel's solid angle (a light of color I emits 4 pi I); "
+    "every area light shoots as many photons, from points uniform over its area (--face-res x --face-res "
+    "cells) in directions cosine-distributed about its normal edge_u x edge_v (a Lambertian emitter of "
+    "power pi I: along its normal as bright as a point light of color I). Photons are traced with the "
+    "renderer's core (on the GPU when there is one). "
     "Only L "
     "S+ D paths are kept: photons whose first hit is not specular, or that leave the scene, are dropped; "
     "specular hits reflect or refract (power x reflectivity + transmissivity) up to --max-bounces; after "
@@ -48,24 +51,55 @@ struct Options {
     float radius = 1.0f, cos_threshold = 0.0f;
 };
 
-/// One pool's caustic map: its splat octree's root, the deposits in it and the octree built.
-struct PoolJob {
-    double root_min[3];
-    double root_size = 1;
-    std::uint32_t depth = 0;
+/// One caustic map: the placement it belongs to (pool::placement_key, 0: any), the model's scale
+/// there, the deposits and the octree built.
+struct MapJob {
+    std::uint32_t placement = 0;
     float scale = 1;
     std::vector<prt::photons::PhotonDeposit> deposits;
     std::optional<prt::gi::GiOctree> tree;
 };
 
+/// One pool's caustic maps (issue 20: one per placement; a pool placed once gets one map for any
+/// placement, key 0, as before) and its splat octree's root, their common frame.
+struct PoolJob {
+    double root_min[3];
+    double root_size = 1;
+    std::uint32_t depth = 0;
+    std::vector<MapJob> maps;
+};
+
 using Pools = prt::tool::ScenePools;
 
-/// The scene's pools: a pool placed twice gets one map (local frame) from both placements.
+/// The scene's pools: a pool placed more than once gets a map per placement (local frame each).
 Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
     return prt::tool::scene_pools(sc, [&](const std::filesystem::path& p) {
-        step.note("prt-photons: %s: pool %s placed more than once: one caustic map for all",
+        step.note("prt-photons: %s: pool %s placed more than once: one caustic map per placement",
                   step.input_path().c_str(), p.string().c_str());
     });
+}
+
+/// Per model: the index of its map in its pool's job (models placing a pool at the same transform
+/// share one).
+std::vector<std::uint32_t> assign_maps(const prt::scene::Scene& sc, const Pools& pools,
+                                       std::vector<PoolJob>& jobs) {
+    std::vector<std::uint32_t> placements(jobs.size(), 0);
+    for (std::size_t m = 0; m < sc.models.size(); ++m) ++placements[pools.of_model[m]];
+    std::vector<std::uint32_t> map_of_model(sc.models.size(), 0);
+    for (std::size_t m = 0; m < sc.models.size(); ++m) {
+        const std::uint32_t p = pools.of_model[m];
+        const std::uint32_t key = placements[p] > 1 ? prt::pool::placement_key(sc.models[m].transform) : 0u;
+        std::vector<MapJob>& maps = jobs[p].maps;
+        std::size_t k = 0;
+        while (k < maps.size() && maps[k].placement != key) ++k;
+        if (k == maps.size()) {
+            maps.push_back(MapJob{});
+            maps[k].placement = key;
+            maps[k].scale = static_cast<float>(sc.models[m].transform.scale);
+        }
+        map_of_model[m] = static_cast<std::uint32_t>(k);
+    }
+    return map_of_model;
 }
 
 /// Shoots the photons; the RenderScene maps the pools rewritten later: it lives only in here.
@@ -78,20 +112,54 @@ prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scen
     for (std::size_t m = 0; m < rs.models().size(); ++m) {
         PoolJob& job = jobs[pools.of_model[m]];
         gi::splat_root(*rs.models()[m].pool, job.root_min, job.root_size, job.depth);
-        job.scale = static_cast<float>(sc.models[m].transform.scale);
     }
     const core::SceneView view = rs.view();
-    lights = view.light_count;
+    lights = core::photon_light_count(view);
     load_seconds = step.seconds();
-    const std::uint64_t total = photons::photons_per_light(o.shoot.params) * view.light_count;
-    step.note("prt-photons: %u lights x %llu photons (%u x %u x 6 faces x %u), backend %s", view.light_count,
-              ull(photons::photons_per_light(o.shoot.params)), o.shoot.params.face_res,
-              o.shoot.params.face_res, o.shoot.params.per_pixel, o.shoot.backend.c_str());
+    const std::uint64_t total = photons::photons_per_light(o.shoot.params) * lights;
+    step.note("prt-photons: %u point + %u area lights x %llu photons (%u x %u x 6 faces x %u), backend %s",
+              view.point_light_count, view.area_light_count, ull(photons::photons_per_light(o.shoot.params)),
+              o.shoot.params.face_res, o.shoot.params.face_res, o.shoot.params.per_pixel,
+              o.shoot.backend.c_str());
     tool::Progress progress("prt-photons: shooting", total, step.quiet());
     photons::ShootResult shot =
         photons::shoot_photons(view, o.shoot, [&](std::uint64_t d, std::uint64_t) { progress.update(d); });
     progress.finish();
     return shot;
+}
+
+/// Builds one map's caustic octree (eq. 5.1-5.2) in its pool's frame; returns its leaves, adds the
+/// phase times.
+std::uint64_t gather_map(const prt::tool::PoolStep& step, const Options& o, const std::filesystem::path& path,
+                         PoolJob& job, std::size_t index, const prt::photons::PhotonTally& t,
+                         double gather_phases[5]) {
+    MapJob& map = job.maps[index];
+    using namespace prt;
+    photons::GatherOptions g;
+    g.depth = std::min(job.depth + o.caustic_levels, pool::k_max_gi_depth);
+    g.radius_edges = o.radius;
+    g.render_scale = map.scale;
+    g.cos_threshold = o.cos_threshold;
+    g.threads = o.shoot.threads;
+    double phases[5] = {0, 0, 0, 0, 0};
+    g.phase_seconds = phases;
+    map.tree = photons::build_caustic_octree(map.deposits, job.root_min, job.root_size, g);
+    for (int k = 0; k < 5; ++k) gather_phases[k] += phases[k];
+    map.tree->info.placement = map.placement;
+    map.tree->info.total[0] = 0.0f;
+    for (const photons::PhotonDeposit& d : map.deposits)
+        map.tree->info.total[0] += 0.2126f * d.flux[0] + 0.7152f * d.flux[1] + 0.0722f * d.flux[2];
+    map.tree->info.total[1] =
+        static_cast<float>(0.2126 * t.emitted[0] + 0.7152 * t.emitted[1] + 0.0722 * t.emitted[2]);
+    const std::string which = job.maps.size() > 1 ? " placement " + std::to_string(index + 1) + " of " +
+                                                        std::to_string(job.maps.size())
+                                                  : std::string();
+    step.note("prt-photons: %s%s: %zu deposits, caustic octree depth %u, %zu leaves (%.1f MiB)",
+              path.filename().string().c_str(), which.c_str(), map.deposits.size(), g.depth,
+              map.tree->leaves.size(),
+              double(map.tree->leaves.size() * sizeof(pool::GiLeaf) + map.tree->nodes.size() * 4) /
+                  (1024.0 * 1024.0));
+    return map.tree->leaves.size();
 }
 
 /// Builds each pool's caustic octree (eq. 5.1-5.2); returns the leaves, sums the phase times.
@@ -101,29 +169,9 @@ std::uint64_t gather(const prt::tool::PoolStep& step, const Options& o, const Po
     using namespace prt;
     std::uint64_t leaves = 0;
     for (std::size_t p = 0; p < jobs.size(); ++p) {
-        PoolJob& job = jobs[p];
-        if (job.deposits.empty()) continue;
-        photons::GatherOptions g;
-        g.depth = std::min(job.depth + o.caustic_levels, pool::k_max_gi_depth);
-        g.radius_edges = o.radius;
-        g.render_scale = job.scale;
-        g.cos_threshold = o.cos_threshold;
-        g.threads = o.shoot.threads;
-        double phases[5] = {0, 0, 0, 0, 0};
-        g.phase_seconds = phases;
-        job.tree = photons::build_caustic_octree(job.deposits, job.root_min, job.root_size, g);
-        for (int k = 0; k < 5; ++k) gather_phases[k] += phases[k];
-        job.tree->info.total[0] = 0.0f;
-        for (const photons::PhotonDeposit& d : job.deposits)
-            job.tree->info.total[0] += 0.2126f * d.flux[0] + 0.7152f * d.flux[1] + 0.0722f * d.flux[2];
-        job.tree->info.total[1] =
-            static_cast<float>(0.2126 * t.emitted[0] + 0.7152 * t.emitted[1] + 0.0722 * t.emitted[2]);
-        leaves += job.tree->leaves.size();
-        step.note("prt-photons: %s: %zu deposits, caustic octree depth %u, %zu leaves (%.1f MiB)",
-                  pools.paths[p].filename().string().c_str(), job.deposits.size(), g.depth,
-                  job.tree->leaves.size(),
-                  double(job.tree->leaves.size() * sizeof(pool::GiLeaf) + job.tree->nodes.size() * 4) /
-                      (1024.0 * 1024.0));
+        for (std::size_t k = 0; k < jobs[p].maps.size(); ++k)
+            if (!jobs[p].maps[k].deposits.empty())
+                leaves += gather_map(step, o, pools.paths[p], jobs[p], k, t, gather_phases);
     }
     return leaves;
 }
@@ -175,9 +223,11 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
 
     const Pools pools = scene_pools(step, sc);
     std::vector<PoolJob> jobs(pools.paths.size());
+    const std::vector<std::uint32_t> map_of_model = assign_maps(sc, pools, jobs);
     std::uint64_t lights = 0;
     photons::ShootResult shot = shoot(step, sc, o, pools, jobs, lights, load_seconds);
-    for (const photons::PhotonDeposit& d : shot.deposits) jobs[pools.of_model[d.model]].deposits.push_back(d);
+    for (const photons::PhotonDeposit& d : shot.deposits)
+        jobs[pools.of_model[d.model]].maps[map_of_model[d.model]].deposits.push_back(d);
     std::vector<photons::PhotonDeposit>().swap(shot.deposits);
 
     const double gather_start = tool::now_seconds();
@@ -194,9 +244,12 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
                                        {"seed", o.shoot.params.seed},
                                        {"scene", step.input_path()}};
     const double write_start = tool::now_seconds();
-    for (std::size_t p = 0; p < jobs.size(); ++p)
-        gi::write_gi_pool(pools.paths[p], gi::k_caustic_sections, jobs[p].tree ? &*jobs[p].tree : nullptr,
-                          "prt-photons", parameters.dump());
+    for (std::size_t p = 0; p < jobs.size(); ++p) {
+        std::vector<const gi::GiOctree*> trees;
+        for (const MapJob& map : jobs[p].maps)
+            if (map.tree) trees.push_back(&*map.tree);
+        gi::write_gi_pool(pools.paths[p], gi::k_caustic_sections, trees, "prt-photons", parameters.dump());
+    }
     const double write_seconds = tool::now_seconds() - write_start;
 
     report(step, shot);

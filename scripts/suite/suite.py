@@ -152,9 +152,12 @@ class Suite:
             self.timed(name, "octree_X%d" % x, [self.tool("prt-octree"), radii, "-o", oc, "-X", str(x)])
             pools["octree_X%d" % x] = oc
             if x == 32:
-                cu = os.path.join(d, "cull_X%d.pool" % x)
-                self.timed(name, "cull_X%d" % x, [self.tool("prt-cull"), oc, "-o", cu])
-                pools["cull_X%d" % x] = cu
+                # prt-cull's policies side by side (issue 20): greedy keeps the label "cull_X32".
+                for policy in self.settings["cull_policies"]:
+                    key = cull_key(policy, x)
+                    cu = os.path.join(d, key + ".pool")
+                    self.timed(name, key, [self.tool("prt-cull"), oc, "-o", cu, "--policy", policy])
+                    pools[key] = cu
         mls = os.path.join(d, "mls.pool")
         self.timed(name, "mls", [self.tool("prt-mls"), radii, "-o", mls])
         pools["mls"] = mls
@@ -251,11 +254,13 @@ class Suite:
             if not (key.startswith("octree_") or key.startswith("cull_")):
                 continue
             x = key.split("_X")[1]
-            steps = ["radii", "octree_X" + x] + (["cull_X" + x] if key.startswith("cull_") else [])
+            culled = key.startswith("cull_")
+            policy = key[len("cull_"):].split("_X")[0] if culled and not key.startswith("cull_X") else ""
+            steps = ["radii", "octree_X" + x] + ([key] if culled else [])
             for deep in s["deep"]:
                 for lc in s["leaf_culling"]:
-                    label = "X%s%s%s_lc%d" % (x, "_culled" if key.startswith("cull_") else "",
-                                              "_deep" if deep else "", lc)
+                    label = "X%s%s%s%s_lc%d" % (x, "_culled" if culled else "", "_" + policy if policy else "",
+                                                "_deep" if deep else "", lc)
                     extra = ["--leaf-culling", str(lc), "--deep-blending" if deep else "--no-deep-blending"]
                     self.accuracy(model, points, "splats", pool, steps, label, extra)
         # ISO: levels, q8/f32, refinement.
@@ -351,19 +356,30 @@ class Suite:
                  ("iso", "prt-iso", []), ("mls", "prt-mls", [])]
         pool = os.path.join(d, "surfaces.pool")
         src = imp
+        octree = os.path.join(d, "octree.pool")
         for step, tool, extra in steps:
             self.timed(label, step, [self.tool(tool), src, "-o", pool] + extra)
             src = pool
+            if step == "octree":
+                shutil.copyfile(pool, octree)
         res = self.settings["fidelity_res"]
         runs = [("splats", "default", []), ("splats", "no_deep", ["--no-deep-blending"]), ("iso", "default", []),
                 ("mls", "default", []), ("mls", "k8", ["--mls-k", "8"])]
         prep = self.prep.get(label, {})
         prep_of = {"splats": ["import", "radii", "octree", "cull"], "iso": ["import", "radii", "iso"],
                    "mls": ["import", "radii", "mls"]}
+        # prt-cull's policies side by side on the same octree (issue 20): rows splats / cull_POLICY.
+        pool_of = {}
+        for policy in self.settings["cull_policies"]:
+            cu = os.path.join(d, "cull_%s.pool" % policy)
+            self.timed(label, "cull_" + policy, [self.tool("prt-cull"), octree, "-o", cu, "--policy", policy])
+            runs.append(("splats", "cull_" + policy, []))
+            pool_of["cull_" + policy] = cu
         for surface, setting, extra in runs:
             tag = "fidelity_%s__%s__%s" % (label, surface, setting)
             js = os.path.join(self.out, "runs", tag + ".json")
-            cmd = [self.tool("prt-fidelity"), pool, "--surface", surface, "--width", str(res), "--height", str(res),
+            cmd = [self.tool("prt-fidelity"), pool_of.get(setting, pool), "--surface", surface,
+                   "--width", str(res), "--height", str(res),
                    "--views-from", views, "--json", js, "--quiet"] + extra
             if reference:
                 cmd += ["--reference", os.path.join(SHARED, reference)]
@@ -379,6 +395,8 @@ class Suite:
             sj = j["surfaces"][surface]
             med = lambda k: (sj.get(k) or {}).get("median")  # noqa: E731
             steps_used = prep_of[surface] + (["scan"] if kind == "scan" else [])
+            if setting in pool_of:
+                steps_used = [st for st in steps_used if st != "cull"] + [setting]
             row = {
                 "model": label, "surface": surface, "setting": setting, "points": j["input_points"],
                 "views": j["views"], "resolution": res, "reference": j["reference"]["kind"],
@@ -414,6 +432,12 @@ class Interrupted(Exception):
     """SIGTERM during a run."""
 
 
+def cull_key(policy, x):
+    """The pool key of prt-cull --policy POLICY on the X-leaf octree: cull_X32 for greedy (the rows'
+    labels before issue 20), cull_thesis_X32 for the thesis's."""
+    return "cull_X%d" % x if policy == "greedy" else "cull_%s_X%d" % (policy, x)
+
+
 def scan_points(suite, pool):
     """Points of a pool, from prt-info's first line of counts ("points: N ...")."""
     _, _, out, _ = suite.run([suite.tool("prt-info"), pool])
@@ -431,6 +455,7 @@ def settings_for(args):
         "leaf_sizes": [32] if quick else [16, 32, 64],
         "deep": [False, True],
         "leaf_culling": [2] if quick else [0, 2],
+        "cull_policies": ["greedy", "thesis"],
         "iso_levels": [8, 10] if quick else [7, 8, 9, 10, 11, 12],
         "iso_refine": [0, 2],
         "mls_k": [4, 8, 16],

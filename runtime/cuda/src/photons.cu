@@ -82,7 +82,7 @@ PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::Ph
     scene.upload(host, nullptr);
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
     const std::uint64_t per_light = core::photons_per_light(params);
-    const std::uint64_t total = per_light * host.light_count;
+    const std::uint64_t total = per_light * core::photon_light_count(host);
     DeviceBuffer<core::PhotonDeposit> d_deposits;
     std::uint64_t capacity =
         std::min<std::uint64_t>(k_photons_per_launch / 4, std::max<std::uint64_t>(total, 1));

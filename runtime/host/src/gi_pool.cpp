@@ -3,14 +3,15 @@
 #include "prt/runtime/gi_pool.h"
 
 #include <optional>
+#include <vector>
 
 namespace prt::rt {
 
 namespace {
 
-core::GiOctreeView make_view(const std::optional<pool::GiSections>& s) {
+core::GiOctreeView make_view(const pool::GiSections* s) {
     core::GiOctreeView v;
-    if (!s) return v;
+    if (s == nullptr) return v;
     v.nodes = s->nodes.data();
     v.node_count = static_cast<std::uint32_t>(s->nodes.size());
     v.leaves = s->leaves.data();
@@ -26,12 +27,14 @@ core::GiOctreeView make_view(const std::optional<pool::GiSections>& s) {
 
 }  // namespace
 
-core::CausticView load_caustic_view(const pool::PoolFile& pool) {
-    return core::CausticView{make_view(pool::validate_caustics(pool))};
+core::CausticView load_caustic_view(const pool::PoolFile& pool, std::uint32_t placement) {
+    const std::vector<pool::GiSections> maps = pool::validate_caustic_maps(pool);
+    return core::CausticView{make_view(pool::find_caustic_map(maps, placement))};
 }
 
 core::LightMapView load_light_map_view(const pool::PoolFile& pool) {
-    return core::LightMapView{make_view(pool::validate_light_map(pool))};
+    const std::optional<pool::GiSections> s = pool::validate_light_map(pool);
+    return core::LightMapView{make_view(s ? &*s : nullptr)};
 }
 
 }  // namespace prt::rt

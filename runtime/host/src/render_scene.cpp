@@ -686,8 +686,17 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             lm.bytes += std::size_t{view.tree.node_count} * 4 +
                         std::size_t{view.tree.leaf_count} * sizeof(pool::GiLeaf);
         };
-        load_gi(m_scene.render.caustics, "caustics", has_caustics(pf), load_caustic_view, v.caustics,
-                "caustic octree (run prt-photons on the scene)");
+        // Issue 20: a pool placed several times holds one caustic map per placement, keyed by its
+        // transform (pool::placement_key).
+        const std::uint32_t placement_id = pool::placement_key(sm.transform);
+        load_gi(
+            m_scene.render.caustics, "caustics", has_caustics(pf),
+            [&](const pool::PoolFile& p) { return load_caustic_view(p, placement_id); }, v.caustics,
+            "caustic octree (run prt-photons on the scene)");
+        if (m_scene.render.caustics && has_caustics(pf) && v.caustics.tree.nodes == nullptr)
+            m_notes.push_back("model '" + lm.name + "': " + pf.label() +
+                              " has no caustic map for this placement (none reached it, or the scene moved "
+                              "it since prt-photons ran)");
         load_gi(m_scene.render.light_map, "light_map", has_light_map(pf), load_light_map_view, v.light_map,
                 "light map (run prt-lightmap on the scene)");
 

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <string>
@@ -94,6 +95,40 @@ TEST(LightMap, UniformlyLitClosedWhiteRoomIsUniform) {
     const double lm_mean = sum / n, sd = std::sqrt(std::max(0.0, sum2 / n - lm_mean * lm_mean));
     EXPECT_NEAR(lm_mean, expected, 0.03 * expected);
     EXPECT_LT(sd / lm_mean, 0.03) << "not uniform: mean " << lm_mean << " sd " << sd;
+}
+
+TEST(LightMap, AnAreaLightLightsTheLightMap) {
+    // The closed white room of the test above lit by a small area light at its centre instead (issue
+    // 20): the renderer's direct light from an area light of color I sampled by area is I cos theta
+    // (path.h, no falloff), so every wall gets 1 and the indirect irradiance is a + a^2 + a^3 again;
+    // with no light at all it is zero.
+    const double a = 0.5;
+    test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1.0, 40000, true), {0, 0, 0});
+    const auto pool = test::make_pool(m);
+    auto scene = [&](const std::string& lights) {
+        return test::load_gi_scene(R"({"lights": )" + lights + R"(,
+        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
+                       "use_point_colors": false}],
+        "models": [{"name": "room", "pool": "room.pool"}],
+        "environment": {"color": [0, 0, 0]}})",
+                                   {pool});
+    };
+    lightmap::TraceParams tp;
+    tp.rays = 8;
+    tp.bounces = 3;
+    const rt::RenderScene lit = scene(
+        R"([{"type": "area", "corner": [-0.01, 0, -0.01], "edge_u": [0.02, 0, 0], "edge_v": [0, 0, 0.02],
+             "samples": 1}])");
+    const Baked baked = bake(lit, *pool, 1, tp);
+    ASSERT_GT(baked.samples.size(), 100u);
+    const double expected = a + a * a + a * a * a;
+    double mean = 0;
+    for (const lightmap::Sample& s : baked.samples) mean += s.irradiance[1] / baked.samples.size();
+    EXPECT_NEAR(mean, expected, 0.02 * expected);
+    const Baked dark = bake(scene("[]"), *pool, 1, tp);
+    double dark_max = 0;
+    for (const lightmap::Sample& s : dark.samples) dark_max = std::max<double>(dark_max, s.irradiance[1]);
+    EXPECT_EQ(dark_max, 0.0);
 }
 
 TEST(LightMap, ColorBleedsFromARedWallOntoTheFloor) {

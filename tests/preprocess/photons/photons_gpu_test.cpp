@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 #include "gi_test_util.h"
 #include "photons.h"
@@ -11,14 +12,14 @@
 
 using namespace prt;
 
-TEST(PhotonsGpu, DepositsMatchTheCpu) {
-    std::string why;
-    if (!cuda::photons_device_available(&why)) GTEST_SKIP() << "no CUDA device: " << why;
+namespace {
+
+/// A glass ball over a floor lit by `lights` (a scene's "lights" array), shot on both backends.
+void deposits_match_the_cpu(const std::string& lights) {
     test::TestModel floor =
         test::make_model(test::rect_points({-2, 0, -2}, {4, 0, 0}, {0, 0, 4}, {0, 1, 0}, 300), {0, 0, 0});
     test::TestModel ball = test::make_model(test::sphere_points({0, 0.8, 0}, 0.4, 40000), {0, 0.8, 0});
-    const rt::RenderScene rs = test::load_gi_scene(R"({
-        "lights": [{"type": "point", "position": [0.3, 2, 0]}],
+    const rt::RenderScene rs = test::load_gi_scene(R"({"lights": )" + lights + R"(,
         "materials": [{"name": "floor"},
                       {"name": "glass", "refractive_index": 1.5, "transmissivity": 0.9, "reflectivity": 0.1,
                        "diffuse_reflectance": 0}],
@@ -47,4 +48,20 @@ TEST(PhotonsGpu, DepositsMatchTheCpu) {
     for (const auto& d : cpu.deposits) cpu_flux += d.flux[1];
     for (const auto& d : gpu.deposits) gpu_flux += d.flux[1];
     EXPECT_NEAR(gpu_flux, cpu_flux, 0.03 * cpu_flux);
+}
+
+}  // namespace
+
+TEST(PhotonsGpu, DepositsMatchTheCpu) {
+    std::string why;
+    if (!cuda::photons_device_available(&why)) GTEST_SKIP() << "no CUDA device: " << why;
+    deposits_match_the_cpu(R"([{"type": "point", "position": [0.3, 2, 0]}])");
+}
+
+TEST(PhotonsGpu, AreaLightDepositsMatchTheCpu) {
+    // Issue 20: area lights emit through the same core on both backends.
+    std::string why;
+    if (!cuda::photons_device_available(&why)) GTEST_SKIP() << "no CUDA device: " << why;
+    deposits_match_the_cpu(
+        R"([{"type": "area", "corner": [0.1, 2, -0.2], "edge_u": [0.4, 0, 0], "edge_v": [0, 0, 0.4]}])");
 }

@@ -91,6 +91,195 @@ TEST(Photons, PowerIsConservedAndMatchesTheSphereSolidAngle) {
     EXPECT_LT(f, share(R + r_max) * 1.02);
 }
 
+namespace {
+
+/// Irradiance at a point on the plane y = 0 from a Lambertian emitter of radiance 1 on the
+/// rectangle [x0, x1] x [z0, z1] at height h facing down (parallel planes), in closed form: pi x
+/// the form factor from a differential area to a parallel rectangle with a corner above it
+/// (Howell's catalogue of configuration factors, C-11: F = 1 / (2 pi) [A / sqrt(1 + A^2)
+/// atan(B / sqrt(1 + A^2)) + B / sqrt(1 + B^2) atan(A / sqrt(1 + B^2))], A = a / h, B = b / h),
+/// summed with signs over the four rectangles from the foot of the point to the corners.
+double parallel_rect_irradiance(double px, double pz, double h, double x0, double x1, double z0, double z1) {
+    auto corner = [&](double X, double Y) {  // signed rectangle [0, X] x [0, Y] from the foot
+        const double A = std::fabs(X) / h, B = std::fabs(Y) / h;
+        const double a1 = std::sqrt(1 + A * A), b1 = std::sqrt(1 + B * B);
+        const double F = (A / a1 * std::atan(B / a1) + B / b1 * std::atan(A / b1)) / (2 * k_pi);
+        return (X < 0) != (Y < 0) ? -F : F;
+    };
+    const double F = corner(x1 - px, z1 - pz) - corner(x0 - px, z1 - pz) - corner(x1 - px, z0 - pz) +
+                     corner(x0 - px, z0 - pz);
+    return k_pi * F;
+}
+
+/// The same irradiance by midpoint quadrature of L cos cos' / r^2 over the emitter (L = 1).
+double parallel_rect_irradiance_quadrature(double px, double pz, double h, double x0, double x1, double z0,
+                                           double z1, int n) {
+    double sum = 0;
+    const double dx = (x1 - x0) / n, dz = (z1 - z0) / n;
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) {
+            const double x = x0 + (i + 0.5) * dx - px, z = z0 + (j + 0.5) * dz - pz;
+            const double r2 = x * x + z * z + h * h;
+            sum += h * h / (r2 * r2) * dx * dz;
+        }
+    return sum;
+}
+
+}  // namespace
+
+TEST(Photons, AreaLightPhotonsMatchTheAnalyticIrradianceOfASquareLambertianEmitter) {
+    // A unit square light of color I at height h = 1 facing down (edge_u x edge_v = -y): its photons
+    // (emitted analytically onto the plane y = 0) binned in 0.25 x 0.25 squares over [-2, 2]^2 must
+    // give the irradiance of a Lambertian emitter of power pi I, radiance L = I / A, each bin's mean
+    // within 4.5 standard deviations of its photon count (equal-power photons: relative sd
+    // 1 / sqrt(expected count)), and the bins' chi-square per bin below 1.5.
+    const double h = 1.0, side = 1.0;
+    const double closed = parallel_rect_irradiance(0.3, -0.7, h, -0.5, 0.5, -0.5, 0.5);
+    ASSERT_NEAR(closed, parallel_rect_irradiance_quadrature(0.3, -0.7, h, -0.5, 0.5, -0.5, 0.5, 400),
+                1e-4 * closed)
+        << "the closed form and the quadrature disagree";
+    core::AreaLight a;
+    a.corner = core::Vec3{-0.5f, float(h), -0.5f};
+    a.edge_u = core::Vec3{float(side), 0, 0};
+    a.edge_v = core::Vec3{0, 0, float(side)};
+    const double I = 2.0;
+    a.color = core::Vec3{float(I), float(I), float(I)};
+    photons::ShootParams p;
+    p.face_res = 64;
+    p.per_pixel = 16;  // 393k photons
+    const std::uint64_t n = photons::photons_per_light(p);
+    constexpr int k_bins = 16;
+    const double lo = -2.0, bin = 0.25;
+    std::vector<double> power(k_bins * k_bins, 0.0);
+    double total = 0, below = 0;
+    for (std::uint64_t i = 0; i < n; ++i) {
+        core::Vec3 o, d;
+        float share;
+        core::emit_area_photon(p, a, 3, i, o, d, share);
+        ASSERT_NEAR(core::length(d), 1.0f, 1e-5f);
+        ASSERT_GE(o.x, -0.5f);
+        ASSERT_LE(o.x, 0.5f);
+        ASSERT_FLOAT_EQ(o.y, float(h));
+        ASSERT_LT(d.y, 0.0f) << "a photon left the light's back";
+        const double flux = share * I;
+        total += flux;
+        const double t = -o.y / d.y;
+        const double x = o.x + t * d.x, z = o.z + t * d.z;
+        const int bx = int(std::floor((x - lo) / bin)), bz = int(std::floor((z - lo) / bin));
+        if (bx < 0 || bz < 0 || bx >= k_bins || bz >= k_bins) continue;
+        power[bz * k_bins + bx] += flux;
+        below += flux;
+    }
+    EXPECT_NEAR(total, k_pi * I, 1e-4 * k_pi * I) << "power: pi I";
+    const double L = I / (side * side);
+    double chi2 = 0, expected_below = 0;
+    for (int bz = 0; bz < k_bins; ++bz)
+        for (int bx = 0; bx < k_bins; ++bx) {
+            // The bin's mean irradiance: the closed form at 8 x 8 points of the bin.
+            double e = 0;
+            for (int i = 0; i < 8; ++i)
+                for (int j = 0; j < 8; ++j)
+                    e += parallel_rect_irradiance(lo + (bx + (i + 0.5) / 8) * bin,
+                                                  lo + (bz + (j + 0.5) / 8) * bin, h, -0.5, 0.5, -0.5, 0.5) /
+                         64;
+            e *= L;
+            const double expected_power = e * bin * bin;
+            expected_below += expected_power;
+            const double expected_count = expected_power / (k_pi * I / double(n));
+            const double sd = expected_power / std::sqrt(expected_count);
+            const double z = (power[bz * k_bins + bx] - expected_power) / sd;
+            chi2 += z * z;
+            EXPECT_LT(std::fabs(z), 4.5) << "bin (" << bx << ", " << bz << "): measured "
+                                         << power[bz * k_bins + bx] / (bin * bin) << ", analytic " << e;
+        }
+    EXPECT_LT(chi2 / (k_bins * k_bins), 1.5);
+    EXPECT_NEAR(below, expected_below, 0.005 * expected_below);
+}
+
+TEST(Photons, AreaLightPowerIsConservedAndFallsOnAReceiverAsItsFormFactorSays) {
+    // A square light (side 1, color c, intensity 3) at height 1 over a diffuse square receiver of
+    // side 2 centred below it (d 0.5, kr 0.3 reflects onto nothing, absorbs 0.2). The light emits
+    // pi x 3 c; the power reaching the receiver first is that times its form factor, between the
+    // nominal square's and the square grown by the splat radius (the disks reach past the edges).
+    test::TestModel m =
+        test::make_model(test::rect_points({-1, 0, -1}, {2, 0, 0}, {0, 0, 2}, {0, 1, 0}, 200), {0, 0, 0});
+    const auto pool = test::make_pool(m);
+    const rt::RenderScene rs = test::load_gi_scene(R"({
+        "lights": [{"type": "area", "corner": [-0.5, 1, -0.5], "edge_u": [1, 0, 0], "edge_v": [0, 0, 1],
+                    "color": [1, 0.5, 0.25], "intensity": 3}],
+        "materials": [{"name": "m", "diffuse_reflectance": 0.5, "reflectivity": 0.3, "use_point_colors": false}],
+        "models": [{"name": "floor", "pool": "unused.pool"}]})",
+                                                   {pool});
+    ASSERT_EQ(core::photon_light_count(rs.view()), 1u) << "the area light, not its samples";
+    photons::ShootOptions o;
+    o.params.face_res = 64;
+    o.params.per_pixel = 8;
+    o.backend = "cpu";
+    const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    const photons::PhotonTally& t = r.tally;
+    EXPECT_EQ(t.photons, photons::photons_per_light(o.params));
+    const double color[3] = {3, 1.5, 0.75};
+    for (int a = 0; a < 3; ++a) {
+        EXPECT_NEAR(t.emitted[a], k_pi * color[a], k_pi * color[a] * 1e-4) << "channel " << a;
+        const double sum = t.direct[a] + t.deposited[a] + t.absorbed[a] + t.escaped[a] + t.truncated[a];
+        EXPECT_NEAR(sum, t.emitted[a], 1e-5 * t.emitted[a]) << "channel " << a;
+    }
+    EXPECT_EQ(t.deposits, 0u);  // a flat mirror sends nothing back to the receiver
+    const double H = lum(t.direct) / 0.5;
+    EXPECT_NEAR(lum(t.absorbed), 0.2 * H, 1e-4 * H);
+    // Form factor light -> receiver = (1 / (pi A_light)) x the integral over the receiver of the
+    // irradiance from a radiance-1 light (reciprocity), by the closed form at 64 x 64 points.
+    const double r_max = *std::max_element(m.radii.begin(), m.radii.end());
+    auto form_factor = [&](double half) {
+        double e = 0;
+        const int k = 64;
+        const double step = 2 * half / k;
+        for (int i = 0; i < k; ++i)
+            for (int j = 0; j < k; ++j)
+                e += parallel_rect_irradiance(-half + (i + 0.5) * step, -half + (j + 0.5) * step, 1.0, -0.5,
+                                              0.5, -0.5, 0.5) *
+                     step * step;
+        return e / k_pi;
+    };
+    const double f = H / lum(t.emitted);
+    const double f_lo = form_factor(1.0), f_hi = form_factor(1.0 + r_max);
+    // 4 standard deviations of the binomial share of 393k... photons
+    const double sd = std::sqrt(f_lo * (1 - f_lo) / double(t.photons));
+    EXPECT_GT(f, f_lo - 4 * sd) << "form factor " << f_lo << " .. " << f_hi;
+    EXPECT_LT(f, f_hi + 4 * sd) << "form factor " << f_lo << " .. " << f_hi;
+}
+
+TEST(Photons, AreaLightCausticDepositsAreScaledFromTheirPointOfEmission) {
+    // A tiny area light facing down over a horizontal mirror (kr 1) at y = 0, and a diffuse ceiling
+    // at y = 2 above it facing down: every deposit comes from a photon that left the light near
+    // (0, 1, 0), bounced at the mirror and rose to the ceiling, and carries its power x its squared
+    // straight distance from the light, (2 - 1)^2 + the horizontal offset^2.
+    test::TestModel mirror =
+        test::make_model(test::rect_points({-1.5, 0, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, 1, 0}, 150), {0, 0, 0});
+    test::TestModel ceiling = test::make_model(
+        test::rect_points({-1.5, 2, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, -1, 0}, 150), {0, 0, 0});
+    const rt::RenderScene rs = test::load_gi_scene(R"({
+        "lights": [{"type": "area", "corner": [-0.005, 1, -0.005], "edge_u": [0.01, 0, 0], "edge_v": [0, 0, 0.01]}],
+        "materials": [{"name": "mirror", "diffuse_reflectance": 0, "reflectivity": 1},
+                      {"name": "matte", "diffuse_reflectance": 1}],
+        "models": [{"name": "mirror", "pool": "a.pool", "material": "mirror"},
+                   {"name": "ceiling", "pool": "b.pool", "material": "matte"}]})",
+                                                   {test::make_pool(mirror), test::make_pool(ceiling)});
+    photons::ShootOptions o;
+    o.params.face_res = 16;
+    o.params.per_pixel = 8;
+    o.backend = "cpu";
+    const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    ASSERT_GT(r.deposits.size(), 1000u);
+    const double per_photon = k_pi / double(photons::photons_per_light(o.params));
+    for (const photons::PhotonDeposit& d : r.deposits) {
+        ASSERT_EQ(d.model, 1u);
+        const double dx = d.position[0], dy = d.position[1] - 1.0, dz = d.position[2];
+        const double d2 = dx * dx + dy * dy + dz * dz;
+        ASSERT_NEAR(d.flux[0], per_photon * d2, 0.03 * per_photon * d2) << "at " << dx << ", " << dz;
+    }
+}
+
 TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
     // A glass ball (n 1.5, R 0.5) at the origin, a point light on the axis at z = +2 behind a
     // mask with a small hole (paraxial rays only), and a diffuse strip in the plane y = 0 along
@@ -472,6 +661,77 @@ TEST(Photons, LoaderRejectsBrokenSections) {
     bad = tree;
     bad.info.scale = -1;
     EXPECT_THROW(rt::load_caustic_view(pool_with(bad)), Error);
+}
+
+TEST(Photons, APoolHoldsOneCausticMapPerPlacement) {
+    // Issue 20: caustic_info holds one GiInfo per map, the nodes and leaves follow one another; each
+    // map is found by its placement key, a map keyed 0 serves any placement; keys must be distinct
+    // and non-zero when there are several maps.
+    auto tree_with = [](std::uint32_t leaf_count, std::uint32_t placement) {
+        std::vector<gi::LeafValues> leaves(leaf_count);
+        for (std::uint32_t k = 0; k < leaf_count; ++k) {
+            leaves[k] = {};
+            leaves[k].key = k * 9;
+        }
+        const double root_min[3] = {0, 0, 0};
+        gi::GiOctree t = gi::build_octree(leaves, root_min, 1.0, 2);
+        t.info.gather_radius = 0.1f;
+        t.info.placement = placement;
+        return t;
+    };
+    test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1, 500), {0, 0, 0});
+    const auto base = test::make_pool(m);
+    auto pool_with = [&](const std::vector<gi::GiOctree>& trees) {
+        std::vector<pool::GiInfo> infos;
+        std::vector<std::uint32_t> nodes;
+        std::vector<pool::GiLeaf> leaves;
+        for (const gi::GiOctree& t : trees) {
+            infos.push_back(t.info);
+            nodes.insert(nodes.end(), t.nodes.begin(), t.nodes.end());
+            leaves.insert(leaves.end(), t.leaves.begin(), t.leaves.end());
+        }
+        pool::PoolWriter w;
+        w.carry_over(*base);
+        w.add_array(pool::SectionType::caustic_info, infos);
+        w.add_array(pool::SectionType::caustic_nodes, nodes);
+        w.add_array(pool::SectionType::caustic_leaves, leaves);
+        return pool::PoolFile::from_bytes(w.serialize(), "m.pool");
+    };
+    const pool::PoolFile two = pool_with({tree_with(3, 7), tree_with(1, 9)});
+    const std::vector<pool::GiSections> maps = pool::validate_caustic_maps(two);
+    ASSERT_EQ(maps.size(), 2u);
+    EXPECT_EQ(maps[0].leaves.size(), 3u);
+    EXPECT_EQ(maps[1].leaves.size(), 1u);
+    EXPECT_EQ(maps[1].nodes.data(), maps[0].nodes.data() + maps[0].nodes.size());
+    EXPECT_EQ(rt::load_caustic_view(two, 7).tree.leaf_count, 3u);
+    EXPECT_EQ(rt::load_caustic_view(two, 9).tree.leaf_count, 1u);
+    EXPECT_EQ(rt::load_caustic_view(two, 8).tree.nodes, nullptr) << "no map for that placement";
+    EXPECT_THROW((void)pool::validate_caustics(two), Error) << "the single-map reader";
+    // One map keyed 0 serves every placement (pools written before issue 20, or placed once).
+    const pool::PoolFile any = pool_with({tree_with(2, 0)});
+    EXPECT_EQ(rt::load_caustic_view(any, 12345).tree.leaf_count, 2u);
+    // Broken: equal keys, a zero key among several, the arrays longer than the infos say.
+    for (const auto& [bad, what] : std::vector<std::pair<std::vector<gi::GiOctree>, std::string>>{
+             {{tree_with(2, 7), tree_with(1, 7)}, "map 1: the placement key of map 0"},
+             {{tree_with(2, 7), tree_with(1, 0)}, "map 1: placement key 0 among several maps"}}) {
+        try {
+            (void)pool::validate_caustic_maps(pool_with(bad));
+            FAIL() << "accepted: " << what;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("m.pool: section caustic_info: " + what), std::string::npos)
+                << e.what();
+        }
+    }
+    gi::GiOctree short_info = tree_with(2, 7);
+    short_info.info.leaf_count = 1;
+    short_info.info.node_count = 1;
+    EXPECT_THROW((void)pool::validate_caustic_maps(pool_with({short_info, tree_with(1, 9)})), Error);
+    // Keys: a hash of the transform, never 0; different placements differ.
+    scene::Transform a, b;
+    b.translate = {1, 0, 0};
+    EXPECT_NE(pool::placement_key(a), 0u);
+    EXPECT_NE(pool::placement_key(a), pool::placement_key(b));
+    EXPECT_EQ(pool::placement_key(b), pool::placement_key(b));
 }
 
 TEST(GiBuild, RadixOrderAndSortUniqueAgreeWithTheStandardLibrary) {

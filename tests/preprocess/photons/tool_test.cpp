@@ -79,6 +79,58 @@ TEST(PhotonsTool, WritesCausticsIntoThePoolsInPlace) {
         EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
 }
 
+TEST(PhotonsTool, APoolPlacedTwiceGetsACausticMapPerPlacement) {
+    // Issue 20: one floor pool (2 x 2) and one glass-ball pool (radius 0.3, 0.6 above the floor),
+    // each placed at x = -1.2 and x = +1.2, under a light at (0, 2, 0). Each ball focuses the light
+    // on its floor away from the light, at local x ~ -0.51 under the left ball and +0.51 under the
+    // right one (the line from the light through the ball's centre meets the floor there). Each placement's
+    // map must hold its own caustic and not the other's, which one map for both would.
+    const auto dir = test::fresh_dir("photons_instances");
+    test::write_model_pool(
+        test::make_model(test::rect_points({-1, 0, -1}, {2, 0, 0}, {0, 0, 2}, {0, 1, 0}, 100), {0, 0, 0}),
+        dir / "floor.pool");
+    test::write_model_pool(test::make_model(test::sphere_points({0, 0.6, 0}, 0.3, 20000), {0, 0.6, 0}),
+                           dir / "ball.pool");
+    write_text(dir / "scene.json", R"({
+  "lights": [{"type": "point", "position": [0, 2, 0]}],
+  "materials": [{"name": "floor"},
+                {"name": "glass", "refractive_index": 1.5, "transmissivity": 1, "diffuse_reflectance": 0}],
+  "models": [{"name": "left floor", "pool": "floor.pool", "material": "floor", "transform": {"translate": [-1.2, 0, 0]}},
+             {"name": "right floor", "pool": "floor.pool", "material": "floor", "transform": {"translate": [1.2, 0, 0]}},
+             {"name": "left ball", "pool": "ball.pool", "material": "glass", "transform": {"translate": [-1.2, 0, 0]}},
+             {"name": "right ball", "pool": "ball.pool", "material": "glass", "transform": {"translate": [1.2, 0, 0]}}],
+  "render": {"caustics": true}
+})");
+    const test::ToolRun r = test::run_tool(
+        "prt-photons", (dir / "scene.json").string() + " --face-res 128 --per-pixel 4 --backend cpu", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("one caustic map per placement"), std::string::npos) << r.err;
+    {
+        const pool::PoolFile floor = pool::PoolFile::open(dir / "floor.pool");
+        ASSERT_EQ(pool::validate_caustic_maps(floor).size(), 2u);
+    }
+    const scene::Scene sc = scene::load_scene(dir / "scene.json");
+    const rt::RenderScene rs = rt::RenderScene::load(sc);
+    const core::SceneView v = rs.view();
+    auto caustic = [&](std::uint32_t model, float x) {
+        return core::caustic_radiance(v.models[model].caustics, core::Vec3{x, 0, 0}, core::Vec3{0, 1, 0}).y;
+    };
+    const float spot = 1.2f * 0.6f / 1.4f;  // the caustic's centre, local frame
+    float left_peak = 0, right_peak = 0, left_wrong = 0, right_wrong = 0;
+    for (float dx = -0.1f; dx <= 0.1f; dx += 0.01f) {
+        left_peak = std::max(left_peak, caustic(0, -spot + dx));
+        left_wrong = std::max(left_wrong, caustic(0, spot + dx));
+        right_peak = std::max(right_peak, caustic(1, spot + dx));
+        right_wrong = std::max(right_wrong, caustic(1, -spot + dx));
+    }
+    EXPECT_GT(left_peak, 0.0f);
+    EXPECT_GT(right_peak, 0.0f);
+    EXPECT_LT(left_wrong, 0.01f * left_peak) << "the right ball's caustic in the left floor's map";
+    EXPECT_LT(right_wrong, 0.01f * right_peak) << "the left ball's caustic in the right floor's map";
+    // Mirror images: the same power under each ball.
+    EXPECT_NEAR(left_peak, right_peak, 0.2f * left_peak);
+}
+
 TEST(PhotonsTool, BadInputGivesOneLineNamingTheFile) {
     const auto dir = test::fresh_dir("photons_bad");
     write_text(dir / "scene.json", k_scene);  // its pools do not exist

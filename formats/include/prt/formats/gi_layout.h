@@ -8,7 +8,9 @@
 // interpolates the corners trilinearly (thesis 5.4.2). The octree's root cube is the model's splat
 // octree root (local frame, ModelInfo::origin), so the map travels with the pool.
 //
-//   caustic_info (64)     one GiInfo: root cube, depth, counts, gather radius, scale
+//   caustic_info (64)     one GiInfo per map: root cube, depth, counts, gather radius, scale,
+//                         placement (issue 20: a pool placed several times holds one map per
+//                         placement; the maps' nodes and leaves follow one another in this order)
 //   caustic_nodes (65)    uint32 node words, the splat octree's encoding (pool_layout.h):
 //                           bits 31..30 type (0 internal, 1 filled leaf, 2 empty leaf)
 //                           bits 29..0  internal: index of the first of 8 children (Morton order
@@ -47,7 +49,8 @@ namespace prt::pool {
 /// Deepest leaf level of a caustic or light-map octree (corner keys then take 21 bits per axis).
 inline constexpr std::uint32_t k_max_gi_depth = 20;
 
-/// Caustic / light-map facts (sections caustic_info and light_map_info, exactly one element each).
+/// Caustic / light-map facts (section caustic_info: one element per map, one map per placement;
+/// light_map_info: exactly one element).
 struct GiInfo {
     float root_min[3];           ///< 0: root cube corner, local frame
     float root_size;             ///< 12: root cube edge (> 0)
@@ -59,7 +62,8 @@ struct GiInfo {
     float scale;                 ///< 36: decoded corner value = RGB9E5 value x scale (> 0)
     float cos_threshold;         ///< 40: a lookup whose normal n has dot(n, leaf normal) below this
                                  ///<     finds nothing (leaves with a zero normal accept every n)
-    std::uint32_t reserved0;     ///< 44: 0
+    std::uint32_t placement;     ///< 44: caustics: the scene placement this map belongs to
+                                 ///<     (pool::placement_key), 0: any placement; light map: 0
     std::uint64_t sample_count;  ///< 48: photons deposited (caustics) or samples traced (light map)
     float total[2];              ///< 56: caustics: deposited flux (luminance) and emitted flux of
                                  ///<     all lights; light map: mean and max corner luminance

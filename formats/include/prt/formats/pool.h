@@ -31,7 +31,7 @@ struct OpenOptions {
 /// (magic, versions, sizes, bounds, overlaps, checksums, counts, cross-references, the splat
 /// octree) and throws prt::Error with one line "FILE: section NAME: what is wrong" on the first
 /// problem found. The surface and global-illumination sections are checked when a reader asks for
-/// them (validate_iso, validate_mls, validate_patches, validate_caustics, validate_light_map in
+/// them (validate_iso, validate_mls, validate_patches, validate_caustic_maps, validate_light_map in
 /// prt/formats/*_sections.h). Move-only; views stay valid while the PoolFile lives.
 class PoolFile {
 public:

@@ -12,6 +12,18 @@
 // I dw = I (2/res)^2 / (1 + s^2 + t^2)^(3/2) at the pixel centre (s, t in [-1, 1] on the face),
 // scaled so the 6 faces sum to exactly 4 pi: a light of color I emits 4 pi I in total, evenly.
 //
+// Area lights (issue 20): each area light (a parallelogram, scene_view.h) shoots as many photons as
+// a point light, from points uniform over its area (stratified: a face_res x face_res grid of cells
+// over the parallelogram, 6 x per_pixel jittered photons per cell) in directions cosine-distributed
+// about its normal edge_u x edge_v (a one-sided Lambertian emitter; SCENE.md's default light faces
+// down). Its power is pi I for a light of color I (intensity multiplied in): a Lambertian emitter of
+// power P has the radiant intensity P / pi along its normal, so straight below it the light is as
+// bright as a point light of color I, which is what the ray tracer's samples (I / samples^2 each)
+// add up to there. Every photon carries pi I / N. Lights split the power as point lights do: every
+// light shoots photons_per_light() photons, each with its share of that light's own power.
+// The photon lights of a scene: the point lights (SceneView::lights[0, point_light_count)), then the
+// area lights (not their point samples).
+//
 // Paths (thesis 5.4.1): only L S+ D is kept. A photon whose first hit is not specular is dropped
 // (direct light, which the renderer shades itself); at a specular hit (reflectivity kr,
 // transmissivity kt) it goes on with power x (kr + kt), reflected or refracted (refraction chosen
@@ -24,7 +36,8 @@
 // Units: the renderer's point lights have no distance falloff (runtime/README.md: direct light is
 // I cos theta). A deposit's power is multiplied by its squared distance d^2 from the light, the
 // factor between the physical I cos theta / d^2 and the renderer's direct light there, so that the
-// caustic map's irradiance and the renderer's direct light keep their physical ratio.
+// caustic map's irradiance and the renderer's direct light keep their physical ratio. An area
+// light's photon is scaled likewise by its squared distance from its own point of emission.
 #pragma once
 
 #include <cstdint>
@@ -122,6 +135,50 @@ PRT_HD inline void emit_photon(const PhotonShootParams& p, std::uint32_t light, 
     dir = normalize(d);
 }
 
+/// The lights that shoot photons: the point lights, then the area lights (their samples in
+/// SceneView::lights are the ray tracer's, not photon sources).
+PRT_HD PRT_INLINE std::uint32_t photon_light_count(const SceneView& s) {
+    return s.point_light_count + s.area_light_count;
+}
+
+/// Area lights (see the header comment): photon `index` of area light `a` (photon light number
+/// `light`): its origin on the parallelogram, its unit direction (cosine-distributed about the
+/// normal edge_u x edge_v) and the fraction of the light's color it carries (pi / photons).
+PRT_HD inline void emit_area_photon(const PhotonShootParams& p, const AreaLight& a, std::uint32_t light,
+                                    std::uint64_t index, Vec3& origin, Vec3& dir, float& share) {
+    const std::uint64_t per_cell = 6ull * p.per_pixel;
+    const std::uint64_t cell = index / per_cell;
+    const std::uint32_t cx = static_cast<std::uint32_t>(cell % p.face_res);
+    const std::uint32_t cy = static_cast<std::uint32_t>(cell / p.face_res);
+    std::uint64_t h = hash64(p.seed ^ hash64((static_cast<std::uint64_t>(light) << 48) ^ index));
+    const float inv_res = 1.0f / static_cast<float>(p.face_res);
+    const float u = (static_cast<float>(cx) + unit_float(h)) * inv_res;
+    h = hash64(h);
+    const float v = (static_cast<float>(cy) + unit_float(h)) * inv_res;
+    h = hash64(h);
+    const float u1 = unit_float(h);
+    h = hash64(h);
+    origin = a.corner + a.edge_u * fminf(u, 1.0f) + a.edge_v * fminf(v, 1.0f);
+    dir = cosine_direction(normalize(cross(a.edge_u, a.edge_v)), u1, unit_float(h));
+    share = k_pi / static_cast<float>(photons_per_light(p));
+}
+
+/// Photon `index` of photon light `light` (photon_light_count()): where it starts, its unit
+/// direction and its power (linear RGB).
+PRT_HD inline void start_photon(const SceneView& s, const PhotonShootParams& p, std::uint32_t light,
+                                std::uint64_t index, Vec3& origin, Vec3& dir, Vec3& flux) {
+    float share = 0.0f;
+    if (light < s.point_light_count) {
+        emit_photon(p, light, index, dir, share);
+        origin = s.lights[light].position;
+        flux = s.lights[light].color * share;
+    } else {
+        const AreaLight& a = s.area_lights[light - s.point_light_count];
+        emit_area_photon(p, a, light, index, origin, dir, share);
+        flux = a.color * share;
+    }
+}
+
 /// Per-thread tally in floats for kernels; the host one above sums in double.
 struct PhotonTallyF {
     Vec3 emitted{0, 0, 0}, direct{0, 0, 0}, deposited{0, 0, 0}, absorbed{0, 0, 0}, escaped{0, 0, 0},
@@ -129,17 +186,16 @@ struct PhotonTallyF {
     std::uint32_t deposits = 0, specular_hits = 0, rays = 0;
 };
 
-/// thesis 5.4.1: traces photon `index` of light `light` through the scene, calling
+/// thesis 5.4.1: traces photon `index` of photon light `light` (point lights, then area lights:
+/// photon_light_count()) through the scene, calling
 /// `deposit(const PhotonDeposit&)` at each L S+ D diffuse hit, and adds its fate to `tally`.
 template <class DepositFn>
 PRT_HD inline void trace_photon(const SceneView& s, const PhotonShootParams& p, std::uint32_t light,
                                 std::uint64_t index, PhotonTallyF& tally, DepositFn&& deposit) {
-    Vec3 dir;
-    float omega = 0.0f;
-    emit_photon(p, light, index, dir, omega);
-    Vec3 flux = s.lights[light].color * omega;
+    Vec3 source, dir, flux;
+    start_photon(s, p, light, index, source, dir, flux);
     tally.emitted += flux;
-    Ray ray{s.lights[light].position, dir, k_inf, 0u};
+    Ray ray{source, dir, k_inf, 0u};
     RayCounters counters;
     bool specular_seen = false;
     std::uint64_t h =
@@ -175,7 +231,7 @@ PRT_HD inline void trace_photon(const SceneView& s, const PhotonShootParams& p, 
                 // The renderer's point lights have no distance falloff (direct light I cos theta,
                 // not I cos theta / d^2), so the deposit is stated in those units: times the squared
                 // distance d from the light, caustic and direct light keep their physical ratio.
-                const float d2 = length2(hit.position - s.lights[light].position);
+                const float d2 = length2(hit.position - source);
                 dep.flux[0] = flux.x * d2;
                 dep.flux[1] = flux.y * d2;
                 dep.flux[2] = flux.z * d2;

@@ -14,10 +14,12 @@ namespace prt::rt {
 using pool::has_caustics;
 using pool::has_light_map;
 
-/// The caustic sections (64-66) validated (pool::validate_caustics) as a view into the mapped pool
-/// (valid while the PoolFile lives); an empty view (null nodes) when the pool has none. Throws
+/// The caustic sections (64-66) validated (pool::validate_caustic_maps) as a view into the mapped
+/// pool (valid while the PoolFile lives): the map of the placement with key `placement`
+/// (pool::placement_key; issue 20: a pool placed several times holds one map per placement), else
+/// the map for any placement (key 0); an empty view (null nodes) when the pool has neither. Throws
 /// prt::Error "FILE: section NAME: what is wrong" on any inconsistency.
-core::CausticView load_caustic_view(const pool::PoolFile& pool);
+core::CausticView load_caustic_view(const pool::PoolFile& pool, std::uint32_t placement = 0);
 /// The same for the light-map sections (80-82).
 core::LightMapView load_light_map_view(const pool::PoolFile& pool);
 
