@@ -2,8 +2,8 @@
 deciding whether an output is current (issue 21). Standard library only, plus python3-xxhash for
 the content hashes when it is installed (hashlib's SHA-256 otherwise).
 
-Used by scripts/prt-batch; written so that scripts/prt-bake can adopt it (its PoolState reads the
-same header, table and provenance).
+Used by scripts/prt-batch (the skip decision) and scripts/prt-bake (PoolState: a pool's sections
+and provenance).
 
 How a batch recognises its own result: every tool built on prt::tool::PoolStep takes
 `--provenance-tag JSON` and records that value as "tag" in its provenance parameters. prt-batch

@@ -1,8 +1,6 @@
 #include "prt/runtime/leaf_bounds.h"
 
 #include <algorithm>
-#include <cmath>
-#include <limits>
 
 #include "prt/core/leaf_bounds.h"
 #include "prt/parallel.h"

@@ -41,6 +41,17 @@ Baked bake(const rt::RenderScene& rs, const pool::PoolFile& pool, std::uint32_t 
     return b;
 }
 
+/// The closed white room of the first tests (a sphere of radius 1, normals inward, albedo 0.5)
+/// lit by `lights` (a JSON array).
+rt::RenderScene white_room(const std::string& lights, const std::shared_ptr<const pool::PoolFile>& pool) {
+    return test::load_gi_scene(R"({"lights": )" + lights + R"(,
+        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
+                       "use_point_colors": false}],
+        "models": [{"name": "room", "pool": "room.pool"}],
+        "environment": {"color": [0, 0, 0]}})",
+                               {pool});
+}
+
 }  // namespace
 
 TEST(LightMap, UniformlyLitClosedWhiteRoomIsUniform) {
@@ -52,13 +63,8 @@ TEST(LightMap, UniformlyLitClosedWhiteRoomIsUniform) {
     const std::uint32_t bounces = 3;
     test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1.0, 40000, true), {0, 0, 0});
     const auto pool = test::make_pool(m);
-    const rt::RenderScene rs = test::load_gi_scene(R"({
-        "lights": [{"type": "point", "position": [0, 0, 0], "color": [1, 1, 1]}],
-        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
-                       "use_point_colors": false}],
-        "models": [{"name": "room", "pool": "room.pool"}],
-        "environment": {"color": [0, 0, 0]}})",
-                                                   {pool});
+    const rt::RenderScene rs =
+        white_room(R"([{"type": "point", "position": [0, 0, 0], "color": [1, 1, 1]}])", pool);
     lightmap::TraceParams tp;
     tp.rays = 8;
     tp.bounces = bounces;
@@ -105,27 +111,20 @@ TEST(LightMap, AnAreaLightLightsTheLightMap) {
     const double a = 0.5;
     test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1.0, 40000, true), {0, 0, 0});
     const auto pool = test::make_pool(m);
-    auto scene = [&](const std::string& lights) {
-        return test::load_gi_scene(R"({"lights": )" + lights + R"(,
-        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
-                       "use_point_colors": false}],
-        "models": [{"name": "room", "pool": "room.pool"}],
-        "environment": {"color": [0, 0, 0]}})",
-                                   {pool});
-    };
     lightmap::TraceParams tp;
     tp.rays = 8;
     tp.bounces = 3;
-    const rt::RenderScene lit = scene(
+    const rt::RenderScene lit = white_room(
         R"([{"type": "area", "corner": [-0.01, 0, -0.01], "edge_u": [0.02, 0, 0], "edge_v": [0, 0, 0.02],
-             "samples": 1}])");
+             "samples": 1}])",
+        pool);
     const Baked baked = bake(lit, *pool, 1, tp);
     ASSERT_GT(baked.samples.size(), 100u);
     const double expected = a + a * a + a * a * a;
     double mean = 0;
     for (const lightmap::Sample& s : baked.samples) mean += s.irradiance[1] / baked.samples.size();
     EXPECT_NEAR(mean, expected, 0.02 * expected);
-    const Baked dark = bake(scene("[]"), *pool, 1, tp);
+    const Baked dark = bake(white_room("[]", pool), *pool, 1, tp);
     double dark_max = 0;
     for (const lightmap::Sample& s : dark.samples) dark_max = std::max<double>(dark_max, s.irradiance[1]);
     EXPECT_EQ(dark_max, 0.0);
