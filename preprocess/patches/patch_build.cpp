@@ -181,6 +181,8 @@ OrientStats orient_patches(std::vector<pool::PatchControlNet>& nets) {
     for (const auto& net : nets) grow(all, net_bounds(net));
     const DVec3 centre{0.5 * (all.lo[0] + all.hi[0]), 0.5 * (all.lo[1] + all.hi[1]),
                        0.5 * (all.lo[2] + all.hi[2])};
+    const double size = std::max({all.hi[0] - all.lo[0], all.hi[1] - all.lo[1], all.hi[2] - all.lo[2], 0.0});
+    const double flat_volume = 1e-9 * size * size * size;
 
     std::vector<int> flip(n, -1);  // -1 unvisited, else 0/1
     std::vector<std::uint32_t> component;
@@ -209,8 +211,12 @@ OrientStats orient_patches(std::vector<pool::PatchControlNet>& nets) {
             const pool::PatchControlNet net = flip[p] ? transpose_net(nets[p]) : nets[p];
             volume += signed_volume_term(net, centre);
         }
-        if (volume < 0.0)
+        // A group with no inside (a plane through the centre: a floor, a wall) has a signed volume
+        // of rounding noise, whose sign would orient it at random: it keeps the file's orientation.
+        if (volume < -flat_volume)
             for (std::uint32_t p : component) flip[p] ^= 1;
+        else if (!(volume > flat_volume))
+            ++st.flat_components;
     }
     for (std::size_t p = 0; p < n; ++p)
         if (flip[p] == 1) {

@@ -39,6 +39,8 @@ struct OrientStats {
     std::uint32_t nonmanifold_edges = 0;  ///< edges of three or more patches (ignored)
     std::uint32_t collapsed_edges = 0;    ///< edges whose 4 control points coincide (degenerate patches)
     std::uint32_t conflicts = 0;          ///< shared edges still inconsistent (non-orientable)
+    std::uint32_t flat_components =
+        0;  ///< groups with no inside (signed volume ~ 0): file's orientation kept
 };
 
 /// Makes dQ/du x dQ/dv consistent across shared edges (two patches sharing an edge run it in

@@ -44,9 +44,9 @@ void report(const prt::tool::PoolStep& step, const prt::patches::PatchModel& mod
     if (orient)
         step.note(
             "prt-patches: orientation: %u components, %u patches transposed, %u shared / %u boundary / %u "
-            "non-manifold / %u collapsed edges, %u conflicts%s",
+            "non-manifold / %u collapsed edges, %u conflicts, %u flat components (file's side kept)%s",
             o.components, o.flipped, o.shared_edges, o.boundary_edges, o.nonmanifold_edges, o.collapsed_edges,
-            o.conflicts,
+            o.conflicts, o.flat_components,
             (o.conflicts || o.nonmanifold_edges) ? " (not marked oriented: shade two-sided, no culling)"
                                                  : "");
     step.note(

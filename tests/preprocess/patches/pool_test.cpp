@@ -165,6 +165,23 @@ TEST(PatchPool, OrientationOfAClosedCubePointsOutwards) {
     }
 }
 
+TEST(PatchPool, AFlatGroupKeepsTheFilesOrientation) {
+    // A floor has no inside: its signed volume about the model's centre (which lies in its plane) is
+    // rounding noise. It oriented the patch at random by its sign (a floor at z = -1.4 turned to
+    // face down, at z = -1.3 up); now the file's orientation stays, in either direction.
+    for (double z : {-2.0, -1.4, -1.39, -1.3, -0.7, 0.0, 0.3}) {
+        for (bool transposed : {false, true}) {
+            std::vector<Net> nets = {planar_net({-1, -1, z}, {2, 0, 0}, {0, 2, 0})};
+            if (transposed) nets[0] = prt::patches::transpose_net(nets[0]);
+            const Net before = nets[0];
+            const auto st = prt::patches::orient_patches(nets);
+            EXPECT_EQ(st.flipped, 0u) << "z " << z;
+            EXPECT_EQ(st.flat_components, 1u) << "z " << z;
+            EXPECT_EQ(std::memcmp(&before, &nets[0], sizeof(Net)), 0) << "z " << z;
+        }
+    }
+}
+
 // ---- validate_patches errors: pools with valid checksums but broken contents --------------------
 
 struct Parts {
