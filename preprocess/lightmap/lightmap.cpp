@@ -1,4 +1,4 @@
-// PointRT prt-lightmap: sample selection, path tracing on the CPU, and the light-map octree
+// PointRT prt-lightmap: sample selection, path tracing on the CPU or the GPU, and the light-map octree
 // (thesis 5.3).
 #include "lightmap.h"
 
@@ -6,26 +6,61 @@
 #include <atomic>
 #include <cmath>
 
+#include "photons.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
+#include "prt/tool.h"
+
+#if defined(PRT_HAVE_CUDA)
+#include "prt/cuda/lightmap_cuda.h"
+#endif
 
 namespace prt::lightmap {
 
-std::vector<Sample> select_samples(const pool::PoolFile& pool, const core::ModelView& model,
-                                   const double root_min[3], double root_size, std::uint32_t depth,
-                                   std::uint32_t per_leaf) {
-    const auto positions = pool.require<pool::Float3>(pool::SectionType::positions, "prt-lightmap");
-    const auto normals = pool.require<pool::Float3>(pool::SectionType::normals, "prt-lightmap");
-    const gi::CellBins bins = gi::bin_points(positions.size(), root_min, root_size, depth,
-                                             [&](std::size_t i) { return &positions[i].x; });
+namespace {
+
+/// A sample moved onto its model's traced surface: render-frame hit and side, back into the local frame.
+void settle(const core::ModelView& mv, core::Vec3 position, core::Vec3 side, Sample& s) {
+    const core::Vec3 lp = core::mul_transpose(mv.rotation, position - mv.offset) * mv.inv_scale;
+    const core::Vec3 ln = core::normalize(core::mul_transpose(mv.rotation, side));
+    s.render_position = position;
+    s.render_normal = side;
+    s.position[0] = lp.x;
+    s.position[1] = lp.y;
+    s.position[2] = lp.z;
+    s.normal[0] = ln.x;
+    s.normal[1] = ln.y;
+    s.normal[2] = ln.z;
+}
+
+core::LightMapSampleIn sample_in(const Sample& s) {
+    return core::LightMapSampleIn{s.render_position, s.render_normal, s.model, s.settle_reach};
+}
+
+void apply(const core::SceneView& scene, const core::LightMapSampleOut& o, Sample& s) {
+    s.settled = o.settled != 0;
+    if (!s.settled) return;
+    if (s.settle_reach > 0.0f) settle(scene.models[s.model], o.position, o.side, s);
+    s.irradiance[0] = o.irradiance.x;
+    s.irradiance[1] = o.irradiance.y;
+    s.irradiance[2] = o.irradiance.z;
+}
+
+}  // namespace
+
+std::vector<Sample> select_samples(const gi::SurfacePoints& points, std::uint32_t model_index,
+                                   const core::ModelView& model, const double root_min[3], double root_size,
+                                   std::uint32_t depth, std::uint32_t per_leaf, float settle_reach) {
+    const gi::CellBins bins = gi::bin_points(points.position.size(), root_min, root_size, depth,
+                                             [&](std::size_t i) { return &points.position[i].x; });
     std::vector<Sample> out;
     for (std::size_t c = 0; c + 1 < bins.cell_begin.size(); ++c) {
         const std::uint32_t b = bins.cell_begin[c], e = bins.cell_begin[c + 1];
         const std::uint32_t n = e - b, take = std::min(n, per_leaf);
         for (std::uint32_t k = 0; k < take; ++k) {
             const std::uint32_t i = bins.order[b + static_cast<std::uint32_t>((std::uint64_t(k) * n) / take)];
-            const core::Vec3 p = core::vec3(positions[i]);
-            const core::Vec3 nn = core::normalize_or(core::vec3(normals[i]), core::Vec3{0, 0, 0});
+            const core::Vec3 p = points.position[i];
+            const core::Vec3 nn = core::normalize_or(points.normal[i], core::Vec3{0, 0, 0});
             if (core::length2(nn) == 0.0f || !core::is_finite(p)) continue;
             Sample s;
             s.position[0] = p.x;
@@ -36,30 +71,57 @@ std::vector<Sample> select_samples(const pool::PoolFile& pool, const core::Model
             s.normal[2] = nn.z;
             s.render_position = model.rotation * (p * model.scale) + model.offset;
             s.render_normal = core::normalize(model.rotation * nn);
+            s.model = model_index;
+            s.settle_reach = settle_reach * model.scale;
             out.push_back(s);
         }
     }
     return out;
 }
 
-void trace_samples(const core::SceneView& scene, const TraceParams& params, std::span<Sample> samples,
-                   std::uint64_t first_index, unsigned threads,
-                   const std::function<void(std::uint64_t)>& progress) {
+float settle_reach(core::SurfaceKind surface, const gi::SurfacePoints& points, double cell_edge) {
+    if (surface == core::SurfaceKind::splats) return 0.0f;
+    return static_cast<float>(points.on_surface ? 0.01 * cell_edge : cell_edge);
+}
+
+std::size_t drop_unsettled(std::vector<Sample>& samples) {
+    const std::size_t before = samples.size();
+    std::erase_if(samples, [](const Sample& s) { return !s.settled; });
+    return before - samples.size();
+}
+
+TraceReport trace_samples(const core::SceneView& scene, const TraceParams& params, std::span<Sample> samples,
+                          std::uint64_t first_index, unsigned threads,
+                          const std::function<void(std::uint64_t)>& progress, const std::string& backend) {
+    TraceReport report;
+    const double t0 = tool::now_seconds();
+    if (photons::resolve_backend(backend) == "cuda") {
+#if defined(PRT_HAVE_CUDA)
+        std::vector<core::LightMapSampleIn> in(samples.size());
+        for (std::size_t i = 0; i < samples.size(); ++i) in[i] = sample_in(samples[i]);
+        std::vector<core::LightMapSampleOut> out(samples.size());
+        const cuda::LightMapCudaResult r =
+            cuda::trace_light_map_cuda(scene, params, in, first_index, out, progress);
+        for (std::size_t i = 0; i < samples.size(); ++i) apply(scene, out[i], samples[i]);
+        report.backend = r.device;
+        report.kernel_seconds = r.kernel_seconds;
+        return report;
+#endif
+    }
+    const unsigned workers = resolve_threads(threads);
     std::atomic<std::uint64_t> done{0};
-    parallel_chunks(samples.size(), 64, resolve_threads(threads),
-                    [&](std::size_t begin, std::size_t end, unsigned worker) {
-                        core::RayCounters c;
-                        for (std::size_t i = begin; i < end; ++i) {
-                            Sample& s = samples[i];
-                            const core::Vec3 e = indirect_irradiance(scene, params, s.render_position,
-                                                                     s.render_normal, first_index + i, c);
-                            s.irradiance[0] = e.x;
-                            s.irradiance[1] = e.y;
-                            s.irradiance[2] = e.z;
-                        }
-                        const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
-                        if (worker == 0 && progress) progress(d);
-                    });
+    parallel_chunks(samples.size(), 64, workers, [&](std::size_t begin, std::size_t end, unsigned worker) {
+        core::RayCounters c;
+        for (std::size_t i = begin; i < end; ++i) {
+            Sample& s = samples[i];
+            apply(scene, core::trace_light_map_sample(scene, params, sample_in(s), first_index + i, c), s);
+        }
+        const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
+        if (worker == 0 && progress) progress(d);
+    });
+    report.backend = "cpu (" + std::to_string(workers) + " threads)";
+    report.kernel_seconds = tool::now_seconds() - t0;
+    return report;
 }
 
 gi::GiOctree build_light_map_octree(std::span<const Sample> samples, const double root_min[3],

@@ -17,10 +17,14 @@
 namespace {
 
 constexpr const char* k_description =
-    "Diffuse light map (thesis 5.3). Loads SCENE.json and its pools, picks up to --samples-per-leaf of "
+    "Diffuse light map (thesis 5.3), on the CPU or the GPU (--backend). Loads SCENE.json and its pools, "
+    "picks up to --samples-per-leaf of "
     "each "
-    "model's points in every cell of the light-map level (--levels-above levels above the splat octree's "
-    "depth), and path traces each one's indirect irradiance with the renderer's core: --rays "
+    "model's points (or of points sampled on its patches) in every cell of the light-map level "
+    "(--levels-above levels above the model's reference level: its splat octree's or bricks' depth, else "
+    "the level where its points fill cells 8 to a cell on average), moves each onto the surface the model "
+    "is traced as (ISO, MLS, patches: a probe ray along its normal), and path traces each one's indirect "
+    "irradiance with the renderer's core: --rays "
     "cosine-distributed paths of up to --bounces vertices, each vertex adding the direct light there "
     "(Lambert, shadow rays) and continuing diffusely, specularly or by refraction in proportion to its "
     "material. The samples are gathered at the corners of a light-map octree with the weighted average "
@@ -39,6 +43,7 @@ struct Options {
     prt::lightmap::GatherOptions gather;
     std::uint32_t levels_above = 1, per_leaf = 4;
     unsigned threads = 0;
+    std::string backend = "auto";  ///< auto | cpu | cuda (issue 20: the light map on the GPU)
 };
 
 using Pools = prt::tool::ScenePools;
@@ -56,7 +61,8 @@ Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) 
 std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep& step,
                                                          const prt::scene::Scene& sc, Options& o,
                                                          const Pools& pools, std::uint64_t& total_samples,
-                                                         double& trace_seconds) {
+                                                         double& trace_seconds, std::string& backend,
+                                                         double& kernel_seconds) {
     using namespace prt;
     std::vector<std::optional<gi::GiOctree>> trees(pools.paths.size());
     const rt::RenderScene rs = rt::RenderScene::load(sc);
@@ -68,26 +74,48 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
         if (done[p]) continue;
         done[p] = true;
         const pool::PoolFile& pf = *rs.models()[m].pool;
-        double root_min[3], root_size;
-        std::uint32_t depth;
-        gi::splat_root(pf, root_min, root_size, depth);
-        o.gather.depth = depth > o.levels_above ? depth - o.levels_above : 0;
+        // Issue 20: samples and frame on whatever surface the model is traced as (gi_frame.h).
+        gi::SurfacePoints points;
+        gi::GiFrame frame;
+        try {
+            points = gi::surface_points(pf);
+            frame = gi::gi_frame(pf, &points);
+        } catch (const Error& e) {
+            throw Error(step.input_path() + ": model '" + sc.models[m].name + "': " + e.what());
+        }
+        const double* root_min = frame.root_min;
+        const double root_size = frame.root_size;
+        o.gather.depth = frame.depth > o.levels_above ? frame.depth - o.levels_above : 0;
+        const float reach = lightmap::settle_reach(view.models[m].surface, points,
+                                                   root_size / static_cast<double>(1ull << o.gather.depth));
         std::vector<lightmap::Sample> samples =
-            lightmap::select_samples(pf, view.models[m], root_min, root_size, o.gather.depth, o.per_leaf);
+            lightmap::select_samples(points, static_cast<std::uint32_t>(m), view.models[m], root_min,
+                                     root_size, o.gather.depth, o.per_leaf, reach);
         const double t0 = tool::now_seconds();
         {
             tool::Progress progress("prt-lightmap: " + pools.paths[p].filename().string(), samples.size(),
                                     step.quiet());
-            lightmap::trace_samples(view, o.trace, samples, total_samples, o.threads,
-                                    [&](std::uint64_t d) { progress.update(d); });
+            const lightmap::TraceReport r = lightmap::trace_samples(
+                view, o.trace, samples, total_samples, o.threads,
+                [&](std::uint64_t d) { progress.update(d); }, o.backend);
             progress.finish();
+            backend = r.backend;
+            kernel_seconds += r.kernel_seconds;
         }
         trace_seconds += tool::now_seconds() - t0;
         total_samples += samples.size();
+        const std::size_t dropped = lightmap::drop_unsettled(samples);
+        if (samples.empty())
+            throw Error(step.input_path() + ": model '" + sc.models[m].name + "': none of its " +
+                        std::to_string(dropped) + " light-map samples lies on its traced surface");
         trees[p] = lightmap::build_light_map_octree(samples, root_min, root_size, o.gather);
-        step.note("prt-lightmap: %s: %zu samples, level %u, %zu leaves, mean irradiance %.4g, max %.4g",
-                  pools.paths[p].filename().string().c_str(), samples.size(), o.gather.depth,
-                  trees[p]->leaves.size(), trees[p]->info.total[0], trees[p]->info.total[1]);
+        step.note(
+            "prt-lightmap: %s: %zu samples on %s (frame of %s, %s surface%s), level %u, %zu leaves, "
+            "mean irradiance %.4g, max %.4g",
+            pools.paths[p].filename().string().c_str(), samples.size(), points.from.c_str(),
+            frame.from.c_str(), std::string(scene::surface_name(sc.models[m].surface)).c_str(),
+            dropped ? (", " + std::to_string(dropped) + " off the surface dropped").c_str() : "",
+            o.gather.depth, trees[p]->leaves.size(), trees[p]->info.total[0], trees[p]->info.total[1]);
     }
     return trees;
 }
@@ -98,24 +126,30 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
     if (sc.models.empty()) throw Error(step.input_path() + ": no models");
     const Pools pools = scene_pools(step, sc);
     std::uint64_t total_samples = 0;
-    double trace_seconds = 0;
+    double trace_seconds = 0, kernel_seconds = 0;
+    std::string backend;
     o.gather.threads = o.threads;
     const std::vector<std::optional<gi::GiOctree>> trees =
-        build_maps(step, sc, o, pools, total_samples, trace_seconds);
-    const nlohmann::json parameters = {{"rays", o.trace.rays},
-                                       {"bounces", o.trace.bounces},
-                                       {"levels_above", o.levels_above},
-                                       {"samples_per_leaf", o.per_leaf},
-                                       {"gather_radius", o.gather.radius_edges},
-                                       {"normal_reject", o.gather.reject_cos},
-                                       {"seed", o.trace.seed},
-                                       {"scene", step.input_path()}};
+        build_maps(step, sc, o, pools, total_samples, trace_seconds, backend, kernel_seconds);
+    nlohmann::json parameters = {{"rays", o.trace.rays},
+                                 {"bounces", o.trace.bounces},
+                                 {"levels_above", o.levels_above},
+                                 {"samples_per_leaf", o.per_leaf},
+                                 {"gather_radius", o.gather.radius_edges},
+                                 {"normal_reject", o.gather.reject_cos},
+                                 {"seed", o.trace.seed},
+                                 {"scene", step.input_path()}};
+    // --provenance-tag (scripts/prt-bake, prt-batch): recorded in each pool's entry as PoolStep::write does.
+    if (!step.provenance_tag().empty()) parameters["tag"] = nlohmann::json::parse(step.provenance_tag());
     for (std::size_t p = 0; p < pools.paths.size(); ++p)
         gi::write_gi_pool(pools.paths[p], gi::k_light_map_sections,
                           trees[p] && !trees[p]->leaves.empty() ? &*trees[p] : nullptr, "prt-lightmap",
                           parameters.dump());
-    step.note("prt-lightmap: %llu samples x %u paths traced in %.3f s; total %.3f s",
-              static_cast<unsigned long long>(total_samples), o.trace.rays, trace_seconds, step.seconds());
+    step.note(
+        "prt-lightmap: %llu samples x %u paths traced on %s in %.3f s (tracing %.3f s; upload and download "
+        "included in the first); total %.3f s",
+        static_cast<unsigned long long>(total_samples), o.trace.rays, backend.c_str(), trace_seconds,
+        kernel_seconds, step.seconds());
     nlohmann::json per_pool = nlohmann::json::array();
     for (std::size_t p = 0; p < pools.paths.size(); ++p)
         per_pool.push_back({{"pool", pools.paths[p].string()},
@@ -126,6 +160,8 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
                       {"parameters", parameters},
                       {"samples", total_samples},
                       {"trace_seconds", trace_seconds},
+                      {"kernel_seconds", kernel_seconds},
+                      {"backend", backend},
                       {"pools", per_pool}});
 }
 
@@ -143,7 +179,8 @@ int main(int argc, char** argv) {
                            "Vertices per path (1 = one diffuse bounce of direct light)")
                 ->check(CLI::Range(1u, 16u));
             app.add_option("--levels-above", o.levels_above,
-                           "Light-map leaf level: this many levels above the splat octree's depth")
+                           "Light-map leaf level: this many levels above the model's reference level "
+                           "(its splat octree's depth, or one from its points or patches)")
                 ->check(CLI::Range(0u, 12u));
             app.add_option("--samples-per-leaf", o.per_leaf, "Points traced per light-map cell at most")
                 ->check(CLI::Range(1u, 64u));
@@ -155,6 +192,11 @@ int main(int argc, char** argv) {
                    "Samples whose normal makes a cosine below this with the leaf's normal are not gathered")
                 ->check(CLI::Range(-1.0f, 1.0f));
             app.add_option("--seed", o.trace.seed, "Seed of the path directions");
+            app.add_option(
+                   "--backend", o.backend,
+                   "Where the samples are traced: auto (the GPU when there is one), cpu or cuda; both run "
+                   "the same core function")
+                ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
             prt::tool::PoolStep::add_threads(app, o.threads, "CPU worker threads (0 = all hardware threads)");
         },
         [&](prt::tool::PoolStep& s) { lightmap_step(s, o); });

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "gi_frame.h"
 #include "photons.h"
 #include "prt/formats/gi_sections.h"
 #include "prt/formats/scene.h"
@@ -35,7 +36,10 @@ constexpr const char* k_description =
     "a "
     "specular hit, a surface with a diffuse share receives a deposit. Deposits go into each model's "
     "caustic "
-    "octree (model local frame, --caustic-levels below the splat octree's depth) with a density estimate "
+    "octree (model local frame, --caustic-levels below the reference level: the splat octree's or bricks' "
+    "depth, "
+    "else the level where the model's points (ISO, MLS) or points sampled on its patches fill cells 8 to a "
+    "cell on average) with a density estimate "
     "at "
     "every leaf corner (eq. 5.1-5.2, radius --gather-radius leaf edges); the renderer interpolates them. "
     "Each pool is rewritten in place, atomically, with its other sections carried over; pools that got "
@@ -66,6 +70,7 @@ struct PoolJob {
     double root_min[3];
     double root_size = 1;
     std::uint32_t depth = 0;
+    std::string frame_from;  ///< what the frame came from (gi::GiFrame::from)
     std::vector<MapJob> maps;
 };
 
@@ -110,8 +115,24 @@ prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scen
     const rt::RenderScene rs = rt::RenderScene::load(sc);
     for (const std::string& w : rs.warnings()) step.note("prt-photons: %s", w.c_str());
     for (std::size_t m = 0; m < rs.models().size(); ++m) {
+        // Issue 20: the caustic map's frame on whatever surface the model is traced as (gi_frame.h).
         PoolJob& job = jobs[pools.of_model[m]];
-        gi::splat_root(*rs.models()[m].pool, job.root_min, job.root_size, job.depth);
+        const pool::PoolFile& pf = *rs.models()[m].pool;
+        gi::GiFrame frame;
+        try {
+            if (gi::frame_needs_points(pf)) {
+                const gi::SurfacePoints points = gi::surface_points(pf);
+                frame = gi::gi_frame(pf, &points);
+            } else {
+                frame = gi::gi_frame(pf, nullptr);
+            }
+        } catch (const Error& e) {
+            throw Error(step.input_path() + ": model '" + sc.models[m].name + "': " + e.what());
+        }
+        for (int a = 0; a < 3; ++a) job.root_min[a] = frame.root_min[a];
+        job.root_size = frame.root_size;
+        job.depth = frame.depth;
+        job.frame_from = frame.from;
     }
     const core::SceneView view = rs.view();
     lights = core::photon_light_count(view);
@@ -154,9 +175,9 @@ std::uint64_t gather_map(const prt::tool::PoolStep& step, const Options& o, cons
     const std::string which = job.maps.size() > 1 ? " placement " + std::to_string(index + 1) + " of " +
                                                         std::to_string(job.maps.size())
                                                   : std::string();
-    step.note("prt-photons: %s%s: %zu deposits, caustic octree depth %u, %zu leaves (%.1f MiB)",
+    step.note("prt-photons: %s%s: %zu deposits, caustic octree depth %u (frame of %s), %zu leaves (%.1f MiB)",
               path.filename().string().c_str(), which.c_str(), map.deposits.size(), g.depth,
-              map.tree->leaves.size(),
+              job.frame_from.c_str(), map.tree->leaves.size(),
               double(map.tree->leaves.size() * sizeof(pool::GiLeaf) + map.tree->nodes.size() * 4) /
                   (1024.0 * 1024.0));
     return map.tree->leaves.size();
@@ -235,14 +256,16 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
     const std::uint64_t leaves = gather(step, o, pools, shot.tally, jobs, gather_phases);
     const double gather_seconds = tool::now_seconds() - gather_start;
 
-    const nlohmann::json parameters = {{"face_res", o.shoot.params.face_res},
-                                       {"per_pixel", o.shoot.params.per_pixel},
-                                       {"max_bounces", o.shoot.params.max_bounces},
-                                       {"caustic_levels", o.caustic_levels},
-                                       {"gather_radius", o.radius},
-                                       {"cos_threshold", o.cos_threshold},
-                                       {"seed", o.shoot.params.seed},
-                                       {"scene", step.input_path()}};
+    nlohmann::json parameters = {{"face_res", o.shoot.params.face_res},
+                                 {"per_pixel", o.shoot.params.per_pixel},
+                                 {"max_bounces", o.shoot.params.max_bounces},
+                                 {"caustic_levels", o.caustic_levels},
+                                 {"gather_radius", o.radius},
+                                 {"cos_threshold", o.cos_threshold},
+                                 {"seed", o.shoot.params.seed},
+                                 {"scene", step.input_path()}};
+    // --provenance-tag (scripts/prt-bake, prt-batch): recorded in each pool's entry as PoolStep::write does.
+    if (!step.provenance_tag().empty()) parameters["tag"] = nlohmann::json::parse(step.provenance_tag());
     const double write_start = tool::now_seconds();
     for (std::size_t p = 0; p < jobs.size(); ++p) {
         std::vector<const gi::GiOctree*> trees;
@@ -295,9 +318,10 @@ int main(int argc, char** argv) {
                 ->check(CLI::Range(1u, 1024u));
             app.add_option("--max-bounces", o.shoot.params.max_bounces, "Specular bounces a photon may make")
                 ->check(CLI::Range(1u, 64u));
-            app.add_option(
-                   "--caustic-levels", o.caustic_levels,
-                   "Levels of the caustic octree below the splat octree's depth (leaf level capped at 20)")
+            app.add_option("--caustic-levels", o.caustic_levels,
+                           "Levels of the caustic octree below the model's reference level (the splat "
+                           "octree's depth, "
+                           "or one from its points or patches; leaf level capped at 20)")
                 ->check(CLI::Range(0u, 12u));
             app.add_option("--gather-radius", o.radius,
                            "Gather radius g of eq. 5.1-5.2, in caustic leaf edges")

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <string>
 
+#include "test_scene.h"
 #include "tool_run.h"
 
 namespace prt::test {
@@ -38,10 +39,10 @@ inline bool surface_tools_built(std::string* missing = nullptr) {
 }
 
 /// Skips the current test when a tool is missing.
-#define PRT_SKIP_WITHOUT_SURFACE_TOOLS()                                                          \
-    do {                                                                                          \
-        std::string missing_tool_;                                                                \
-        if (!::prt::test::surface_tools_built(&missing_tool_))                                    \
+#define PRT_SKIP_WITHOUT_SURFACE_TOOLS()                                                              \
+    do {                                                                                              \
+        std::string missing_tool_;                                                                    \
+        if (!::prt::test::surface_tools_built(&missing_tool_))                                        \
             GTEST_SKIP() << missing_tool_ << " was not built (prt-radii needs FLANN): no test pools"; \
     } while (0)
 
@@ -68,14 +69,63 @@ inline std::filesystem::path sphere_pool_all_surfaces(const std::filesystem::pat
 /// A .bpt file (seed 002's patch format) of one flat bicubic patch: the square [x0,x0+size] x
 /// [y0,y0+size] in the plane z = z0, control points evenly spaced (so Q(u,v) is affine), its
 /// normal dQ/du x dQ/dv = +z (the front face looks up the z axis).
-inline std::filesystem::path flat_patch_file(const std::filesystem::path& dir, double x0, double y0, double z0,
-                                             double size, const std::string& name = "flat.bpt") {
+inline std::filesystem::path flat_patch_file(const std::filesystem::path& dir, double x0, double y0,
+                                             double z0, double size, const std::string& name = "flat.bpt") {
     const std::filesystem::path p = dir / name;
     std::ofstream out(p);
     out << "1\n3 3\n";
     for (int i = 0; i < 4; ++i)
-        for (int j = 0; j < 4; ++j) out << x0 + size * i / 3.0 << " " << y0 + size * j / 3.0 << " " << z0 << "\n";
+        for (int j = 0; j < 4; ++j)
+            out << x0 + size * i / 3.0 << " " << y0 + size * j / 3.0 << " " << z0 << "\n";
     return p;
+}
+
+/// A .bpt file of a sphere of radius `r` at `center` in 8 bicubic patches (4 around x 2
+/// hemispheres): Q(u, v) = (r(u) c(v), z(u)) with the profile (r, z) and the unit circle c each a
+/// quarter circle as a cubic Bezier (inner control points at k = 4 (sqrt 2 - 1) / 3), so the patches
+/// are tensor products of the two; the surface lies within 5e-4 r of the sphere. Normals
+/// dQ/du x dQ/dv point outward, or inward with `inward`, on every patch (the poles collapse an
+/// edge: the core takes the normal's limit there).
+inline std::filesystem::path sphere_patch_file(const std::filesystem::path& dir, double r,
+                                               const double center[3], bool inward = false,
+                                               const std::string& name = "sphere.bpt") {
+    const double k = 4.0 * (std::sqrt(2.0) - 1.0) / 3.0;
+    const double prof[4][2] = {{1, 0}, {1, k}, {k, 1}, {0, 1}};  // (radius, height): equator -> pole
+    const double circ[4][2] = {{1, 0}, {1, k}, {k, 1}, {0, 1}};  // quarter of the unit circle
+    const std::filesystem::path p = dir / name;
+    std::ofstream out(p);
+    out.precision(17);
+    out << "8\n";
+    for (int hemi = 0; hemi < 2; ++hemi)
+        for (int q = 0; q < 4; ++q) {
+            out << "3 3\n";
+            const double a = q * M_PI / 2, ca = std::cos(a), sa = std::sin(a);
+            // Upper hemisphere with v running counter-clockwise gives dQ/du x dQ/dv inward; the
+            // lower one (heights negated) outward: reverse v where the wanted side differs.
+            const bool reverse_v = (hemi == 0) != inward;
+            for (int i = 0; i < 4; ++i)
+                for (int jj = 0; jj < 4; ++jj) {
+                    const int j = reverse_v ? 3 - jj : jj;
+                    const double cx = circ[j][0] * ca - circ[j][1] * sa,
+                                 cy = circ[j][0] * sa + circ[j][1] * ca;
+                    const double z = hemi == 0 ? prof[i][1] : -prof[i][1];
+                    out << center[0] + r * prof[i][0] * cx << " " << center[1] + r * prof[i][0] * cy << " "
+                        << center[2] + r * z << "\n";
+                }
+        }
+    return p;
+}
+
+/// Writes a test model's points only (model info, positions, normals, radii, colors): no octree, as
+/// a scan traced only as ISO or MLS comes.
+inline void write_points_pool(const TestModel& m, const std::filesystem::path& path) {
+    const auto full = make_pool(m);
+    pool::PoolWriter w;
+    w.carry_over(*full);
+    for (pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
+                                pool::SectionType::leaf_info, pool::SectionType::splats})
+        w.remove(t);
+    w.write(path);
 }
 
 /// The nearest t > 0 where o + t d (d unit) meets the sphere |x - c| = r, or -1.

@@ -14,42 +14,68 @@
 #include "gi_test_util.h"
 #include "prt/core/gi.h"
 #include "prt/runtime/gi_pool.h"
+#include "runtime/surface_fixtures.h"
 #include "runtime/tool_run.h"
 
 using namespace prt;
 
 namespace {
 
-/// Samples of the scene's first model at one level above its splat octree, traced, and their
-/// light-map octree.
+/// Samples of the scene's first model at one level above its reference level (gi_frame.h: its
+/// splat octree's depth, else one from its points or patches), settled on the surface it is traced
+/// as, traced, and their light-map octree.
 struct Baked {
     std::vector<lightmap::Sample> samples;
+    std::size_t dropped = 0;
+    gi::GiFrame frame;
     gi::GiOctree tree;
 };
 
 Baked bake(const rt::RenderScene& rs, const pool::PoolFile& pool, std::uint32_t per_leaf,
            const lightmap::TraceParams& tp) {
-    double root_min[3], root_size;
-    std::uint32_t depth;
-    gi::splat_root(pool, root_min, root_size, depth);
-    lightmap::GatherOptions g;
-    g.depth = depth > 1 ? depth - 1 : 0;
     Baked b;
-    b.samples = lightmap::select_samples(pool, rs.view().models[0], root_min, root_size, g.depth, per_leaf);
+    const gi::SurfacePoints points = gi::surface_points(pool);
+    b.frame = gi::gi_frame(pool, &points);
+    lightmap::GatherOptions g;
+    g.depth = b.frame.depth > 1 ? b.frame.depth - 1 : 0;
+    const float reach = lightmap::settle_reach(rs.view().models[0].surface, points,
+                                               b.frame.root_size / static_cast<double>(1ull << g.depth));
+    b.samples = lightmap::select_samples(points, 0, rs.view().models[0], b.frame.root_min, b.frame.root_size,
+                                         g.depth, per_leaf, reach);
     lightmap::trace_samples(rs.view(), tp, b.samples, 0, 0);
-    b.tree = lightmap::build_light_map_octree(b.samples, root_min, root_size, g);
+    b.dropped = lightmap::drop_unsettled(b.samples);
+    b.tree = lightmap::build_light_map_octree(b.samples, b.frame.root_min, b.frame.root_size, g);
     return b;
 }
 
-/// The closed white room of the first tests (a sphere of radius 1, normals inward, albedo 0.5)
-/// lit by `lights` (a JSON array).
-rt::RenderScene white_room(const std::string& lights, const std::shared_ptr<const pool::PoolFile>& pool) {
-    return test::load_gi_scene(R"({"lights": )" + lights + R"(,
-        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
-                       "use_point_colors": false}],
-        "models": [{"name": "room", "pool": "room.pool"}],
-        "environment": {"color": [0, 0, 0]}})",
-                               {pool});
+/// Mean and relative spread of the light map looked up at points of the unit sphere that are not
+/// sample points (inward normals), and how many lookups found nothing.
+struct Lookups {
+    double mean = 0, relative_sd = 0;
+    int missing = 0;
+};
+Lookups look_up_unit_sphere(const gi::GiOctree& tree) {
+    const core::LightMapView v{gi::view_of(tree)};
+    double sum = 0, sum2 = 0;
+    int n = 0;
+    Lookups out;
+    for (const test::TestPoint& q : test::sphere_points({0, 0, 0}, 1.0, 997, true)) {
+        const core::Vec3 pos{float(q.position[0]), float(q.position[1]), float(q.position[2])};
+        const core::Vec3 nrm{float(q.normal[0]), float(q.normal[1]), float(q.normal[2])};
+        core::Vec3 e;
+        if (!core::light_map_irradiance(v, pos, nrm, e)) {
+            ++out.missing;
+            continue;
+        }
+        sum += e.y;
+        sum2 += double(e.y) * e.y;
+        ++n;
+    }
+    if (n > 0) {
+        out.mean = sum / n;
+        out.relative_sd = std::sqrt(std::max(0.0, sum2 / n - out.mean * out.mean)) / out.mean;
+    }
+    return out;
 }
 
 }  // namespace
@@ -64,7 +90,7 @@ TEST(LightMap, UniformlyLitClosedWhiteRoomIsUniform) {
     test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1.0, 40000, true), {0, 0, 0});
     const auto pool = test::make_pool(m);
     const rt::RenderScene rs =
-        white_room(R"([{"type": "point", "position": [0, 0, 0], "color": [1, 1, 1]}])", pool);
+        test::white_room(R"([{"type": "point", "position": [0, 0, 0], "color": [1, 1, 1]}])", pool);
     lightmap::TraceParams tp;
     tp.rays = 8;
     tp.bounces = bounces;
@@ -114,7 +140,7 @@ TEST(LightMap, AnAreaLightLightsTheLightMap) {
     lightmap::TraceParams tp;
     tp.rays = 8;
     tp.bounces = 3;
-    const rt::RenderScene lit = white_room(
+    const rt::RenderScene lit = test::white_room(
         R"([{"type": "area", "corner": [-0.01, 0, -0.01], "edge_u": [0.02, 0, 0], "edge_v": [0, 0, 0.02],
              "samples": 1}])",
         pool);
@@ -124,7 +150,7 @@ TEST(LightMap, AnAreaLightLightsTheLightMap) {
     double mean = 0;
     for (const lightmap::Sample& s : baked.samples) mean += s.irradiance[1] / baked.samples.size();
     EXPECT_NEAR(mean, expected, 0.02 * expected);
-    const Baked dark = bake(white_room("[]", pool), *pool, 1, tp);
+    const Baked dark = bake(test::white_room("[]", pool), *pool, 1, tp);
     double dark_max = 0;
     for (const lightmap::Sample& s : dark.samples) dark_max = std::max<double>(dark_max, s.irradiance[1]);
     EXPECT_EQ(dark_max, 0.0);
@@ -185,4 +211,91 @@ TEST(LightMapTool, WritesTheLightMapInPlace) {
     EXPECT_EQ(r.code, 1);
     EXPECT_EQ(test::lines(r.err), 1) << r.err;
     EXPECT_NE(r.err.find("missing.json"), std::string::npos) << r.err;
+}
+
+TEST(LightMap, TheClosedWhiteRoomIsUniformOnEverySurface) {
+    // Issue 20: the closed white room of the first test traced as ISO, MLS and Bezier patches. The
+    // ISO and MLS rooms are built by the tools from a pool of points only (no splat octree: the
+    // frame comes from the points), and their samples are settled onto the traced surface first;
+    // the patch room (8 patches within 5e-4 of the sphere, normals inward) samples the patches.
+    // Every wall is still lit at normal incidence, so the light map is a + a^2 + a^3 everywhere.
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
+    const test::TempDir dir("prt_lightmap_surfaces");
+    const double a = 0.5, expected = a + a * a + a * a * a;
+    test::write_points_pool(test::make_model(test::sphere_points({0, 0, 0}, 1.0, 40000, true), {0, 0, 0}),
+                            dir.path / "points.pool");
+    test::must_run("prt-iso",
+                   (dir.path / "points.pool").string() + " -o " + (dir.path / "iso.pool").string() + " -q",
+                   dir.path);
+    test::must_run("prt-mls",
+                   (dir.path / "points.pool").string() + " -o " + (dir.path / "mls.pool").string() + " -q",
+                   dir.path);
+    const double origin[3] = {0, 0, 0};
+    test::sphere_patch_file(dir.path, 1.0, origin, true);
+    test::must_run("prt-patches",
+                   (dir.path / "sphere.bpt").string() + " -o " + (dir.path / "patches.pool").string() +
+                       " --orient none -q",
+                   dir.path);
+    lightmap::TraceParams tp;
+    tp.rays = 8;
+    tp.bounces = 3;
+    for (const char* surface : {"iso", "mls", "patches"}) {
+        SCOPED_TRACE(surface);
+        const auto pool = std::make_shared<const pool::PoolFile>(
+            pool::PoolFile::open(dir.path / (std::string(surface) + ".pool")));
+        const rt::RenderScene rs = test::white_room(
+            R"([{"type": "point", "position": [0, 0, 0], "color": [1, 1, 1]}])", pool, surface);
+        const Baked baked = bake(rs, *pool, 2, tp);
+        EXPECT_EQ(baked.frame.from, std::string(surface) == "patches" ? "the patches" : "the points");
+        ASSERT_GT(baked.samples.size(), 200u);
+        EXPECT_LT(baked.dropped, baked.samples.size() / 100) << "samples the probe did not settle";
+        double mean = 0;
+        for (const lightmap::Sample& s : baked.samples) {
+            mean += s.irradiance[1] / baked.samples.size();
+            // Settled onto the traced surface: on the sphere (ISO, MLS and patches all lie within
+            // a small fraction of a point spacing of it).
+            const double r =
+                std::sqrt(double(s.position[0]) * s.position[0] + double(s.position[1]) * s.position[1] +
+                          double(s.position[2]) * s.position[2]);
+            ASSERT_NEAR(r, 1.0, 0.01);
+        }
+        EXPECT_NEAR(mean, expected, 0.03 * expected);
+        const Lookups l = look_up_unit_sphere(baked.tree);
+        EXPECT_EQ(l.missing, 0);
+        EXPECT_NEAR(l.mean, expected, 0.04 * expected);
+        EXPECT_LT(l.relative_sd, 0.04);
+    }
+}
+
+TEST(LightMapTool, BakesModelsWithoutASplatOctreeAndNamesAModelWithNothingToBakeOn) {
+    // Issue 20: prt-lightmap on an ISO room with no splat octree (frame from its points); a model
+    // whose pool has neither points nor patches (bricks alone) fails in one line naming the model.
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
+    const test::TempDir dir("prt_lightmap_iso_tool");
+    test::write_points_pool(test::make_model(test::sphere_points({0, 0, 0}, 1.0, 8000, true), {0, 0, 0}),
+                            dir.path / "room.pool");
+    test::must_run("prt-iso",
+                   (dir.path / "room.pool").string() + " -o " + (dir.path / "room.pool").string() + " -q",
+                   dir.path);
+    std::ofstream(dir.path / "scene.json") << R"({"lights": [{"type": "point", "position": [0, 0, 0]}],
+        "models": [{"name": "room", "pool": "room.pool", "surface": "iso"}]})";
+    test::ToolRun r =
+        test::run_tool("prt-lightmap", (dir.path / "scene.json").string() + " --rays 4", dir.path);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("frame of the points"), std::string::npos) << r.err;
+    const pool::PoolFile p = pool::PoolFile::open(dir.path / "room.pool");
+    EXPECT_GT(rt::load_light_map_view(p).tree.leaf_count, 0u);
+    EXPECT_FALSE(p.has(pool::SectionType::octree_info));
+    // A bricked pool without its points (prt-bricks' default): the bricks give the frame, but there
+    // is nothing to draw light-map samples from.
+    test::write_model_pool(test::make_model(test::sphere_points({0, 0, 0}, 1.0, 8000, true), {0, 0, 0}),
+                           dir.path / "splats.pool");
+    test::must_run("prt-bricks",
+                   (dir.path / "splats.pool").string() + " -o " + (dir.path / "bare.pool").string() + " -q",
+                   dir.path);
+    std::ofstream(dir.path / "bare.json") << R"({"lights": [{"type": "point", "position": [0, 0, 0]}],
+        "models": [{"name": "shell", "pool": "bare.pool"}]})";
+    r = test::run_tool("prt-lightmap", (dir.path / "bare.json").string() + " --rays 4", dir.path);
+    EXPECT_EQ(r.code, 1);
+    test::expect_one_line(r.err, {"bare.json", "model 'shell'", "no points and no patches"});
 }

@@ -29,6 +29,20 @@ inline rt::RenderScene load_gi_scene(const std::string& json,
     return rt::RenderScene::from_pools(sc, pools);
 }
 
+/// The closed white room of the light-map tests (a sphere of radius 1, normals inward, albedo 0.5)
+/// lit by `lights` (a JSON array), traced as `surface`.
+inline rt::RenderScene white_room(const std::string& lights,
+                                  const std::shared_ptr<const pool::PoolFile>& pool,
+                                  const std::string& surface = "splats") {
+    return test::load_gi_scene(R"({"lights": )" + lights + R"(,
+        "materials": [{"name": "white", "diffuse": [0.5, 0.5, 0.5], "specular": [0, 0, 0], "diffuse_reflectance": 1,
+                       "use_point_colors": false}],
+        "models": [{"name": "room", "pool": "room.pool", "surface": ")" +
+                                   surface + R"("}],
+        "environment": {"color": [0, 0, 0]}})",
+                               {pool});
+}
+
 /// Writes a test model's pool to `path` (atomic writer).
 inline void write_model_pool(const TestModel& m, const std::filesystem::path& path, bool colors = true) {
     const auto in = make_pool(m, colors);

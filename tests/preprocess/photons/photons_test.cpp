@@ -8,15 +8,18 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <set>
 #include <string>
 #include <vector>
 
+#include "gi_frame.h"
 #include "gi_test_util.h"
 #include "prt/core/gi.h"
 #include "prt/runtime/gi_pool.h"
+#include "runtime/surface_fixtures.h"
 
 using namespace prt;
 
@@ -280,7 +283,12 @@ TEST(Photons, AreaLightCausticDepositsAreScaledFromTheirPointOfEmission) {
     }
 }
 
-TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
+namespace {
+
+/// The ball-lens check (test below) with the ball given as a pool traced as `surface` (a glass ball
+/// of radius 0.5 at the origin, in its pool's frame), the mask and the strip as splats. Also checks
+/// that the photons' power is accounted for exactly.
+void check_ball_lens(const std::shared_ptr<const pool::PoolFile>& ball_pool, const std::string& surface) {
     // A glass ball (n 1.5, R 0.5) at the origin, a point light on the axis at z = +2 behind a
     // mask with a small hole (paraxial rays only), and a diffuse strip in the plane y = 0 along
     // the axis behind the ball: every refracted ray stays in its meridional plane, so it meets the
@@ -316,28 +324,31 @@ TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
     const double z_marginal = axis_crossing(hole), z_paraxial = axis_crossing(1e-4);
     ASSERT_NEAR(z_paraxial, -s_i, 1e-3) << "the paraxial formula and the exact trace disagree";
 
-    std::vector<test::TestPoint> ball = test::sphere_points({0, 0, 0}, R, 60000);
     std::vector<test::TestPoint> mask;
     for (const test::TestPoint& p : test::rect_points({-1, -1, mask_z}, {2, 0, 0}, {0, 2, 0}, {0, 0, 1}, 150))
         if (std::hypot(p.position[0], p.position[1]) > hole + p.radius) mask.push_back(p);
     std::vector<test::TestPoint> strip =
         test::rect_points({-0.3, 0, -2.5}, {0.6, 0, 0}, {0, 0, 1.95}, {0, 1, 0}, 200);
-    test::TestModel mb = test::make_model(ball, {0, 0, 0}), mm = test::make_model(mask, {0, 0, 0}),
-                    ms = test::make_model(strip, {0, 0, 0});
-    const rt::RenderScene rs =
-        test::load_gi_scene(R"({
+    test::TestModel mm = test::make_model(mask, {0, 0, 0}), ms = test::make_model(strip, {0, 0, 0});
+    const rt::RenderScene rs = test::load_gi_scene(std::string(R"({
         "lights": [{"type": "point", "position": [0, 0, 2]}],
         "materials": [{"name": "matte"},
                       {"name": "glass", "refractive_index": 1.5, "transmissivity": 1, "diffuse_reflectance": 0}],
-        "models": [{"name": "ball", "pool": "a.pool", "material": "glass"},
+        "models": [{"name": "ball", "pool": "a.pool", "material": "glass", "surface": ")") +
+                                                       surface + R"("},
                    {"name": "mask", "pool": "b.pool", "material": "matte"},
                    {"name": "strip", "pool": "c.pool", "material": "matte"}]})",
-                            {test::make_pool(mb), test::make_pool(mm), test::make_pool(ms)});
+                                                   {ball_pool, test::make_pool(mm), test::make_pool(ms)});
     photons::ShootOptions o;
     o.params.face_res = 256;
     o.params.per_pixel = 4;
     o.backend = "cpu";
     const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    for (int a = 0; a < 3; ++a) {
+        const photons::PhotonTally& t = r.tally;
+        const double sum = t.direct[a] + t.deposited[a] + t.absorbed[a] + t.escaped[a] + t.truncated[a];
+        EXPECT_NEAR(sum, t.emitted[a], 1e-5 * t.emitted[a]) << "power not conserved, channel " << a;
+    }
     std::vector<photons::PhotonDeposit> on_strip;
     for (const photons::PhotonDeposit& d : r.deposits)
         if (d.model == 2) on_strip.push_back(d);
@@ -365,6 +376,189 @@ TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
     EXPECT_EQ(
         core::caustic_radiance(core::CausticView{v}, core::Vec3{0, 0, float(best_z)}, core::Vec3{0, -1, 0}).x,
         0.0f);
+}
+
+}  // namespace
+
+TEST(Photons, BallLensFocusesWhereParaxialOpticsSays) {
+    check_ball_lens(test::make_pool(test::make_model(test::sphere_points({0, 0, 0}, 0.5, 60000), {0, 0, 0})),
+                    "splats");
+}
+
+TEST(Photons, BallLensFocusesOnEverySurface) {
+    // Issue 20: the same ball traced as ISO and MLS (built by the tools from the ball's points, no
+    // splat octree) and as 8 Bezier patches within 5e-4 R of the sphere.
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
+    const test::TempDir dir("prt_photons_lens");
+    test::write_points_pool(test::make_model(test::sphere_points({0, 0, 0}, 0.5, 60000), {0, 0, 0}),
+                            dir.path / "ball.pool");
+    test::must_run("prt-iso",
+                   (dir.path / "ball.pool").string() + " -o " + (dir.path / "iso.pool").string() + " -q",
+                   dir.path);
+    test::must_run("prt-mls",
+                   (dir.path / "ball.pool").string() + " -o " + (dir.path / "mls.pool").string() + " -q",
+                   dir.path);
+    const double origin[3] = {0, 0, 0};
+    test::sphere_patch_file(dir.path, 0.5, origin);
+    test::must_run("prt-patches",
+                   (dir.path / "sphere.bpt").string() + " -o " + (dir.path / "patches.pool").string() + " -q",
+                   dir.path);
+    for (const char* surface : {"iso", "mls", "patches"}) {
+        SCOPED_TRACE(surface);
+        check_ball_lens(std::make_shared<const pool::PoolFile>(
+                            pool::PoolFile::open(dir.path / (std::string(surface) + ".pool"))),
+                        surface);
+    }
+}
+
+namespace {
+
+/// The caustic on a floor (z = -1.4, 2 x 2, facing +z) under a glass ball (R 0.5 at the origin, as
+/// splats) lit from z = 3, with the floor given as a pool traced as `surface`: the floor's caustic
+/// octree built as prt-photons builds it (its GI frame, --caustic-levels 2, gather radius 1 edge)
+/// and looked up on a 101 x 101 grid over [-0.5, 0.5]^2 of the floor.
+std::vector<double> floor_caustic(const std::shared_ptr<const pool::PoolFile>& floor,
+                                  const std::string& surface, gi::GiFrame& frame, std::uint32_t depth = 0) {
+    const auto ball =
+        test::make_pool(test::make_model(test::sphere_points({0, 0, 0}, 0.5, 60000), {0, 0, 0}));
+    const rt::RenderScene rs = test::load_gi_scene(std::string(R"({
+        "lights": [{"type": "point", "position": [0, 0, 3]}],
+        "materials": [{"name": "matte"},
+                      {"name": "glass", "refractive_index": 1.5, "transmissivity": 1, "diffuse_reflectance": 0}],
+        "models": [{"name": "ball", "pool": "a.pool", "material": "glass"},
+                   {"name": "floor", "pool": "b.pool", "material": "matte", "surface": ")") +
+                                                       surface + R"("}]})",
+                                                   {ball, floor});
+    photons::ShootOptions o;
+    o.params.face_res = 512;
+    o.params.per_pixel = 4;
+    o.backend = "cpu";
+    const photons::ShootResult r = photons::shoot_photons(rs.view(), o);
+    std::vector<photons::PhotonDeposit> on_floor;
+    for (const photons::PhotonDeposit& d : r.deposits)
+        if (d.model == 1) on_floor.push_back(d);
+    const gi::SurfacePoints points = gi::surface_points(*floor);
+    frame = gi::gi_frame(*floor, &points);
+    photons::GatherOptions g;
+    g.depth = depth > 0 ? depth : frame.depth + 2;
+    const gi::GiOctree tree = photons::build_caustic_octree(on_floor, frame.root_min, frame.root_size, g);
+    const core::CausticView v{gi::view_of(tree)};
+    const core::ModelView& mv = rs.view().models[1];  // the map is in the floor pool's local frame
+    std::vector<double> grid;
+    for (int i = 0; i <= 100; ++i)
+        for (int j = 0; j <= 100; ++j) {
+            const core::Vec3 world{-0.5f + 0.01f * i, -0.5f + 0.01f * j, -1.4f};
+            const core::Vec3 local = core::mul_transpose(mv.rotation, world - mv.offset) * mv.inv_scale;
+            grid.push_back(core::caustic_radiance(v, local, core::Vec3{0, 0, 1}).x);
+        }
+    return grid;
+}
+
+}  // namespace
+
+TEST(Photons, ThePatchFloorsCausticMatchesTheSplatFloors) {
+    // Issue 20's target: the caustic under a glass sphere on a patch floor matches the splat-floor
+    // caustic. The same photons reach both floors (the splat floor's discs lie in its plane); the
+    // maps differ in their frames (the splat octree's root and depth against the cube and level of
+    // the points sampled on the patch: one level finer here), so their leaves differ in size and
+    // placement. Measured (2026-11-25, dev VM; 6.3M photons, about 20 000 deposits): at the default
+    // levels total ratio 1.028, binned L1 0.051; at the same level total ratio 1.032, pointwise L1
+    // 0.135, binned L1 0.034, peak ratio 1.039. Stated tolerance: totals within 5 %, binned L1
+    // below 8 % of the total; at the same level the pointwise L1 below 20 %, the peaks within 10 %.
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
+    const test::TempDir dir("prt_photons_floor");
+    test::flat_patch_file(dir.path, -1, -1, -1.4, 2.0);
+    test::must_run("prt-patches",
+                   (dir.path / "flat.bpt").string() + " -o " + (dir.path / "floor.pool").string() + " -q",
+                   dir.path);
+    // The splat floor from the real octree builder (prt-octree), like the patch floor from prt-patches.
+    test::write_points_pool(
+        test::make_model(test::rect_points({-1, -1, -1.4}, {2, 0, 0}, {0, 2, 0}, {0, 0, 1}, 200), {0, 0, 0}),
+        dir.path / "points.pool");
+    test::must_run("prt-octree",
+                   (dir.path / "points.pool").string() + " -o " + (dir.path / "splats.pool").string() + " -q",
+                   dir.path);
+    const auto splat_floor =
+        std::make_shared<const pool::PoolFile>(pool::PoolFile::open(dir.path / "splats.pool"));
+    const auto patch_floor =
+        std::make_shared<const pool::PoolFile>(pool::PoolFile::open(dir.path / "floor.pool"));
+    // Compared pointwise on the grid, and binned into 10 x 10 squares of 0.1 (how the caustic's
+    // power is distributed, whatever the maps' cell sizes).
+    struct Compare {
+        double total_ratio, l1, peak_ratio, binned_l1;
+    };
+    auto compare = [](const std::vector<double>& a, const std::vector<double>& b) {
+        double sa = 0, sb = 0, diff = 0, pa = 0, pb = 0;
+        double ba[10][10] = {}, bb[10][10] = {};
+        for (std::size_t k = 0; k < a.size(); ++k) {
+            sa += a[k];
+            sb += b[k];
+            diff += std::fabs(a[k] - b[k]);
+            pa = std::max(pa, a[k]);
+            pb = std::max(pb, b[k]);
+            const int i = std::min(9, int(k / 101) / 10), j = std::min(9, int(k % 101) / 10);
+            ba[i][j] += a[k];
+            bb[i][j] += b[k];
+        }
+        double bdiff = 0;
+        for (int i = 0; i < 10; ++i)
+            for (int j = 0; j < 10; ++j) bdiff += std::fabs(ba[i][j] - bb[i][j]);
+        return Compare{sb / sa, diff / sa, pb / pa, bdiff / sa};
+    };
+    gi::GiFrame fs, fp;
+    const std::vector<double> a = floor_caustic(splat_floor, "splats", fs);
+    const std::vector<double> b = floor_caustic(patch_floor, "patches", fp);
+    EXPECT_EQ(fs.from, "the splat octree");
+    EXPECT_EQ(fp.from, "the patches");
+    ASSERT_GT(*std::max_element(a.begin(), a.end()), 0.0);
+    const Compare d = compare(a, b);
+    // The same maps' leaf level for both (the splat floor's default): what the surface changes alone.
+    gi::GiFrame unused;
+    const Compare e = compare(a, floor_caustic(patch_floor, "patches", unused, fs.depth + 2));
+    std::printf(
+        "caustic, patch floor vs splat floor: default levels (%u / %u): total ratio %.4f, L1 %.4f, binned "
+        "L1 %.4f, peak ratio %.4f; same level: total ratio %.4f, L1 %.4f, binned L1 %.4f, peak ratio %.4f\n",
+        fs.depth + 2, fp.depth + 2, d.total_ratio, d.l1, d.binned_l1, d.peak_ratio, e.total_ratio, e.l1,
+        e.binned_l1, e.peak_ratio);
+    EXPECT_NEAR(d.total_ratio, 1.0, 0.05);
+    EXPECT_LT(d.binned_l1, 0.08);
+    EXPECT_NEAR(e.total_ratio, 1.0, 0.05);
+    EXPECT_LT(e.binned_l1, 0.08);
+    EXPECT_LT(e.l1, 0.2);
+    EXPECT_NEAR(e.peak_ratio, 1.0, 0.1);
+}
+
+TEST(GiFrame, PointsGiveTheSplatOctreesLevelWithinOne) {
+    // gi_frame.h: without a splat octree the reference level is the first at which the points fill
+    // their cells 8 to a cell on average; on uniformly sampled surfaces it is the octree's depth
+    // within one level. The root holds every point.
+    for (std::size_t n : {20000u, 200000u}) {
+        const test::TestModel m = test::make_model(test::sphere_points({0, 0, 0}, 1.0, n), {0, 0, 0});
+        const auto with_octree = test::make_pool(m);
+        const gi::GiFrame octree = gi::gi_frame(*with_octree, nullptr);
+        EXPECT_EQ(octree.from, "the splat octree");
+        const gi::SurfacePoints points = gi::surface_points(*with_octree);
+        ASSERT_EQ(points.position.size(), n);
+        gi::GiFrame own;
+        own.depth = gi::reference_level(points.position, octree.root_min, octree.root_size);
+        EXPECT_LE(std::abs(int(own.depth) - int(octree.depth)), 1) << n << " points";
+        const gi::GiFrame pts = [&] {
+            pool::PoolWriter w;
+            w.carry_over(*with_octree);
+            for (pool::SectionType t : {pool::SectionType::octree_info, pool::SectionType::octree_nodes,
+                                        pool::SectionType::leaf_info, pool::SectionType::splats})
+                w.remove(t);
+            const pool::PoolFile f = pool::PoolFile::from_bytes(w.serialize(), "points");
+            return gi::gi_frame(f, &points);
+        }();
+        EXPECT_EQ(pts.from, "the points");
+        for (const core::Vec3& p : points.position)
+            for (int a = 0; a < 3; ++a) {
+                const double c = a == 0 ? p.x : a == 1 ? p.y : p.z;
+                ASSERT_GT(c, pts.root_min[a]);
+                ASSERT_LT(c, pts.root_min[a] + pts.root_size);
+            }
+    }
 }
 
 TEST(Photons, CausticOctreeEstimatesAKnownIrradiance) {

@@ -7,6 +7,7 @@
 
 #include "gi_test_util.h"
 #include "prt/runtime/gi_pool.h"
+#include "runtime/surface_fixtures.h"
 #include "runtime/tool_run.h"
 
 using namespace prt;
@@ -148,4 +149,38 @@ TEST(PhotonsTool, BadInputGivesOneLineNamingTheFile) {
     EXPECT_NE(r.err.find("floor.pool"), std::string::npos) << r.err;
     r = test::run_tool("prt-photons", (dir / "scene.json").string() + " --face-res 0", dir);
     EXPECT_EQ(r.code, 2) << r.err;
+}
+
+TEST(PhotonsTool, BakesCausticsOnModelsWithoutASplatOctree) {
+    // Issue 20: a floor traced as ISO (no splat octree: the frame comes from its points) under a glass
+    // ball of Bezier patches; the floor's pool gets its caustic map and keeps having no octree.
+    PRT_SKIP_WITHOUT_SURFACE_TOOLS();
+    const test::TempDir dir("prt_photons_surfaces");
+    test::write_points_pool(
+        test::make_model(test::rect_points({-2, 0, -2}, {4, 0, 0}, {0, 0, 4}, {0, 1, 0}, 150), {0, 0, 0}),
+        dir.path / "points.pool");
+    test::must_run("prt-iso",
+                   (dir.path / "points.pool").string() + " -o " + (dir.path / "floor.pool").string() + " -q",
+                   dir.path);
+    const double center[3] = {0, 0.8, 0};
+    test::sphere_patch_file(dir.path, 0.4, center);
+    test::must_run("prt-patches",
+                   (dir.path / "sphere.bpt").string() + " -o " + (dir.path / "ball.pool").string() + " -q",
+                   dir.path);
+    auto replace_first = [](std::string text, const std::string& from, const std::string& to) {
+        return text.replace(text.find(from), from.size(), to);
+    };
+    std::string scene =
+        replace_first(k_scene, R"("material": "floor"})", R"("material": "floor", "surface": "iso"})");
+    scene = replace_first(scene, R"("material": "glass"})", R"("material": "glass", "surface": "patches"})");
+    write_text(dir.path / "scene.json", scene);
+    test::ToolRun r = test::run_tool(
+        "prt-photons", (dir.path / "scene.json").string() + " --face-res 96 --per-pixel 2 --backend cpu",
+        dir.path);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("frame of the points"), std::string::npos) << r.err;
+    const pool::PoolFile floor = pool::PoolFile::open(dir.path / "floor.pool");
+    EXPECT_GT(rt::load_caustic_view(floor).tree.leaf_count, 0u);
+    EXPECT_FALSE(floor.has(pool::SectionType::octree_info));
+    EXPECT_TRUE(floor.has(pool::SectionType::iso_info));
 }

@@ -29,16 +29,18 @@ struct LightMapTraceParams {
     std::uint64_t seed = 1;
 };
 
-/// thesis 5.3: indirect irradiance at render-frame point `p` on the side of unit normal `n`,
-/// sample number `sample` (seeds its random numbers, so every backend draws the same paths).
-PRT_HD inline Vec3 indirect_irradiance(const SceneView& s, const LightMapTraceParams& tp, Vec3 p, Vec3 n,
-                                       std::uint64_t sample, RayCounters& c) {
+/// thesis 5.3: the mean radiance of `tp.rays` paths leaving a sample on the side of unit normal `n`
+/// in cosine-distributed directions; `first_ray(dir)` makes each path's first ray. `sample` seeds
+/// the random numbers, so every backend draws the same paths.
+template <class FirstRay>
+PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapTraceParams& tp, Vec3 n,
+                                             std::uint64_t sample, RayCounters& c, FirstRay&& first_ray) {
     Vec3 sum{0, 0, 0};
     for (std::uint32_t k = 0; k < tp.rays; ++k) {
         std::uint64_t h = hash64(tp.seed ^ hash64(sample * 0x9e3779b97f4a7c15ull + k));
         const float u1 = unit_float(h);
         h = hash64(h);
-        Ray ray{p, cosine_direction(n, u1, unit_float(h)), k_inf, 0u};
+        Ray ray = first_ray(cosine_direction(n, u1, unit_float(h)));
         Vec3 weight{1, 1, 1};
         // Bounded: at most `bounces` closest-hit queries per path.
         for (std::uint32_t b = 0; b < tp.bounces; ++b) {
@@ -84,6 +86,73 @@ PRT_HD inline Vec3 indirect_irradiance(const SceneView& s, const LightMapTracePa
         }
     }
     return tp.rays > 0 ? sum * (1.0f / static_cast<float>(tp.rays)) : sum;
+}
+
+/// thesis 5.3: indirect irradiance at render-frame point `p` on the side of unit normal `n` (a splat
+/// model's sample: its point lies on its splat, and paths start there).
+PRT_HD inline Vec3 indirect_irradiance(const SceneView& s, const LightMapTraceParams& tp, Vec3 p, Vec3 n,
+                                       std::uint64_t sample, RayCounters& c) {
+    return indirect_irradiance_paths(s, tp, n, sample, c, [&](Vec3 d) { return Ray{p, d, k_inf, 0u}; });
+}
+
+/// Issue 20: a light-map sample of a model traced as ISO, MLS or patches starts on the surface the
+/// renderer traces, not at the scan point it was drawn from (an ISO or MLS surface passes near the
+/// points, not through them: paths leaving a point just under it would see the surface's inside).
+/// The probe ray from p + reach n toward -n, up to 2 reach: its closest hit, when it lies on model
+/// `model`, is the sample's surface point. False when the probe misses or meets another model first.
+PRT_HD inline bool settle_sample(const SceneView& s, std::uint32_t model, Vec3 p, Vec3 n, float reach,
+                                 SurfaceHit& hit, Vec3& side, RayCounters& c) {
+    const Ray probe{p + n * reach, -n, 2.0f * reach, 0u};
+    ++c.secondary;
+    if (!closest_hit_scene(s, probe, hit, c) || hit.model != model) return false;
+    side = facing_normal(hit, probe);  // the side the probe came from: n's
+    return true;
+}
+
+/// thesis 5.3: indirect irradiance at a settled sample (settle_sample) on the side `side`: paths leave
+/// the hit as the renderer's secondary rays do (leave_surface: no offset, the surface remembered).
+PRT_HD inline Vec3 indirect_irradiance_at(const SceneView& s, const LightMapTraceParams& tp,
+                                          const SurfaceHit& h, Vec3 side, std::uint64_t sample,
+                                          RayCounters& c) {
+    return indirect_irradiance_paths(s, tp, side, sample, c,
+                                     [&](Vec3 d) { return leave_surface(h, d, k_inf, 0u); });
+}
+
+/// One light-map sample as the tracers take it (render frame): where, which side, its model and how
+/// far it is probed for the traced surface (0: not probed, splats).
+struct LightMapSampleIn {
+    Vec3 position, normal;
+    std::uint32_t model = 0;
+    float settle_reach = 0.0f;
+};
+
+/// What tracing one sample gives: its indirect irradiance and, when probed, the surface point and
+/// side it settled on (render frame); settled 0 when the probe found no surface of its model.
+struct LightMapSampleOut {
+    Vec3 irradiance{0, 0, 0}, position{0, 0, 0}, side{0, 0, 0};
+    std::uint32_t settled = 1;
+};
+
+/// thesis 5.3 (+ issue 20's settling): traces light-map sample number `index`. The CPU path
+/// (prt-lightmap's threads) and the GPU kernel (runtime/cuda/src/lightmap.cu) both call this.
+PRT_HD inline LightMapSampleOut trace_light_map_sample(const SceneView& s, const LightMapTraceParams& tp,
+                                                       const LightMapSampleIn& in, std::uint64_t index,
+                                                       RayCounters& c) {
+    LightMapSampleOut out;
+    out.position = in.position;
+    out.side = in.normal;
+    if (in.settle_reach > 0.0f) {
+        SurfaceHit hit;
+        if (!settle_sample(s, in.model, in.position, in.normal, in.settle_reach, hit, out.side, c)) {
+            out.settled = 0;
+            return out;
+        }
+        out.position = hit.position;
+        out.irradiance = indirect_irradiance_at(s, tp, hit, out.side, index, c);
+    } else {
+        out.irradiance = indirect_irradiance(s, tp, in.position, in.normal, index, c);
+    }
+    return out;
 }
 
 }  // namespace prt::core
