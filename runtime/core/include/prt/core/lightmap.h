@@ -29,14 +29,16 @@ struct LightMapTraceParams {
     std::uint64_t seed = 1;
 };
 
-/// thesis 5.3: the mean radiance of `tp.rays` paths leaving a sample on the side of unit normal `n`
-/// in cosine-distributed directions; `first_ray(dir)` makes each path's first ray. `sample` seeds
-/// the random numbers, so every backend draws the same paths.
-template <class FirstRay>
-PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapTraceParams& tp, Vec3 n,
-                                             std::uint64_t sample, RayCounters& c, FirstRay&& first_ray) {
+/// thesis 5.3: the radiance path number `k` of sample `sample` brings to a sample on the side of
+/// unit normal `n`, leaving in a cosine-distributed direction; `first_ray(dir)` makes its first ray.
+/// (sample, k) seed the random numbers, so every backend draws the same path (the GPU runs a
+/// sample's paths in parallel, the CPU one after the other).
+template <std::uint32_t K = k_mask_all, class FirstRay>
+PRT_HD inline Vec3 light_map_path(const SceneView& s, const LightMapTraceParams& tp, Vec3 n,
+                                  std::uint64_t sample, std::uint32_t k, RayCounters& c,
+                                  FirstRay&& first_ray) {
     Vec3 sum{0, 0, 0};
-    for (std::uint32_t k = 0; k < tp.rays; ++k) {
+    {
         std::uint64_t h = hash64(tp.seed ^ hash64(sample * 0x9e3779b97f4a7c15ull + k));
         const float u1 = unit_float(h);
         h = hash64(h);
@@ -46,7 +48,7 @@ PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapT
         for (std::uint32_t b = 0; b < tp.bounces; ++b) {
             SurfaceHit hit;
             ++c.secondary;
-            if (!closest_hit_scene(s, ray, hit, c)) {
+            if (!closest_hit_scene<K>(s, ray, hit, c)) {
                 sum += weight * background(s.environment, ray.dir);
                 break;
             }
@@ -58,7 +60,7 @@ PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapT
             if (d > 0.0f) {
                 // The renderer's direct light (path.h: point lights, area lights sampled by area).
                 PathRng rng{static_cast<std::uint32_t>(h >> 32)};
-                sum += weight * direct_light(s, ray, hit, nf, albedo, rng, c) * d;
+                sum += weight * direct_light<K>(s, ray, hit, nf, albedo, rng, c) * d;
             }
             const float total = d + kr + kt;
             if (!(total > 0.0f) || b + 1 == tp.bounces) break;
@@ -85,6 +87,15 @@ PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapT
             if (!refracted) ray = leave_surface(hit, normalize(reflect(ray.dir, nf)), k_inf, ray.flags);
         }
     }
+    return sum;
+}
+
+/// thesis 5.3: the mean radiance of `tp.rays` paths (light_map_path) leaving a sample.
+template <class FirstRay>
+PRT_HD inline Vec3 indirect_irradiance_paths(const SceneView& s, const LightMapTraceParams& tp, Vec3 n,
+                                             std::uint64_t sample, RayCounters& c, FirstRay&& first_ray) {
+    Vec3 sum{0, 0, 0};
+    for (std::uint32_t k = 0; k < tp.rays; ++k) sum += light_map_path(s, tp, n, sample, k, c, first_ray);
     return tp.rays > 0 ? sum * (1.0f / static_cast<float>(tp.rays)) : sum;
 }
 
@@ -100,22 +111,14 @@ PRT_HD inline Vec3 indirect_irradiance(const SceneView& s, const LightMapTracePa
 /// points, not through them: paths leaving a point just under it would see the surface's inside).
 /// The probe ray from p + reach n toward -n, up to 2 reach: its closest hit, when it lies on model
 /// `model`, is the sample's surface point. False when the probe misses or meets another model first.
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline bool settle_sample(const SceneView& s, std::uint32_t model, Vec3 p, Vec3 n, float reach,
                                  SurfaceHit& hit, Vec3& side, RayCounters& c) {
     const Ray probe{p + n * reach, -n, 2.0f * reach, 0u};
     ++c.secondary;
-    if (!closest_hit_scene(s, probe, hit, c) || hit.model != model) return false;
+    if (!closest_hit_scene<K>(s, probe, hit, c) || hit.model != model) return false;
     side = facing_normal(hit, probe);  // the side the probe came from: n's
     return true;
-}
-
-/// thesis 5.3: indirect irradiance at a settled sample (settle_sample) on the side `side`: paths leave
-/// the hit as the renderer's secondary rays do (leave_surface: no offset, the surface remembered).
-PRT_HD inline Vec3 indirect_irradiance_at(const SceneView& s, const LightMapTraceParams& tp,
-                                          const SurfaceHit& h, Vec3 side, std::uint64_t sample,
-                                          RayCounters& c) {
-    return indirect_irradiance_paths(s, tp, side, sample, c,
-                                     [&](Vec3 d) { return leave_surface(h, d, k_inf, 0u); });
 }
 
 /// One light-map sample as the tracers take it (render frame): where, which side, its model and how
@@ -133,25 +136,46 @@ struct LightMapSampleOut {
     std::uint32_t settled = 1;
 };
 
-/// thesis 5.3 (+ issue 20's settling): traces light-map sample number `index`. The CPU path
-/// (prt-lightmap's threads) and the GPU kernel (runtime/cuda/src/lightmap.cu) both call this.
+/// Issue 20: where a sample's paths start: settled onto the traced surface when it has a settle
+/// reach (settle_sample; false when the probe found no surface of its model), else at its point.
+template <std::uint32_t K = k_mask_all>
+PRT_HD inline bool light_map_start(const SceneView& s, const LightMapSampleIn& in, SurfaceHit& hit,
+                                   Vec3& side, RayCounters& c) {
+    side = in.normal;
+    if (!(in.settle_reach > 0.0f)) return true;
+    return settle_sample<K>(s, in.model, in.position, in.normal, in.settle_reach, hit, side, c);
+}
+
+/// Path number `k` of light-map sample number `index` from its start (light_map_start).
+template <std::uint32_t K = k_mask_all>
+PRT_HD inline Vec3 light_map_sample_path(const SceneView& s, const LightMapTraceParams& tp,
+                                         const LightMapSampleIn& in, const SurfaceHit& hit, Vec3 side,
+                                         std::uint64_t index, std::uint32_t k, RayCounters& c) {
+    if (in.settle_reach > 0.0f)
+        return light_map_path<K>(s, tp, side, index, k, c,
+                                 [&](Vec3 d) { return leave_surface(hit, d, k_inf, 0u); });
+    return light_map_path<K>(s, tp, side, index, k, c, [&](Vec3 d) {
+        return Ray{in.position, d, k_inf, 0u};
+    });
+}
+
+/// thesis 5.3 (+ issue 20's settling): traces light-map sample number `index`: its start, then its
+/// paths one after the other (the CPU path; the GPU kernel, runtime/cuda/src/lightmap.cu, runs the
+/// same light_map_start and light_map_sample_path with a sample's paths in parallel).
 PRT_HD inline LightMapSampleOut trace_light_map_sample(const SceneView& s, const LightMapTraceParams& tp,
                                                        const LightMapSampleIn& in, std::uint64_t index,
                                                        RayCounters& c) {
     LightMapSampleOut out;
+    SurfaceHit hit;
     out.position = in.position;
-    out.side = in.normal;
-    if (in.settle_reach > 0.0f) {
-        SurfaceHit hit;
-        if (!settle_sample(s, in.model, in.position, in.normal, in.settle_reach, hit, out.side, c)) {
-            out.settled = 0;
-            return out;
-        }
-        out.position = hit.position;
-        out.irradiance = indirect_irradiance_at(s, tp, hit, out.side, index, c);
-    } else {
-        out.irradiance = indirect_irradiance(s, tp, in.position, in.normal, index, c);
+    if (!light_map_start(s, in, hit, out.side, c)) {
+        out.settled = 0;
+        return out;
     }
+    if (in.settle_reach > 0.0f) out.position = hit.position;
+    for (std::uint32_t k = 0; k < tp.rays; ++k)
+        out.irradiance += light_map_sample_path(s, tp, in, hit, out.side, index, k, c);
+    if (tp.rays > 0) out.irradiance = out.irradiance * (1.0f / static_cast<float>(tp.rays));
     return out;
 }
 

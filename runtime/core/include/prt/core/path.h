@@ -105,6 +105,8 @@ PRT_HD inline int hit_area_light(const SceneView& s, const Ray& r, float t_max, 
 }
 
 /// Direct light at a diffuse hit (thesis 5.2 light convention; shadow rays keep the ray's flag).
+/// K (KernelMask): the surfaces its shadow rays may meet.
+template <std::uint32_t K = k_mask_all>
 PRT_HD inline Vec3 direct_light(const SceneView& s, const Ray& r, const SurfaceHit& h, Vec3 n, Vec3 albedo,
                                 PathRng& rng, RayCounters& c) {
     Vec3 sum{0, 0, 0};
@@ -117,7 +119,7 @@ PRT_HD inline Vec3 direct_light(const SceneView& s, const Ray& r, const SurfaceH
         if (!(ndl > 0.0f)) return;
         if (s.params.shadows != 0 && shadows != 0) {
             ++c.shadow;
-            if (occluded(s, leave_surface(h, l, dist, r.flags), c)) return;
+            if (occluded<K>(s, leave_surface(h, l, dist, r.flags), c)) return;
         }
         sum += color * albedo * ndl;
     };
