@@ -205,6 +205,13 @@ check "hand-made pool: only prt-cull runs" [ "$(steps hand.txt hand)" = "prt-cul
 "$bake" -B "$build" -n --force hand.json >hand_force.txt 2>&1
 check "hand-made pool: --force rebuilds" [ "$(steps hand_force.txt hand)" = "prt-radii,prt-octree,prt-cull" ]
 
+# A bricked pool (prt-bricks: bricks, no per-point sections) keeps its bricks: no splat step runs.
+fake_pool hand/bricked.pool 2,128,129,130,131,132 '[{"tool":"prt-synth","parameters":{}},{"tool":"prt-bricks","parameters":{}}]'
+printf '{"models": [{"name": "big", "pool": "hand/bricked.pool"}]}' >bricked.json
+"$bake" -B "$build" -n bricked.json >bricked.txt 2>&1
+check "bricked pool: kept" contains bricked.txt "[big] skip prt-octree: the pool is bricked (prt-bricks): its bricks are kept"
+check "bricked pool: nothing to do" contains bricked.txt "prt-bake: nothing to do: the 3 steps bricked.json needs are current"
+
 # -- bad input: one line naming the model and what is missing, exit 1, nothing run ---------------
 fake_pool hand/nonormals.pool 2,3 '[{"tool":"prt-synth","parameters":{}}]'
 fake_pool hand/points.pool 2,3,4 '[{"tool":"prt-synth","parameters":{}}]'
@@ -226,6 +233,8 @@ bad patches_from_ply '{"name": "plyp", "source": "scan.ply", "pool": "pools/plyp
     "prt-bake: error: model 'plyp': surface \"patches\" needs Bezier patches (prt-patches reads a .bpt source)"
 bad iso_on_teapot '{"name": "tp", "source": "teapot.bpt", "pool": "pools/tp.pool", "surface": "iso"}' \
     "prt-bake: error: model 'tp': surface \"iso\" needs points (prt-import), but the model is Bezier patches"
+bad iso_on_bricks '{"name": "big", "pool": "hand/bricked.pool", "surface": "iso"}' \
+    "prt-bake: error: model 'big': prt-iso needs the points: pool $work/hand/bricked.pool has no positions section (bricked without --keep-points)"
 bad no_pool '{"name": "gone", "pool": "hand/gone.pool"}' \
     "prt-bake: error: model 'gone': pool $work/hand/gone.pool does not exist and the model has no source"
 
