@@ -363,4 +363,27 @@ else
     echo "SKIP: real textured bake (prt-texture or prt-iso not built in $bin)"
 fi
 
+# The scene passes: a caustic scene bakes photons and a light map once; a second bake runs nothing
+# (their tags are kept beside the pools while the tools do not record them); editing the scene
+# file's content reruns both passes and nothing else; touching it reruns nothing.
+if have prt-import prt-radii prt-octree prt-cull prt-photons prt-lightmap; then
+    "$bake" -B "$build" --quiet caustic.json
+    check "caustic: real run exits 0" [ $? = 0 ]
+    check "caustic: photons in the pools" contains <(tools pools/ball.pool) "prt-photons,prt-lightmap"
+    "$bake" -B "$build" caustic.json >caustic2.out 2>caustic2.err
+    cat caustic2.err
+    check "caustic: second bake runs nothing" [ "$(cat caustic2.err)" = "prt-bake: nothing to do: the 10 steps caustic.json needs are current" ]
+    touch -d '+1 minute' caustic.json
+    "$bake" -B "$build" -n caustic.json >caustic_touched.txt 2>&1
+    check "touched scene: nothing runs" runs_nothing caustic_touched.txt
+    sed -i 's/"position": \[0, 3, 0\]/"position": [0, 2.5, 0]/' caustic.json
+    "$bake" -B "$build" -n caustic.json >caustic_edit.txt 2>&1
+    cat caustic_edit.txt
+    check "edited scene: photons rerun" contains caustic_edit.txt "[scene] run prt-photons: pool $work/pools/room.pool: its input changed (content hash differs)"
+    check "edited scene: light map reruns" contains caustic_edit.txt "[scene] run prt-lightmap:"
+    check "edited scene: no model step" [ -z "$(steps caustic_edit.txt room)$(steps caustic_edit.txt ball)" ]
+else
+    echo "SKIP: real caustic bake (prt-cull, prt-photons or prt-lightmap not built in $bin)"
+fi
+
 finish_checks
