@@ -8,7 +8,9 @@
 # build; skipped with a message where they are missing): a second bake runs nothing and says so in
 # one line; touching the inputs without changing them runs nothing; changing one model's source
 # reruns only its chain; changing a texture reruns prt-texture and prt-iso; radii from a PLY
-# "radius" property kept in the pool; a failing step stops the bake with its one-line error.
+# "radius" property kept in the pool; the scene passes (photons, light map; photons on an ISO model
+# without an octree) current on a second bake, rerun when the scene's content changes, not when it is
+# touched; a failing step stops the bake with its one-line error.
 # Usage: prt_bake_test.sh PRT_BAKE BIN_DIR   (exit 77 = skipped: python3 missing)
 set -uo pipefail
 bake=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
@@ -384,6 +386,23 @@ if have prt-import prt-radii prt-octree prt-cull prt-photons prt-lightmap; then
     check "edited scene: no model step" [ -z "$(steps caustic_edit.txt room)$(steps caustic_edit.txt ball)" ]
 else
     echo "SKIP: real caustic bake (prt-cull, prt-photons or prt-lightmap not built in $bin)"
+fi
+
+# Caustics on an ISO model: photons without a splat octree (SCENE_PASS_NEEDS).
+if have prt-import prt-iso prt-photons; then
+    cat >iso_caustic.json <<'EOF'
+{"materials": [{"name": "glass", "transmissivity": 0.9, "refractive_index": 1.5}],
+ "models": [{"name": "ball", "source": "iso.ply", "pool": "pools/isoball.pool", "material": "glass", "surface": "iso"}],
+ "lights": [{"type": "point", "position": [0, 3, 0]}],
+ "render": {"caustics": true}}
+EOF
+    "$bake" -B "$build" --quiet iso_caustic.json
+    check "iso caustics: real run exits 0" [ $? = 0 ]
+    check "iso caustics: no octree, photons" [ "$(tools pools/isoball.pool)" = "prt-import,prt-iso,prt-photons" ]
+    "$bake" -B "$build" iso_caustic.json >iso_caustic2.out 2>iso_caustic2.err
+    check "iso caustics: second bake runs nothing" contains iso_caustic2.err "nothing to do"
+else
+    echo "SKIP: real ISO caustic bake (prt-iso or prt-photons not built in $bin)"
 fi
 
 finish_checks
