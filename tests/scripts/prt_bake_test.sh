@@ -287,6 +287,7 @@ if have prt-import prt-radii prt-octree prt-cull; then
     check "splats: real run exits 0" [ "$status" = 0 ]
     check "splats: pool written" [ -s pools/splats.pool ]
     check "splats: step lines on stderr" contains run.err "[splats] run prt-cull"
+    check "splats: the bake's self-check finds everything current" lacks run.err "warning"
     check "splats: the pool's steps" [ "$(tools pools/splats.pool)" = "prt-import,prt-radii,prt-octree,prt-cull" ]
     "$bake" -B "$build" splats.json >again.out 2>again.err
     cat again.err
@@ -369,8 +370,9 @@ fi
 # (their tags are kept beside the pools while the tools do not record them); editing the scene
 # file's content reruns both passes and nothing else; touching it reruns nothing.
 if have prt-import prt-radii prt-octree prt-cull prt-photons prt-lightmap; then
-    "$bake" -B "$build" --quiet caustic.json
+    "$bake" -B "$build" --quiet caustic.json 2>caustic1.err
     check "caustic: real run exits 0" [ $? = 0 ]
+    check "caustic: the bake's self-check finds everything current" [ ! -s caustic1.err ]
     check "caustic: photons in the pools" contains <(tools pools/ball.pool) "prt-photons,prt-lightmap"
     "$bake" -B "$build" caustic.json >caustic2.out 2>caustic2.err
     cat caustic2.err
