@@ -2,8 +2,9 @@
 deciding whether an output is current (issue 21). Standard library only, plus python3-xxhash for
 the content hashes when it is installed (hashlib's SHA-256 otherwise).
 
-Used by scripts/prt-batch (the skip decision) and scripts/prt-bake (PoolState: a pool's sections
-and provenance).
+Used by scripts/prt-batch (the skip decision: `current_reason`, a chain at the end of the
+provenance) and scripts/prt-bake (a pool's sections, their checksums and provenance; `step_reason`,
+one step anywhere in the provenance and the steps it depends on).
 
 How a batch recognises its own result: every tool built on prt::tool::PoolStep takes
 `--provenance-tag JSON` and records that value as "tag" in its provenance parameters. prt-batch
@@ -35,6 +36,20 @@ class PoolError(Exception):
 
 def read_table(path):
     """The section table of the pool at `path`: a list of (type, version, offset, size)."""
+    table, count = _raw_table(path)
+    return [struct.unpack_from("<IIQQ", table, ENTRY_BYTES * i) for i in range(count)]
+
+
+def read_checksums(path):
+    """{section type: XXH3-64 of its payload} from the section table of the pool at `path` (the
+    checksum each entry carries, formats/POOL.md; nothing is hashed here)."""
+    table, count = _raw_table(path)
+    return {struct.unpack_from("<I", table, ENTRY_BYTES * i)[0]:
+            "%016x" % struct.unpack_from("<Q", table, ENTRY_BYTES * i + 40)[0] for i in range(count)}
+
+
+def _raw_table(path):
+    """The section table's bytes and its entry count."""
     try:
         with open(path, "rb") as f:
             head = f.read(HEADER_BYTES)
@@ -50,7 +65,7 @@ def read_table(path):
                 raise ValueError("truncated section table")
     except (OSError, ValueError) as e:
         raise PoolError("%s: cannot read the pool: %s" % (path, e))
-    return [struct.unpack_from("<IIQQ", table, ENTRY_BYTES * i) for i in range(count)]
+    return table, count
 
 
 def read_sections(path, skip=(S_PROVENANCE,)):
@@ -110,12 +125,13 @@ def json_text(value):
     return json.dumps(value, sort_keys=True, separators=(",", ":"))
 
 
-def chain_tag(input_hash, steps, args):
-    """The tag prt-batch records with the last of `steps` (tool names, in order): the input's
-    content hash and each step's extra arguments (`args`: tool -> list of strings). Thread counts
-    and file names are left out: they do not change the result."""
+def chain_tag(input_hash, steps, args, maker="batch"):
+    """The tag a script records with the last of `steps` (tool names, in order): the input's
+    content hash and each step's extra arguments (`args`: tool -> list of strings; a file argument
+    given as its content hash). Thread counts and file names are left out: they do not change the
+    result. `maker`: "batch" (prt-batch: {"batch": "prt-batch", ...}) or "bake" (prt-bake)."""
     return {
-        "batch": "prt-batch",
+        maker: "prt-" + maker,
         "input": input_hash,
         "steps": list(steps),
         "args": {s: list(args.get(s, [])) for s in steps},
@@ -149,3 +165,50 @@ def current_reason(path, expected):
                 return "the input changed (content hash differs)"
             return "%s ran with other parameters" % want["tool"]
     return None
+
+
+def entry_tag(entry):
+    """The "tag" a provenance entry's parameters hold (--provenance-tag), or None."""
+    params = entry.get("parameters") if isinstance(entry, dict) else None
+    if isinstance(params, str):  # older writers kept parameters as JSON text
+        try:
+            params = json.loads(params)
+        except ValueError:
+            params = None
+    return params.get("tag") if isinstance(params, dict) else None
+
+
+def last_entry(provenance, tools):
+    """Index of the newest entry of `provenance` written by one of `tools` (a name or a list), or -1."""
+    names = [tools] if isinstance(tools, str) else list(tools)
+    for i in range(len(provenance) - 1, -1, -1):
+        if isinstance(provenance[i], dict) and provenance[i].get("tool") in names:
+            return i
+    return -1
+
+
+def step_reason(provenance, tool, tag, depends, recorded=None):
+    """Whether `tool`'s result in a pool whose provenance is `provenance` is current for `tag`:
+    returns (None, note) when it is, (reason, None) when it must run. prt-bake's rule:
+
+    - the newest entry of `tool` must exist and no tool of `depends` may come after it;
+    - its tag (or `recorded`, the tag known from elsewhere for a tool that did not record it) must
+      equal `tag`; an entry with no tag at all was made without a tag (by hand): current, and the
+      note says so.
+    """
+    mine = last_entry(provenance, tool)
+    if mine < 0:
+        return "the pool's provenance has no %s step" % tool, None
+    newer = last_entry(provenance, depends)
+    if newer > mine:
+        return "%s ran after the last %s" % (provenance[newer].get("tool"), tool), None
+    got = entry_tag(provenance[mine])
+    if got is None:
+        got = recorded
+    if got is None:
+        return None, "current (made without a provenance tag, by hand: kept; --force rebuilds)"
+    if got == tag:
+        return None, "current (same inputs and parameters)"
+    if isinstance(got, dict) and isinstance(tag, dict) and got.get("input") != tag.get("input"):
+        return "its input changed (content hash differs)", None
+    return "%s ran with other inputs or parameters" % tool, None
