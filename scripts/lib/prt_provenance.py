@@ -187,14 +187,13 @@ def last_entry(provenance, tools):
     return -1
 
 
-def step_reason(provenance, tool, tag, depends, recorded=None):
+def step_reason(provenance, tool, tag, depends):
     """Whether `tool`'s result in a pool whose provenance is `provenance` is current for `tag`:
     returns (None, note) when it is, (reason, None) when it must run. prt-bake's rule:
 
     - the newest entry of `tool` must exist and no tool of `depends` may come after it;
-    - its tag (or `recorded`, the tag known from elsewhere for a tool that did not record it) must
-      equal `tag`; an entry with no tag at all was made without a tag (by hand): current, and the
-      note says so.
+    - its tag must equal `tag`; an entry with no tag at all was made without a tag (by hand):
+      current, and the note says so.
     """
     mine = last_entry(provenance, tool)
     if mine < 0:
@@ -203,8 +202,6 @@ def step_reason(provenance, tool, tag, depends, recorded=None):
     if newer > mine:
         return "%s ran after the last %s" % (provenance[newer].get("tool"), tool), None
     got = entry_tag(provenance[mine])
-    if got is None:
-        got = recorded
     if got is None:
         return None, "current (made without a provenance tag, by hand: kept; --force rebuilds)"
     if got == tag:
