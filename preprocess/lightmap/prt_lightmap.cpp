@@ -3,12 +3,14 @@
 // (eq. 5.3-5.4, normal rejection) and written into each model's pool, in place.
 #include <algorithm>
 #include <filesystem>
+#include <future>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "lightmap.h"
+#include "photons.h"
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
@@ -65,6 +67,11 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
                                                          double& kernel_seconds) {
     using namespace prt;
     std::vector<std::optional<gi::GiOctree>> trees(pools.paths.size());
+    // The GPU's context is created on a thread while the scene loads (photons::warm_up).
+    std::string why;
+    o.backend = photons::resolve_backend(o.backend, &why);
+    if (!why.empty()) step.note("prt-lightmap: --backend auto: using the CPU (%s)", why.c_str());
+    std::future<void> device = photons::warm_up(o.backend);
     const rt::RenderScene rs = rt::RenderScene::load(sc);
     for (const std::string& w : rs.warnings()) step.note("prt-lightmap: %s", w.c_str());
     const core::SceneView view = rs.view();
@@ -91,6 +98,7 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
         std::vector<lightmap::Sample> samples =
             lightmap::select_samples(points, static_cast<std::uint32_t>(m), view.models[m], root_min,
                                      root_size, o.gather.depth, o.per_leaf, reach);
+        device.wait();
         const double t0 = tool::now_seconds();
         {
             tool::Progress progress("prt-lightmap: " + pools.paths[p].filename().string(), samples.size(),

@@ -14,6 +14,7 @@
 #include "prt/tool.h"
 
 #if defined(PRT_HAVE_CUDA)
+#include "prt/cuda/device.h"
 #include "prt/cuda/photons_cuda.h"
 #endif
 
@@ -166,6 +167,15 @@ std::string resolve_backend(const std::string& requested, std::string* why) {
 #endif
 }
 
+std::future<void> warm_up(const std::string& backend) {
+#if defined(PRT_HAVE_CUDA)
+    if (backend == "cuda") return std::async(std::launch::async, [] { cuda::warm_up_device(); });
+#endif
+    std::promise<void> ready;
+    ready.set_value();
+    return ready.get_future();
+}
+
 ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& options,
                           const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
     ShootResult result;
@@ -184,6 +194,7 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
         result.tally.photons = total;
         result.backend = r.device;
         result.kernel_seconds = r.kernel_seconds;
+        result.setup_seconds = r.setup_seconds;
 #endif
     } else {
         const unsigned threads = resolve_threads(options.threads);

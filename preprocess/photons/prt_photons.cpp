@@ -110,7 +110,7 @@ std::vector<std::uint32_t> assign_maps(const prt::scene::Scene& sc, const Pools&
 /// Shoots the photons; the RenderScene maps the pools rewritten later: it lives only in here.
 prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scene::Scene& sc,
                                 const Options& o, const Pools& pools, std::vector<PoolJob>& jobs,
-                                std::uint64_t& lights, double& load_seconds) {
+                                std::uint64_t& lights, double& load_seconds, std::future<void>& device) {
     using namespace prt;
     const rt::RenderScene rs = rt::RenderScene::load(sc);
     for (const std::string& w : rs.warnings()) step.note("prt-photons: %s", w.c_str());
@@ -142,6 +142,7 @@ prt::photons::ShootResult shoot(const prt::tool::PoolStep& step, const prt::scen
               view.point_light_count, view.area_light_count, ull(photons::photons_per_light(o.shoot.params)),
               o.shoot.params.face_res, o.shoot.params.face_res, o.shoot.params.per_pixel,
               o.shoot.backend.c_str());
+    device.wait();  // the GPU's context, created while the scene loaded
     tool::Progress progress("prt-photons: shooting", total, step.quiet());
     photons::ShootResult shot =
         photons::shoot_photons(view, o.shoot, [&](std::uint64_t d, std::uint64_t) { progress.update(d); });
@@ -203,11 +204,12 @@ void report(const prt::tool::PoolStep& step, const prt::photons::ShootResult& sh
     const double emitted = lum(t.emitted);
     auto pct = [&](const double c[3]) { return emitted > 0 ? 100.0 * lum(c) / emitted : 0.0; };
     step.note(
-        "prt-photons: %llu photons in %.3f s (%.1f M photons/s; tracing alone %.3f s, %.1f M/s; %s); %llu "
-        "deposits, %llu specular hits",
+        "prt-photons: %llu photons in %.3f s (%.1f M photons/s; tracing alone %.3f s, %.1f M/s; device setup "
+        "and "
+        "scene upload %.3f s; %s); %llu deposits, %llu specular hits",
         ull(t.photons), shot.seconds, shot.seconds > 0 ? double(t.photons) / shot.seconds * 1e-6 : 0.0,
         shot.kernel_seconds, shot.kernel_seconds > 0 ? double(t.photons) / shot.kernel_seconds * 1e-6 : 0.0,
-        shot.backend.c_str(), ull(t.deposits), ull(t.specular_hits));
+        shot.setup_seconds, shot.backend.c_str(), ull(t.deposits), ull(t.specular_hits));
     step.note(
         "prt-photons: power: direct %.2f %%, deposited (x albedo share) %.2f %%, absorbed %.2f %%, escaped "
         "%.2f %%, cut at the bounce limit %.4f %%",
@@ -241,12 +243,13 @@ void photons_step(prt::tool::PoolStep& step, Options o) {
     std::string why;
     o.shoot.backend = photons::resolve_backend(o.shoot.backend, &why);
     if (!why.empty()) step.note("prt-photons: --backend auto: using the CPU (%s)", why.c_str());
+    std::future<void> device = photons::warm_up(o.shoot.backend);
 
     const Pools pools = scene_pools(step, sc);
     std::vector<PoolJob> jobs(pools.paths.size());
     const std::vector<std::uint32_t> map_of_model = assign_maps(sc, pools, jobs);
     std::uint64_t lights = 0;
-    photons::ShootResult shot = shoot(step, sc, o, pools, jobs, lights, load_seconds);
+    photons::ShootResult shot = shoot(step, sc, o, pools, jobs, lights, load_seconds, device);
     for (const photons::PhotonDeposit& d : shot.deposits)
         jobs[pools.of_model[d.model]].maps[map_of_model[d.model]].deposits.push_back(d);
     std::vector<photons::PhotonDeposit>().swap(shot.deposits);

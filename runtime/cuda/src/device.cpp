@@ -41,4 +41,8 @@ std::string device_name() {
     return prop.name;
 }
 
+void warm_up_device() {
+    if (cudaSetDevice(0) != cudaSuccess || cudaFree(nullptr) != cudaSuccess) cudaGetLastError();
+}
+
 }  // namespace prt::cuda

@@ -12,6 +12,7 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <chrono>
 #include <vector>
 
 #include "cuda_check.h"
@@ -73,6 +74,7 @@ bool photons_device_available(std::string* why) {
 
 PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::PhotonShootParams& params,
                                      const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    const auto setup_start = std::chrono::steady_clock::now();
     PRT_CUDA_CHECK(cudaSetDevice(0));
     PhotonsCudaResult result;
     cudaDeviceProp prop{};
@@ -81,6 +83,8 @@ PhotonsCudaResult shoot_photons_cuda(const core::SceneView& host, const core::Ph
     DeviceScene scene;
     scene.upload(host, nullptr);
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
+    result.setup_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - setup_start).count();
     const std::uint64_t per_light = core::photons_per_light(params);
     const std::uint64_t total = per_light * core::photon_light_count(host);
     DeviceBuffer<core::PhotonDeposit> d_deposits;

@@ -295,7 +295,7 @@ TEST(LightMapTool, BakesModelsWithoutASplatOctreeAndNamesAModelWithNothingToBake
                    dir.path);
     std::ofstream(dir.path / "bare.json") << R"({"lights": [{"type": "point", "position": [0, 0, 0]}],
         "models": [{"name": "shell", "pool": "bare.pool"}]})";
-    r = test::run_tool("prt-lightmap", (dir.path / "bare.json").string() + " --rays 4", dir.path);
+    r = test::run_tool("prt-lightmap", (dir.path / "bare.json").string() + " --rays 4 --quiet", dir.path);
     EXPECT_EQ(r.code, 1);
     test::expect_one_line(r.err, {"bare.json", "model 'shell'", "no points and no patches"});
 }

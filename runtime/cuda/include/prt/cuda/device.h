@@ -14,4 +14,9 @@ bool device_available(std::string* why = nullptr);
 /// Name of device 0 ("NVIDIA H100 80GB HBM3"), or "" when none.
 std::string device_name();
 
+/// Creates device 0's primary context now (a process's first CUDA use: about 0.13 s on the H100),
+/// so a tool can pay it on a thread while it loads its input; every thread shares that context.
+/// Never throws (errors surface at the next real use).
+void warm_up_device();
+
 }  // namespace prt::cuda

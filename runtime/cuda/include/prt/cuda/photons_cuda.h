@@ -23,6 +23,7 @@ struct PhotonsCudaResult {
     core::PhotonTally tally;
     std::string device;         ///< the GPU's name
     double kernel_seconds = 0;  ///< sum of the shooting kernels' times (CUDA events)
+    double setup_seconds = 0;   ///< the device's first use (context) and the scene's upload (wall clock)
 };
 
 /// Shoots photons_per_light(params) photons from every light of `host` (host pointers: the scene
