@@ -165,8 +165,10 @@ inline TestOctree build_test_octree(const std::vector<pool::Splat>& splats, cons
                 // Plus a margin of 1e-6 of the root: a flat floor lying on a cell boundary (its discs'
                 // extent 0 along the axis) goes into both cells, so the float walk, whose boundary
                 // rounds either way, finds it (without it a floor on the root's mid-plane had holes).
-                const double e =
-                    sp.radius * std::sqrt(std::max(0.0, 1.0 - n[a] * n[a])) * (1.0 + 1e-6) + 1e-6 * root_size;
+                // At most 1 % of the cell, so deep cells (below 1e-6 of the root) still split their
+                // points: a margin larger than the cell put every deep point in every deep cell.
+                const double e = sp.radius * std::sqrt(std::max(0.0, 1.0 - n[a] * n[a])) * (1.0 + 1e-6) +
+                                 std::min(1e-6 * root_size, 1e-2 * (hi[a] - lo[a]));
                 if (p[a] + e < lo[a] || p[a] - e > hi[a]) return false;
             } else {
                 const bool last = cell.c[a] + 1 == (1ull << cell.level);
