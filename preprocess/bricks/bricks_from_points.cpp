@@ -18,9 +18,9 @@
 //                count and radius sum checks that build_octree splits it (octree_splits_node)
 //   5. scatter   one pass: each point's record into its cells' ranges of a spill file, in input
 //                order within each cell (chunks write disjoint ranges, so in parallel)
-//   6. cells     in depth-first (Morton) order: build_octree_cell, cull_octree over the part (its
-//                first leaf's octree-wide index: the leaves of earlier cells), build_brick_part; the
-//                payloads appended to a spill file
+//   6. cells     in depth-first (Morton) order: build_octree_cell, cull_octree over the part (a
+//                leaf's probes depend on its cell only), build_brick_part; the payloads appended to
+//                a spill file
 //   7. assemble  the top tree breadth first over the partition and the cells' top trees (the
 //                numbering cut_top_tree gives), the table in that brick order, the payloads copied into
 //                place, the LOD discs above the bricks (finish_bricks)
@@ -30,12 +30,19 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <string>
+#include <thread>
+#include <type_traits>
 #include <vector>
 
 #include "morton.h"
+#include "prt/atomic_file.h"
 #include "prt/error.h"
+#include "prt/formats/pool.h"
+#include "prt/mapped_file.h"
 #include "prt/parallel.h"
 #include "prt/tool.h"
 
@@ -72,6 +79,111 @@ std::uint32_t fine_coordinate(double c, double root_min, double scale) {
     return static_cast<std::uint32_t>(std::clamp(q, 0.0, double((1u << k_histogram_level) - 1)));
 }
 
+// -- the staged build's files (issue 21) ------------------------------------------------------------
+// plan.bin: "PRTPLAN1", then one blob (below) and its checksum (pool::checksum, XXH3).
+// records.bin: the Record array of step 5, cell after cell (plan.bin gives each cell's range).
+// cells-FIRST-LAST.bin: the payloads of cells [FIRST, LAST) one after the other, then the blob of
+//   their CellBricks and statistics, then a footer: the blob's offset, size and checksum, "PRTCELL1".
+// A blob is a sequence of trivially copyable values and vectors of them (a vector: its length, then
+// its elements), in host byte order: the folder is read by the same build of prt-bricks on the same
+// kind of machine (a cluster's workers).
+constexpr std::uint64_t k_plan_magic = 0x314e414c50545250ull;   // "PRTPLAN1"
+constexpr std::uint64_t k_cells_magic = 0x314c4c4543545250ull;  // "PRTCELL1"
+constexpr std::uint32_t k_staged_version = 1;
+
+class BlobWriter {
+public:
+    template <class T>
+    void put(const T& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        const auto* p = reinterpret_cast<const std::byte*>(&v);
+        m_bytes.insert(m_bytes.end(), p, p + sizeof(T));
+    }
+    template <class T>
+    void put_vector(const std::vector<T>& v) {
+        static_assert(std::is_trivially_copyable_v<T>);
+        put(std::uint64_t(v.size()));
+        const auto* p = reinterpret_cast<const std::byte*>(v.data());
+        m_bytes.insert(m_bytes.end(), p, p + v.size() * sizeof(T));
+    }
+    void put_string(const std::string& t) { put_vector(std::vector<char>(t.begin(), t.end())); }
+    const std::vector<std::byte>& bytes() const { return m_bytes; }
+
+private:
+    std::vector<std::byte> m_bytes;
+};
+
+class BlobReader {
+public:
+    BlobReader(std::span<const std::byte> bytes, std::string label)
+        : m_bytes(bytes), m_label(std::move(label)) {}
+    template <class T>
+    T get() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        T v;
+        std::memcpy(&v, take(sizeof(T)), sizeof(T));
+        return v;
+    }
+    template <class T>
+    std::vector<T> get_vector() {
+        static_assert(std::is_trivially_copyable_v<T>);
+        const auto n = get<std::uint64_t>();
+        if (n > (m_bytes.size() - m_at) / sizeof(T)) fail();
+        std::vector<T> v(n);
+        if (n > 0) std::memcpy(v.data(), take(n * sizeof(T)), n * sizeof(T));
+        return v;
+    }
+    std::string get_string() {
+        const std::vector<char> c = get_vector<char>();
+        return {c.begin(), c.end()};
+    }
+    bool done() const { return m_at == m_bytes.size(); }
+    [[noreturn]] void fail() const { throw Error(m_label + ": truncated or not written by this prt-bricks"); }
+
+private:
+    const std::byte* take(std::size_t n) {
+        if (n > m_bytes.size() - m_at) fail();
+        const std::byte* p = m_bytes.data() + m_at;
+        m_at += n;
+        return p;
+    }
+    std::span<const std::byte> m_bytes;
+    std::string m_label;
+    std::size_t m_at = 0;
+};
+
+std::span<const std::byte> bytes_of(const MappedFile& f) {
+    return {reinterpret_cast<const std::byte*>(f.data()), f.size()};
+}
+
+/// The options a staged build's stages must share (everything that changes the bricks).
+std::string staged_fingerprint(const PointBrickParams& p) {
+    const CullParams& c = p.culling;
+    return "leaf_size=" + std::to_string(p.octree.max_leaf_splats) +
+           " max_depth=" + std::to_string(p.octree.max_depth) +
+           " replicate=" + std::to_string(p.octree.replicate) +
+           " min_cell=" + std::to_string(p.octree.min_cell_ratio) +
+           " split_by_centres=" + std::to_string(p.octree.split_by_centres) +
+           " cull=" + std::to_string(p.cull) + " directions=" + std::to_string(c.directions) +
+           " grid=" + std::to_string(c.grid) + " policy=" + std::to_string(int(c.policy)) +
+           " window=" + std::to_string(c.window) + " seed=" + std::to_string(c.seed) +
+           " brick_splats=" + std::to_string(p.bricks.brick_splats) +
+           " lod_splats=" + std::to_string(p.bricks.lod_splats);
+}
+
+}  // namespace
+
+unsigned cell_workers(const PointBrickParams& params) {
+    return params.cell_workers > 0 ? params.cell_workers : resolve_threads(params.threads);
+}
+
+std::uint64_t cell_capacity(const PointBrickParams& params) {
+    if (params.cell_points > 0) return params.cell_points;
+    return std::max<std::uint64_t>(params.memory / (k_cell_bytes_per_point * cell_workers(params)), 1u << 16);
+}
+
+namespace {
+
 class Partitioner {
 public:
     Partitioner(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
@@ -81,22 +193,311 @@ public:
           m_normals(normals),
           m_radii(radii),
           m_colors(colors),
+          m_has_colors(!colors.empty()),
           m_params(params),
           m_threads(resolve_threads(params.threads)) {}
 
-    PointBricks run(PointBrickStats& stats) {
+    /// Steps 1-5: the partition and the records of each cell, in a temporary spill file or, with
+    /// `records_file`, in that named file (the staged build).
+    void plan(PointBrickStats& stats, const std::filesystem::path& records_file = {}) {
         const double start = tool::now_seconds();
         bounds(stats);           // 1
         partition(histogram());  // 2, 3
         count();                 // 4
-        scatter();               // 5
-        const double cells = tool::now_seconds();
-        stats.partition_seconds = cells - start;
-        build_cells(stats);  // 6
+        scatter(records_file);   // 5
+        stats.partition_seconds = tool::now_seconds() - start;
+    }
+
+    std::uint32_t cell_count() const { return std::uint32_t(m_cell_nodes.size()); }
+
+    /// Step 6 for cells [first, last): each cell's payload goes to `append` (returns its offset in
+    /// the payload file, which is part `part`).
+    void build(std::uint32_t first, std::uint32_t last, std::uint32_t part,
+               const std::function<std::uint64_t(std::span<const std::byte>)>& append,
+               PointBrickStats& stats) {
+        m_cells.resize(cell_count());
+        const std::uint64_t begin = m_cell_begin[first], end = m_cell_begin[last];
+        // Cells by several workers at once, each with its share of the threads: a cell's build has
+        // serial stretches (and GPU culling) that one cell's threads cannot fill (on the H100 host with
+        // 16 threads: a 50M room with 1, 2, 4, 8 cells at once 33.7, 19.8, 15.7, 10.8 s; a 200M room
+        // with 4, 8, 16 at once 54.0, 46.3, 37.5 s).
+        const unsigned workers = std::min<unsigned>(cell_workers(), last - first);
+        const unsigned threads = std::max(1u, m_threads / std::max(1u, workers));
+        std::atomic<std::uint32_t> next{first};
+        std::atomic<std::uint64_t> done{0};
+        std::exception_ptr failure;
+        auto work = [&] {
+            try {
+                for (std::uint32_t c = next++; c < last; c = next++) {
+                    build_cell(c, part, append, stats, threads);
+                    const std::uint64_t d = done.fetch_add(m_cell_begin[c + 1] - m_cell_begin[c]) +
+                                            (m_cell_begin[c + 1] - m_cell_begin[c]);
+                    const std::lock_guard<std::mutex> lock(m_mutex);
+                    report("building cells", d, end - begin);
+                }
+            } catch (...) {
+                const std::lock_guard<std::mutex> lock(m_mutex);
+                if (!failure) failure = std::current_exception();
+                next = last;  // the other workers stop after their cell
+            }
+        };
+        report("building cells", 0, end - begin);
+        std::vector<std::thread> pool;
+        for (unsigned w = 1; w < workers; ++w) pool.emplace_back(work);
+        work();
+        for (std::thread& t : pool) t.join();
+        if (failure) std::rethrow_exception(failure);
+    }
+
+    unsigned cell_workers() const { return pre::cell_workers(m_params); }
+
+    /// The whole build in this process (build_bricks_from_points).
+    PointBricks run(PointBrickStats& stats) {
+        const double start = tool::now_seconds();
+        plan(stats);
+        m_payloads = AppendFile(m_params.spill_folder, "the brick payloads");
+        build(
+            0, cell_count(), 0,
+            [&](std::span<const std::byte> b) { return m_payloads.append(b.data(), b.size()); }, stats);
+        m_records = SpillFile{};
         const double assembly = tool::now_seconds();
-        PointBricks out = assemble(stats);  // 7
+        PointBricks out = assemble(stats, [&](std::uint32_t, std::uint64_t offset, std::byte* to,
+                                              std::uint64_t n) { m_payloads.read(offset, to, n); });
+        m_payloads = AppendFile{};
         stats.seconds = tool::now_seconds() - start;
         stats.assemble_seconds = stats.seconds - (assembly - start);
+        return out;
+    }
+
+    // -- the staged build (issue 21) ---------------------------------------------------------------
+    void save_plan(const std::filesystem::path& folder, const PointBrickStats& stats) const {
+        BlobWriter w;
+        w.put(k_staged_version);
+        w.put_string(staged_fingerprint(m_params));
+        w.put(std::uint64_t(m_positions.size()));
+        w.put(m_has_colors);
+        w.put(m_root);
+        w.put_vector(m_nodes);
+        w.put_vector(m_cell_nodes);
+        w.put_vector(m_cell_begin);
+        w.put(stats.points);
+        w.put(stats.skipped);
+        w.put(stats.partition_seconds);
+        AtomicFile f(folder / "plan.bin");
+        f.write(&k_plan_magic, sizeof k_plan_magic);
+        f.write(w.bytes().data(), w.bytes().size());
+        const std::uint64_t sum = pool::checksum(w.bytes());
+        f.write(&sum, sizeof sum);
+        f.commit();
+    }
+
+    /// Reads FOLDER/plan.bin and maps FOLDER/records.bin; returns the plan's statistics.
+    PointBrickStats load_plan(const std::filesystem::path& folder) {
+        const std::filesystem::path path = folder / "plan.bin";
+        if (!std::filesystem::exists(path))
+            throw Error(folder.string() + ": no plan.bin (run prt-bricks --stage plan first)");
+        const MappedFile file = MappedFile::open(path, MappedFile::Access::random);
+        const std::span<const std::byte> all = bytes_of(file);
+        std::uint64_t magic = 0, sum = 0;
+        if (all.size() < 16) throw Error(path.string() + ": truncated or not written by this prt-bricks");
+        std::memcpy(&magic, all.data(), 8);
+        std::memcpy(&sum, all.data() + all.size() - 8, 8);
+        const std::span<const std::byte> blob = all.subspan(8, all.size() - 16);
+        if (magic != k_plan_magic || pool::checksum(blob) != sum)
+            throw Error(path.string() +
+                        ": checksum mismatch: corrupt, truncated or not written by this prt-bricks");
+        BlobReader r(blob, path.string());
+        if (r.get<std::uint32_t>() != k_staged_version)
+            throw Error(path.string() + ": written by another version of prt-bricks");
+        const std::string planned = r.get_string(), now = staged_fingerprint(m_params);
+        if (planned != now)
+            throw Error(path.string() + ": planned with other options (" + planned + "; now " + now +
+                        "): give every stage the same options");
+        r.get<std::uint64_t>();  // input points
+        m_has_colors = r.get<bool>();
+        m_root = r.get<pool::OctreeInfo>();
+        m_nodes = r.get_vector<PartNode>();
+        m_cell_nodes = r.get_vector<std::uint32_t>();
+        m_cell_begin = r.get_vector<std::uint64_t>();
+        PointBrickStats stats;
+        stats.points = r.get<std::uint64_t>();
+        stats.skipped = r.get<std::uint64_t>();
+        stats.partition_seconds = r.get<double>();
+        if (!r.done() || m_cell_begin.size() != m_cell_nodes.size() + 1) r.fail();
+        for (const std::uint32_t n : m_cell_nodes)
+            if (n >= m_nodes.size()) r.fail();
+        for (std::size_t c = 0; c + 1 < m_cell_begin.size(); ++c)
+            if (m_cell_begin[c] > m_cell_begin[c + 1]) r.fail();
+        const std::filesystem::path records = folder / "records.bin";
+        m_records_file = MappedFile::open(records, MappedFile::Access::random);
+        const std::uint64_t need = m_cell_begin.back() * sizeof(Record);
+        if (m_records_file.size() < need)
+            throw Error(records.string() + ": " + std::to_string(m_records_file.size()) +
+                        " bytes, the plan needs " + std::to_string(need));
+        m_record_view = {reinterpret_cast<const Record*>(m_records_file.data()),
+                         static_cast<std::size_t>(m_cell_begin.back())};
+        return stats;
+    }
+
+    static std::string part_name(std::uint32_t first, std::uint32_t last) {
+        return "cells-" + std::to_string(first) + "-" + std::to_string(last) + ".bin";
+    }
+
+    /// Step 6 for cells [first, last) into FOLDER/cells-FIRST-LAST.bin (after load_plan).
+    void build_part(const std::filesystem::path& folder, std::uint32_t first, std::uint32_t last,
+                    PointBrickStats& stats) {
+        if (first >= last || last > cell_count())
+            throw Error("cells " + std::to_string(first) + ":" + std::to_string(last) +
+                        " outside the plan's 0:" + std::to_string(cell_count()));
+        AtomicFile f(folder / part_name(first, last));
+        std::uint64_t at = 0;
+        build(
+            first, last, 0,
+            [&](std::span<const std::byte> b) {
+                f.write(b.data(), b.size());
+                at += b.size();
+                return at - b.size();
+            },
+            stats);
+        BlobWriter w;
+        w.put(first);
+        w.put(last);
+        for (std::uint32_t c = first; c < last; ++c) {
+            const CellBricks& cb = m_cells[c];
+            w.put(cb.payload);
+            w.put(cb.payload_bytes);
+            w.put(cb.payload_checksum);
+            w.put_vector(cb.top_nodes);
+            w.put_vector(cb.table);
+            w.put_vector(cb.lod);
+            w.put_vector(cb.sums);
+            w.put_vector(cb.lod_table);
+            w.put_vector(cb.lod_nodes);
+            w.put_vector(cb.lod_discs);
+        }
+        w.put(stats.cells);
+        w.put(stats.partition_depth);
+        w.put(stats.max_cell_points);
+        w.put(stats.cell_records);
+        w.put(stats.stored_splats);
+        w.put(stats.culled_splats);
+        w.put(stats.octree_seconds);
+        w.put(stats.cull_seconds);
+        w.put(stats.brick_seconds);
+        w.put(m_depth);
+        w.put(m_top_depth);
+        w.put(m_error);
+        f.write(w.bytes().data(), w.bytes().size());
+        const std::uint64_t footer[4] = {at, w.bytes().size(), pool::checksum(w.bytes()), k_cells_magic};
+        f.write(footer, sizeof footer);
+        f.commit();
+    }
+
+    /// Reads every FOLDER/cells-*.bin (after load_plan): they must cover the plan's cells once each.
+    void load_parts(const std::filesystem::path& folder, PointBrickStats& stats) {
+        m_cells.assign(cell_count(), CellBricks{});
+        std::vector<std::uint32_t> owner(cell_count(), k_no_cell);
+        std::vector<std::filesystem::path> paths;
+        for (const auto& entry : std::filesystem::directory_iterator(folder)) {
+            const std::string name = entry.path().filename().string();
+            if (name.starts_with("cells-") && name.ends_with(".bin")) paths.push_back(entry.path());
+        }
+        std::sort(paths.begin(), paths.end());
+        for (const std::filesystem::path& path : paths) {
+            MappedFile file = MappedFile::open(path, MappedFile::Access::random);
+            const std::span<const std::byte> all = bytes_of(file);
+            std::uint64_t footer[4] = {0, 0, 0, 0};
+            const auto corrupt = [&] {
+                return Error(path.string() +
+                             ": checksum mismatch: corrupt, truncated or not written by this prt-bricks");
+            };
+            if (all.size() < sizeof footer) throw corrupt();
+            std::memcpy(footer, all.data() + all.size() - sizeof footer, sizeof footer);
+            if (footer[3] != k_cells_magic || footer[0] > all.size() - sizeof footer ||
+                footer[1] != all.size() - sizeof footer - footer[0])
+                throw corrupt();
+            const std::span<const std::byte> blob = all.subspan(footer[0], footer[1]);
+            if (pool::checksum(blob) != footer[2]) throw corrupt();
+            BlobReader r(blob, path.string());
+            const auto first = r.get<std::uint32_t>(), last = r.get<std::uint32_t>();
+            if (first >= last || last > cell_count())
+                throw Error(path.string() + ": cells " + std::to_string(first) + ":" + std::to_string(last) +
+                            " outside the plan's 0:" + std::to_string(cell_count()) +
+                            " (a part of another plan?)");
+            const std::uint32_t part = std::uint32_t(m_parts.size());
+            for (std::uint32_t c = first; c < last; ++c) {
+                if (owner[c] != k_no_cell)
+                    throw Error(path.string() + ": cell " + std::to_string(c) + " is also in " +
+                                paths[owner[c]].filename().string());
+                owner[c] = std::uint32_t(&path - paths.data());
+                CellBricks& cb = m_cells[c];
+                cb.part = part;
+                cb.payload = r.get<std::uint64_t>();
+                cb.payload_bytes = r.get<std::uint64_t>();
+                cb.payload_checksum = r.get<std::uint64_t>();
+                cb.top_nodes = r.get_vector<std::uint32_t>();
+                cb.table = r.get_vector<pool::BrickEntry>();
+                cb.lod = r.get_vector<pool::LodSplat>();
+                cb.sums = r.get_vector<LodSum>();
+                cb.lod_table = r.get_vector<pool::BrickLod>();
+                cb.lod_nodes = r.get_vector<std::uint32_t>();
+                cb.lod_discs = r.get_vector<pool::CompressedSplat>();
+                if (cb.payload > footer[0] || cb.payload_bytes > footer[0] - cb.payload) throw corrupt();
+                if (cb.payload_bytes > 0 &&  // an empty cell has no payload
+                    pool::checksum(all.subspan(cb.payload, cb.payload_bytes)) != cb.payload_checksum)
+                    throw corrupt();
+                drop_mapped_pages(all.data() + cb.payload, cb.payload_bytes);
+                for (const pool::BrickEntry& e : cb.table)
+                    if (e.offset < cb.payload || e.offset - cb.payload > cb.payload_bytes ||
+                        e.size > cb.payload_bytes - (e.offset - cb.payload))
+                        throw corrupt();
+            }
+            PointBrickStats s;
+            s.cells = r.get<std::uint32_t>();
+            s.partition_depth = r.get<std::uint32_t>();
+            s.max_cell_points = r.get<std::uint64_t>();
+            s.cell_records = r.get<std::uint64_t>();
+            s.stored_splats = r.get<std::uint64_t>();
+            s.culled_splats = r.get<std::uint64_t>();
+            s.octree_seconds = r.get<double>();
+            s.cull_seconds = r.get<double>();
+            s.brick_seconds = r.get<double>();
+            m_depth = std::max(m_depth, r.get<std::uint32_t>());
+            m_top_depth = std::max(m_top_depth, r.get<std::uint32_t>());
+            m_error.merge(r.get<CodecError>());
+            if (!r.done()) r.fail();
+            stats.cells += s.cells;
+            stats.partition_depth = std::max(stats.partition_depth, s.partition_depth);
+            stats.max_cell_points = std::max(stats.max_cell_points, s.max_cell_points);
+            stats.cell_records += s.cell_records;
+            stats.stored_splats += s.stored_splats;
+            stats.culled_splats += s.culled_splats;
+            stats.octree_seconds += s.octree_seconds;
+            stats.cull_seconds += s.cull_seconds;
+            stats.brick_seconds += s.brick_seconds;
+            m_parts.push_back(std::move(file));
+        }
+        for (std::uint32_t c = 0; c < cell_count(); ++c) {
+            if (owner[c] != k_no_cell) continue;
+            std::uint32_t e = c;
+            while (e < cell_count() && owner[e] == k_no_cell) ++e;
+            throw Error(folder.string() + ": cells " + std::to_string(c) + ":" + std::to_string(e) +
+                        " are not built (prt-bricks --stage cells --cells " + std::to_string(c) + ":" +
+                        std::to_string(e) + ")");
+        }
+    }
+
+    /// Step 7 from the loaded parts.
+    PointBricks merge(PointBrickStats& stats) {
+        const double start = tool::now_seconds();
+        PointBricks out =
+            assemble(stats, [&](std::uint32_t part, std::uint64_t offset, std::byte* to, std::uint64_t n) {
+                std::memcpy(to, m_parts[part].data() + offset, n);
+                drop_mapped_pages(m_parts[part].data() + offset, n);
+            });
+        stats.assemble_seconds = tool::now_seconds() - start;
+        stats.seconds = stats.partition_seconds + stats.octree_seconds + stats.cull_seconds +
+                        stats.brick_seconds + stats.assemble_seconds;
         return out;
     }
 
@@ -167,10 +568,7 @@ private:
 
     // -- 3 ----------------------------------------------------------------------------------------
     void partition(const std::vector<std::uint64_t>& prefix) {
-        const std::uint64_t capacity =
-            m_params.cell_points > 0
-                ? m_params.cell_points
-                : std::max<std::uint64_t>(m_params.memory / k_cell_bytes_per_point, 1u << 16);
+        const std::uint64_t capacity = cell_capacity(m_params);
         const std::uint64_t min_inner =
             2 * std::uint64_t(std::max<std::uint32_t>(m_params.bricks.brick_splats, 1));
         auto centres = [&](const NodeCell& c) -> std::uint64_t {
@@ -279,13 +677,15 @@ private:
     }
 
     // -- 5 ----------------------------------------------------------------------------------------
-    void scatter() {
+    void scatter(const std::filesystem::path& records_file) {
         const std::size_t cells = m_cell_nodes.size();
         const std::uint64_t records = m_cell_begin[cells];
-        m_records = SpillFile(m_params.spill_folder, std::max<std::uint64_t>(records, 1) * sizeof(Record),
-                              "the partitioned points");
+        const std::uint64_t bytes = std::max<std::uint64_t>(records, 1) * sizeof(Record);
+        m_records = records_file.empty() ? SpillFile(m_params.spill_folder, bytes, "the partitioned points")
+                                         : SpillFile::named(records_file, bytes, "the partitioned points");
         Record* out = m_records.as<Record>().data();
         std::atomic<std::uint64_t> done{0};
+        m_record_view = m_records.as<const Record>().first(records);
         parallel_chunks(
             m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
                 std::uint64_t* slot = m_slot.data() + (b / k_chunk) * cells;
@@ -311,6 +711,8 @@ private:
     // -- 6 ----------------------------------------------------------------------------------------
     /// One cell's bricks, numbered within the cell, with its payload in m_payloads.
     struct CellBricks {
+        std::uint32_t part = 0;  ///< the payload file (staged build)
+        std::uint64_t payload = 0, payload_bytes = 0, payload_checksum = 0;  ///< where, in it
         std::vector<std::uint32_t> top_nodes;
         std::vector<pool::BrickEntry> table;  // offset: into m_payloads
         std::vector<pool::LodSplat> lod;
@@ -320,81 +722,86 @@ private:
         std::vector<pool::CompressedSplat> lod_discs;
     };
 
-    void build_cells(PointBrickStats& stats) {
-        const std::size_t cells = m_cell_nodes.size();
-        m_payloads = AppendFile(m_params.spill_folder, "the brick payloads");
-        m_cells.resize(cells);
-        std::uint64_t leaf_base = 0;
-        const std::uint64_t records_total = m_cell_begin[cells];
-        for (std::size_t c = 0; c < cells; ++c) {
-            const std::uint64_t b = m_cell_begin[c], e = m_cell_begin[c + 1];
-            report("building cells", b, records_total);
-            if (b == e) continue;
-            const NodeCell at = m_nodes[m_cell_nodes[c]].at;
-            stats.cells += 1;
-            stats.partition_depth = std::max(stats.partition_depth, at.level);
-            stats.max_cell_points = std::max(stats.max_cell_points, e - b);
-            const std::span<const Record> recs = m_records.as<Record>().subspan(b, e - b);
-            std::vector<pool::Float3> positions(recs.size()), normals(recs.size());
-            std::vector<float> radii(recs.size());
-            std::vector<pool::Rgba8> colors(m_colors.empty() ? 0 : recs.size());
-            for (std::size_t k = 0; k < recs.size(); ++k) {
-                positions[k] = recs[k].position;
-                normals[k] = recs[k].normal;
-                radii[k] = recs[k].radius;
-                if (!colors.empty()) colors[k] = recs[k].color;
-            }
-            drop_pages(recs.data(), recs.size_bytes());
-            double t0 = tool::now_seconds();
-            OctreeParams op = m_params.octree;
-            op.threads = m_threads;
-            op.progress = nullptr;
-            SplatOctree octree = build_octree_cell(positions, normals, radii, m_root, at, op);
-            std::vector<pool::Float3>().swap(positions);
-            std::vector<pool::Float3>().swap(normals);
-            std::vector<float>().swap(radii);
-            double t1 = tool::now_seconds();
-            stats.octree_seconds += t1 - t0;
-            m_depth = std::max(m_depth, octree.info.depth);
-            stats.stored_splats += octree.splats.size();
-            if (octree.leaf_info.size() - 1 + leaf_base > std::numeric_limits<std::uint32_t>::max())
-                throw Error("bricks from points: more than 2^32 - 1 filled leaves");
-            pool::SplatOctreeSections sections{octree.info, octree.nodes, octree.leaf_info, octree.splats};
-            CulledOctree culled;
-            if (m_params.cull) {
-                CullParams cp = m_params.culling;
-                cp.threads = m_threads;
-                cp.progress = nullptr;
-                culled = cull_octree(sections, cp, nullptr, OctreePart{at, std::uint32_t(leaf_base)});
-                std::vector<pool::Splat>().swap(octree.splats);
-                sections =
-                    pool::SplatOctreeSections{culled.info, octree.nodes, culled.leaf_info, culled.splats};
-            }
-            stats.culled_splats += sections.splats.size();
-            t0 = tool::now_seconds();
-            stats.cull_seconds += t0 - t1;
-            leaf_base += octree.info.filled_leaves;
-            BrickParams bp = m_params.bricks;
-            bp.threads = m_threads;
-            bp.progress = nullptr;
-            BrickPart part = build_brick_part(sections, colors, bp, at);
-            m_error.merge(part.error);
-            m_top_depth = std::max(m_top_depth, part.top_depth);
-            const std::uint64_t base = m_payloads.append(part.bricks.data.data(), part.bricks.data.size());
-            for (pool::BrickEntry& entry : part.bricks.table) entry.offset += base;
-            stats.brick_seconds += tool::now_seconds() - t0;
-            m_cells[c] = CellBricks{std::move(part.bricks.top_nodes), std::move(part.bricks.table),
-                                    std::move(part.bricks.lod),       std::move(part.sums),
-                                    std::move(part.bricks.lod_table), std::move(part.bricks.lod_nodes),
-                                    std::move(part.bricks.lod_discs)};
-            stats.cell_records += e - b;
+    /// One cell (step 6): its subtree built, culled and cut; the payload handed to `append`.
+    void build_cell(std::uint32_t c, std::uint32_t part,
+                    const std::function<std::uint64_t(std::span<const std::byte>)>& append,
+                    PointBrickStats& stats, unsigned threads) {
+        const std::uint64_t b = m_cell_begin[c], e = m_cell_begin[c + 1];
+        if (b == e) return;
+        const NodeCell at = m_nodes[m_cell_nodes[c]].at;
+        const std::span<const Record> recs = m_record_view.subspan(b, e - b);
+        std::vector<pool::Float3> positions(recs.size()), normals(recs.size());
+        std::vector<float> radii(recs.size());
+        std::vector<pool::Rgba8> colors(m_has_colors ? recs.size() : 0);
+        for (std::size_t k = 0; k < recs.size(); ++k) {
+            positions[k] = recs[k].position;
+            normals[k] = recs[k].normal;
+            radii[k] = recs[k].radius;
+            if (!colors.empty()) colors[k] = recs[k].color;
         }
-        report("building cells", records_total, records_total);
-        m_records = SpillFile{};
+        drop_pages(recs.data(), recs.size_bytes());
+        const double t0 = tool::now_seconds();
+        OctreeParams op = m_params.octree;
+        op.threads = threads;
+        op.progress = nullptr;
+        SplatOctree octree = build_octree_cell(positions, normals, radii, m_root, at, op);
+        std::vector<pool::Float3>().swap(positions);
+        std::vector<pool::Float3>().swap(normals);
+        std::vector<float>().swap(radii);
+        const double t1 = tool::now_seconds();
+        const std::uint64_t stored = octree.splats.size();
+        pool::SplatOctreeSections sections{octree.info, octree.nodes, octree.leaf_info, octree.splats};
+        CulledOctree culled;
+        if (m_params.cull) {
+            CullParams cp = m_params.culling;
+            cp.threads = threads;
+            cp.progress = nullptr;
+            culled = cull_octree(sections, cp, nullptr, OctreePart{at});
+            std::vector<pool::Splat>().swap(octree.splats);
+            sections = pool::SplatOctreeSections{culled.info, octree.nodes, culled.leaf_info, culled.splats};
+        }
+        const double t2 = tool::now_seconds();
+        BrickParams bp = m_params.bricks;
+        bp.threads = threads;
+        bp.progress = nullptr;
+        BrickPart bricks = build_brick_part(sections, colors, bp, at);
+        const std::uint64_t checksum = pool::checksum(bricks.bricks.data);
+        // The cell's results into the shared state (cells build concurrently:
+        // PointBrickParams::cell_workers).
+        const std::lock_guard<std::mutex> lock(m_mutex);
+        const std::uint64_t base = append(bricks.bricks.data);
+        for (pool::BrickEntry& entry : bricks.bricks.table) entry.offset += base;
+        m_cells[c] = CellBricks{part,
+                                base,
+                                bricks.bricks.data.size(),
+                                checksum,
+                                std::move(bricks.bricks.top_nodes),
+                                std::move(bricks.bricks.table),
+                                std::move(bricks.bricks.lod),
+                                std::move(bricks.sums),
+                                std::move(bricks.bricks.lod_table),
+                                std::move(bricks.bricks.lod_nodes),
+                                std::move(bricks.bricks.lod_discs)};
+        m_error.merge(bricks.error);
+        m_top_depth = std::max(m_top_depth, bricks.top_depth);
+        m_depth = std::max(m_depth, octree.info.depth);
+        stats.cells += 1;
+        stats.partition_depth = std::max(stats.partition_depth, at.level);
+        stats.max_cell_points = std::max(stats.max_cell_points, e - b);
+        stats.stored_splats += stored;
+        stats.culled_splats += sections.splats.size();
+        stats.octree_seconds += t1 - t0;
+        stats.cull_seconds += t2 - t1;
+        stats.brick_seconds += tool::now_seconds() - t2;
+        stats.cell_records += e - b;
     }
 
     // -- 7 ----------------------------------------------------------------------------------------
-    PointBricks assemble(PointBrickStats& stats) {
+    /// Reads `bytes` of cell payloads at `offset` of payload file `part` into `to`.
+    using PayloadReader =
+        std::function<void(std::uint32_t part, std::uint64_t offset, std::byte* to, std::uint64_t bytes)>;
+
+    PointBricks assemble(PointBrickStats& stats, const PayloadReader& read) {
         PointBricks out;
         BrickedOctree& br = out.bricks;
         std::vector<LodSum> sums;
@@ -478,12 +885,12 @@ private:
         out.data = SpillFile(m_params.spill_folder, std::max<std::uint64_t>(offset, 1), "the brick payloads");
         out.data_bytes = offset;
         for (std::size_t b = 0; b < brick_src.size(); ++b) {
-            const pool::BrickEntry& src = m_cells[brick_src[b].first].table[brick_src[b].second];
-            m_payloads.read(src.offset, out.data.data() + br.table[b].offset, src.size);
+            const CellBricks& cb = m_cells[brick_src[b].first];
+            const pool::BrickEntry& src = cb.table[brick_src[b].second];
+            read(cb.part, src.offset, out.data.data() + br.table[b].offset, src.size);
             drop_pages(out.data.data() + br.table[b].offset, src.size);
             report("writing bricks", b + 1, brick_src.size());
         }
-        m_payloads = AppendFile{};
         std::uint32_t top_depth = m_top_depth;
         for (const PartNode& p : m_nodes) top_depth = std::max(top_depth, p.at.level);
         pool::OctreeInfo info = m_root;
@@ -491,7 +898,7 @@ private:
         info.unique_splats = stats.points;
         info.flags = (m_params.octree.replicate ? pool::k_octree_replicated : 0u) |
                      (m_params.cull ? pool::k_octree_culled : 0u);
-        stats.bricks = finish_bricks(br, sums, info, top_depth, m_params.bricks, !m_colors.empty());
+        stats.bricks = finish_bricks(br, sums, info, top_depth, m_params.bricks, m_has_colors);
         stats.bricks.data_bytes = offset;
         stats.bricks.error = m_error;
         return out;
@@ -500,6 +907,7 @@ private:
     std::span<const pool::Float3> m_positions, m_normals;
     std::span<const float> m_radii;
     std::span<const pool::Rgba8> m_colors;
+    bool m_has_colors;
     const PointBrickParams& m_params;
     unsigned m_threads;
     pool::OctreeInfo m_root{};
@@ -510,6 +918,10 @@ private:
     std::vector<std::uint64_t> m_slot;        // [chunk][cell]: next record index
     std::vector<std::uint64_t> m_cell_begin;  // cell -> first record
     SpillFile m_records;
+    std::span<const Record> m_record_view;  // m_records, or the staged build's records file
+    MappedFile m_records_file;
+    std::vector<MappedFile> m_parts;  // the staged build's part files, by CellBricks::part
+    std::mutex m_mutex;               // build_cell's shared results, the payload file, progress
     AppendFile m_payloads;
     std::vector<CellBricks> m_cells;
     std::uint32_t m_depth = 0, m_top_depth = 0;
@@ -517,6 +929,51 @@ private:
 };
 
 }  // namespace
+
+std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                               std::span<const float> radii, std::span<const pool::Rgba8> colors,
+                               const PointBrickParams& params, const std::filesystem::path& folder,
+                               PointBrickStats* stats_out) {
+    PointBrickStats stats;
+    Partitioner partitioner(positions, normals, radii, colors, params);
+    std::filesystem::remove(folder / "plan.bin");  // a folder holds one plan: an old one goes first
+    for (const auto& entry : std::filesystem::directory_iterator(folder))
+        if (const std::string name = entry.path().filename().string();
+            name.starts_with("cells-") && name.ends_with(".bin"))
+            std::filesystem::remove(entry.path());
+    partitioner.plan(stats, folder / "records.bin");
+    partitioner.save_plan(folder, stats);
+    if (stats_out) *stats_out = stats;
+    return partitioner.cell_count();
+}
+
+std::uint32_t planned_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params) {
+    Partitioner partitioner({}, {}, {}, {}, params);
+    partitioner.load_plan(folder);
+    return partitioner.cell_count();
+}
+
+void build_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params,
+                       std::uint32_t first, std::uint32_t last, PointBrickStats* stats_out) {
+    Partitioner partitioner({}, {}, {}, {}, params);
+    PointBrickStats stats = partitioner.load_plan(folder);
+    stats.partition_seconds = 0;
+    const double start = tool::now_seconds();
+    partitioner.build_part(folder, first, last, stats);
+    stats.seconds = tool::now_seconds() - start;
+    if (stats_out) *stats_out = stats;
+}
+
+PointBricks merge_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params,
+                              PointBrickStats* stats_out) {
+    Partitioner partitioner({}, {}, {}, {}, params);
+    PointBrickStats stats = partitioner.load_plan(folder);
+    partitioner.load_parts(folder, stats);
+    PointBricks out = partitioner.merge(stats);
+    stats.bricks.seconds = stats.seconds;
+    if (stats_out) *stats_out = stats;
+    return out;
+}
 
 PointBricks build_bricks_from_points(std::span<const pool::Float3> positions,
                                      std::span<const pool::Float3> normals, std::span<const float> radii,

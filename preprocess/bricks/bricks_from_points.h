@@ -35,7 +35,13 @@ struct PointBrickParams {
     /// Never true for arrays in anonymous memory (dropping would zero them).
     bool input_mapped = false;
     unsigned threads = 0;  ///< 0 = every hardware thread
-    /// Progress on stderr: (stage, done, total), called from the calling thread; may be empty.
+    /// Cells built at the same time, each with threads / cell_workers threads; --memory is shared
+    /// among them (cells of memory / (cell_workers x k_cell_bytes_per_point) points). 0: one per
+    /// thread, each cell on one thread (fastest measured on 16 threads: 4, 8, 16 at once on a 200M
+    /// room). The result does not depend on it.
+    unsigned cell_workers = 0;
+    /// Progress on stderr: (stage, done, total), called from one thread at a time (the cell workers
+    /// take turns); may be empty.
     std::function<void(const char*, std::uint64_t, std::uint64_t)> progress;
 };
 
@@ -44,6 +50,11 @@ struct PointBrickParams {
 /// (826 B per point, a 100M-point room, H100 host, 16 threads); 7.8 stored replicas per point
 /// before culling make most of it.
 inline constexpr std::uint64_t k_cell_bytes_per_point = 840;
+
+/// The cells built at once (PointBrickParams::cell_workers resolved) and the most points a cell is
+/// planned to hold (cell_points, else memory / (cell workers x k_cell_bytes_per_point), at least 65536).
+unsigned cell_workers(const PointBrickParams& params);
+std::uint64_t cell_capacity(const PointBrickParams& params);
 
 struct PointBrickStats {
     std::uint64_t points = 0, skipped = 0;  ///< usable points; points the octree skips
@@ -74,5 +85,30 @@ PointBricks build_bricks_from_points(std::span<const pool::Float3> positions,
                                      std::span<const pool::Float3> normals, std::span<const float> radii,
                                      std::span<const pool::Rgba8> colors, const PointBrickParams& params,
                                      PointBrickStats* stats = nullptr);
+
+/// The same build in three stages, for processes on one or several machines that share `folder`
+/// (issue 21: scripts/prt-bricks-dask runs the cells on a Dask cluster, the way Entwine builds
+/// subsets and merges them). The merged result equals build_bricks_from_points' byte for byte:
+/// cells are independent (bricks_from_points.cpp), and culling hashes a leaf's cell, not its index.
+///  1. plan_brick_cells: steps 1-5 on the points; writes folder/plan.bin (the partition, the options
+///     that change the result) and folder/records.bin (each cell's points, 32 B a record), removes an
+///     earlier plan's part files, and returns the number of cells.
+///  2. build_brick_cells: cells [first, last) of the plan (built, culled, cut) into
+///     folder/cells-FIRST-LAST.bin, written atomically; any number of these, anywhere, in any order.
+///  3. merge_brick_cells: the top tree, table, payloads and LOD from part files that cover every cell
+///     once (each checked: checksums, ranges).
+/// Every stage must get the same `params` but threads, memory and spill folder (a mismatch is an
+/// error naming both). Throws prt::Error naming the file on a missing, corrupt or foreign file, and
+/// naming the cells that no part holds.
+std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                               std::span<const float> radii, std::span<const pool::Rgba8> colors,
+                               const PointBrickParams& params, const std::filesystem::path& folder,
+                               PointBrickStats* stats = nullptr);
+/// The number of cells of folder's plan (checked against `params`).
+std::uint32_t planned_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params);
+void build_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params,
+                       std::uint32_t first, std::uint32_t last, PointBrickStats* stats = nullptr);
+PointBricks merge_brick_cells(const std::filesystem::path& folder, const PointBrickParams& params,
+                              PointBrickStats* stats = nullptr);
 
 }  // namespace prt::pre

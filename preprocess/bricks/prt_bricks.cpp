@@ -40,9 +40,29 @@ struct PointOptions {
     prt::pre::PointBrickParams params;
     bool no_cull = false;
     std::string policy = "greedy";
-    std::string memory;        ///< --memory text; empty = half the physical memory
-    std::string spill_folder;  ///< empty = the output's folder
+    std::string memory;         ///< --memory text; empty = half the physical memory
+    std::string spill_folder;   ///< empty = the output's folder
+    std::string stage = "all";  ///< --stage: all, plan, cells or merge (the staged build, issue 21)
+    std::string cells_folder;   ///< --cells-folder: the staged build's shared folder
+    std::string cells;          ///< --cells A:B (stage cells)
 };
+
+/// --cells "A:B" as [A, B).
+std::pair<std::uint32_t, std::uint32_t> parse_cells(const std::string& text) {
+    const std::size_t colon = text.find(':');
+    try {
+        if (colon != std::string::npos && colon > 0 && colon + 1 < text.size()) {
+            std::size_t used_a = 0, used_b = 0;
+            const unsigned long a = std::stoul(text.substr(0, colon), &used_a);
+            const unsigned long b = std::stoul(text.substr(colon + 1), &used_b);
+            if (used_a == colon && used_b == text.size() - colon - 1 && a < b && b <= 0xFFFFFFFFul)
+                return {std::uint32_t(a), std::uint32_t(b)};
+        }
+    } catch (const std::exception&) {
+    }
+    throw prt::Error("--cells '" + text +
+                     "': expected FIRST:LAST with FIRST < LAST (cells FIRST to LAST - 1)");
+}
 
 constexpr prt::pool::SectionType k_point_sections[] = {
     prt::pool::SectionType::positions,    prt::pool::SectionType::normals,
@@ -77,6 +97,47 @@ std::uint64_t drop_points(prt::tool::PoolStep& step, bool keep_points) {
     return bytes;
 }
 
+/// --no-cull and --policy into the build's parameters.
+void set_culling(PointOptions& opt) {
+    using prt::pre::CullPolicy;
+    opt.params.cull = !opt.no_cull;
+    opt.params.culling.policy = opt.policy == "votes"    ? CullPolicy::votes
+                                : opt.policy == "thesis" ? CullPolicy::thesis
+                                                         : CullPolicy::greedy;
+}
+
+/// --stage cells: cells FIRST:LAST of the plan in --cells-folder; the input pool is not read (the
+/// plan holds the points), so a cluster's tasks each read only their cells' records.
+void cells_step(prt::tool::PoolStep& step, PointOptions& opt) {
+    using namespace prt;
+    pre::PointBrickParams& p = opt.params;
+    set_culling(opt);
+    if (opt.cells_folder.empty()) throw Error("--stage cells needs --cells-folder DIR");
+    if (opt.cells.empty()) throw Error("--stage cells needs --cells FIRST:LAST");
+    const std::filesystem::path folder = opt.cells_folder;
+    if (!std::filesystem::is_directory(folder))
+        throw Error(opt.cells_folder + ": --cells-folder is not a folder");
+    const auto [first, last] = parse_cells(opt.cells);
+    pre::PointBrickStats stats;
+    tool::StagedProgress progress("prt-bricks", step.quiet());
+    p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
+        progress.update(stage, done, total);
+    };
+    pre::build_brick_cells(folder, p, first, last, &stats);
+    progress.finish();
+    step.note(
+        "prt-bricks: cells %u:%u: %u built, %llu stored splats, %llu after culling (%.1f s octrees, %.1f s "
+        "culling, %.1f s bricks)",
+        first, last, stats.cells, ull(stats.stored_splats), ull(stats.culled_splats), stats.octree_seconds,
+        stats.cull_seconds, stats.brick_seconds);
+    step.write_stats({{"stage", "cells"},
+                      {"first", first},
+                      {"last", last},
+                      {"cells_built", stats.cells},
+                      {"seconds", stats.seconds},
+                      {"peak_rss_bytes", pre::peak_rss_bytes()}});
+}
+
 void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, bool keep_points) {
     using namespace prt;
     const pool::PoolFile& in = step.input();
@@ -88,20 +149,48 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     if (keep_float)
         throw Error(step.input_path() +
                     ": --keep-float needs an octree (prt-octree); this pool has points only");
-    step.check_output_folder();
     pre::PointBrickParams& p = opt.params;
-    p.cull = !opt.no_cull;
+    set_culling(opt);
     p.input_mapped = in.mapped();
-    p.culling.policy = opt.policy == "votes"    ? pre::CullPolicy::votes
-                       : opt.policy == "thesis" ? pre::CullPolicy::thesis
-                                                : pre::CullPolicy::greedy;
     p.memory = tool::memory_limit(opt.memory);
     p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
                                                : std::filesystem::absolute(step.output_path()).parent_path();
+    if (opt.stage != "all" && opt.cells_folder.empty())
+        throw Error("--stage " + opt.stage + " needs --cells-folder DIR (a folder every stage can read)");
+    if (opt.stage == "all" && !opt.cells_folder.empty())
+        throw Error("--cells-folder is for the staged build: give --stage plan, cells or merge");
+    if (!opt.cells.empty()) throw Error("--cells is for --stage cells");
+    const std::filesystem::path folder = opt.cells_folder;
+    if (!folder.empty() && !std::filesystem::is_directory(folder))
+        throw Error(opt.cells_folder + ": --cells-folder is not a folder");
+    if (opt.stage == "plan") {
+        pre::PointBrickStats stats;
+        tool::StagedProgress progress("prt-bricks", step.quiet());
+        p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
+            progress.update(stage, done, total);
+        };
+        const std::uint32_t cells = step.about_input(
+            [&] { return pre::plan_brick_cells(positions, normals, radii, colors, p, folder, &stats); });
+        progress.finish();
+        step.note(
+            "prt-bricks: planned %u cells of %llu points (%.2f records per point) in %s (%.1f s)", cells,
+            ull(stats.points),
+            double(stats.cell_records ? stats.cell_records : 0) / double(stats.points ? stats.points : 1),
+            folder.c_str(), stats.partition_seconds);
+        step.write_stats({{"input", step.input_path()},
+                          {"stage", "plan"},
+                          {"cells", cells},
+                          {"points", stats.points},
+                          {"partition_seconds", stats.partition_seconds},
+                          {"peak_rss_bytes", pre::peak_rss_bytes()}});
+        return;
+    }
+    step.check_output_folder();
     step.note(
-        "prt-bricks: %llu points; octree cells of at most about %llu points (--memory %s), spill files in %s",
-        ull(positions.size()), ull(p.cell_points ? p.cell_points : p.memory / pre::k_cell_bytes_per_point),
-        tool::format_bytes(p.memory).c_str(), p.spill_folder.string().c_str());
+        "prt-bricks: %llu points; octree cells of at most about %llu points (--memory %s, %u cells at once), "
+        "spill files in %s",
+        ull(positions.size()), ull(pre::cell_capacity(p)), tool::format_bytes(p.memory).c_str(),
+        pre::cell_workers(p), p.spill_folder.string().c_str());
     pre::PointBrickStats stats;
     pre::PointBricks built;
     {
@@ -109,8 +198,9 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
             progress.update(stage, done, total);
         };
-        built = step.about_input(
-            [&] { return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats); });
+        built = opt.stage == "merge" ? pre::merge_brick_cells(folder, p, &stats) : step.about_input([&] {
+            return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats);
+        });
         progress.finish();
     }
     pool::PoolWriter& writer = step.writer();
@@ -131,7 +221,8 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                                        {"grid", p.culling.grid},
                                        {"policy", opt.policy},
                                        {"memory", p.memory},
-                                       {"keep_points", keep_points}};
+                                       {"keep_points", keep_points},
+                                       {"staged", opt.stage == "merge"}};
     const std::uint64_t bytes = step.write(parameters);
     const double per_point = 1.0 / double(stats.points ? stats.points : 1);
     step.note(
@@ -151,9 +242,16 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks, %.1f s assembly",
         stats.partition_seconds, stats.octree_seconds, stats.cull_seconds, stats.brick_seconds,
         stats.assemble_seconds);
-    step.note("prt-bricks: %.3f s building (%.2f M points/s), total %.3f s, peak memory %s; wrote %s",
-              stats.seconds, double(positions.size()) / std::max(stats.seconds, 1e-9) * 1e-6, seconds,
-              tool::format_bytes(pre::peak_rss_bytes()).c_str(), step.output_path().c_str());
+    if (opt.stage == "merge")  // the cells ran in other processes, perhaps at the same time
+        step.note(
+            "prt-bricks: staged build: the stages' times summed over their processes %.3f s (merge %.3f s), "
+            "peak memory of the merge %s; wrote %s",
+            stats.seconds, seconds, tool::format_bytes(pre::peak_rss_bytes()).c_str(),
+            step.output_path().c_str());
+    else
+        step.note("prt-bricks: %.3f s building (%.2f M points/s), total %.3f s, peak memory %s; wrote %s",
+                  stats.seconds, double(positions.size()) / std::max(stats.seconds, 1e-9) * 1e-6, seconds,
+                  tool::format_bytes(pre::peak_rss_bytes()).c_str(), step.output_path().c_str());
     step.write_stats({{"input", step.input_path()},
                       {"parameters", parameters},
                       {"points", stats.points},
@@ -188,13 +286,18 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
 void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool keep_float, bool keep_points,
                  PointOptions& from_points) {
     using namespace prt;
+    from_points.params.bricks = params;
+    if (from_points.stage == "cells") return cells_step(step, from_points);
     const pool::PoolFile& in = step.input();
     if (!pool::has_splat_octree(in)) {
         if (!in.has(pool::SectionType::radii))
             throw Error(step.input_path() + ": no octree and no radii: run prt-radii (or prt-octree) first");
-        from_points.params.bricks = params;
         return points_step(step, from_points, keep_float, keep_points);
     }
+    if (from_points.stage != "all")
+        throw Error(
+            step.input_path() + ": --stage " + from_points.stage +
+            " is for the build from points; this pool has an octree (prt-bricks cuts it in one process)");
     const pool::SplatOctreeSections octree = pool::splat_octree(in, "prt-bricks");
     const std::span<const pool::Rgba8> colors = in.array<pool::Rgba8>(pool::SectionType::colors);
     if (const auto ids = in.array<std::uint32_t>(pool::SectionType::material_ids); !ids.empty()) {
@@ -353,15 +456,41 @@ int main(int argc, char** argv) {
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
                 ->capture_default_str()
                 ->group(from_points);
+            app.add_option(
+                   "--cell-workers", pp.cell_workers,
+                   "Octree cells built at the same time, each with -j / N threads; --memory is shared "
+                   "among them. 0: one per thread (the result is the same for any N)")
+                ->capture_default_str()
+                ->group(from_points);
             prt::tool::PoolStep::add_memory(
                 app, points.memory,
-                "Memory for one octree cell's build (SIZE, e.g. 8G); larger models are split into cells of "
-                "about SIZE / 840 points (default: half the physical memory)")
+                "Memory for the octree cells' builds (SIZE, e.g. 8G); larger models are split into cells of "
+                "about SIZE / (840 x cell workers) points (default: half the physical memory)")
                 ->group(from_points);
             app.add_option("--spill-folder", points.spill_folder,
                            "Folder of the spill files (removed as soon as created; about 32 bytes per point "
                            "and the brick payloads twice) (default: the output's folder)")
                 ->group(from_points);
+            const char* staged = "Staged build (one model's cells on several processes or machines)";
+            app.add_option(
+                   "--stage", points.stage,
+                   "all: the whole build from points here; plan: partition the points into octree "
+                   "cells and write the plan and the cells' points into --cells-folder (--stats-json "
+                   "gets the number of cells); cells: build cells --cells FIRST:LAST of the plan into a "
+                   "part file there (INPUT is not read); merge: assemble the parts into OUTPUT. Every "
+                   "stage takes the same options; the result equals --stage all byte for byte "
+                   "(scripts/prt-bricks-dask runs the stages on a Dask cluster)")
+                ->check(CLI::IsMember({"all", "plan", "cells", "merge"}))
+                ->capture_default_str()
+                ->group(staged);
+            app.add_option(
+                   "--cells-folder", points.cells_folder,
+                   "The staged build's folder, shared by every stage (plan.bin, records.bin: 32 B per "
+                   "point and cell it reaches; cells-FIRST-LAST.bin: the parts) [none]")
+                ->group(staged);
+            app.add_option("--cells", points.cells,
+                           "--stage cells: the cells FIRST:LAST to build (FIRST to LAST - 1) [none]")
+                ->group(staged);
             app.add_option("--cell-points", pp.cell_points,
                            "Testing: cells of at most about this many points whatever --memory")
                 ->group("");

@@ -40,10 +40,24 @@ int temporary_file(const std::filesystem::path& folder, const std::string& what)
 
 SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what) {
     const std::filesystem::path dir = folder.empty() ? std::filesystem::path(".") : folder;
-    auto fail = [&](int err) {
+    map(temporary_file(folder, what), bytes, [&](int err) {
         return Error(dir.string() + ": cannot create a spill file for " + what + ": " + std::strerror(err));
+    });
+}
+
+SpillFile SpillFile::named(const std::filesystem::path& file, std::uint64_t bytes, const std::string& what) {
+    auto fail = [&](int err) {
+        return Error(file.string() + ": cannot create " + what + ": " + std::strerror(err));
     };
-    const int fd = temporary_file(folder, what);
+    const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw fail(errno);
+    SpillFile f;
+    f.map(fd, bytes, fail);
+    return f;
+}
+
+/// Sizes the open file `fd` to `bytes`, maps it shared read-write and closes `fd`.
+void SpillFile::map(int fd, std::uint64_t bytes, const std::function<Error(int)>& fail) {
     if (bytes > 0) {
         if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
             const int err = errno;

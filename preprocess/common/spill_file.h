@@ -9,8 +9,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <span>
 #include <string>
+
+#include "prt/error.h"
 
 namespace prt::pre {
 
@@ -21,6 +24,10 @@ public:
     /// Creates a file of `bytes` in `folder` (O_TMPFILE, or a unique name removed at once) and
     /// maps it. Throws prt::Error "FOLDER: cannot create a spill file for WHAT: REASON".
     SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what);
+    /// A named file `file` of `bytes` (created or truncated) mapped read-write; it stays on disk after
+    /// the mapping is gone (the staged out-of-core build hands it to other processes, issue 21).
+    /// Throws prt::Error "FILE: cannot create WHAT: REASON".
+    static SpillFile named(const std::filesystem::path& file, std::uint64_t bytes, const std::string& what);
     SpillFile(SpillFile&& other) noexcept;
     SpillFile& operator=(SpillFile&& other) noexcept;
     SpillFile(const SpillFile&) = delete;
@@ -37,6 +44,7 @@ public:
     void drop() const;
 
 private:
+    void map(int fd, std::uint64_t bytes, const std::function<Error(int)>& fail);
     void release();
     std::byte* m_data = nullptr;
     std::uint64_t m_size = 0;

@@ -282,7 +282,6 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
     view.policy = params.policy;
     view.window = params.window;
     view.seed = params.seed;
-    view.leaf_base = part.leaf_base;
 
     if (backend == "cuda") {
 #ifdef PRT_HAVE_CUDA

@@ -119,12 +119,11 @@ struct CulledOctree {
 };
 
 /// Where the octree handed to culling sits in a whole one: its node 0 is the whole octree's node
-/// `root` and its filled leaf 0 the whole one's leaf `leaf_base` (an out-of-core build culls it cell
-/// by cell, issue 17: probes depend only on their leaf, so the result is the whole octree's). The
-/// default is the whole octree.
+/// `root` (an out-of-core build culls it cell by cell, issues 17 and 21: probes depend only on their
+/// leaf's cell, core/cull.h leaf_hash, so the result is the whole octree's). The default is the
+/// whole octree.
 struct OctreePart {
     NodeCell root;
-    std::uint32_t leaf_base = 0;
 };
 
 /// The filled leaves of an octree (level, cell, node word by leaf_info index), found by walking

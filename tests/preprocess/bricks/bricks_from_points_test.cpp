@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 #include <random>
 #include <vector>
 
@@ -80,8 +82,7 @@ pre::BrickedOctree in_core(const Scan& s, const Pipeline& setup, pre::BrickStats
     return pre::build_bricks(sections, s.colors, setup.bricks, stats);
 }
 
-pre::PointBricks out_of_core(const Scan& s, const Pipeline& setup, std::uint64_t cell_points,
-                             pre::PointBrickStats* stats) {
+pre::PointBrickParams point_params(const Pipeline& setup, std::uint64_t cell_points) {
     pre::PointBrickParams p;
     p.octree = setup.octree;
     p.cull = setup.cull;
@@ -90,7 +91,35 @@ pre::PointBricks out_of_core(const Scan& s, const Pipeline& setup, std::uint64_t
     p.cell_points = cell_points;
     p.threads = 2;
     p.spill_folder = std::filesystem::temp_directory_path();
-    return pre::build_bricks_from_points(s.positions, s.normals, s.radii, s.colors, p, stats);
+    return p;
+}
+
+pre::PointBricks out_of_core(const Scan& s, const Pipeline& setup, std::uint64_t cell_points,
+                             pre::PointBrickStats* stats) {
+    return pre::build_bricks_from_points(s.positions, s.normals, s.radii, s.colors,
+                                         point_params(setup, cell_points), stats);
+}
+
+/// A fresh folder for a staged build, removed at the end of the test.
+struct StageFolder {
+    std::filesystem::path path;
+    StageFolder() {
+        path = std::filesystem::temp_directory_path() /
+               ("prt-cells-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
+                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+        std::filesystem::remove_all(path);
+        std::filesystem::create_directories(path);
+    }
+    ~StageFolder() { std::filesystem::remove_all(path); }
+};
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "(no error)";
 }
 
 template <class T>
@@ -105,6 +134,9 @@ void expect_equal(const pre::BrickedOctree& ref, const pre::PointBricks& got) {
     expect_same_bytes(ref.top_nodes, got.bricks.top_nodes, "top node");
     expect_same_bytes(ref.table, got.bricks.table, "brick entry");
     expect_same_bytes(ref.lod, got.bricks.lod, "LOD disc");
+    expect_same_bytes(ref.lod_table, got.bricks.lod_table, "LOD prefix entry");
+    expect_same_bytes(ref.lod_nodes, got.bricks.lod_nodes, "LOD prefix node");
+    expect_same_bytes(ref.lod_discs, got.bricks.lod_discs, "LOD prefix disc");
     ASSERT_EQ(ref.data.size(), got.data_bytes);
     ASSERT_EQ(std::memcmp(ref.data.data(), got.data.data(), ref.data.size()), 0) << "brick payloads differ";
 }
@@ -127,6 +159,16 @@ TEST(BricksFromPoints, CulledCellByCellEqualsTheInCorePipeline) {
     EXPECT_EQ(stats.bricks.top_depth, ref_stats.top_depth);
     EXPECT_EQ(stats.bricks.encoded, ref_stats.encoded);
     EXPECT_EQ(stats.bricks.error.splats, ref_stats.error.splats);
+    // Cells built by 3 workers at once: the same bytes, the same counts.
+    pre::PointBrickParams p = point_params(setup, 2500);
+    p.cell_workers = 3;
+    pre::PointBrickStats concurrent;
+    expect_equal(ref,
+                 pre::build_bricks_from_points(s.positions, s.normals, s.radii, s.colors, p, &concurrent));
+    EXPECT_EQ(concurrent.cells, stats.cells);
+    EXPECT_EQ(concurrent.stored_splats, stats.stored_splats);
+    EXPECT_EQ(concurrent.culled_splats, stats.culled_splats);
+    EXPECT_EQ(concurrent.cell_records, stats.cell_records);
 }
 
 TEST(BricksFromPoints, UnculledAndSplitByCentresEqualTheInCorePipeline) {
@@ -167,6 +209,96 @@ TEST(BricksFromPoints, EveryPointCountsOnceInTheRootDisc) {
     EXPECT_NEAR(root.position.x, c[0] / w, 1e-5);
     EXPECT_NEAR(root.position.y, c[1] / w, 1e-5);
     EXPECT_NEAR(root.position.z, c[2] / w, 1e-5);
+}
+
+TEST(BricksFromPoints, StagedBuildInPartsEqualsTheInCorePipeline) {
+    // Issue 21: one model's cells built by separate builders (here separate calls, each reading only
+    // the plan and its cells' records, as a cluster's processes do), in any order, then merged.
+    const Scan s = scan_model(30000, 3);
+    const Pipeline setup;
+    pre::BrickStats ref_stats;
+    const pre::BrickedOctree ref = in_core(s, setup, &ref_stats);
+    const pre::PointBrickParams p = point_params(setup, 2500);
+    const StageFolder folder;
+    pre::PointBrickStats plan_stats;
+    const std::uint32_t cells =
+        pre::plan_brick_cells(s.positions, s.normals, s.radii, s.colors, p, folder.path, &plan_stats);
+    ASSERT_GE(cells, 10u);
+    EXPECT_EQ(pre::planned_brick_cells(folder.path, p), cells);
+    const std::uint32_t a = cells / 3, b = 2 * cells / 3;
+    pre::PointBrickParams other_threads = p;
+    other_threads.threads = 1;  // threads, workers, memory and the spill folder may differ between stages
+    other_threads.cell_workers = 2;
+    pre::build_brick_cells(folder.path, p, b, cells);
+    pre::build_brick_cells(folder.path, other_threads, 0, a);
+    pre::build_brick_cells(folder.path, p, a, b);
+    pre::PointBrickStats stats;
+    const pre::PointBricks got = pre::merge_brick_cells(folder.path, p, &stats);
+    expect_equal(ref, got);
+    pre::PointBrickStats whole;
+    out_of_core(s, setup, 2500, &whole);
+    EXPECT_EQ(stats.cells, whole.cells);
+    EXPECT_EQ(stats.points, whole.points);
+    EXPECT_EQ(stats.stored_splats, whole.stored_splats);
+    EXPECT_EQ(stats.culled_splats, whole.culled_splats);
+    EXPECT_EQ(stats.bricks.bricks, ref_stats.bricks);
+    EXPECT_EQ(stats.bricks.error.splats, ref_stats.error.splats);
+    // A new plan in the same folder drops the old parts: merging now names the missing cells.
+    pre::plan_brick_cells(s.positions, s.normals, s.radii, s.colors, p, folder.path);
+    EXPECT_NE(error_of([&] {
+                  pre::merge_brick_cells(folder.path, p);
+              }).find("cells 0:" + std::to_string(cells) + " are not built"),
+              std::string::npos);
+}
+
+TEST(BricksFromPoints, StagedBuildRefusesMissingCorruptOverlappingAndForeignParts) {
+    const Scan s = scan_model(12000, 5);
+    const Pipeline setup;
+    const pre::PointBrickParams p = point_params(setup, 1500);
+    const StageFolder folder;
+    EXPECT_NE(error_of([&] { pre::build_brick_cells(folder.path, p, 0, 1); }).find("no plan.bin"),
+              std::string::npos);
+    const std::uint32_t cells =
+        pre::plan_brick_cells(s.positions, s.normals, s.radii, s.colors, p, folder.path);
+    ASSERT_GE(cells, 4u);
+    pre::build_brick_cells(folder.path, p, 0, 2);
+    pre::build_brick_cells(folder.path, p, 3, cells);
+    // cell 2 missing: named with the command that builds it
+    std::string e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    EXPECT_NE(e.find("cells 2:3 are not built (prt-bricks --stage cells --cells 2:3)"), std::string::npos)
+        << e;
+    // a range outside the plan
+    e = error_of([&] { pre::build_brick_cells(folder.path, p, 1, cells + 1); });
+    EXPECT_NE(e.find("outside the plan's 0:" + std::to_string(cells)), std::string::npos) << e;
+    // other options than the plan's
+    pre::PointBrickParams other = p;
+    other.bricks.brick_splats += 1;
+    e = error_of([&] { pre::build_brick_cells(folder.path, other, 2, 3); });
+    EXPECT_NE(e.find("planned with other options"), std::string::npos) << e;
+    // overlapping parts
+    pre::build_brick_cells(folder.path, p, 1, 3);
+    e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    EXPECT_NE(e.find("is also in"), std::string::npos) << e;
+    std::filesystem::remove(folder.path / "cells-0-2.bin");
+    pre::build_brick_cells(folder.path, p, 0, 1);
+    const pre::PointBricks merged = pre::merge_brick_cells(folder.path, p);  // 0:1, 1:3, 3:N
+    expect_equal(in_core(s, setup, nullptr), merged);
+    // a flipped byte in a part's payload, then in the plan: refused, naming the file
+    const std::filesystem::path part = folder.path / "cells-1-3.bin";
+    {
+        std::fstream f(part, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(100);
+        char c = 0;
+        f.read(&c, 1);
+        f.seekp(100);
+        c = char(c ^ 0x5a);
+        f.write(&c, 1);
+    }
+    e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    EXPECT_NE(e.find(part.string() + ": checksum mismatch"), std::string::npos) << e;
+    std::filesystem::resize_file(folder.path / "plan.bin", 40);
+    e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    EXPECT_NE(e.find("plan.bin: checksum mismatch"), std::string::npos) << e;
 }
 
 TEST(BricksFromPoints, BadInputIsRefused) {

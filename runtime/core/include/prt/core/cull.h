@@ -55,9 +55,6 @@ struct CullView {
     CullPolicy policy = CullPolicy::greedy;
     float window = 1.0f;     ///< blending window in radii of the nearest splat (RenderParams::blend_window)
     std::uint32_t seed = 0;  ///< jitter and direction-set choice
-    /// Added to a leaf's index in the hashes that pick its direction set and jitter: the octree-wide
-    /// index of leaf 0 when `leaves` are a part of an octree (an out-of-core build culls cell by cell).
-    std::uint32_t leaf_base = 0;
 };
 
 /// Per-leaf counters, summed by the backends.
@@ -236,12 +233,23 @@ struct ProbeFrame {
     float u0, u1, v0, v1, d0, d1;
 };
 
+/// The hash that picks leaf `leaf`'s direction set and jitters its probes: of its level, its cell and
+/// the seed, not of its index, so a leaf gets the same probes whichever part of the octree is culled
+/// (the out-of-core build culls cell by cell, and its cells are built on several machines, issues 17
+/// and 21).
+PRT_HD inline std::uint32_t leaf_hash(const CullView& v, std::uint32_t leaf) {
+    const CullLeaf& L = v.leaves[leaf];
+    std::uint32_t h = cull_detail::hash32(L.level ^ cull_detail::hash32(v.seed));
+    h = cull_detail::hash32(h ^ L.cell[0]);
+    h = cull_detail::hash32(h ^ L.cell[1]);
+    return cull_detail::hash32(h ^ L.cell[2]);
+}
+
 /// The frame of direction `di` (< directions_per_set) of leaf `leaf`: one of the 64 rotated
-/// direction sets, picked by a hash of the leaf index and the seed.
+/// direction sets, picked by leaf_hash().
 PRT_HD inline void probe_frame(const CullView& v, std::uint32_t leaf, const ProbeRegion& r, std::uint32_t di,
                                ProbeFrame& f) {
-    const std::uint32_t leaf_hash = cull_detail::hash32((leaf + v.leaf_base) ^ cull_detail::hash32(v.seed));
-    f.dir = v.directions[(leaf_hash % v.direction_sets) * v.directions_per_set + di];
+    f.dir = v.directions[(leaf_hash(v, leaf) % v.direction_sets) * v.directions_per_set + di];
     f.u0 = f.v0 = f.d0 = k_inf;
     f.u1 = f.v1 = f.d1 = -k_inf;
     for (std::uint32_t i = 0; i < r.corner_count; ++i) {
@@ -265,8 +273,7 @@ PRT_HD inline bool make_probe(const CullView& v, std::uint32_t leaf, const Probe
                               const ProbeFrame& f, std::uint32_t k, Vec3& o, Vec3& d, float& t_max) {
     const std::uint32_t cell = k % (v.grid * v.grid);
     const std::uint32_t gi = cell % v.grid, gj = cell / v.grid;
-    const std::uint32_t h = cull_detail::hash32(
-        cull_detail::hash32((leaf + v.leaf_base) ^ cull_detail::hash32(v.seed)) + k * 0x9e3779b9u);
+    const std::uint32_t h = cull_detail::hash32(leaf_hash(v, leaf) + k * 0x9e3779b9u);
     const float inv_g = 1.0f / static_cast<float>(v.grid);
     const float a = f.u0 + (f.u1 - f.u0) * ((static_cast<float>(gi) + cull_detail::unit_float(h)) * inv_g);
     const float b =
