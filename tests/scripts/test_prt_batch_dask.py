@@ -167,17 +167,19 @@ def test_a_killed_worker_loses_nothing(tmp_path):
     assert leftovers(out) == []
 
 
-def pids_of(path):
-    found = []
+def command_lines():
+    """(pid, argv as bytes) of every process that can be read."""
     for d in os.listdir("/proc"):
         if d.isdigit():
             try:
-                cmd = open("/proc/%s/cmdline" % d, "rb").read().split(b"\0")
+                yield int(d), open("/proc/%s/cmdline" % d, "rb").read().split(b"\0")
             except OSError:
                 continue
-            if len(cmd) > 1 and cmd[0].endswith(b"prt-import") and path.encode() in cmd:
-                found.append(int(d))
-    return found
+
+
+def pids_of(path):
+    return [pid for pid, cmd in command_lines()
+            if len(cmd) > 1 and cmd[0].endswith(b"prt-import") and path.encode() in cmd]
 
 
 def parent_of(pid):
