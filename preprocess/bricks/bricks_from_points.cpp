@@ -89,7 +89,7 @@ std::uint32_t fine_coordinate(double c, double root_min, double scale) {
 // kind of machine (a cluster's workers).
 constexpr std::uint64_t k_plan_magic = 0x314e414c50545250ull;   // "PRTPLAN1"
 constexpr std::uint64_t k_cells_magic = 0x314c4c4543545250ull;  // "PRTCELL1"
-constexpr std::uint32_t k_staged_version = 1;
+constexpr std::uint32_t k_staged_version = 2;
 
 class BlobWriter {
 public:
@@ -151,6 +151,19 @@ private:
     std::string m_label;
     std::size_t m_at = 0;
 };
+
+/// Adds the cell counts and times of `from` (one cell's, or a part's) to `to`.
+void add_cells(PointBrickStats& to, const PointBrickStats& from) {
+    to.cells += from.cells;
+    to.partition_depth = std::max(to.partition_depth, from.partition_depth);
+    to.max_cell_points = std::max(to.max_cell_points, from.max_cell_points);
+    to.cell_records += from.cell_records;
+    to.stored_splats += from.stored_splats;
+    to.culled_splats += from.culled_splats;
+    to.octree_seconds += from.octree_seconds;
+    to.cull_seconds += from.cull_seconds;
+    to.brick_seconds += from.brick_seconds;
+}
 
 std::span<const std::byte> bytes_of(const MappedFile& f) {
     return {reinterpret_cast<const std::byte*>(f.data()), f.size()};
@@ -261,8 +274,9 @@ public:
             [&](std::span<const std::byte> b) { return m_payloads.append(b.data(), b.size()); }, stats);
         m_records = SpillFile{};
         const double assembly = tool::now_seconds();
-        PointBricks out = assemble(stats, [&](std::uint32_t, std::uint64_t offset, std::byte* to,
-                                              std::uint64_t n) { m_payloads.read(offset, to, n); });
+        PointBricks out = assemble(stats, [&](std::uint32_t, const pool::BrickEntry& src, std::byte* to) {
+            m_payloads.read(src.offset, to, src.size);
+        });
         m_payloads = AppendFile{};
         stats.seconds = tool::now_seconds() - start;
         stats.assemble_seconds = stats.seconds - (assembly - start);
@@ -274,7 +288,6 @@ public:
         BlobWriter w;
         w.put(k_staged_version);
         w.put_string(staged_fingerprint(m_params));
-        w.put(std::uint64_t(m_positions.size()));
         w.put(m_has_colors);
         w.put(m_root);
         w.put_vector(m_nodes);
@@ -313,7 +326,6 @@ public:
         if (planned != now)
             throw Error(path.string() + ": planned with other options (" + planned + "; now " + now +
                         "): give every stage the same options");
-        r.get<std::uint64_t>();  // input points
         m_has_colors = r.get<bool>();
         m_root = r.get<pool::OctreeInfo>();
         m_nodes = r.get_vector<PartNode>();
@@ -366,7 +378,6 @@ public:
             const CellBricks& cb = m_cells[c];
             w.put(cb.payload);
             w.put(cb.payload_bytes);
-            w.put(cb.payload_checksum);
             w.put_vector(cb.top_nodes);
             w.put_vector(cb.table);
             w.put_vector(cb.lod);
@@ -375,15 +386,7 @@ public:
             w.put_vector(cb.lod_nodes);
             w.put_vector(cb.lod_discs);
         }
-        w.put(stats.cells);
-        w.put(stats.partition_depth);
-        w.put(stats.max_cell_points);
-        w.put(stats.cell_records);
-        w.put(stats.stored_splats);
-        w.put(stats.culled_splats);
-        w.put(stats.octree_seconds);
-        w.put(stats.cull_seconds);
-        w.put(stats.brick_seconds);
+        w.put(stats);
         w.put(m_depth);
         w.put(m_top_depth);
         w.put(m_error);
@@ -434,7 +437,6 @@ public:
                 cb.part = part;
                 cb.payload = r.get<std::uint64_t>();
                 cb.payload_bytes = r.get<std::uint64_t>();
-                cb.payload_checksum = r.get<std::uint64_t>();
                 cb.top_nodes = r.get_vector<std::uint32_t>();
                 cb.table = r.get_vector<pool::BrickEntry>();
                 cb.lod = r.get_vector<pool::LodSplat>();
@@ -443,38 +445,17 @@ public:
                 cb.lod_nodes = r.get_vector<std::uint32_t>();
                 cb.lod_discs = r.get_vector<pool::CompressedSplat>();
                 if (cb.payload > footer[0] || cb.payload_bytes > footer[0] - cb.payload) throw corrupt();
-                if (cb.payload_bytes > 0 &&  // an empty cell has no payload
-                    pool::checksum(all.subspan(cb.payload, cb.payload_bytes)) != cb.payload_checksum)
-                    throw corrupt();
-                drop_mapped_pages(all.data() + cb.payload, cb.payload_bytes);
                 for (const pool::BrickEntry& e : cb.table)
                     if (e.offset < cb.payload || e.offset - cb.payload > cb.payload_bytes ||
                         e.size > cb.payload_bytes - (e.offset - cb.payload))
                         throw corrupt();
             }
-            PointBrickStats s;
-            s.cells = r.get<std::uint32_t>();
-            s.partition_depth = r.get<std::uint32_t>();
-            s.max_cell_points = r.get<std::uint64_t>();
-            s.cell_records = r.get<std::uint64_t>();
-            s.stored_splats = r.get<std::uint64_t>();
-            s.culled_splats = r.get<std::uint64_t>();
-            s.octree_seconds = r.get<double>();
-            s.cull_seconds = r.get<double>();
-            s.brick_seconds = r.get<double>();
+            const auto built = r.get<PointBrickStats>();
             m_depth = std::max(m_depth, r.get<std::uint32_t>());
             m_top_depth = std::max(m_top_depth, r.get<std::uint32_t>());
             m_error.merge(r.get<CodecError>());
             if (!r.done()) r.fail();
-            stats.cells += s.cells;
-            stats.partition_depth = std::max(stats.partition_depth, s.partition_depth);
-            stats.max_cell_points = std::max(stats.max_cell_points, s.max_cell_points);
-            stats.cell_records += s.cell_records;
-            stats.stored_splats += s.stored_splats;
-            stats.culled_splats += s.culled_splats;
-            stats.octree_seconds += s.octree_seconds;
-            stats.cull_seconds += s.cull_seconds;
-            stats.brick_seconds += s.brick_seconds;
+            add_cells(stats, built);
             m_parts.push_back(std::move(file));
         }
         for (std::uint32_t c = 0; c < cell_count(); ++c) {
@@ -490,10 +471,16 @@ public:
     /// Step 7 from the loaded parts.
     PointBricks merge(PointBrickStats& stats) {
         const double start = tool::now_seconds();
+        // Each brick's own checksum (BrickEntry::checksum) is checked as it is copied: one pass over the
+        // parts finds a damaged payload and names its part.
         PointBricks out =
-            assemble(stats, [&](std::uint32_t part, std::uint64_t offset, std::byte* to, std::uint64_t n) {
-                std::memcpy(to, m_parts[part].data() + offset, n);
-                drop_mapped_pages(m_parts[part].data() + offset, n);
+            assemble(stats, [&](std::uint32_t part, const pool::BrickEntry& src, std::byte* to) {
+                const MappedFile& file = m_parts[part];
+                std::memcpy(to, file.data() + src.offset, src.size);
+                drop_mapped_pages(file.data() + src.offset, src.size);
+                if (pool::checksum({to, static_cast<std::size_t>(src.size)}) != src.checksum)
+                    throw Error(file.label() +
+                                ": checksum mismatch: corrupt, truncated or not written by this prt-bricks");
             });
         stats.assemble_seconds = tool::now_seconds() - start;
         stats.seconds = stats.partition_seconds + stats.octree_seconds + stats.cull_seconds +
@@ -711,8 +698,8 @@ private:
     // -- 6 ----------------------------------------------------------------------------------------
     /// One cell's bricks, numbered within the cell, with its payload in m_payloads.
     struct CellBricks {
-        std::uint32_t part = 0;  ///< the payload file (staged build)
-        std::uint64_t payload = 0, payload_bytes = 0, payload_checksum = 0;  ///< where, in it
+        std::uint32_t part = 0;                        ///< the payload file (staged build)
+        std::uint64_t payload = 0, payload_bytes = 0;  ///< where, in it
         std::vector<std::uint32_t> top_nodes;
         std::vector<pool::BrickEntry> table;  // offset: into m_payloads
         std::vector<pool::LodSplat> lod;
@@ -765,7 +752,6 @@ private:
         bp.threads = threads;
         bp.progress = nullptr;
         BrickPart bricks = build_brick_part(sections, colors, bp, at);
-        const std::uint64_t checksum = pool::checksum(bricks.bricks.data);
         // The cell's results into the shared state (cells build concurrently:
         // PointBrickParams::cell_workers).
         const std::lock_guard<std::mutex> lock(m_mutex);
@@ -774,7 +760,6 @@ private:
         m_cells[c] = CellBricks{part,
                                 base,
                                 bricks.bricks.data.size(),
-                                checksum,
                                 std::move(bricks.bricks.top_nodes),
                                 std::move(bricks.bricks.table),
                                 std::move(bricks.bricks.lod),
@@ -785,21 +770,21 @@ private:
         m_error.merge(bricks.error);
         m_top_depth = std::max(m_top_depth, bricks.top_depth);
         m_depth = std::max(m_depth, octree.info.depth);
-        stats.cells += 1;
-        stats.partition_depth = std::max(stats.partition_depth, at.level);
-        stats.max_cell_points = std::max(stats.max_cell_points, e - b);
-        stats.stored_splats += stored;
-        stats.culled_splats += sections.splats.size();
-        stats.octree_seconds += t1 - t0;
-        stats.cull_seconds += t2 - t1;
-        stats.brick_seconds += tool::now_seconds() - t2;
-        stats.cell_records += e - b;
+        PointBrickStats cell;
+        cell.cells = 1;
+        cell.partition_depth = at.level;
+        cell.max_cell_points = cell.cell_records = e - b;
+        cell.stored_splats = stored;
+        cell.culled_splats = sections.splats.size();
+        cell.octree_seconds = t1 - t0;
+        cell.cull_seconds = t2 - t1;
+        cell.brick_seconds = tool::now_seconds() - t2;
+        add_cells(stats, cell);
     }
 
     // -- 7 ----------------------------------------------------------------------------------------
-    /// Reads `bytes` of cell payloads at `offset` of payload file `part` into `to`.
-    using PayloadReader =
-        std::function<void(std::uint32_t part, std::uint64_t offset, std::byte* to, std::uint64_t bytes)>;
+    /// Copies brick `src` (its offset: into payload file `part`) to `to`.
+    using PayloadReader = std::function<void(std::uint32_t part, const pool::BrickEntry& src, std::byte* to)>;
 
     PointBricks assemble(PointBrickStats& stats, const PayloadReader& read) {
         PointBricks out;
@@ -887,7 +872,7 @@ private:
         for (std::size_t b = 0; b < brick_src.size(); ++b) {
             const CellBricks& cb = m_cells[brick_src[b].first];
             const pool::BrickEntry& src = cb.table[brick_src[b].second];
-            read(cb.part, src.offset, out.data.data() + br.table[b].offset, src.size);
+            read(cb.part, src, out.data.data() + br.table[b].offset);
             drop_pages(out.data.data() + br.table[b].offset, src.size);
             report("writing bricks", b + 1, brick_src.size());
         }

@@ -97,6 +97,27 @@ std::uint64_t drop_points(prt::tool::PoolStep& step, bool keep_points) {
     return bytes;
 }
 
+/// The staged build's options agree with each other (--stage, --cells-folder, --cells).
+void check_stage_options(const PointOptions& opt) {
+    using prt::Error;
+    if (opt.stage != "all" && opt.cells_folder.empty())
+        throw Error("--stage " + opt.stage + " needs --cells-folder DIR (a folder every stage can read)");
+    if (opt.stage == "all" && !opt.cells_folder.empty())
+        throw Error("--cells-folder is for the staged build: give --stage plan, cells or merge");
+    if ((opt.stage == "cells") != !opt.cells.empty())
+        throw Error(opt.stage == "cells" ? "--stage cells needs --cells FIRST:LAST"
+                                         : "--cells is for --stage cells");
+    if (!opt.cells_folder.empty() && !std::filesystem::is_directory(opt.cells_folder))
+        throw Error(opt.cells_folder + ": --cells-folder is not a folder");
+}
+
+/// Progress of the build from points on stderr through `progress`.
+void report_to(prt::pre::PointBrickParams& p, prt::tool::StagedProgress& progress) {
+    p.progress = [&progress](const char* stage, std::uint64_t done, std::uint64_t total) {
+        progress.update(stage, done, total);
+    };
+}
+
 /// --no-cull and --policy into the build's parameters.
 void set_culling(PointOptions& opt) {
     using prt::pre::CullPolicy;
@@ -112,17 +133,11 @@ void cells_step(prt::tool::PoolStep& step, PointOptions& opt) {
     using namespace prt;
     pre::PointBrickParams& p = opt.params;
     set_culling(opt);
-    if (opt.cells_folder.empty()) throw Error("--stage cells needs --cells-folder DIR");
-    if (opt.cells.empty()) throw Error("--stage cells needs --cells FIRST:LAST");
     const std::filesystem::path folder = opt.cells_folder;
-    if (!std::filesystem::is_directory(folder))
-        throw Error(opt.cells_folder + ": --cells-folder is not a folder");
     const auto [first, last] = parse_cells(opt.cells);
     pre::PointBrickStats stats;
     tool::StagedProgress progress("prt-bricks", step.quiet());
-    p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
-        progress.update(stage, done, total);
-    };
+    report_to(p, progress);
     pre::build_brick_cells(folder, p, first, last, &stats);
     progress.finish();
     step.note(
@@ -155,20 +170,11 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     p.memory = tool::memory_limit(opt.memory);
     p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
                                                : std::filesystem::absolute(step.output_path()).parent_path();
-    if (opt.stage != "all" && opt.cells_folder.empty())
-        throw Error("--stage " + opt.stage + " needs --cells-folder DIR (a folder every stage can read)");
-    if (opt.stage == "all" && !opt.cells_folder.empty())
-        throw Error("--cells-folder is for the staged build: give --stage plan, cells or merge");
-    if (!opt.cells.empty()) throw Error("--cells is for --stage cells");
     const std::filesystem::path folder = opt.cells_folder;
-    if (!folder.empty() && !std::filesystem::is_directory(folder))
-        throw Error(opt.cells_folder + ": --cells-folder is not a folder");
     if (opt.stage == "plan") {
         pre::PointBrickStats stats;
         tool::StagedProgress progress("prt-bricks", step.quiet());
-        p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
-            progress.update(stage, done, total);
-        };
+        report_to(p, progress);
         const std::uint32_t cells = step.about_input(
             [&] { return pre::plan_brick_cells(positions, normals, radii, colors, p, folder, &stats); });
         progress.finish();
@@ -195,9 +201,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     pre::PointBricks built;
     {
         tool::StagedProgress progress("prt-bricks", step.quiet());
-        p.progress = [&](const char* stage, std::uint64_t done, std::uint64_t total) {
-            progress.update(stage, done, total);
-        };
+        report_to(p, progress);
         built = opt.stage == "merge" ? pre::merge_brick_cells(folder, p, &stats) : step.about_input([&] {
             return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats);
         });
@@ -287,6 +291,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
                  PointOptions& from_points) {
     using namespace prt;
     from_points.params.bricks = params;
+    check_stage_options(from_points);
     if (from_points.stage == "cells") return cells_step(step, from_points);
     const pool::PoolFile& in = step.input();
     if (!pool::has_splat_octree(in)) {

@@ -40,39 +40,31 @@ int temporary_file(const std::filesystem::path& folder, const std::string& what)
 
 SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what) {
     const std::filesystem::path dir = folder.empty() ? std::filesystem::path(".") : folder;
-    map(temporary_file(folder, what), bytes, [&](int err) {
-        return Error(dir.string() + ": cannot create a spill file for " + what + ": " + std::strerror(err));
-    });
+    map(temporary_file(folder, what), bytes, dir.string() + ": cannot create a spill file for " + what);
 }
 
 SpillFile SpillFile::named(const std::filesystem::path& file, std::uint64_t bytes, const std::string& what) {
-    auto fail = [&](int err) {
-        return Error(file.string() + ": cannot create " + what + ": " + std::strerror(err));
-    };
+    const std::string failure = file.string() + ": cannot create " + what;
     const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw fail(errno);
+    if (fd < 0) throw Error(failure + ": " + std::strerror(errno));
     SpillFile f;
-    f.map(fd, bytes, fail);
+    f.map(fd, bytes, failure);
     return f;
 }
 
-/// Sizes the open file `fd` to `bytes`, maps it shared read-write and closes `fd`.
-void SpillFile::map(int fd, std::uint64_t bytes, const std::function<Error(int)>& fail) {
-    if (bytes > 0) {
-        if (::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
-            const int err = errno;
-            ::close(fd);
-            throw fail(err);
-        }
+void SpillFile::map(int fd, std::uint64_t bytes, const std::string& failure) {
+    int err = 0;
+    if (bytes > 0 && ::ftruncate(fd, static_cast<off_t>(bytes)) != 0) {
+        err = errno;
+    } else if (bytes > 0) {
         void* map = ::mmap(nullptr, bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-        const int err = errno;
-        ::close(fd);
-        if (map == MAP_FAILED) throw fail(err);
-        m_data = static_cast<std::byte*>(map);
-        m_size = bytes;
-    } else {
-        ::close(fd);
+        if (map == MAP_FAILED)
+            err = errno;
+        else
+            m_data = static_cast<std::byte*>(map), m_size = bytes;
     }
+    ::close(fd);
+    if (err != 0) throw Error(failure + ": " + std::strerror(err));
 }
 
 AppendFile::AppendFile(const std::filesystem::path& folder, const std::string& what)

@@ -9,11 +9,8 @@
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
-#include <functional>
 #include <span>
 #include <string>
-
-#include "prt/error.h"
 
 namespace prt::pre {
 
@@ -44,7 +41,8 @@ public:
     void drop() const;
 
 private:
-    void map(int fd, std::uint64_t bytes, const std::function<Error(int)>& fail);
+    /// Sizes the open file `fd` to `bytes`, maps it and closes `fd`; throws prt::Error "FAILURE: REASON".
+    void map(int fd, std::uint64_t bytes, const std::string& failure);
     void release();
     std::byte* m_data = nullptr;
     std::uint64_t m_size = 0;

@@ -8,11 +8,39 @@ to stop a local cluster's processes at once on Ctrl-C.
 """
 import ctypes
 import logging
+import os
+import shutil
+import subprocess
 import tempfile
 
 
 class UsageError(Exception):
     """A bad command line, a missing tool or scheduler: exit status 2."""
+
+
+def find_bin_dir(bin_dir, tool, here):
+    """The folder holding `tool`: `bin_dir` when given, else $PRT_BIN_DIR, else the scripts' folder
+    `here` when it holds the tool, else ../build/bin next to it, else the PATH's. Raises UsageError
+    when none holds it."""
+    if bin_dir:
+        return os.path.abspath(bin_dir)
+    if os.environ.get("PRT_BIN_DIR"):
+        return os.path.abspath(os.environ["PRT_BIN_DIR"])
+    for d in (here, os.path.join(here, "..", "build", "bin")):
+        if os.access(os.path.join(d, tool), os.X_OK):
+            return os.path.abspath(d)
+    if shutil.which(tool):
+        return os.path.dirname(os.path.abspath(shutil.which(tool)))
+    raise UsageError("%s not found (give --bin-dir, set PRT_BIN_DIR or add it to the PATH)" % tool)
+
+
+def tool_version(path):
+    """The tool's --version line, or None when it cannot say."""
+    try:
+        p = subprocess.run([path, "--version"], stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, timeout=60)
+        return p.stdout.decode("utf-8", "replace").strip() or None
+    except (OSError, subprocess.TimeoutExpired):
+        return None
 
 
 def die_with_parent():
