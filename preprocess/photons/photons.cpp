@@ -198,13 +198,17 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
 #endif
     } else {
         const unsigned threads = resolve_threads(options.threads);
-        std::vector<std::vector<PhotonDeposit>> per_worker(threads);
-        std::vector<PhotonTally> tallies(threads);
-        std::atomic<std::uint64_t> done{0};
+        // Deposits and tallies per chunk of photons, joined in photon order: the map is the same
+        // bytes whatever the thread count and however the chunks fall to the threads.
         constexpr std::size_t k_chunk = 1 << 14;
+        const std::size_t chunks = (total + k_chunk - 1) / k_chunk;
+        std::vector<std::vector<PhotonDeposit>> per_chunk(chunks);
+        std::vector<PhotonTally> tallies(chunks);
+        std::atomic<std::uint64_t> done{0};
         parallel_chunks(total, k_chunk, threads, [&](std::size_t begin, std::size_t end, unsigned worker) {
             PhotonTallyF f;
-            std::vector<PhotonDeposit>& out = per_worker[worker];
+            std::vector<PhotonDeposit>& out = per_chunk[begin / k_chunk];
+            PhotonTally& tally = tallies[begin / k_chunk];
             for (std::size_t g = begin; g < end; ++g) {
                 const std::uint32_t light = static_cast<std::uint32_t>(g / per_light);
                 trace_photon(scene, params, light, g - light * per_light, f,
@@ -212,18 +216,21 @@ ShootResult shoot_photons(const core::SceneView& scene, const ShootOptions& opti
                 // Float tallies stay exact enough over a few thousand photons; flush
                 // often.
                 if (((g - begin) & 1023u) == 1023u) {
-                    add_tally(tallies[worker], f);
+                    add_tally(tally, f);
                     f = PhotonTallyF{};
                 }
             }
-            add_tally(tallies[worker], f);
+            add_tally(tally, f);
             const std::uint64_t d = done.fetch_add(end - begin) + (end - begin);
             if (worker == 0 && progress) progress(d, total);
         });
-        for (unsigned w = 0; w < threads; ++w) {
-            result.deposits.insert(result.deposits.end(), per_worker[w].begin(), per_worker[w].end());
-            std::vector<PhotonDeposit>().swap(per_worker[w]);
-            add_tally(result.tally, tallies[w]);
+        std::size_t count = 0;
+        for (const auto& c : per_chunk) count += c.size();
+        result.deposits.reserve(count);
+        for (std::size_t c = 0; c < chunks; ++c) {
+            result.deposits.insert(result.deposits.end(), per_chunk[c].begin(), per_chunk[c].end());
+            std::vector<PhotonDeposit>().swap(per_chunk[c]);
+            add_tally(result.tally, tallies[c]);
         }
         result.backend = "cpu (" + std::to_string(threads) + " threads)";
     }

@@ -39,7 +39,7 @@ struct ShootOptions {
 };
 
 struct ShootResult {
-    std::vector<PhotonDeposit> deposits;  ///< every model's, in photon order per chunk
+    std::vector<PhotonDeposit> deposits;  ///< every model's; CPU: in photon order, whatever the threads
     PhotonTally tally;
     double seconds = 0;         ///< shooting, wall clock (GPU: upload, kernels and deposit download)
     double kernel_seconds = 0;  ///< GPU: the shooting kernels alone (CUDA events); CPU: = seconds

@@ -252,22 +252,32 @@ TEST(Photons, AreaLightPowerIsConservedAndFallsOnAReceiverAsItsFormFactorSays) {
     EXPECT_LT(f, f_hi + 4 * sd) << "form factor " << f_lo << " .. " << f_hi;
 }
 
+namespace {
+
+/// A horizontal 3 x 3 mirror (kr 1) at y = 0 facing up and a diffuse ceiling of the same size at
+/// y = 2 facing down, lit by `light` (one JSON light object).
+rt::RenderScene mirror_under_ceiling(const std::string& light) {
+    test::TestModel mirror =
+        test::make_model(test::rect_points({-1.5, 0, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, 1, 0}, 150), {0, 0, 0});
+    test::TestModel ceiling = test::make_model(
+        test::rect_points({-1.5, 2, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, -1, 0}, 150), {0, 0, 0});
+    return test::load_gi_scene(R"({"lights": [)" + light + R"(],
+        "materials": [{"name": "mirror", "diffuse_reflectance": 0, "reflectivity": 1},
+                      {"name": "matte", "diffuse_reflectance": 1}],
+        "models": [{"name": "mirror", "pool": "a.pool", "material": "mirror"},
+                   {"name": "ceiling", "pool": "b.pool", "material": "matte"}]})",
+                               {test::make_pool(mirror), test::make_pool(ceiling)});
+}
+
+}  // namespace
+
 TEST(Photons, AreaLightCausticDepositsAreScaledFromTheirPointOfEmission) {
     // A tiny area light facing down over a horizontal mirror (kr 1) at y = 0, and a diffuse ceiling
     // at y = 2 above it facing down: every deposit comes from a photon that left the light near
     // (0, 1, 0), bounced at the mirror and rose to the ceiling, and carries its power x its squared
     // straight distance from the light, (2 - 1)^2 + the horizontal offset^2.
-    test::TestModel mirror =
-        test::make_model(test::rect_points({-1.5, 0, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, 1, 0}, 150), {0, 0, 0});
-    test::TestModel ceiling = test::make_model(
-        test::rect_points({-1.5, 2, -1.5}, {3, 0, 0}, {0, 0, 3}, {0, -1, 0}, 150), {0, 0, 0});
-    const rt::RenderScene rs = test::load_gi_scene(R"({
-        "lights": [{"type": "area", "corner": [-0.005, 1, -0.005], "edge_u": [0.01, 0, 0], "edge_v": [0, 0, 0.01]}],
-        "materials": [{"name": "mirror", "diffuse_reflectance": 0, "reflectivity": 1},
-                      {"name": "matte", "diffuse_reflectance": 1}],
-        "models": [{"name": "mirror", "pool": "a.pool", "material": "mirror"},
-                   {"name": "ceiling", "pool": "b.pool", "material": "matte"}]})",
-                                                   {test::make_pool(mirror), test::make_pool(ceiling)});
+    const rt::RenderScene rs = mirror_under_ceiling(
+        R"({"type": "area", "corner": [-0.005, 1, -0.005], "edge_u": [0.01, 0, 0], "edge_v": [0, 0, 0.01]})");
     photons::ShootOptions o;
     o.params.face_res = 16;
     o.params.per_pixel = 8;
@@ -280,6 +290,30 @@ TEST(Photons, AreaLightCausticDepositsAreScaledFromTheirPointOfEmission) {
         const double dx = d.position[0], dy = d.position[1] - 1.0, dz = d.position[2];
         const double d2 = dx * dx + dy * dy + dz * dz;
         ASSERT_NEAR(d.flux[0], per_photon * d2, 0.03 * per_photon * d2) << "at " << dx << ", " << dz;
+    }
+}
+
+TEST(Photons, CpuDepositsAreTheSameWhateverTheThreads) {
+    // Deposits are joined in photon order (per chunk), so a map is the same bytes on any machine
+    // (prt-bake's Dask workers run the tools on fewer threads than a serial bake): a mirror under
+    // a point light above it sends photons of several chunks to a diffuse ceiling.
+    const rt::RenderScene rs = mirror_under_ceiling(R"({"type": "point", "position": [0.1, 1, 0.2]})");
+    photons::ShootOptions o;
+    o.params.face_res = 96;
+    o.params.per_pixel = 4;  // 221k photons in 14 chunks of 16384, a face over 2.25 chunks
+    o.backend = "cpu";
+    o.threads = 1;
+    const photons::ShootResult one = photons::shoot_photons(rs.view(), o);
+    ASSERT_GT(one.deposits.size(), 2000u);
+    for (unsigned threads : {2u, 3u, 7u}) {
+        o.threads = threads;
+        const photons::ShootResult many = photons::shoot_photons(rs.view(), o);
+        ASSERT_EQ(many.deposits.size(), one.deposits.size()) << threads << " threads";
+        EXPECT_EQ(std::memcmp(many.deposits.data(), one.deposits.data(),
+                              one.deposits.size() * sizeof(photons::PhotonDeposit)),
+                  0)
+            << threads << " threads";
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(many.tally.deposited[a], one.tally.deposited[a]);
     }
 }
 
