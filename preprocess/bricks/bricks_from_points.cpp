@@ -222,6 +222,8 @@ public:
     }
 
     std::uint32_t cell_count() const { return std::uint32_t(m_cell_nodes.size()); }
+    /// Point records over all cells (a point in several cells counts in each).
+    std::uint64_t record_count() const { return m_cell_begin.empty() ? 0 : m_cell_begin.back(); }
 
     /// Step 6 for cells [first, last): each cell's payload goes to `append` (returns its offset in
     /// the payload file, which is part `part`).
@@ -928,6 +930,8 @@ std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::spa
             std::filesystem::remove(entry.path());
     partitioner.plan(stats, folder / "records.bin");
     partitioner.save_plan(folder, stats);
+    // Reported, not saved: the cells count their own records as they are built.
+    stats.cell_records = partitioner.record_count();
     if (stats_out) *stats_out = stats;
     return partitioner.cell_count();
 }

@@ -178,15 +178,15 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         const std::uint32_t cells = step.about_input(
             [&] { return pre::plan_brick_cells(positions, normals, radii, colors, p, folder, &stats); });
         progress.finish();
-        step.note(
-            "prt-bricks: planned %u cells of %llu points (%.2f records per point) in %s (%.1f s)", cells,
-            ull(stats.points),
-            double(stats.cell_records ? stats.cell_records : 0) / double(stats.points ? stats.points : 1),
-            folder.c_str(), stats.partition_seconds);
+        step.note("prt-bricks: planned %u cells of %llu points (%.2f records per point) in %s (%.1f s)",
+                  cells, ull(stats.points),
+                  double(stats.cell_records) / double(stats.points ? stats.points : 1), folder.c_str(),
+                  stats.partition_seconds);
         step.write_stats({{"input", step.input_path()},
                           {"stage", "plan"},
                           {"cells", cells},
                           {"points", stats.points},
+                          {"cell_records", stats.cell_records},
                           {"partition_seconds", stats.partition_seconds},
                           {"peak_rss_bytes", pre::peak_rss_bytes()}});
         return;
