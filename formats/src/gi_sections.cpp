@@ -58,7 +58,7 @@ GiSections check_map(const PoolFile& pool, const SectionType (&types)[3], const 
 }
 
 /// Every map of one family: `types` are its info, nodes and leaves sections; `what` names it in
-/// errors; `several`: the info section may hold more than one map (caustics, one per placement).
+/// errors; `several`: the info section may hold more than one map (one per placement).
 std::vector<GiSections> validate_maps(const PoolFile& pool, const SectionType (&types)[3], const char* what,
                                       bool several) {
     std::vector<GiSections> maps;
@@ -113,7 +113,11 @@ std::vector<GiSections> validate_caustic_maps(const PoolFile& pool) {
     return validate_maps(pool, k_caustic_types, "caustic octree", true);
 }
 
-const GiSections* find_caustic_map(const std::vector<GiSections>& maps, std::uint32_t placement) {
+std::vector<GiSections> validate_light_maps(const PoolFile& pool) {
+    return validate_maps(pool, k_light_map_types, "light map", true);
+}
+
+const GiSections* find_gi_map(const std::vector<GiSections>& maps, std::uint32_t placement) {
     for (const GiSections& m : maps)
         if (m.info.placement == placement) return &m;
     for (const GiSections& m : maps)

@@ -5,12 +5,12 @@
 #include <filesystem>
 #include <future>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
 #include "lightmap.h"
 #include "photons.h"
+#include "prt/formats/gi_sections.h"
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
@@ -50,23 +50,27 @@ struct Options {
 
 using Pools = prt::tool::ScenePools;
 
-/// The scene's pools: a pool placed twice is mapped at its first placement.
+/// The scene's pools: a pool placed more than once gets a map per placement (issue 20).
 Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) {
     return prt::tool::scene_pools(sc, [&](const std::filesystem::path& p) {
-        step.note("prt-lightmap: pool %s placed more than once: its first placement is mapped",
+        step.note("prt-lightmap: pool %s placed more than once: one light map per placement",
                   p.string().c_str());
     });
 }
 
-/// Traces each pool's samples and builds its light-map octree (thesis 5.3); the RenderScene maps
-/// the pools rewritten later: it lives only in here.
-std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep& step,
-                                                         const prt::scene::Scene& sc, Options& o,
-                                                         const Pools& pools, std::uint64_t& total_samples,
-                                                         double& trace_seconds, std::string& backend,
-                                                         double& kernel_seconds) {
+/// Traces the samples of each placement of each pool and builds its light-map octree (thesis 5.3):
+/// per pool, one map keyed 0 (any placement) when the scene places it once, else one map per
+/// distinct placement keyed pool::placement_key (issue 20: the indirect light depends on where the
+/// model stands). The RenderScene maps the pools rewritten later: it lives only in here.
+std::vector<std::vector<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep& step,
+                                                       const prt::scene::Scene& sc, Options& o,
+                                                       const Pools& pools, std::uint64_t& total_samples,
+                                                       double& trace_seconds, std::string& backend,
+                                                       double& kernel_seconds) {
     using namespace prt;
-    std::vector<std::optional<gi::GiOctree>> trees(pools.paths.size());
+    std::vector<std::vector<gi::GiOctree>> trees(pools.paths.size());
+    std::vector<std::uint32_t> placements(pools.paths.size(), 0);
+    for (std::size_t m = 0; m < sc.models.size(); ++m) ++placements[pools.of_model[m]];
     // The GPU's context is created on a thread while the scene loads (photons::warm_up).
     std::string why;
     o.backend = photons::resolve_backend(o.backend, &why);
@@ -75,11 +79,12 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
     const rt::RenderScene rs = rt::RenderScene::load(sc);
     for (const std::string& w : rs.warnings()) step.note("prt-lightmap: %s", w.c_str());
     const core::SceneView view = rs.view();
-    std::vector<bool> done(pools.paths.size(), false);
     for (std::size_t m = 0; m < rs.models().size(); ++m) {
         const std::uint32_t p = pools.of_model[m];
-        if (done[p]) continue;
-        done[p] = true;
+        const std::uint32_t key = placements[p] > 1 ? pool::placement_key(sc.models[m].transform) : 0u;
+        if (std::any_of(trees[p].begin(), trees[p].end(),
+                        [&](const gi::GiOctree& t) { return t.info.placement == key; }))
+            continue;  // placed twice at the same spot: one map serves both
         const pool::PoolFile& pf = *rs.models()[m].pool;
         // Issue 20: samples and frame on whatever surface the model is traced as (gi_frame.h).
         gi::SurfacePoints points;
@@ -116,14 +121,18 @@ std::vector<std::optional<prt::gi::GiOctree>> build_maps(const prt::tool::PoolSt
         if (samples.empty())
             throw Error(step.input_path() + ": model '" + sc.models[m].name + "': none of its " +
                         std::to_string(dropped) + " light-map samples lies on its traced surface");
-        trees[p] = lightmap::build_light_map_octree(samples, root_min, root_size, o.gather);
+        gi::GiOctree& tree =
+            trees[p].emplace_back(lightmap::build_light_map_octree(samples, root_min, root_size, o.gather));
+        tree.info.placement = key;
+        const std::string which =
+            placements[p] > 1 ? " (model '" + sc.models[m].name + "''s placement)" : std::string();
         step.note(
-            "prt-lightmap: %s: %zu samples on %s (frame of %s, %s surface%s), level %u, %zu leaves, "
+            "prt-lightmap: %s%s: %zu samples on %s (frame of %s, %s surface%s), level %u, %zu leaves, "
             "mean irradiance %.4g, max %.4g",
-            pools.paths[p].filename().string().c_str(), samples.size(), points.from.c_str(),
+            pools.paths[p].filename().string().c_str(), which.c_str(), samples.size(), points.from.c_str(),
             frame.from.c_str(), std::string(scene::surface_name(sc.models[m].surface)).c_str(),
             dropped ? (", " + std::to_string(dropped) + " off the surface dropped").c_str() : "",
-            o.gather.depth, trees[p]->leaves.size(), trees[p]->info.total[0], trees[p]->info.total[1]);
+            o.gather.depth, tree.leaves.size(), tree.info.total[0], tree.info.total[1]);
     }
     return trees;
 }
@@ -137,7 +146,7 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
     double trace_seconds = 0, kernel_seconds = 0;
     std::string backend;
     o.gather.threads = o.threads;
-    const std::vector<std::optional<gi::GiOctree>> trees =
+    const std::vector<std::vector<gi::GiOctree>> trees =
         build_maps(step, sc, o, pools, total_samples, trace_seconds, backend, kernel_seconds);
     nlohmann::json parameters = {{"rays", o.trace.rays},
                                  {"bounces", o.trace.bounces},
@@ -149,21 +158,35 @@ void lightmap_step(prt::tool::PoolStep& step, Options o) {
                                  {"scene", step.input_path()}};
     // --provenance-tag (scripts/prt-bake, prt-batch): recorded in each pool's entry as PoolStep::write does.
     if (!step.provenance_tag().empty()) parameters["tag"] = nlohmann::json::parse(step.provenance_tag());
-    for (std::size_t p = 0; p < pools.paths.size(); ++p)
-        gi::write_gi_pool(pools.paths[p], gi::k_light_map_sections,
-                          trees[p] && !trees[p]->leaves.empty() ? &*trees[p] : nullptr, "prt-lightmap",
-                          parameters.dump());
+    for (std::size_t p = 0; p < pools.paths.size(); ++p) {
+        std::vector<const gi::GiOctree*> maps;
+        for (const gi::GiOctree& t : trees[p])
+            if (!t.leaves.empty()) maps.push_back(&t);
+        gi::write_gi_pool(pools.paths[p], gi::k_light_map_sections, maps, "prt-lightmap", parameters.dump());
+    }
     step.note(
         "prt-lightmap: %llu samples x %u paths traced on %s in %.3f s (tracing %.3f s; upload and download "
         "included in the first); total %.3f s",
         static_cast<unsigned long long>(total_samples), o.trace.rays, backend.c_str(), trace_seconds,
         kernel_seconds, step.seconds());
     nlohmann::json per_pool = nlohmann::json::array();
-    for (std::size_t p = 0; p < pools.paths.size(); ++p)
+    for (std::size_t p = 0; p < pools.paths.size(); ++p) {
+        nlohmann::json maps = nlohmann::json::array();
+        std::size_t leaves = 0;
+        for (const gi::GiOctree& t : trees[p]) {
+            maps.push_back({{"placement", t.info.placement},
+                            {"leaves", t.leaves.size()},
+                            {"mean", t.info.total[0]},
+                            {"max", t.info.total[1]}});
+            leaves += t.leaves.size();
+        }
+        // "mean" and "max": the first map's (the only one for a pool placed once).
         per_pool.push_back({{"pool", pools.paths[p].string()},
-                            {"leaves", trees[p] ? trees[p]->leaves.size() : 0},
-                            {"mean", trees[p] ? trees[p]->info.total[0] : 0.0f},
-                            {"max", trees[p] ? trees[p]->info.total[1] : 0.0f}});
+                            {"leaves", leaves},
+                            {"mean", trees[p].empty() ? 0.0f : trees[p][0].info.total[0]},
+                            {"max", trees[p].empty() ? 0.0f : trees[p][0].info.total[1]},
+                            {"maps", maps}});
+    }
     step.write_stats({{"scene", step.input_path()},
                       {"parameters", parameters},
                       {"samples", total_samples},

@@ -187,7 +187,9 @@ void validate_on_demand(const pool::PoolFile& file, Result& r, const std::string
     if (pool::has_patches(file)) attempt([&] { (void)pool::validate_patches(file); });
     if (pool::has_bricks(file)) attempt([&] { (void)pool::validate_bricks(file); });
     attempt([&] { (void)pool::validate_caustics(file); });
+    attempt([&] { (void)pool::validate_caustic_maps(file); });
     attempt([&] { (void)pool::validate_light_map(file); });
+    attempt([&] { (void)pool::validate_light_maps(file); });
 }
 
 /// Validates one pool image and, when it is accepted, reads it through every accessor the tools use.

@@ -2,7 +2,6 @@
 // (prt/formats/gi_sections.h), as the core's views.
 #include "prt/runtime/gi_pool.h"
 
-#include <optional>
 #include <vector>
 
 namespace prt::rt {
@@ -29,12 +28,12 @@ core::GiOctreeView make_view(const pool::GiSections* s) {
 
 core::CausticView load_caustic_view(const pool::PoolFile& pool, std::uint32_t placement) {
     const std::vector<pool::GiSections> maps = pool::validate_caustic_maps(pool);
-    return core::CausticView{make_view(pool::find_caustic_map(maps, placement))};
+    return core::CausticView{make_view(pool::find_gi_map(maps, placement))};
 }
 
-core::LightMapView load_light_map_view(const pool::PoolFile& pool) {
-    const std::optional<pool::GiSections> s = pool::validate_light_map(pool);
-    return core::LightMapView{make_view(s ? &*s : nullptr)};
+core::LightMapView load_light_map_view(const pool::PoolFile& pool, std::uint32_t placement) {
+    const std::vector<pool::GiSections> maps = pool::validate_light_maps(pool);
+    return core::LightMapView{make_view(pool::find_gi_map(maps, placement))};
 }
 
 }  // namespace prt::rt

@@ -686,8 +686,8 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             lm.bytes += std::size_t{view.tree.node_count} * 4 +
                         std::size_t{view.tree.leaf_count} * sizeof(pool::GiLeaf);
         };
-        // Issue 20: a pool placed several times holds one caustic map per placement, keyed by its
-        // transform (pool::placement_key).
+        // Issue 20: a pool placed several times holds one caustic map and one light map per
+        // placement, keyed by its transform (pool::placement_key).
         const std::uint32_t placement_id = pool::placement_key(sm.transform);
         load_gi(
             m_scene.render.caustics, "caustics", has_caustics(pf),
@@ -697,8 +697,14 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
             m_notes.push_back("model '" + lm.name + "': " + pf.label() +
                               " has no caustic map for this placement (none reached it, or the scene moved "
                               "it since prt-photons ran)");
-        load_gi(m_scene.render.light_map, "light_map", has_light_map(pf), load_light_map_view, v.light_map,
-                "light map (run prt-lightmap on the scene)");
+        load_gi(
+            m_scene.render.light_map, "light_map", has_light_map(pf),
+            [&](const pool::PoolFile& p) { return load_light_map_view(p, placement_id); }, v.light_map,
+            "light map (run prt-lightmap on the scene)");
+        if (m_scene.render.light_map && has_light_map(pf) && v.light_map.tree.nodes == nullptr)
+            m_notes.push_back(
+                "model '" + lm.name + "': " + pf.label() +
+                " has no light map for this placement (the scene moved it since prt-lightmap ran)");
 
         const Placement pl = placement(sm.transform, info);
         const DVec3 world_origin = pl.world({0, 0, 0});

@@ -299,3 +299,59 @@ TEST(LightMapTool, BakesModelsWithoutASplatOctreeAndNamesAModelWithNothingToBake
     EXPECT_EQ(r.code, 1);
     test::expect_one_line(r.err, {"bare.json", "model 'shell'", "no points and no patches"});
 }
+
+TEST(LightMapTool, APoolPlacedTwiceGetsALightMapPerPlacement) {
+    // Issue 20: a white floor placed twice, once beside a red wall and once alone far away, each
+    // under its own light. The indirect light differs: the first placement's map holds the wall's
+    // red, the second's nothing (its paths see only the black environment). One pool, two maps,
+    // each found by its placement's key; the renderer gives each model its own.
+    const auto dir = test::fresh_dir("lightmap_placements");
+    test::write_model_pool(
+        test::make_model(test::rect_points({0, 0, -1}, {2, 0, 0}, {0, 0, 2}, {0, 1, 0}, 100), {0, 0, 0}),
+        dir / "floor.pool");
+    test::write_model_pool(
+        test::make_model(
+            test::rect_points({0, 0, -1}, {0, 2, 0}, {0, 0, 2}, {1, 0, 0}, 100, {255, 0, 0, 255}), {0, 0, 0}),
+        dir / "wall.pool");
+    std::ofstream(dir / "scene.json") << R"({
+        "lights": [{"type": "point", "position": [1, 1.5, 0]}, {"type": "point", "position": [11, 1.5, 0]}],
+        "materials": [{"name": "m", "diffuse": [0.9, 0.9, 0.9], "diffuse_reflectance": 1}],
+        "models": [{"name": "floor by the wall", "pool": "floor.pool"},
+                   {"name": "wall", "pool": "wall.pool"},
+                   {"name": "floor alone", "pool": "floor.pool", "transform": {"translate": [10, 0, 0]}}],
+        "environment": {"color": [0, 0, 0]},
+        "render": {"light_map": true}})";
+    const test::ToolRun r =
+        test::run_tool("prt-lightmap", (dir / "scene.json").string() + " --rays 32 --bounces 1", dir);
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("one light map per placement"), std::string::npos) << r.err;
+    const scene::Scene sc = scene::load_scene(dir / "scene.json");
+    const std::uint32_t by_wall = pool::placement_key(sc.models[0].transform);
+    const std::uint32_t alone = pool::placement_key(sc.models[2].transform);
+    {
+        const pool::PoolFile floor = pool::PoolFile::open(dir / "floor.pool");
+        const std::vector<pool::GiSections> maps = pool::validate_light_maps(floor);
+        ASSERT_EQ(maps.size(), 2u);
+        EXPECT_EQ(maps[0].info.placement, by_wall);
+        EXPECT_EQ(maps[1].info.placement, alone);
+        EXPECT_GT(maps[0].info.total[0], 0.0f);
+        EXPECT_LT(maps[1].info.total[0], 0.01f * maps[0].info.total[0])
+            << "the lone floor sees nothing to bounce";
+        EXPECT_EQ(rt::load_light_map_view(floor, alone).tree.nodes, maps[1].nodes.data());
+        EXPECT_EQ(rt::load_light_map_view(floor, 12345).tree.nodes, nullptr) << "no map for that placement";
+        // The wall, placed once, has one map for any placement.
+        const std::vector<pool::GiSections> wall =
+            pool::validate_light_maps(pool::PoolFile::open(dir / "wall.pool"));
+        ASSERT_EQ(wall.size(), 1u);
+        EXPECT_EQ(wall[0].info.placement, 0u);
+    }
+    const rt::RenderScene rs = rt::RenderScene::load(sc);
+    const core::SceneView v = rs.view();
+    core::Vec3 near_wall, lone;
+    ASSERT_TRUE(core::light_map_irradiance(v.models[0].light_map, core::Vec3{0.1f, 0, 0}, core::Vec3{0, 1, 0},
+                                           near_wall));
+    EXPECT_GT(near_wall.x, 0.02f);
+    EXPECT_LT(near_wall.y, 0.1f * near_wall.x) << "the red wall reflects no green";
+    if (core::light_map_irradiance(v.models[2].light_map, core::Vec3{0.1f, 0, 0}, core::Vec3{0, 1, 0}, lone))
+        EXPECT_LT(lone.x, 0.01f * near_wall.x) << "the lone floor took the other placement's map";
+}

@@ -20,9 +20,9 @@
 //                         every filled leaf is at level depth
 //   caustic_leaves (66)   GiLeaf per filled leaf: corner irradiance (thesis eq. 5.1-5.2 density
 //                         estimate of the deposited photon flux), local-frame units
-//   light_map_info (80), light_map_nodes (81), light_map_leaves (82): the same layout; corner values
-//                         are indirect irradiance (thesis eq. 5.3-5.4 weighted average of the
-//                         path-traced samples)
+//   light_map_info (80), light_map_nodes (81), light_map_leaves (82): the same layout, one map per
+//                         placement too; corner values are indirect irradiance (thesis eq. 5.3-5.4 weighted
+//                         average of the path-traced samples)
 //
 // Corners of a leaf are numbered like children: corner c = x | y << 1 | z << 2 sits at
 // cell_min + (x, y, z) * edge; a leaf with integer cell coordinates (i, j, k) spans
@@ -49,8 +49,8 @@ namespace prt::pool {
 /// Deepest leaf level of a caustic or light-map octree (corner keys then take 21 bits per axis).
 inline constexpr std::uint32_t k_max_gi_depth = 20;
 
-/// Caustic / light-map facts (section caustic_info: one element per map, one map per placement;
-/// light_map_info: exactly one element).
+/// Caustic / light-map facts (sections caustic_info and light_map_info: one element per map, one
+/// map per placement of the pool).
 struct GiInfo {
     float root_min[3];           ///< 0: root cube corner, local frame
     float root_size;             ///< 12: root cube edge (> 0)
@@ -62,8 +62,8 @@ struct GiInfo {
     float scale;                 ///< 36: decoded corner value = RGB9E5 value x scale (> 0)
     float cos_threshold;         ///< 40: a lookup whose normal n has dot(n, leaf normal) below this
                                  ///<     finds nothing (leaves with a zero normal accept every n)
-    std::uint32_t placement;     ///< 44: caustics: the scene placement this map belongs to
-                                 ///<     (pool::placement_key), 0: any placement; light map: 0
+    std::uint32_t placement;     ///< 44: the scene placement this map belongs to
+                                 ///<     (pool::placement_key), 0: any placement
     std::uint64_t sample_count;  ///< 48: photons deposited (caustics) or samples traced (light map)
     float total[2];              ///< 56: caustics: deposited flux (luminance) and emitted flux of
                                  ///<     all lights; light map: mean and max corner luminance

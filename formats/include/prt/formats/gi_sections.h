@@ -26,7 +26,8 @@ struct GiSections {
 bool has_caustics(const PoolFile& pool);
 bool has_light_map(const PoolFile& pool);
 
-/// The key of a scene placement (issue 20: one caustic map per placement of a pool): a hash of the
+/// The key of a scene placement (issue 20: one caustic map and one light map per placement of a
+/// pool): a hash of the
 /// model's transform (translate, rotate_degrees, scale as doubles, XXH3-64 folded to 32 bits), never 0.
 std::uint32_t placement_key(const scene::Transform& t);
 
@@ -36,9 +37,13 @@ std::uint32_t placement_key(const scene::Transform& t);
 /// non-zero and distinct. Returns no map when the pool has none of the sections.
 std::vector<GiSections> validate_caustic_maps(const PoolFile& pool);
 
-/// The map of validate_caustic_maps() for the placement with key `placement`: the map with that key,
-/// else one with key 0 (any placement); nullptr when there is neither.
-const GiSections* find_caustic_map(const std::vector<GiSections>& maps, std::uint32_t placement);
+/// The same for the light-map sections (light_map_info: one GiInfo per map, one map per placement).
+std::vector<GiSections> validate_light_maps(const PoolFile& pool);
+
+/// The map of validate_caustic_maps() or validate_light_maps() for the placement with key
+/// `placement`: the map with that key, else one with key 0 (any placement); nullptr when there is
+/// neither.
+const GiSections* find_gi_map(const std::vector<GiSections>& maps, std::uint32_t placement);
 
 /// Validates the caustic sections of a pool holding one map (or none): the three come together,
 /// exactly one GiInfo, root corner finite,

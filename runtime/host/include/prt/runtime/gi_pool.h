@@ -20,7 +20,7 @@ using pool::has_light_map;
 /// the map for any placement (key 0); an empty view (null nodes) when the pool has neither. Throws
 /// prt::Error "FILE: section NAME: what is wrong" on any inconsistency.
 core::CausticView load_caustic_view(const pool::PoolFile& pool, std::uint32_t placement = 0);
-/// The same for the light-map sections (80-82).
-core::LightMapView load_light_map_view(const pool::PoolFile& pool);
+/// The same for the light-map sections (80-82; pool::validate_light_maps: one map per placement too).
+core::LightMapView load_light_map_view(const pool::PoolFile& pool, std::uint32_t placement = 0);
 
 }  // namespace prt::rt
