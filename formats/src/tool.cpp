@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "prt/atomic_file.h"
+#include "prt/formats/gi_sections.h"
 #include "prt/pool_step.h"
 #include "prt/scene_pools.h"
 
@@ -351,6 +352,11 @@ ScenePools scene_pools(const scene::Scene& sc,
         else if (placed_again)
             placed_again(p);
     }
+    std::vector<std::uint32_t> placements(pools.paths.size(), 0);
+    for (const std::uint32_t p : pools.of_model) ++placements[p];
+    for (std::size_t m = 0; m < sc.models.size(); ++m)
+        pools.map_key.push_back(
+            placements[pools.of_model[m]] > 1 ? pool::placement_key(sc.models[m].transform) : 0u);
     return pools;
 }
 

@@ -10,7 +10,6 @@
 
 #include "lightmap.h"
 #include "photons.h"
-#include "prt/formats/gi_sections.h"
 #include "prt/formats/scene.h"
 #include "prt/pool_step.h"
 #include "prt/runtime/render_scene.h"
@@ -69,8 +68,6 @@ std::vector<std::vector<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep
                                                        double& kernel_seconds) {
     using namespace prt;
     std::vector<std::vector<gi::GiOctree>> trees(pools.paths.size());
-    std::vector<std::uint32_t> placements(pools.paths.size(), 0);
-    for (std::size_t m = 0; m < sc.models.size(); ++m) ++placements[pools.of_model[m]];
     // The GPU's context is created on a thread while the scene loads (photons::warm_up).
     std::string why;
     o.backend = photons::resolve_backend(o.backend, &why);
@@ -81,7 +78,7 @@ std::vector<std::vector<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep
     const core::SceneView view = rs.view();
     for (std::size_t m = 0; m < rs.models().size(); ++m) {
         const std::uint32_t p = pools.of_model[m];
-        const std::uint32_t key = placements[p] > 1 ? pool::placement_key(sc.models[m].transform) : 0u;
+        const std::uint32_t key = pools.map_key[m];
         if (std::any_of(trees[p].begin(), trees[p].end(),
                         [&](const gi::GiOctree& t) { return t.info.placement == key; }))
             continue;  // placed twice at the same spot: one map serves both
@@ -125,7 +122,7 @@ std::vector<std::vector<prt::gi::GiOctree>> build_maps(const prt::tool::PoolStep
             trees[p].emplace_back(lightmap::build_light_map_octree(samples, root_min, root_size, o.gather));
         tree.info.placement = key;
         const std::string which =
-            placements[p] > 1 ? " (model '" + sc.models[m].name + "''s placement)" : std::string();
+            key != 0 ? " (model '" + sc.models[m].name + "''s placement)" : std::string();
         step.note(
             "prt-lightmap: %s%s: %zu samples on %s (frame of %s, %s surface%s), level %u, %zu leaves, "
             "mean irradiance %.4g, max %.4g",

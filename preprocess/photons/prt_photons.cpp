@@ -88,12 +88,10 @@ Pools scene_pools(const prt::tool::PoolStep& step, const prt::scene::Scene& sc) 
 /// share one).
 std::vector<std::uint32_t> assign_maps(const prt::scene::Scene& sc, const Pools& pools,
                                        std::vector<PoolJob>& jobs) {
-    std::vector<std::uint32_t> placements(jobs.size(), 0);
-    for (std::size_t m = 0; m < sc.models.size(); ++m) ++placements[pools.of_model[m]];
     std::vector<std::uint32_t> map_of_model(sc.models.size(), 0);
     for (std::size_t m = 0; m < sc.models.size(); ++m) {
         const std::uint32_t p = pools.of_model[m];
-        const std::uint32_t key = placements[p] > 1 ? prt::pool::placement_key(sc.models[m].transform) : 0u;
+        const std::uint32_t key = pools.map_key[m];
         std::vector<MapJob>& maps = jobs[p].maps;
         std::size_t k = 0;
         while (k < maps.size() && maps[k].placement != key) ++k;

@@ -67,6 +67,12 @@ def reason(log_text, tool, status):
     return line[:400]
 
 
+def own_error(status, why):
+    """Whether a tool's failure is its own error on its input (exit 1 or 2 with a "TOOL: error:"
+    line, `why` from reason()): the same input gives the same answer, so it is not retried."""
+    return status in (1, 2) and ": error: " in why
+
+
 def one_line(e):
     """A task's exception as one line (Dask's KilledWorker: the workers running it died)."""
     name = type(e).__name__

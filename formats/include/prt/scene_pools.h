@@ -16,6 +16,10 @@ struct ScenePools {
     std::vector<std::filesystem::path> paths;  ///< weakly canonical, one per pool file
     std::vector<std::uint32_t> of_model;       ///< per model: its pool's index in `paths`
     std::vector<bool> placed_before;           ///< per model: its pool was placed by an earlier model
+    /// Per model: the key of its caustic and light maps (issue 20, formats/POOL.md "One map per
+    /// placement"): 0 (any placement) when the scene places its pool once, else
+    /// pool::placement_key(transform); models placing a pool at the same transform share a key.
+    std::vector<std::uint32_t> map_key;
 };
 
 /// Groups the models of `sc` by pool file (std::filesystem::weakly_canonical paths); calls
