@@ -109,8 +109,10 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
                    "cpu, cuda, hybrid (GPU and CPU share each frame) or auto (cuda if a GPU exists)")
         ->check(CLI::IsMember({"cpu", "cuda", "hybrid", "auto"}));
     app.add_option("--kernel", b.kernel,
-                   "CUDA kernel structure: mega (one kernel) or wavefront (several, thesis 2.4)")
-        ->check(CLI::IsMember({"mega", "wavefront"}));
+                   "CUDA kernel structure: mega (one kernel, its warps taking 32-pixel items from a queue "
+                   "until the frame is done), mega-static (one kernel, one item per warp) or wavefront "
+                   "(several kernels, thesis 2.4)")
+        ->check(CLI::IsMember({"mega", "mega-static", "wavefront"}));
     app.add_option("--mapping", b.mapping, "CUDA ray-to-thread mapping: zorder (thesis 2.3) or linear")
         ->check(CLI::IsMember({"zorder", "linear"}));
     app.add_option("--threads", b.threads, "CPU backend threads (0: all hardware threads)");
@@ -175,6 +177,7 @@ rt::BackendOptions backend_options(const BackendChoice& b) {
     rt::BackendOptions o;
     o.cpu_threads = b.threads;
     o.cuda_wavefront = b.kernel == "wavefront";
+    o.cuda_persistent = b.kernel != "mega-static";
     o.cuda_linear_mapping = b.mapping == "linear";
     o.cuda_min_blocks = b.min_blocks;
     o.cuda_max_l1 = !b.default_carveout;

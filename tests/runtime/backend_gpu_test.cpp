@@ -153,7 +153,8 @@ void compare(const rt::Image& ref, const rt::Image& img, const rt::FrameStats& s
 
 std::string backend_case_name(
     const ::testing::TestParamInfo<std::pair<const char*, rt::BackendOptions>>& info) {
-    const char* names[] = {"mega_zorder", "mega_linear", "wavefront_zorder", "wavefront_linear", "hybrid"};
+    const char* names[] = {"mega_zorder",      "mega_linear",      "mega_static_zorder",
+                           "wavefront_zorder", "wavefront_linear", "hybrid"};
     return names[info.index];
 }
 
@@ -271,16 +272,18 @@ TEST(GpuMemory, AScenePastFreeGpuMemoryFailsWithTheFigures) {
     }
 }
 
-rt::BackendOptions opts(bool wavefront, bool linear) {
+rt::BackendOptions opts(bool wavefront, bool linear, bool persistent = true) {
     rt::BackendOptions o;
     o.cuda_wavefront = wavefront;
     o.cuda_linear_mapping = linear;
+    o.cuda_persistent = persistent;
     return o;
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, GpuAgreement,
                          ::testing::Values(std::make_pair("cuda", opts(false, false)),
                                            std::make_pair("cuda", opts(false, true)),
+                                           std::make_pair("cuda", opts(false, false, false)),
                                            std::make_pair("cuda", opts(true, false)),
                                            std::make_pair("cuda", opts(true, true)),
                                            std::make_pair("hybrid", opts(false, false))),

@@ -89,22 +89,59 @@ __device__ __forceinline__ void store_pixel(const core::RenderParams& p, std::si
     rgba[i] = core::pack_rgba8(core::encode_display(color, p));
 }
 
+/// The pixel of lane `lane` of work item `item` (one warp's 32 pixels): in Z-order, item / 8 is a
+/// 16x16 tile (row by row over `tiles_x` tiles) and item % 8 its 8x4 block; else pixels row by row.
+template <bool k_zorder>
+__device__ __forceinline__ void item_pixel(std::uint32_t item, std::uint32_t lane, std::uint32_t width,
+                                           std::uint32_t tiles_x, std::uint32_t row_begin, std::uint32_t& x,
+                                           std::uint32_t& y) {
+    if constexpr (k_zorder) {
+        constexpr std::uint32_t k_warps_per_tile = k_block / 32u;
+        const std::uint32_t tile = item / k_warps_per_tile;
+        std::uint32_t tx, ty;
+        core::zorder_decode((item % k_warps_per_tile) * 32u + lane, tx, ty);
+        x = (tile % tiles_x) * k_tile + tx;
+        y = row_begin + (tile / tiles_x) * k_tile + ty;
+    } else {
+        const unsigned long long i = static_cast<unsigned long long>(item) * 32u + lane;
+        x = static_cast<std::uint32_t>(i % width);
+        y = row_begin + static_cast<std::uint32_t>(i / width);
+    }
+}
+
 /// Megakernel: one thread traces one pixel's whole ray tree (render_pixel). k_min_blocks is the
 /// occupancy hint (resident 256-thread blocks per SM) that bounds the registers per thread; K the
 /// code it carries (core::KernelMask): splats-only Whitted frames get a kernel without the other
 /// surfaces and the path tracer (measured on an H200: the general kernel traced the 1M-point room's
 /// primary rays at 0.84 Grays/s, the splat kernel at the H100's 1.13).
+/// Persistent warps (Aila and Laine 2009, "Understanding the efficiency of ray traversal on GPUs",
+/// 3): with `queue`, the grid holds only as many blocks as fit on the GPU at once and each warp
+/// takes its next 32 pixels (`items` in all) from the queue until none are left, so a block whose
+/// warps finish early does not wait on its slowest warp before the SM gets new work; without it,
+/// one 32-pixel item per warp from the block index.
 template <bool k_zorder, int k_min_blocks, std::uint32_t K = core::k_mask_splats>
 __global__ void __launch_bounds__(k_block, k_min_blocks)
     render_kernel(const core::SceneView scene, const core::PinholeCamera cam, std::uint32_t width,
                   std::uint32_t height, std::uint32_t row_begin, std::uint32_t row_end,
-                  float* __restrict__ rgb, std::uint32_t* __restrict__ rgba, unsigned long long* counters) {
-    std::uint32_t x, y;
-    thread_pixel<k_zorder>(width, row_begin, x, y);
+                  float* __restrict__ rgb, std::uint32_t* __restrict__ rgba, unsigned long long* counters,
+                  unsigned int* queue, std::uint32_t items, std::uint32_t tiles_x) {
+    const std::uint32_t lane = threadIdx.x & 31u;
     core::RayCounters c;
-    if (x < width && y < row_end) {
-        const core::Vec3 color = core::render_pixel<K>(scene, cam, x, y, width, height, c);
-        store_pixel(scene.params, static_cast<std::size_t>(y) * width + x, color, rgb, rgba);
+    std::uint32_t item = (blockIdx.y * gridDim.x + blockIdx.x) * (k_block / 32u) + threadIdx.x / 32u;
+    for (;;) {  // bounded: every pass takes a new item from the queue, or ends
+        if (queue != nullptr) {
+            unsigned int next = 0;
+            if (lane == 0) next = atomicAdd(queue, 1u);
+            item = __shfl_sync(0xffffffffu, next, 0);
+        }
+        if (item >= items) break;
+        std::uint32_t x, y;
+        item_pixel<k_zorder>(item, lane, width, tiles_x, row_begin, x, y);
+        if (x < width && y < row_end) {
+            const core::Vec3 color = core::render_pixel<K>(scene, cam, x, y, width, height, c);
+            store_pixel(scene.params, static_cast<std::size_t>(y) * width + x, color, rgb, rgba);
+        }
+        if (queue == nullptr) break;
     }
     flush_counters(c, counters);
 }
@@ -112,7 +149,8 @@ __global__ void __launch_bounds__(k_block, k_min_blocks)
 // ---- The megakernels this build has ----------------------------------------------------------------
 
 using RenderKernel = void (*)(core::SceneView, core::PinholeCamera, std::uint32_t, std::uint32_t,
-                              std::uint32_t, std::uint32_t, float*, std::uint32_t*, unsigned long long*);
+                              std::uint32_t, std::uint32_t, float*, std::uint32_t*, unsigned long long*,
+                              unsigned int*, std::uint32_t, std::uint32_t);
 
 /// One megakernel variant: the code it carries (core::KernelMask: splats only, patches only, or
 /// everything with sampling), its occupancy hint (--min-blocks) and its two ray mappings.
@@ -305,7 +343,8 @@ public:
         PRT_CUDA_CHECK(cudaStreamCreateWithFlags(&m_stream, cudaStreamNonBlocking));
         PRT_CUDA_CHECK(cudaEventCreate(&m_start));
         PRT_CUDA_CHECK(cudaEventCreate(&m_stop));
-        m_counters.resize(k_counter_count);
+        m_counters.resize(k_counter_count + 1);  // + the persistent megakernel's work queue
+        m_sm_count = static_cast<std::uint32_t>(prop.multiProcessorCount);
     }
     ~CudaBackend() override {
         if (m_stream) cudaStreamSynchronize(m_stream);
@@ -407,16 +446,29 @@ private:
                            std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
         const bool z = !m_options.cuda_linear_mapping;
         const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
-        const dim3 grid = z ? dim3((w + k_tile - 1) / k_tile, (y1 - y0 + k_tile - 1) / k_tile)
-                            : dim3(static_cast<unsigned>((n + k_block - 1) / k_block));
-        auto launch = [&](auto kernel) {
+        // 32-pixel work items: 8 per 16x16 tile (Z-order) or 32 pixels row by row.
+        const std::uint32_t tiles_x = (w + k_tile - 1) / k_tile;
+        const std::uint32_t items = z ? tiles_x * ((y1 - y0 + k_tile - 1) / k_tile) * (k_block / 32u)
+                                      : static_cast<std::uint32_t>((n + 31u) / 32u);
+        const std::uint32_t item_blocks = (items + k_block / 32u - 1) / (k_block / 32u);
+        auto launch = [&](RenderKernel kernel) {
             // Traversal reads through L1: ask for the largest L1 share (the kernel needs 32 B of
             // shared memory).
             PRT_CUDA_CHECK(
                 cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
                                      m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
-            launch_kernel(launch_grid(grid, k_block, m_stream), kernel, scene, req.camera, w, h, y0, y1,
-                          m_rgb.data(), rgba_target(req), m_counters.data());
+            unsigned int* queue = nullptr;
+            std::uint32_t blocks = item_blocks;
+            if (m_options.cuda_persistent) {
+                // As many blocks as the GPU holds at once; the queue counter sits after the counters
+                // (zeroed with them every frame).
+                int per_sm = 0;
+                PRT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, k_block, 0));
+                blocks = std::min<std::uint32_t>(item_blocks, std::max(1, per_sm) * m_sm_count);
+                queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counter_count);
+            }
+            launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, scene, req.camera, w, h, y0,
+                          y1, m_rgb.data(), rgba_target(req), m_counters.data(), queue, items, tiles_x);
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
         const Megakernel& k = find_megakernel(m_surface_mask, sampling, m_options.cuda_min_blocks);
@@ -465,6 +517,7 @@ private:
     }
 
     rt::BackendOptions m_options;
+    std::uint32_t m_sm_count = 1;
     std::string m_device;
     cudaStream_t m_stream = nullptr;
     cudaEvent_t m_start = nullptr, m_stop = nullptr;

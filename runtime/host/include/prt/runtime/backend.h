@@ -120,8 +120,11 @@ BackendAvailability backend_availability();
 
 /// Backend options.
 struct BackendOptions {
-    unsigned cpu_threads = 0;          ///< 0: all hardware threads
-    bool cuda_wavefront = false;       ///< several kernels per frame (thesis 2.4) instead of one
+    unsigned cpu_threads = 0;     ///< 0: all hardware threads
+    bool cuda_wavefront = false;  ///< several kernels per frame (thesis 2.4) instead of one
+    /// megakernel: persistent warps taking 32-pixel items from a queue (Aila-Laine) instead of one
+    /// item per warp from the block index
+    bool cuda_persistent = true;
     bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
     int cuda_min_blocks =
         0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
