@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <utility>
 #include <vector>
 
 #include "cast_batch.h"
@@ -62,22 +63,6 @@ __device__ void flush_counters(const core::RayCounters& c, unsigned long long* o
     __syncthreads();
     if (threadIdx.x < k_counter_count && block_sum[threadIdx.x]) {
         atomicAdd(&out[threadIdx.x], static_cast<unsigned long long>(block_sum[threadIdx.x]));
-    }
-}
-
-/// The pixel of this thread: Z-order within a 16x16 tile per block (thesis 2.3), or row by row.
-template <bool k_zorder>
-__device__ __forceinline__ void thread_pixel(std::uint32_t width, std::uint32_t row_begin, std::uint32_t& x,
-                                             std::uint32_t& y) {
-    if constexpr (k_zorder) {
-        std::uint32_t tx, ty;
-        core::zorder_decode(threadIdx.x, tx, ty);
-        x = blockIdx.x * k_tile + tx;
-        y = row_begin + blockIdx.y * k_tile + ty;
-    } else {
-        const unsigned long long i = static_cast<unsigned long long>(blockIdx.x) * k_block + threadIdx.x;
-        x = static_cast<std::uint32_t>(i % width);
-        y = row_begin + static_cast<std::uint32_t>(i / width);
     }
 }
 
@@ -240,8 +225,11 @@ __global__ void __launch_bounds__(k_block)
     wave_primary(const core::PinholeCamera cam, std::uint32_t width, std::uint32_t height,
                  std::uint32_t row_begin, std::uint32_t row_end, WaveRay* __restrict__ queue,
                  float* __restrict__ accum, unsigned long long* counters) {
+    // One 32-pixel item per warp from the block index: the grid is one block per 16x16 tile
+    // (Z-order) or per 256 pixels (linear).
     std::uint32_t x, y;
-    thread_pixel<k_zorder>(width, row_begin, x, y);
+    item_pixel<k_zorder>((blockIdx.y * gridDim.x + blockIdx.x) * (k_block / 32u) + threadIdx.x / 32u,
+                         threadIdx.x & 31u, width, gridDim.x, row_begin, x, y);
     const std::uint32_t slot = (blockIdx.y * gridDim.x + blockIdx.x) * k_block + threadIdx.x;
     WaveRay r;
     r.pixel = k_no_pixel;
@@ -442,6 +430,20 @@ private:
         return req.device_rgba8 ? static_cast<std::uint32_t*>(req.device_rgba8) : m_rgba.data();
     }
 
+    /// A megakernel's resident blocks per SM, asked once per kernel; the first call also sets its
+    /// L1 preference: traversal reads through L1, so the largest L1 share (the kernel needs 32 B of
+    /// shared memory) unless BackendOptions::cuda_max_l1 is off.
+    std::uint32_t resident_blocks(RenderKernel kernel) {
+        for (const auto& [k, n] : m_resident_blocks)
+            if (k == kernel) return n;
+        PRT_CUDA_CHECK(cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
+                                            m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
+        int per_sm = 0;
+        PRT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, k_block, 0));
+        m_resident_blocks.emplace_back(kernel, static_cast<std::uint32_t>(std::max(1, per_sm)));
+        return m_resident_blocks.back().second;
+    }
+
     void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
                            std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
         const bool z = !m_options.cuda_linear_mapping;
@@ -452,20 +454,15 @@ private:
                                       : static_cast<std::uint32_t>((n + 31u) / 32u);
         const std::uint32_t item_blocks = (items + k_block / 32u - 1) / (k_block / 32u);
         auto launch = [&](RenderKernel kernel) {
-            // Traversal reads through L1: ask for the largest L1 share (the kernel needs 32 B of
-            // shared memory).
-            PRT_CUDA_CHECK(
-                cudaFuncSetAttribute(kernel, cudaFuncAttributePreferredSharedMemoryCarveout,
-                                     m_options.cuda_max_l1 ? int(cudaSharedmemCarveoutMaxL1) : -1));
             unsigned int* queue = nullptr;
             std::uint32_t blocks = item_blocks;
             if (m_options.cuda_persistent) {
                 // As many blocks as the GPU holds at once; the queue counter sits after the counters
                 // (zeroed with them every frame).
-                int per_sm = 0;
-                PRT_CUDA_CHECK(cudaOccupancyMaxActiveBlocksPerMultiprocessor(&per_sm, kernel, k_block, 0));
-                blocks = std::min<std::uint32_t>(item_blocks, std::max(1, per_sm) * m_sm_count);
+                blocks = std::min<std::uint32_t>(item_blocks, resident_blocks(kernel) * m_sm_count);
                 queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counter_count);
+            } else {
+                resident_blocks(kernel);  // sets the kernel's L1 preference
             }
             launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, scene, req.camera, w, h, y0,
                           y1, m_rgb.data(), rgba_target(req), m_counters.data(), queue, items, tiles_x);
@@ -518,6 +515,7 @@ private:
 
     rt::BackendOptions m_options;
     std::uint32_t m_sm_count = 1;
+    std::vector<std::pair<RenderKernel, std::uint32_t>> m_resident_blocks;  ///< resident_blocks' answers
     std::string m_device;
     cudaStream_t m_stream = nullptr;
     cudaEvent_t m_start = nullptr, m_stop = nullptr;
