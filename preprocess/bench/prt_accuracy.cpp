@@ -627,7 +627,7 @@ int main(int argc, char** argv) {
             app.add_option("--fov", o.fov, "Vertical field of view, degrees")
                 ->check(CLI::Range(1.0f, 120.0f));
             app.add_option("--view", o.view, "Direction from the model's centre to the eye")->expected(3);
-            app.add_option("-j,--threads", o.threads, "Threads (0 = all hardware threads)");
+            app.add_option("-j,--threads", o.threads, "Threads (0 = every core the process may use)");
             app.add_option("--repeat", o.repeat, "Timed runs after one warm-up; the median is reported")
                 ->check(CLI::Range(1u, 1000u));
             app.add_option("--json", o.json, "Write the figures as JSON to this file (default: none)");

@@ -34,6 +34,7 @@
 #include "bench_scene.h"
 #include "player_options.h"
 #include "prt/core/render.h"
+#include "prt/parallel.h"
 #include "prt/runtime/backend.h"
 #include "prt/tool.h"
 
@@ -281,7 +282,7 @@ double time_frames(std::uint32_t warmup, std::uint32_t frames, const std::functi
 }
 
 void run(const Options& o, const tool::CommonOptions& common) {
-    const unsigned threads = o.threads ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+    const unsigned threads = o.threads ? o.threads : prt::available_cores();
     rt::RenderScene rs = player::bench_scene(o.scene, common.quiet);
     core::RenderParams base = rs.params();
     player::apply(o.render, base);
@@ -416,7 +417,8 @@ int main(int argc, char** argv) {
                 ->check(CLI::Range(1u, 100000u));
             app.add_option("--warmup", o.warmup, "Untimed frames before timing")
                 ->check(CLI::Range(0u, 100000u));
-            app.add_option("--threads", o.threads, "Threads for both renderers (0: all hardware threads)");
+            app.add_option("--threads", o.threads,
+                           "Threads for both renderers (0: every core the process may use)");
             app.add_option("--scenarios", o.scenarios, "Comma-separated subset of primary,shadow,reflect4");
             app.add_option("--json", o.json, "Write the results as JSON to this file");
             prt::player::add_render_options(app, o.render);

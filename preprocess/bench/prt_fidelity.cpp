@@ -737,7 +737,7 @@ int main(int argc, char** argv) {
                            "A surface hit farther than this many local spacings from the reference is false; "
                            "one this far behind the reference hit is a hole")
                 ->check(CLI::Range(0.1, 100.0));
-            app.add_option("-j,--threads", o.threads, "Threads (0 = all hardware threads)");
+            app.add_option("-j,--threads", o.threads, "Threads (0 = every core the process may use)");
             app.add_option("--json", o.json, "Write the figures as JSON to this file (default: none)");
             app.add_option("--images", o.images,
                            "Write each view's reference, surfaces and classification maps into this folder "

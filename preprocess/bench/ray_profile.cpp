@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "prt/core/render.h"
+#include "prt/parallel.h"
 
 namespace prt::player {
 
@@ -121,7 +122,7 @@ RayProfile profile_rays(const core::SceneView& scene, const core::PinholeCamera&
         total.dropped += local.dropped;
         for (int i = 0; i < 6; ++i) sums[i] += s[i];
     };
-    const unsigned n = std::max(1u, std::thread::hardware_concurrency());
+    const unsigned n = prt::available_cores();
     std::vector<std::thread> threads;
     for (unsigned i = 1; i < n; ++i) threads.emplace_back(job);
     job();

@@ -39,7 +39,7 @@ struct RayProfile {
     std::string table() const;
 };
 
-/// Traces every pixel of a width x height frame on the host (all hardware threads) with
+/// Traces every pixel of a width x height frame on the host (every core the process may use) with
 /// core::trace_ray, recording the work of each ray.
 RayProfile profile_rays(const core::SceneView& scene, const core::PinholeCamera& camera, std::uint32_t width,
                         std::uint32_t height);

@@ -225,7 +225,7 @@ int main(int argc, char** argv) {
                    "Where the samples are traced: auto (the GPU when there is one), cpu or cuda; both run "
                    "the same core function")
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
-            prt::tool::PoolStep::add_threads(app, o.threads, "CPU worker threads (0 = all hardware threads)");
+            prt::tool::PoolStep::add_threads(app, o.threads, "CPU worker threads (0 = every core the process may use)");
         },
         [&](prt::tool::PoolStep& s) { lightmap_step(s, o); });
 }

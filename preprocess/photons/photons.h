@@ -35,7 +35,7 @@ using gi::LeafValues;
 struct ShootOptions {
     ShootParams params;
     std::string backend = "auto";  ///< auto | cpu | cuda
-    unsigned threads = 0;          ///< CPU workers (0 = all hardware threads)
+    unsigned threads = 0;          ///< CPU workers (0 = every core the process may use)
 };
 
 struct ShootResult {

@@ -338,7 +338,7 @@ int main(int argc, char** argv) {
                            "auto (CUDA when a device is usable, else CPU), cpu or cuda")
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
             prt::tool::PoolStep::add_threads(app, o.shoot.threads,
-                                             "CPU worker threads (0 = all hardware threads)");
+                                             "CPU worker threads (0 = every core the process may use)");
         },
         [&](prt::tool::PoolStep& s) { photons_step(s, o); });
 }

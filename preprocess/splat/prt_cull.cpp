@@ -217,7 +217,7 @@ int main(int argc, char** argv) {
                            "auto (CUDA when a device is usable, else CPU), cpu or cuda")
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}));
             prt::tool::PoolStep::add_threads(app, params.threads,
-                                             "CPU worker threads (0 = all hardware threads)");
+                                             "CPU worker threads (0 = every core the process may use)");
             app.add_option(
                 "--measure-holes", holes.rays,
                 "After culling, shoot N rays at INPUT and OUTPUT and report the hole rate: rays that "

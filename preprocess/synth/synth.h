@@ -43,7 +43,7 @@ struct SynthOptions {
     std::uint64_t seed = 1;
     ColorMode colors = ColorMode::none;
     pool::Rgba8 color{200, 200, 200, 255};  ///< for ColorMode::constant and single-part shapes
-    unsigned threads = 0;                   ///< 0 = std::thread::hardware_concurrency()
+    unsigned threads = 0;                   ///< 0 = every available core (prt::available_cores)
 };
 
 /// Noise draws beyond this many standard deviations are redrawn, so |displacement| is bounded.

@@ -150,7 +150,7 @@ int main(int argc, char** argv) {
                    "linear RGB)")
                 ->check(CLI::IsMember({"replace", "multiply"}));
             step.add_output(app, "Output pool (written atomically; default: rewrite POOL in place)");
-            tool::PoolStep::add_threads(app, o.threads, "Worker threads (default 0: all hardware threads)");
+            tool::PoolStep::add_threads(app, o.threads, "Worker threads (default 0: every core the process may use)");
         },
         [&](tool::PoolStep& s) { texture_step(s, o); });
 }

@@ -115,7 +115,7 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
         ->check(CLI::IsMember({"mega", "mega-static", "wavefront"}));
     app.add_option("--mapping", b.mapping, "CUDA ray-to-thread mapping: zorder (thesis 2.3) or linear")
         ->check(CLI::IsMember({"zorder", "linear"}));
-    app.add_option("--threads", b.threads, "CPU backend threads (0: all hardware threads)");
+    app.add_option("--threads", b.threads, "CPU backend threads (0: every core the process may use)");
     app.add_option(
            "--min-blocks", b.min_blocks,
            "CUDA megakernel occupancy hint: resident 256-thread blocks per SM, 1-6, which caps registers "

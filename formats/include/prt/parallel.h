@@ -13,13 +13,30 @@
 #include <thread>
 #include <vector>
 
+#if defined(__linux__)
+#include <sched.h>
+#endif
+
 namespace prt {
 
-/// The number of worker threads to use: `requested`, or every hardware thread when 0.
-inline unsigned resolve_threads(unsigned requested) {
-    if (requested > 0) return requested;
+/// The cores this process may run on: its CPU affinity mask where the system has one (taskset,
+/// cgroup cpusets, a batch system's pinning), else every hardware thread; at least 1.
+inline unsigned available_cores() {
+#if defined(__linux__)
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof(set), &set) == 0) {
+        const int n = CPU_COUNT(&set);
+        if (n > 0) return static_cast<unsigned>(n);
+    }
+#endif
     const unsigned hw = std::thread::hardware_concurrency();
     return hw > 0 ? hw : 1;
+}
+
+/// The number of worker threads to use: `requested`, or every available core when 0.
+inline unsigned resolve_threads(unsigned requested) {
+    return requested > 0 ? requested : available_cores();
 }
 
 /// Calls `body(begin, end, worker)` on chunks of [0, count) of at most `chunk` items, from

@@ -79,10 +79,10 @@ public:
     int run(int argc, char** argv, const std::function<void(CLI::App&)>& options,
             const std::function<void(PoolStep&)>& body);
 
-    /// Declares -j,--threads on `threads` (0 = all hardware threads).
+    /// Declares -j,--threads on `threads` (0 = every core the process may use).
     template <class T>
     static CLI::Option* add_threads(CLI::App& app, T& threads,
-                                    const std::string& help = "Worker threads (0 = all hardware threads)") {
+                                    const std::string& help = "Worker threads (0 = every core the process may use)") {
         return app.add_option("-j,--threads", threads, help);
     }
     /// The out-of-core tools' --memory SIZE (tool::memory_limit() reads it; empty: the default),

@@ -54,6 +54,27 @@ TEST(Parallel, SelectKeepsTheInputOrder) {
     for (std::size_t r = 0; r < kept; ++r) EXPECT_EQ(out[r], 7 * r + 3);
 }
 
+#if defined(__linux__)
+// Tools started under taskset or a cgroup cpuset use the cores they were given, not every core of
+// the machine (bench-preprocess.sh pins the tools this way).
+TEST(Parallel, ZeroThreadsMeansTheCoresTheAffinityMaskAllows) {
+    cpu_set_t saved;
+    ASSERT_EQ(sched_getaffinity(0, sizeof(saved), &saved), 0);
+    EXPECT_EQ(available_cores(), static_cast<unsigned>(CPU_COUNT(&saved)));
+    int first = 0;
+    while (!CPU_ISSET(first, &saved)) ++first;
+    cpu_set_t one;
+    CPU_ZERO(&one);
+    CPU_SET(first, &one);
+    ASSERT_EQ(sched_setaffinity(0, sizeof(one), &one), 0);
+    const unsigned pinned = available_cores(), resolved = resolve_threads(0), asked = resolve_threads(5);
+    ASSERT_EQ(sched_setaffinity(0, sizeof(saved), &saved), 0);
+    EXPECT_EQ(pinned, 1u);
+    EXPECT_EQ(resolved, 1u);
+    EXPECT_EQ(asked, 5u);  // an explicit count is kept
+}
+#endif
+
 TEST(Morton, InterleavesXLowestAndInverts) {
     for (std::uint32_t x : {0u, 1u, 5u, 1023u, (1u << 20), (1u << 21) - 1})
         for (std::uint32_t y : {0u, 2u, 77u, (1u << 20) - 3})

@@ -20,6 +20,7 @@
 #include "cpu_seconds.h"
 #include "iso_pool.h"
 #include "prt/formats/pool.h"
+#include "prt/parallel.h"
 #include "prt/runtime/surface_pools.h"
 #include "prt/tool.h"
 
@@ -91,7 +92,7 @@ int main(int argc, char** argv) {
             app.add_option("input", input, "Pool with ISO sections (prt-iso)")->required();
             app.add_option("--width", width, "Image width")->check(CLI::Range(1u, 16384u));
             app.add_option("--height", height, "Image height")->check(CLI::Range(1u, 16384u));
-            app.add_option("-j,--threads", threads, "Threads (0 = all hardware threads)");
+            app.add_option("-j,--threads", threads, "Threads (0 = every core the process may use)");
             app.add_option("--repeat", repeat, "Timed runs (median reported) after one warm-up")
                 ->check(CLI::Range(1u, 1000u));
             app.add_option("--storage", storage, "q8, f32 or all (every leaf array present)")
@@ -107,7 +108,7 @@ int main(int argc, char** argv) {
         },
         [&](const prt::tool::CommonOptions& common) {
             using namespace prt;
-            if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+            if (threads == 0) threads = prt::available_cores();
             const pool::PoolFile p = pool::PoolFile::open(input);
             const pool::IsoInfo& info = p.array<pool::IsoInfo>(pool::SectionType::iso_info).empty()
                                             ? throw Error(input + ": no ISO (run prt-iso)")

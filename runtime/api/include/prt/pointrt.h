@@ -43,7 +43,7 @@ struct Options {
     /// Surface traced for every model: "" keeps the scene file's (a pool alone: what it holds),
     /// "auto", "splats", "iso", "mls" or "patches" (the pool must hold those sections).
     std::string surface;
-    /// CPU backend threads; 0: all hardware threads.
+    /// CPU backend threads; 0: every core the process may use.
     unsigned threads = 0;
 };
 

@@ -9,7 +9,7 @@
 
 namespace prt::cpu {
 
-/// Creates the CPU backend with `threads` workers (0: all hardware threads).
+/// Creates the CPU backend with `threads` workers (0: every core the process may use).
 std::unique_ptr<rt::Backend> make_cpu_backend(unsigned threads = 0);
 
 }  // namespace prt::cpu

@@ -120,7 +120,7 @@ BackendAvailability backend_availability();
 
 /// Backend options.
 struct BackendOptions {
-    unsigned cpu_threads = 0;     ///< 0: all hardware threads
+    unsigned cpu_threads = 0;     ///< 0: every core the process may use
     bool cuda_wavefront = false;  ///< several kernels per frame (thesis 2.4) instead of one
     /// megakernel: persistent warps taking 32-pixel items from a queue (Aila-Laine) instead of one
     /// item per warp from the block index
