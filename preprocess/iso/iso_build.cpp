@@ -91,8 +91,9 @@ double seconds_since(Clock::time_point t0) {
 
 using Progress = std::function<void(const char*, std::uint64_t, std::uint64_t)>;
 
-/// Leaf kinds (thesis 4.3.1) and the internal-node marker.
-enum Kind : std::uint8_t { k_empty = 0, k_active = 1, k_passive = 2, k_internal = 3 };
+/// Leaf kinds (thesis 4.3.1) and the internal-node marker. k_untested: a new leaf without points
+/// whose disk test (passive or empty) the 2:1 balance runs later, in parallel (TreeBuilder::DiskTest).
+enum Kind : std::uint8_t { k_empty = 0, k_active = 1, k_passive = 2, k_internal = 3, k_untested = 4 };
 
 /// A node of the octree under construction.
 struct Node {
@@ -266,14 +267,18 @@ public:
             if (count == 0) continue;
             if (n.level < m_options.min_level ||
                 (n.level < m_options.max_level && count > m_options.max_points))
-                split_by_points(static_cast<std::uint32_t>(i), false);
+                split_by_points(static_cast<std::uint32_t>(i), DiskTest::none);
         }
     }
 
-    /// Splits leaf `i` into 8 children: children with points are active; the others are tested
-    /// against the influence disks near the parent when `test_disks` (else empty). Returns the
-    /// first child.
-    std::uint32_t split_by_points(std::uint32_t i, bool test_disks) {
+    /// What split_by_points does with children without points: leave them empty (none), test them
+    /// against the influence disks near the parent now (passive or empty), or mark them k_untested
+    /// for test_untested (later).
+    enum class DiskTest { none, now, later };
+
+    /// Splits leaf `i` into 8 children: children with points are active; the others as `disks`
+    /// says. Returns the first child.
+    std::uint32_t split_by_points(std::uint32_t i, DiskTest disks) {
         check_size(8);
         const std::uint32_t first = static_cast<std::uint32_t>(nodes.size());
         const Node parent = nodes[i];
@@ -290,31 +295,49 @@ public:
             child.x = 2 * parent.x + (c & 1u);
             child.y = 2 * parent.y + ((c >> 1) & 1u);
             child.z = 2 * parent.z + ((c >> 2) & 1u);
-            child.kind = b < e ? k_active : k_empty;
+            child.kind = b < e ? k_active : (disks == DiskTest::none ? k_empty : k_untested);
             nodes.push_back(child);
             b = e;
         }
         nodes[i].child = first;
         nodes[i].kind = k_internal;
-        if (test_disks) {
-            double lo[3], hi[3];
-            m_frame.box(parent.level, parent.x, parent.y, parent.z, lo, hi);
-            m_candidates.clear();
-            gather_overlapping(m_index, m_ps, m_ps.rho, lo, hi, m_candidates);
-            for (std::uint32_t c = 0; c < 8; ++c) {
-                Node& ch = nodes[first + c];
-                if (ch.kind != k_empty) continue;
-                double clo[3], chi[3];
-                m_frame.box(ch.level, ch.x, ch.y, ch.z, clo, chi);
-                for (std::uint32_t id : m_candidates)
-                    if (pre::disk_overlaps_box(&m_ps.pos[3 * id], &m_ps.nrm[3 * id], m_ps.rho[id], clo,
-                                               chi)) {
-                        ch.kind = k_passive;
-                        break;
-                    }
-            }
-        }
+        if (disks == DiskTest::now) test_children(i, m_candidates);
+        if (disks == DiskTest::later) m_untested.push_back(i);
         return first;
+    }
+
+    /// The k_untested children of `parent` become passive where a point's influence disk overlaps
+    /// them (thesis 4.3.1), else empty. `candidates`: scratch. Writes only those children.
+    void test_children(std::uint32_t parent, std::vector<std::uint32_t>& candidates) {
+        const Node p = nodes[parent];
+        bool any = false;
+        for (std::uint32_t c = 0; c < 8; ++c) any |= nodes[p.child + c].kind == k_untested;
+        if (!any) return;
+        double lo[3], hi[3];
+        m_frame.box(p.level, p.x, p.y, p.z, lo, hi);
+        candidates.clear();
+        gather_overlapping(m_index, m_ps, m_ps.rho, lo, hi, candidates);
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            Node& ch = nodes[p.child + c];
+            if (ch.kind != k_untested) continue;
+            ch.kind = k_empty;
+            double clo[3], chi[3];
+            m_frame.box(ch.level, ch.x, ch.y, ch.z, clo, chi);
+            for (std::uint32_t id : candidates)
+                if (pre::disk_overlaps_box(&m_ps.pos[3 * id], &m_ps.nrm[3 * id], m_ps.rho[id], clo, chi)) {
+                    ch.kind = k_passive;
+                    break;
+                }
+        }
+    }
+
+    /// test_children for every parent split with DiskTest::later so far, in parallel.
+    void test_untested(unsigned threads) {
+        parallel_chunks(m_untested.size(), 64, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            std::vector<std::uint32_t> candidates;
+            for (std::size_t k = b; k < e; ++k) test_children(m_untested[k], candidates);
+        });
+        m_untested.clear();
     }
 
     /// thesis 4.3.1: marks empty leaves touched by a point's influence disk as passive.
@@ -379,7 +402,7 @@ public:
         std::uint64_t splits = 0;
         for (std::size_t i = 0; i < nodes.size(); ++i) {  // children appended behind are visited too
             if (nodes[i].child == 0 && nodes[i].kind == k_passive && nodes[i].level < m_options.min_level) {
-                split_by_points(static_cast<std::uint32_t>(i), true);
+                split_by_points(static_cast<std::uint32_t>(i), DiskTest::now);
                 ++splits;
             }
         }
@@ -390,17 +413,27 @@ public:
     /// cells next to B (faces, edges, corners) must lie in nodes of level >= l - 1; a filled leaf
     /// coarser than that is split (repeatedly) until they do. B's neighbour cells at level l - 1
     /// are its parent's neighbours on B's sides, so the check runs once per parent and direction.
-    std::uint64_t balance(const Progress& progress) {
+    /// In parallel: which (parent, direction) pairs need a split at all (most need none, and a
+    /// pair that needs none still needs none after other pairs' splits: splits only refine filled
+    /// leaves, which such a pair's descent does not meet), and the disk tests of the new leaves
+    /// (DiskTest::later, run before the next level reads them). The splits themselves run in the
+    /// serial order, so the tree is the one a serial pass builds.
+    std::uint64_t balance(unsigned threads, const Progress& progress) {
         std::uint64_t splits = 0;
         std::uint32_t deepest = 0;
         for (const Node& n : nodes) deepest = std::max<std::uint32_t>(deepest, n.level);
+        // Filled leaves by level in node order; each level's splits add their filled leaves.
+        std::vector<std::vector<std::uint32_t>> by_level(deepest + 1);
+        for (std::size_t i = 0; i < nodes.size(); ++i)
+            if (nodes[i].child == 0 && is_filled(nodes[i].kind))
+                by_level[nodes[i].level].push_back(static_cast<std::uint32_t>(i));
         for (std::uint32_t l = deepest; l >= 2; --l) {
             // Parents of filled leaves at level l, with the directions their filled children face.
             std::vector<std::pair<std::uint32_t, std::uint32_t>> work;  // (parent, 27-bit direction mask)
-            for (std::size_t i = 0; i < nodes.size(); ++i) {
+            for (const std::uint32_t i : by_level[l]) {
                 const Node& n = nodes[i];
-                if (n.level != l || n.child != 0 || !is_filled(n.kind)) continue;
-                const std::uint32_t c = static_cast<std::uint32_t>(i) - nodes[n.parent].child;
+                if (n.child != 0) continue;  // split since
+                const std::uint32_t c = i - nodes[n.parent].child;
                 std::uint32_t mask = 0;
                 const int sx = (c & 1u) ? 1 : -1, sy = (c & 2u) ? 1 : -1, sz = (c & 4u) ? 1 : -1;
                 for (int dz = 0; dz < 2; ++dz)
@@ -415,19 +448,42 @@ public:
                 else
                     work.emplace_back(n.parent, mask);
             }
-            for (const auto& [parent, mask] : work) {
-                const Node p = nodes[parent];
+            // The neighbour cell of `parent` in direction d, if inside the root.
+            auto neighbour = [&](const Node& p, int d, std::uint32_t cell[3]) {
                 const std::int64_t top = std::int64_t{1} << p.level;
-                for (int d = 0; d < 27; ++d) {
-                    if (!(mask & (1u << d))) continue;
-                    const std::int64_t nx = std::int64_t{p.x} + d % 3 - 1,
-                                       ny = std::int64_t{p.y} + (d / 3) % 3 - 1,
-                                       nz = std::int64_t{p.z} + d / 9 - 1;
-                    if (nx < 0 || ny < 0 || nz < 0 || nx >= top || ny >= top || nz >= top) continue;
-                    splits += refine_towards(static_cast<std::uint32_t>(nx), static_cast<std::uint32_t>(ny),
-                                             static_cast<std::uint32_t>(nz), p.level);
+                const std::int64_t c[3] = {std::int64_t{p.x} + d % 3 - 1, std::int64_t{p.y} + (d / 3) % 3 - 1,
+                                           std::int64_t{p.z} + d / 9 - 1};
+                for (int a = 0; a < 3; ++a) {
+                    if (c[a] < 0 || c[a] >= top) return false;
+                    cell[a] = static_cast<std::uint32_t>(c[a]);
+                }
+                return true;
+            };
+            parallel_chunks(work.size(), 1024, threads, [&](std::size_t b, std::size_t e, unsigned) {
+                for (std::size_t k = b; k < e; ++k) {
+                    const Node& p = nodes[work[k].first];
+                    std::uint32_t needed = 0;
+                    for (int d = 0; d < 27; ++d) {
+                        std::uint32_t cell[3];
+                        if ((work[k].second & (1u << d)) && neighbour(p, d, cell) &&
+                            needs_split(cell[0], cell[1], cell[2], p.level))
+                            needed |= 1u << d;
+                    }
+                    work[k].second = needed;
+                }
+            });
+            const std::size_t before = nodes.size();
+            for (const auto& [parent, mask] : work) {
+                for (int d = 0; d < 27 && mask != 0; ++d) {
+                    std::uint32_t cell[3];
+                    if (!(mask & (1u << d)) || !neighbour(nodes[parent], d, cell)) continue;
+                    splits += refine_towards(cell[0], cell[1], cell[2], nodes[parent].level);
                 }
             }
+            test_untested(threads);
+            for (std::size_t i = before; i < nodes.size(); ++i)
+                if (nodes[i].child == 0 && is_filled(nodes[i].kind))
+                    by_level[nodes[i].level].push_back(static_cast<std::uint32_t>(i));
             if (progress) progress("2:1 balance", deepest - l + 1, deepest - 1);
         }
         return splits;
@@ -440,11 +496,11 @@ private:
         std::uint64_t splits = 0;
         std::uint32_t node = 0;
         for (;;) {  // bounded: one level per iteration
-            const Node& n = nodes[node];
-            if (n.level >= level) break;
-            if (n.child == 0) {
-                if (!is_filled(n.kind)) break;
-                split_by_points(node, m_options.passive);
+            if (nodes[node].level >= level) break;
+            if (nodes[node].child == 0) {
+                if (nodes[node].kind == k_untested) test_children(nodes[node].parent, m_candidates);
+                if (!is_filled(nodes[node].kind)) break;
+                split_by_points(node, m_options.passive ? DiskTest::later : DiskTest::none);
                 ++splits;
             }
             const std::uint32_t s = level - nodes[node].level - 1;
@@ -454,11 +510,24 @@ private:
         return splits;
     }
 
+    /// Whether refine_towards(x, y, z, level) would split a leaf (read only).
+    bool needs_split(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint32_t level) const {
+        std::uint32_t node = 0;
+        for (;;) {  // bounded: one level per iteration
+            const Node& n = nodes[node];
+            if (n.level >= level) return false;
+            if (n.child == 0) return is_filled(n.kind);
+            const std::uint32_t s = level - n.level - 1;
+            node = n.child + (((x >> s) & 1u) | (((y >> s) & 1u) << 1) | (((z >> s) & 1u) << 2));
+        }
+    }
+
     const PointSet& m_ps;
     const InfluenceIndex& m_index;
     const Frame& m_frame;
     const BuildOptions& m_options;
     std::vector<std::uint32_t> m_candidates;
+    std::vector<std::uint32_t> m_untested;  ///< parents split with DiskTest::later, not yet tested
 };
 
 // ---- surface closure (thesis 4.3.1, 4.5.1) --------------------------------------------------------
@@ -481,33 +550,83 @@ private:
 /// Leaves that still end up without a sign change are dropped like any other.
 class SurfaceClosure {
 public:
-    /// `near(level, x, y, z)`: whether some point's support reaches that cell.
-    SurfaceClosure(TreeBuilder& tree, std::uint32_t max_level,
-                   std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t)> near)
+    /// Whether some point's support reaches cell (x, y, z) at `level` (a function of the cell
+    /// only); the vector is the caller's scratch (calls run in parallel).
+    using Near = std::function<bool(std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                                    std::vector<std::uint32_t>& scratch)>;
+    SurfaceClosure(TreeBuilder& tree, std::uint32_t max_level, Near near)
         : m_tree(tree), m_max_level(max_level), m_near(std::move(near)) {}
 
     /// Examines the faces of `frontier` (evaluated leaves); returns the leaves to evaluate next.
-    /// `values(node, f)` fills the 8 corner values of an evaluated leaf.
+    /// `values(node, f)` fills the 8 corner values of an evaluated leaf; `sign_mask` and `values`
+    /// are called from `threads` workers at once.
+    /// In parallel first: which faces can lead anywhere. A face the surface crosses into a filled
+    /// leaf of the same level leads nowhere, whatever the serial pass adds or splits before it
+    /// gets there (a split of that leaf gives filled children only); nor does one into an empty
+    /// leaf (of its level or coarser) when no support reaches the cell beyond the face at the
+    /// face's level (m_near, a function of the cell: then none reaches any cell inside it, which
+    /// is all the serial pass could fill there). Only the other faces go through beyond_face, in
+    /// the serial order, with m_near's answer where it was asked.
     template <class SignMask, class Values>
     std::vector<std::uint32_t> close(const std::vector<std::uint32_t>& frontier,
                                      const std::vector<std::uint32_t>& leaf_slot, SignMask&& sign_mask,
-                                     Values&& values) {
+                                     Values&& values, unsigned threads) {
         std::vector<Node>& nodes = m_tree.nodes;
         m_added.clear();
         m_work.clear();
         auto evaluated = [&](std::uint32_t i) { return i < leaf_slot.size() && leaf_slot[i] != UINT32_MAX; };
-        for (const std::uint32_t leaf : frontier) {
-            if (nodes[leaf].child != 0 || !evaluated(leaf)) continue;
+        // Bit 2a + side: the surface crosses that face (corners of both signs on it).
+        auto crossed_faces = [&](std::uint32_t leaf) {
+            if (nodes[leaf].child != 0 || !evaluated(leaf)) return 0u;
             const std::uint32_t m = sign_mask(leaf);
-            if (m == 0 || m == 0xffu) continue;
+            if (m == 0 || m == 0xffu) return 0u;
+            std::uint32_t faces = 0;
             for (std::uint32_t a = 0; a < 3; ++a)
                 for (std::uint32_t side = 0; side < 2; ++side) {
                     std::uint32_t face = 0;  // corners on this face
                     for (std::uint32_t c = 0; c < 8; ++c)
                         if (((c >> a) & 1u) == side) face |= 1u << c;
-                    if ((m & face) == 0 || (m & face) == face) continue;  // one sign: no crossing
+                    if ((m & face) != 0 && (m & face) != face) faces |= 1u << (2 * a + side);
+                }
+            return faces;
+        };
+        std::vector<std::uint8_t> open(frontier.size()), near(frontier.size());  // face bits
+        parallel_chunks(frontier.size(), 1024, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            std::vector<std::uint32_t> scratch;
+            for (std::size_t k = b; k < e; ++k) {
+                const std::uint32_t leaf = frontier[k], l = nodes[leaf].level;
+                std::uint32_t faces = crossed_faces(leaf), near_faces = 0;
+                for (std::uint32_t f = 0; f < 6; ++f) {
+                    std::uint32_t cell[3];
+                    if (!(faces & (1u << f))) continue;
+                    if (!neighbour_cell(leaf, f / 2, f % 2, cell)) {
+                        faces &= ~(1u << f);  // the root's face
+                        continue;
+                    }
+                    const Node& n = nodes[locate(cell, l)];
+                    if (n.child != 0) continue;  // finer leaves beyond: the serial pass decides
+                    if (n.kind != k_empty) {
+                        if (n.level == l) faces &= ~(1u << f);
+                    } else if (m_near(l, cell[0], cell[1], cell[2], scratch)) {
+                        near_faces |= 1u << f;
+                    } else {
+                        faces &= ~(1u << f);
+                    }
+                }
+                open[k] = static_cast<std::uint8_t>(faces);
+                near[k] = static_cast<std::uint8_t>(near_faces);
+            }
+        });
+        for (std::size_t k = 0; k < frontier.size(); ++k) {
+            if (open[k] == 0) continue;
+            const std::uint32_t leaf = frontier[k];
+            if (nodes[leaf].child != 0) continue;  // split by an earlier face
+            for (std::uint32_t a = 0; a < 3; ++a)
+                for (std::uint32_t side = 0; side < 2; ++side) {
+                    const std::uint32_t bit = 1u << (2 * a + side);
+                    if (!(open[k] & bit)) continue;
                     beyond_face(
-                        leaf, a, side,
+                        leaf, a, side, (near[k] & bit) != 0,
                         [&](std::uint32_t i) {
                             return evaluated(i) ? sign_mask(i) : 0x100u;  // 0x100: not known yet
                         },
@@ -533,12 +652,12 @@ private:
     /// Fills empty leaf i if some point's support reaches it.
     void add_empty(std::uint32_t i) {
         const Node& n = m_tree.nodes[i];
-        if (m_near(n.level, n.x, n.y, n.z)) add(i);
+        if (m_near(n.level, n.x, n.y, n.z, m_scratch)) add(i);
     }
 
     /// Splits filled leaf i; all 8 children are filled and to be evaluated.
     void split_all(std::uint32_t i) {
-        const std::uint32_t first = m_tree.split_by_points(i, false);
+        const std::uint32_t first = m_tree.split_by_points(i, TreeBuilder::DiskTest::none);
         for (std::uint32_t c = 0; c < 8; ++c) add(first + c);
     }
 
@@ -562,28 +681,44 @@ private:
         return y0 + (y1 - y0) * u[2];
     }
 
-    template <class Mask, class Values>
-    void beyond_face(std::uint32_t leaf, std::uint32_t a, std::uint32_t side, Mask&& mask, Values&& values) {
-        std::vector<Node>& nodes = m_tree.nodes;
-        const std::uint32_t l = nodes[leaf].level;
-        std::uint32_t cell[3] = {nodes[leaf].x, nodes[leaf].y, nodes[leaf].z};
+    /// The cell beyond face (a, side) of `leaf`, at its level; false at the root's faces.
+    bool neighbour_cell(std::uint32_t leaf, std::uint32_t a, std::uint32_t side,
+                        std::uint32_t cell[3]) const {
+        const Node& n = m_tree.nodes[leaf];
+        cell[0] = n.x, cell[1] = n.y, cell[2] = n.z;
         if (side == 1) {
-            if (cell[a] + 1 >= (1u << l)) return;  // the root's face
+            if (cell[a] + 1 >= (1u << n.level)) return false;
             ++cell[a];
         } else {
-            if (cell[a] == 0) return;
+            if (cell[a] == 0) return false;
             --cell[a];
         }
+        return true;
+    }
+
+    /// `near_known`: m_near is true for the cell beyond the face at the leaf's level.
+    template <class Mask, class Values>
+    void beyond_face(std::uint32_t leaf, std::uint32_t a, std::uint32_t side, bool near_known, Mask&& mask,
+                     Values&& values) {
+        std::vector<Node>& nodes = m_tree.nodes;
+        const std::uint32_t l = nodes[leaf].level;
+        std::uint32_t cell[3];
+        if (!neighbour_cell(leaf, a, side, cell)) return;
         std::uint32_t node = locate(cell, l);
         if (nodes[node].child == 0 && nodes[node].level == l) {
-            if (nodes[node].kind == k_empty) add_empty(node);
+            if (nodes[node].kind == k_empty) {
+                if (near_known)
+                    add(node);
+                else
+                    add_empty(node);
+            }
             return;
         }
         if (nodes[node].child == 0) {  // a coarser leaf
             if (nodes[node].kind == k_empty) {
-                if (!m_near(l, cell[0], cell[1], cell[2])) return;
+                if (!near_known && !m_near(l, cell[0], cell[1], cell[2], m_scratch)) return;
                 while (nodes[node].level < l) {  // bounded by l
-                    m_tree.split_by_points(node, false);
+                    m_tree.split_by_points(node, TreeBuilder::DiskTest::none);
                     node = locate(cell, l);
                 }
                 add(node);
@@ -694,7 +829,8 @@ private:
 
     TreeBuilder& m_tree;
     std::uint32_t m_max_level;
-    std::function<bool(std::uint32_t, std::uint32_t, std::uint32_t, std::uint32_t)> m_near;
+    Near m_near;
+    std::vector<std::uint32_t> m_scratch;  ///< m_near's, on the serial path
     std::vector<std::uint32_t> m_added, m_work;
 };
 
@@ -1239,21 +1375,23 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
                    const CornerEvaluator& evaluator, const Frame& frame, const BuildOptions& o,
                    unsigned threads, BuildStats& st) {
     std::vector<Node>& nodes = tree.nodes;
-    std::vector<std::uint32_t> near_ids;
-    SurfaceClosure closure(
-        tree, o.max_level, [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z) {
-            double blo[3], bhi[3];
-            frame.box(level, x, y, z, blo, bhi);
-            near_ids.clear();
-            gather_overlapping(evaluator.index, evaluator.ps, evaluator.ps.support, blo, bhi, near_ids);
-            return !near_ids.empty();
-        });
+    SurfaceClosure closure(tree, o.max_level,
+                           [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+                               std::vector<std::uint32_t>& near_ids) {
+                               double blo[3], bhi[3];
+                               frame.box(level, x, y, z, blo, bhi);
+                               near_ids.clear();
+                               gather_overlapping(evaluator.index, evaluator.ps, evaluator.ps.support, blo,
+                                                  bhi, near_ids);
+                               return !near_ids.empty();
+                           });
     for (std::uint32_t round = 0; round < 256 && !frontier.empty(); ++round) {  // every round adds leaves
         std::vector<std::uint32_t> added = closure.close(
             frontier, table.leaf_slot, [&](std::uint32_t node) { return table.sign_mask(node); },
             [&](std::uint32_t node, double f[8]) {
                 for (std::uint32_t c = 0; c < 8; ++c) f[c] = table.at(node, c).f;
-            });
+            },
+            threads);
         st.closure_leaves += added.size();
         // New leaves: evaluate their 8 corners each (a corner shared with an older leaf gets the same
         // value again: f depends on the position only).
@@ -1267,7 +1405,9 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
         for (std::size_t k = 0; k < 8 * added.size(); ++k)
             table.slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
         std::atomic<std::uint64_t> far_added{0}, unsupported_added{0};
-        parallel_chunks(added.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        // Small chunks: a round adds few leaves, each costly (8 corners far from the data on
+        // scans: 0.6 ms a leaf on the noisy room scan), and 256-leaf chunks left one worker alone.
+        parallel_chunks(added.size(), 4, threads, [&](std::size_t b, std::size_t e, unsigned) {
             EvaluatorScratch scratch;
             for (std::size_t k = b; k < e; ++k) {
                 const Node& nd = nodes[added[k]];
@@ -1446,7 +1586,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     st.seconds_passive = seconds_since(t0);
 
     t0 = Clock::now();
-    if (o.balance) st.balance_splits = tree.balance(progress);  // step 4
+    if (o.balance) st.balance_splits = tree.balance(threads, progress);  // step 4
     st.seconds_balance = seconds_since(t0);
 
     t0 = Clock::now();
