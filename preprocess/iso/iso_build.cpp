@@ -1262,6 +1262,16 @@ struct CornerTable {
     std::vector<CornerValue> values;
     std::vector<std::uint32_t> slot_corner;
     std::vector<std::uint32_t> leaf_slot;  ///< node -> its evaluated leaf (UINT32_MAX: never evaluated)
+    std::vector<std::uint64_t> keys;       ///< sorted codes of values[0, keys.size()): step 5's corners
+    std::unordered_map<std::uint64_t, std::uint32_t> added;  ///< code -> value: the closure's corners
+
+    /// The value index of the corner with code `key`, or UINT32_MAX when not evaluated yet.
+    std::uint32_t find(std::uint64_t key) const {
+        const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+        if (it != keys.end() && *it == key) return static_cast<std::uint32_t>(it - keys.begin());
+        const auto a = added.find(key);
+        return a != added.end() ? a->second : UINT32_MAX;
+    }
 
     const CornerValue& at(std::uint32_t node, std::uint32_t c) const {
         return values[slot_corner[8 * leaf_slot[node] + c]];
@@ -1295,76 +1305,97 @@ std::vector<std::uint32_t> filled_leaves(const std::vector<Node>& nodes, BuildSt
     return filled;
 }
 
+/// The code of corner c of a node (its cell's corner at the finest code level).
+std::uint64_t corner_key(const Node& nd, std::uint32_t c) {
+    const std::uint32_t s = k_code_level - nd.level;
+    return morton3((nd.x + (c & 1u)) << s, (nd.y + ((c >> 1) & 1u)) << s, (nd.z + ((c >> 2) & 1u)) << s);
+}
+
+/// Counts of BlockEvaluation::run, for BuildStats.
+struct CornerCounts {
+    std::uint64_t far = 0, counted = 0, unsupported = 0;
+};
+
+/// Evaluates corners given by sorted distinct codes in blocks sharing a node at a level about half
+/// as wide as the median support (`median_support`): one gather of candidates per block. f, n
+/// and the color depend on the corner's position only (the candidates within its support, in the
+/// index's order, whatever the block's box); the step-5c flag `supported` looks at every gathered
+/// candidate, so it may depend on the box. Each corner is evaluated once (step 5 and the closure's
+/// rounds share CornerTable's values), so the leaves that share a corner agree on it.
+struct BlockEvaluation {
+    const CornerEvaluator& evaluator;
+    const Frame& frame;
+    double median_support;
+
+    CornerCounts run(const std::vector<std::uint64_t>& keys, CornerValue* out, unsigned threads,
+                     const Progress& progress) const {
+        if (keys.empty()) return {};
+        const std::uint32_t block_level =
+            detail::level_for_extent(frame, 0.5 * median_support, 1.0, k_code_level);
+        const std::uint32_t block_shift = 3 * (k_code_level - block_level);
+        std::vector<std::size_t> blocks{0};
+        for (std::size_t i = 1; i < keys.size(); ++i)
+            if ((keys[i] >> block_shift) != (keys[i - 1] >> block_shift)) blocks.push_back(i);
+        blocks.push_back(keys.size());
+        std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
+        const double corner_step = frame.edge(k_code_level);
+        parallel_chunks(blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
+            EvaluatorScratch scratch;
+            std::vector<double> qs;
+            for (std::size_t bi = b0; bi < b1; ++bi) {
+                const std::size_t first = blocks[bi], last = blocks[bi + 1];
+                const std::uint64_t prefix = keys[first] >> block_shift;
+                double blo[3], bhi[3];
+                frame.box(block_level, pre::compact_bits21(prefix), pre::compact_bits21(prefix >> 1),
+                          pre::compact_bits21(prefix >> 2), blo, bhi);
+                qs.clear();
+                for (std::size_t ci = first; ci < last; ++ci) {
+                    const std::uint64_t key = keys[ci];
+                    qs.push_back(frame.lo[0] + corner_step * pre::compact_bits21(key));
+                    qs.push_back(frame.lo[1] + corner_step * pre::compact_bits21(key >> 1));
+                    qs.push_back(frame.lo[2] + corner_step * pre::compact_bits21(key >> 2));
+                }
+                evaluator.evaluate(qs.data(), last - first, blo, bhi, out + first, scratch);
+                const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
+                if (worker == 0 && progress) progress("corners", d, keys.size());
+            }
+            far += scratch.far;
+            counted += scratch.counted;
+            unsupported += scratch.unsupported;
+        });
+        return CornerCounts{far.load(), counted.load(), unsupported.load()};
+    }
+};
+
 /// Step 5 (thesis 4.2-4.3, eq. 4.1-4.3): f(Q), n(Q) and the color at every distinct corner of the
-/// `filled` leaves. The corners are sorted by code and evaluated in blocks sharing a node at a
-/// level about half as wide as the median support (`median_support`): one gather of candidates
-/// per block.
+/// `filled` leaves, sorted by code (BlockEvaluation).
 CornerTable evaluate_corners(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& filled,
-                             const CornerEvaluator& evaluator, const Frame& frame, double median_support,
-                             unsigned threads, const Progress& progress, BuildStats& st) {
+                             const BlockEvaluation& blocks, unsigned threads, const Progress& progress,
+                             BuildStats& st) {
     CornerTable table;
     table.leaf_slot.assign(nodes.size(), UINT32_MAX);
     for (std::size_t f = 0; f < filled.size(); ++f)
         table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
     std::vector<std::pair<std::uint64_t, std::uint32_t>> slots(8 * filled.size());
     parallel_chunks(filled.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t f = b; f < e; ++f) {
-            const Node& nd = nodes[filled[f]];
-            const std::uint32_t s = k_code_level - nd.level;
+        for (std::size_t f = b; f < e; ++f)
             for (std::uint32_t c = 0; c < 8; ++c)
-                slots[8 * f + c] = {morton3((nd.x + (c & 1u)) << s, (nd.y + ((c >> 1) & 1u)) << s,
-                                            (nd.z + ((c >> 2) & 1u)) << s),
-                                    static_cast<std::uint32_t>(8 * f + c)};
-        }
+                slots[8 * f + c] = {corner_key(nodes[filled[f]], c), static_cast<std::uint32_t>(8 * f + c)};
     });
     pre::radix_sort_by(slots, 64, threads, [](const auto& e) { return e.first; });
-    std::vector<std::uint64_t> corner_keys;
+    std::vector<std::uint64_t>& corner_keys = table.keys;
     table.slot_corner.resize(slots.size());
     for (std::size_t i = 0; i < slots.size(); ++i) {
         if (i == 0 || slots[i].first != slots[i - 1].first) corner_keys.push_back(slots[i].first);
         table.slot_corner[slots[i].second] = static_cast<std::uint32_t>(corner_keys.size() - 1);
     }
     std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(slots);
-
-    const std::uint32_t block_level =
-        detail::level_for_extent(frame, 0.5 * median_support, 1.0, k_code_level);
-    const std::uint32_t block_shift = 3 * (k_code_level - block_level);
-    std::vector<std::size_t> blocks{0};
-    for (std::size_t i = 1; i < corner_keys.size(); ++i)
-        if ((corner_keys[i] >> block_shift) != (corner_keys[i - 1] >> block_shift)) blocks.push_back(i);
-    blocks.push_back(corner_keys.size());
     table.values.resize(corner_keys.size());
-    std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
-    const double corner_step = frame.edge(k_code_level);
-    parallel_chunks(blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
-        EvaluatorScratch scratch;
-        std::vector<double> qs;
-        for (std::size_t bi = b0; bi < b1; ++bi) {
-            const std::size_t first = blocks[bi], last = blocks[bi + 1];
-            const std::uint64_t prefix = corner_keys[first] >> block_shift;
-            double blo[3], bhi[3];
-            frame.box(block_level, pre::compact_bits21(prefix), pre::compact_bits21(prefix >> 1),
-                      pre::compact_bits21(prefix >> 2), blo, bhi);
-            qs.clear();
-            for (std::size_t ci = first; ci < last; ++ci) {
-                const std::uint64_t key = corner_keys[ci];
-                qs.push_back(frame.lo[0] + corner_step * pre::compact_bits21(key));
-                qs.push_back(frame.lo[1] + corner_step * pre::compact_bits21(key >> 1));
-                qs.push_back(frame.lo[2] + corner_step * pre::compact_bits21(key >> 2));
-            }
-            evaluator.evaluate(qs.data(), last - first, blo, bhi, &table.values[first], scratch);
-            const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
-            if (worker == 0 && progress) progress("corners", d, corner_keys.size());
-        }
-        far += scratch.far;
-        counted += scratch.counted;
-        unsupported += scratch.unsupported;
-    });
-    st.far_corners = far.load();
-    st.unsupported_corners = unsupported.load();
-    st.mean_neighbours_x100 = corner_keys.size() > st.far_corners
-                                  ? 100 * counted.load() / (corner_keys.size() - st.far_corners)
-                                  : 0;
+    const CornerCounts n = blocks.run(corner_keys, table.values.data(), threads, progress);
+    st.far_corners = n.far;
+    st.unsupported_corners = n.unsupported;
+    st.mean_neighbours_x100 =
+        corner_keys.size() > st.far_corners ? 100 * n.counted / (corner_keys.size() - st.far_corners) : 0;
     st.corners = corner_keys.size();
     return table;
 }
@@ -1372,8 +1403,9 @@ CornerTable evaluate_corners(const std::vector<Node>& nodes, const std::vector<s
 /// Step 5b (with 5c's support): the surface closure, from the `frontier` of evaluated leaves
 /// until no face leads to a new leaf; the new leaves' corners are evaluated into `table`.
 void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint32_t> frontier,
-                   const CornerEvaluator& evaluator, const Frame& frame, const BuildOptions& o,
-                   unsigned threads, BuildStats& st) {
+                   const BlockEvaluation& blocks, const BuildOptions& o, unsigned threads, BuildStats& st) {
+    const CornerEvaluator& evaluator = blocks.evaluator;
+    const Frame& frame = blocks.frame;
     std::vector<Node>& nodes = tree.nodes;
     SurfaceClosure closure(tree, o.max_level,
                            [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
@@ -1393,35 +1425,31 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
             },
             threads);
         st.closure_leaves += added.size();
-        // New leaves: evaluate their 8 corners each (a corner shared with an older leaf gets the same
-        // value again: f depends on the position only).
+        // New leaves: their corners not evaluated yet (most are shared with the leaves they grew
+        // from or with each other), in blocks as in step 5.
         const std::size_t base = table.slot_corner.size() / 8;
         table.leaf_slot.resize(nodes.size(), UINT32_MAX);
         for (std::size_t k = 0; k < added.size(); ++k)
             table.leaf_slot[added[k]] = static_cast<std::uint32_t>(base + k);
         table.slot_corner.resize(table.slot_corner.size() + 8 * added.size());
-        const std::size_t corner_base = table.values.size();
-        table.values.resize(corner_base + 8 * added.size());
-        for (std::size_t k = 0; k < 8 * added.size(); ++k)
-            table.slot_corner[8 * base + k] = static_cast<std::uint32_t>(corner_base + k);
-        std::atomic<std::uint64_t> far_added{0}, unsupported_added{0};
-        // Small chunks: a round adds few leaves, each costly (8 corners far from the data on
-        // scans: 0.6 ms a leaf on the noisy room scan), and 256-leaf chunks left one worker alone.
-        parallel_chunks(added.size(), 4, threads, [&](std::size_t b, std::size_t e, unsigned) {
-            EvaluatorScratch scratch;
-            for (std::size_t k = b; k < e; ++k) {
-                const Node& nd = nodes[added[k]];
-                double blo[3], bhi[3], qs[24];
-                frame.box(nd.level, nd.x, nd.y, nd.z, blo, bhi);
-                for (int c = 0; c < 8; ++c)
-                    for (int a = 0; a < 3; ++a) qs[3 * c + a] = ((c >> a) & 1) ? bhi[a] : blo[a];
-                evaluator.evaluate(qs, 8, blo, bhi, &table.values[corner_base + 8 * k], scratch);
+        std::vector<std::uint64_t> fresh;
+        for (std::size_t k = 0; k < added.size(); ++k)
+            for (std::uint32_t c = 0; c < 8; ++c) {
+                const std::uint64_t key = corner_key(nodes[added[k]], c);
+                if (table.find(key) == UINT32_MAX) fresh.push_back(key);
             }
-            far_added += scratch.far;
-            unsupported_added += scratch.unsupported;
-        });
-        st.far_corners += far_added.load();
-        st.unsupported_corners += unsupported_added.load();
+        std::sort(fresh.begin(), fresh.end());
+        fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
+        const std::size_t corner_base = table.values.size();
+        table.values.resize(corner_base + fresh.size());
+        const CornerCounts n = blocks.run(fresh, table.values.data() + corner_base, threads, nullptr);
+        for (std::size_t i = 0; i < fresh.size(); ++i)
+            table.added.emplace(fresh[i], static_cast<std::uint32_t>(corner_base + i));
+        for (std::size_t k = 0; k < added.size(); ++k)
+            for (std::uint32_t c = 0; c < 8; ++c)
+                table.slot_corner[8 * (base + k) + c] = table.find(corner_key(nodes[added[k]], c));
+        st.far_corners += n.far;
+        st.unsupported_corners += n.unsupported;
         st.corner_slots += 8 * added.size();
         frontier.swap(added);
     }
@@ -1594,12 +1622,12 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     const double median_support = median_of(ps.support);
     const CornerEvaluator evaluator{index, ps, o.support, cube.sigma_max, 2 * median_support, o.one_side};
     const std::vector<std::uint32_t> filled = filled_leaves(nodes, st);
-    CornerTable table =
-        evaluate_corners(nodes, filled, evaluator, cube.frame, median_support, threads, progress, st);
+    const BlockEvaluation blocks{evaluator, cube.frame, median_support};
+    CornerTable table = evaluate_corners(nodes, filled, blocks, threads, progress, st);
     st.seconds_corners = seconds_since(t0);
 
     t0 = Clock::now();
-    if (o.closure) close_surface(tree, table, filled, evaluator, cube.frame, o, threads, st);  // steps 5b, 5c
+    if (o.closure) close_surface(tree, table, filled, blocks, o, threads, st);  // steps 5b, 5c
     st.seconds_closure = seconds_since(t0);
 
     t0 = Clock::now();
