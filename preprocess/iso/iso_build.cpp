@@ -253,6 +253,17 @@ public:
                 "the ISO octree would need more than 2^30 nodes (lower --max-level or raise --max-points)");
     }
 
+    /// The node holding cell (x, y, z) at `level`, or the leaf above it.
+    std::uint32_t locate(const std::uint32_t cell[3], std::uint32_t level) const {
+        std::uint32_t node = 0;
+        while (nodes[node].child != 0 && nodes[node].level < level) {  // bounded: one level per step
+            const std::uint32_t s = level - nodes[node].level - 1;
+            node = nodes[node].child +
+                   (((cell[0] >> s) & 1u) | (((cell[1] >> s) & 1u) << 1) | (((cell[2] >> s) & 1u) << 2));
+        }
+        return node;
+    }
+
     /// Top-down split by point count (step 2).
     void build_from_points() {
         nodes.clear();
@@ -466,7 +477,7 @@ public:
                     for (int d = 0; d < 27; ++d) {
                         std::uint32_t cell[3];
                         if ((work[k].second & (1u << d)) && neighbour(p, d, cell) &&
-                            needs_split(cell[0], cell[1], cell[2], p.level))
+                            needs_split(cell, p.level))
                             needed |= 1u << d;
                     }
                     work[k].second = needed;
@@ -510,16 +521,10 @@ private:
         return splits;
     }
 
-    /// Whether refine_towards(x, y, z, level) would split a leaf (read only).
-    bool needs_split(std::uint32_t x, std::uint32_t y, std::uint32_t z, std::uint32_t level) const {
-        std::uint32_t node = 0;
-        for (;;) {  // bounded: one level per iteration
-            const Node& n = nodes[node];
-            if (n.level >= level) return false;
-            if (n.child == 0) return is_filled(n.kind);
-            const std::uint32_t s = level - n.level - 1;
-            node = n.child + (((x >> s) & 1u) | (((y >> s) & 1u) << 1) | (((z >> s) & 1u) << 2));
-        }
+    /// Whether refine_towards(cell, level) would split a leaf (read only).
+    bool needs_split(const std::uint32_t cell[3], std::uint32_t level) const {
+        const Node& n = nodes[locate(cell, level)];
+        return n.level < level && is_filled(n.kind);
     }
 
     const PointSet& m_ps;
@@ -663,14 +668,7 @@ private:
 
     /// The node holding cell (x, y, z) at `level`, or the leaf above it.
     std::uint32_t locate(const std::uint32_t cell[3], std::uint32_t level) const {
-        const std::vector<Node>& nodes = m_tree.nodes;
-        std::uint32_t node = 0;
-        while (nodes[node].child != 0 && nodes[node].level < level) {  // bounded: one level per step
-            const std::uint32_t s = level - nodes[node].level - 1;
-            node = nodes[node].child +
-                   (((cell[0] >> s) & 1u) | (((cell[1] >> s) & 1u) << 1) | (((cell[2] >> s) & 1u) << 2));
-        }
-        return node;
+        return m_tree.locate(cell, level);
     }
 
     /// Trilinear interpolation of 8 corner values at unit-cube coordinates u (double).
@@ -1432,11 +1430,13 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
         for (std::size_t k = 0; k < added.size(); ++k)
             table.leaf_slot[added[k]] = static_cast<std::uint32_t>(base + k);
         table.slot_corner.resize(table.slot_corner.size() + 8 * added.size());
+        std::uint32_t* slots = table.slot_corner.data() + 8 * base;
         std::vector<std::uint64_t> fresh;
         for (std::size_t k = 0; k < added.size(); ++k)
             for (std::uint32_t c = 0; c < 8; ++c) {
                 const std::uint64_t key = corner_key(nodes[added[k]], c);
-                if (table.find(key) == UINT32_MAX) fresh.push_back(key);
+                slots[8 * k + c] = table.find(key);
+                if (slots[8 * k + c] == UINT32_MAX) fresh.push_back(key);
             }
         std::sort(fresh.begin(), fresh.end());
         fresh.erase(std::unique(fresh.begin(), fresh.end()), fresh.end());
@@ -1447,7 +1447,8 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
             table.added.emplace(fresh[i], static_cast<std::uint32_t>(corner_base + i));
         for (std::size_t k = 0; k < added.size(); ++k)
             for (std::uint32_t c = 0; c < 8; ++c)
-                table.slot_corner[8 * (base + k) + c] = table.find(corner_key(nodes[added[k]], c));
+                if (slots[8 * k + c] == UINT32_MAX)
+                    slots[8 * k + c] = table.added.at(corner_key(nodes[added[k]], c));
         st.far_corners += n.far;
         st.unsupported_corners += n.unsupported;
         st.corner_slots += 8 * added.size();
