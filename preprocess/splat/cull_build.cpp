@@ -39,6 +39,7 @@
 #include <limits>
 #include <random>
 
+#include "cull_probe_hits.h"
 #include "octree_build.h"
 #include "prt/core/scene_view.h"
 #include "prt/error.h"
@@ -294,15 +295,16 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
         std::vector<std::uint32_t> votes;
         if (params.policy == CullPolicy::votes) votes.assign(s.splats.size(), 0);
         std::vector<CullCounters> counters(threads);
+        std::vector<LeafProbeHits> probe_hits(threads);
         std::atomic<std::uint64_t> done{0};
-        parallel_chunks(leaves.size(), k_leaf_chunk, threads,
-                        [&](std::size_t b, std::size_t e, unsigned worker) {
-                            for (std::size_t a = b; a < e; ++a)
-                                cull_leaf(view, static_cast<std::uint32_t>(a), keep.data(),
-                                          votes.empty() ? nullptr : votes.data(), counters[worker]);
-                            const std::uint64_t d = done.fetch_add(e - b) + (e - b);
-                            if (worker == 0 && params.progress) params.progress(d, leaves.size());
-                        });
+        parallel_chunks(
+            leaves.size(), k_leaf_chunk, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+                for (std::size_t a = b; a < e; ++a)
+                    cull_leaf(view, static_cast<std::uint32_t>(a), keep.data(),
+                              votes.empty() ? nullptr : votes.data(), counters[worker], probe_hits[worker]);
+                const std::uint64_t d = done.fetch_add(e - b) + (e - b);
+                if (worker == 0 && params.progress) params.progress(d, leaves.size());
+            });
         for (const CullCounters& c : counters) stats.counters += c;
     }
     for (const std::uint8_t k : keep) stats.splats_after += k != k_keep_none;

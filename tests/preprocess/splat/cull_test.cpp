@@ -9,8 +9,6 @@
 // in double with tolerances that make a float rounding difference at a rim or a leaf face count
 // for the code, never against it (strict on the unculled side, lenient on the culled side). The
 // probes themselves are the code's (make_probe and friends): "the same probes" is what is tested.
-#include "cull_build.h"
-
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -21,13 +19,17 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <set>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "cull_build.h"
+#include "cull_probe_hits.h"
 #include "octree_build.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
@@ -390,6 +392,78 @@ TEST(Cull, HoleMeasurementSeesHolesAndNoneWithoutCulling) {
     pre::OctreeSections other = m.sections();
     other.info.root_size *= 2;
     EXPECT_THROW(pre::measure_holes(m.sections(), other, hp), Error);
+}
+
+// The CPU backend's four-wide probe-hit pass must give what cull.h's scalar probe_hits (the CUDA
+// backend's) gives, bit for bit, or the backends keep different replicas: random disks with the
+// cases that decide a test at its edge (normals across the line, zero radii, NaN coordinates,
+// coincident disks whose tie the first one wins, lines along an axis with axis-aligned normals),
+// every keep flag, leaves of 1 to 13 splats (padding lanes), lines with empty ranges.
+TEST(CullProbeHits, SameHitsAsTheScalarPass) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const auto unit = [&] {
+        core::Vec3 n{u(rng), u(rng), u(rng)};
+        return core::normalize_or(n, core::Vec3{0.0f, 0.0f, 1.0f});
+    };
+    const auto bits = [](float x) {
+        std::uint32_t b;
+        std::memcpy(&b, &x, 4);
+        return b;
+    };
+    std::size_t lines = 0, hit_sides = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        const std::uint32_t count = 1 + static_cast<std::uint32_t>(trial % 13);
+        const std::uint32_t pad = static_cast<std::uint32_t>(trial % 3);  // the leaf's place in the array
+        std::vector<pool::Splat> splats(pad + count + 2);
+        std::vector<std::uint8_t> keep(splats.size());
+        for (std::size_t i = 0; i < splats.size(); ++i) {
+            pool::Splat& s = splats[i];
+            const core::Vec3 p{u(rng) * 0.5f, u(rng) * 0.5f, u(rng) * 0.5f};
+            core::Vec3 n = unit();
+            const int edge = static_cast<int>(rng() % 10);
+            if (edge == 0) n = core::Vec3{0.0f, 0.0f, (rng() & 1u) ? 1.0f : -1.0f};  // across z lines
+            if (edge == 1) n = core::Vec3{0.0f, 0.0f, 0.0f};
+            if (edge == 7) n = core::Vec3{1.0f, 0.0f, 0.0f};  // along z lines: d.n = 0
+            s.position = {p.x, p.y, p.z};
+            s.normal = {n.x, n.y, n.z};
+            s.radius = edge == 2 ? 0.0f : 0.2f + 0.6f * std::fabs(u(rng));
+            if (edge == 3) s.position.y = std::numeric_limits<float>::quiet_NaN();
+            if (edge >= 4 && edge <= 6 && i > 0) {  // a coincident disk of another radius: a tie
+                const float r = s.radius;
+                s = splats[i - 1];
+                s.radius = r;
+            }
+            s.point = static_cast<std::uint32_t>(i);
+            keep[i] = static_cast<std::uint8_t>(rng() % 3);
+        }
+        core::OctreeView view;
+        view.splats = splats.data();
+        view.splat_count = static_cast<std::uint32_t>(splats.size());
+        pre::LeafProbeHits soa;
+        for (int k = 0; k < 64; ++k, ++lines) {
+            const core::Vec3 o{u(rng) * 0.3f, u(rng) * 0.3f, -2.0f + u(rng) * 0.1f};
+            const core::Vec3 d = k % 4 == 0 ? core::Vec3{0.0f, 0.0f, 1.0f} : unit();
+            const float t0 = k % 7 == 0 ? 3.0f : std::fabs(u(rng)), t1 = 1.0f + 3.0f * std::fabs(u(rng));
+            core::cull_detail::SideHits want[2], got[2];
+            core::CullCounters cw, cg;
+            core::cull_detail::probe_hits(view, pad, pad + count, keep.data(), core::k_keep_centre, o, d, t0,
+                                          t1, want, cw);
+            soa(view, pad, pad + count, keep.data(), o, d, t0, t1, got, cg);
+            ASSERT_EQ(cw.splat_tests, cg.splat_tests);
+            for (int side = 0; side < 2; ++side) {
+                SCOPED_TRACE("trial " + std::to_string(trial) + " line " + std::to_string(k) + " side " +
+                             std::to_string(side));
+                ASSERT_EQ(bits(want[side].near_s), bits(got[side].near_s));
+                ASSERT_EQ(bits(want[side].near_r), bits(got[side].near_r));
+                ASSERT_EQ(bits(want[side].kept_s), bits(got[side].kept_s));
+                ASSERT_EQ(want[side].centre, got[side].centre);
+                hit_sides += want[side].near_s < core::k_inf;
+            }
+            if (k == 40) keep[pad] = core::k_keep_probe;  // cull_leaf keeps a replica mid-leaf
+        }
+    }
+    EXPECT_GT(hit_sides, lines / 8);  // the lines do meet disks (4055 of 6400 lines x 2 sides)
 }
 
 TEST(Cull, DeterministicAndIndependentOfThreads) {

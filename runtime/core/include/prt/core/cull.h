@@ -132,6 +132,17 @@ PRT_HD PRT_INLINE void probe_hits(const OctreeView& v, std::uint32_t begin, std:
     }
 }
 
+/// The default `Hits` of cull_leaf(): probe_hits over the octree's splats, as the CUDA path runs it.
+/// A backend may pass its own (the CPU path's reads a per-leaf structure-of-arrays copy, eight
+/// splats per step) as long as it gives the same SideHits: the backends must keep the same replicas.
+struct OctreeProbeHits {
+    PRT_HD PRT_INLINE void operator()(const OctreeView& v, std::uint32_t begin, std::uint32_t end,
+                                      const std::uint8_t* keep, Vec3 o, Vec3 d, float t0, float t1,
+                                      SideHits hits[2], CullCounters& c) const {
+        probe_hits(v, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
+    }
+};
+
 }  // namespace cull_detail
 
 /// The number of probe lines per leaf: directions x G x G (each line is two probe rays).
@@ -335,18 +346,21 @@ PRT_HD inline bool probe_leaf_range(const CullView& v, std::uint32_t leaf, Vec3 
 
 /// Probe line k of `leaf` (`frame` is set at the first line of each of its directions): the ray
 /// o + t d, its range [t0, t1] inside the leaf, and both sides' nearest hits among the leaf's
-/// centre splats [begin, end) (probe_hits). False when the line misses the leaf.
+/// centre splats [begin, end) (`probe_hits`, cull_detail::OctreeProbeHits or a backend's equal).
+/// False when the line misses the leaf.
+template <class Hits>
 PRT_HD inline bool trace_probe_line(const CullView& v, std::uint32_t leaf, const ProbeRegion& region,
                                     ProbeFrame& frame, std::uint32_t k, std::uint32_t begin,
                                     std::uint32_t end, const std::uint8_t* keep, Vec3& o, Vec3& d, float& t0,
-                                    float& t1, cull_detail::SideHits hits[2], CullCounters& c) {
+                                    float& t1, cull_detail::SideHits hits[2], CullCounters& c,
+                                    Hits& probe_hits) {
     const std::uint32_t per_dir = v.grid * v.grid;
     float t_max;
     if (k % per_dir == 0) probe_frame(v, leaf, region, k / per_dir, frame);
     if (!make_probe(v, leaf, region, frame, k, o, d, t_max) ||
         !probe_leaf_range(v, leaf, o, d, t_max, t0, t1))
         return false;
-    cull_detail::probe_hits(v.octree, begin, end, keep, k_keep_centre, o, d, t0, t1, hits, c);
+    probe_hits(v.octree, begin, end, keep, o, d, t0, t1, hits, c);
     return true;
 }
 
@@ -354,13 +368,15 @@ PRT_HD inline bool trace_probe_line(const CullView& v, std::uint32_t leaf, const
 /// on entry k_keep_centre for the leaf's centre splats and k_keep_none for its replicas; on return
 /// the replicas a probe needed are k_keep_probe. `votes` (one counter per stored splat, zero on
 /// entry) is scratch for the votes policy and may be null otherwise. Only the leaf's own ranges of
-/// `keep` and `votes` are touched, so leaves can be culled in parallel.
+/// `keep` and `votes` are touched, so leaves can be culled in parallel. `probe_hits` finds a probe
+/// line's hits among the leaf's splats (see cull_detail::OctreeProbeHits).
 ///
 /// Each probe line is two probe rays: o + t d and its reverse. A disk facing d is met by the
 /// reverse ray only, so one pass over the splats serves both, and each leaf is probed from
 /// 2 x directions directions without testing any line twice.
+template <class Hits = cull_detail::OctreeProbeHits>
 PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t* keep, std::uint32_t* votes,
-                             CullCounters& c) {
+                             CullCounters& c, Hits&& probe_hits = Hits{}) {
     const CullLeaf L = v.leaves[leaf];
     if (L.level == k_cull_leaf_unknown) return;
     std::uint32_t begin, end;
@@ -386,7 +402,8 @@ PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t
         Vec3 o, d;
         float t0, t1;
         cull_detail::SideHits hits[2];
-        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c)) continue;
+        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c, probe_hits))
+            continue;
         for (std::uint32_t side = 0; side < 2; ++side) {
             const cull_detail::SideHits& h = hits[side];
             if (!(h.near_s < k_inf)) continue;
@@ -406,7 +423,8 @@ PRT_HD inline void cull_leaf(const CullView& v, std::uint32_t leaf, std::uint8_t
         Vec3 o, d;
         float t0, t1;
         cull_detail::SideHits hits[2];
-        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c)) continue;
+        if (!trace_probe_line(v, leaf, region, frame, k, begin, end, keep, o, d, t0, t1, hits, c, probe_hits))
+            continue;
         c.probes += 2;
         for (std::uint32_t side = 0; side < 2; ++side) {
             const cull_detail::SideHits& h = hits[side];
