@@ -112,12 +112,14 @@ bool is_filled(std::uint8_t kind) {
 /// The usable points, sorted by their level-K Morton code (structure of arrays).
 struct PointSet {
     std::size_t n = 0;
-    std::vector<double> pos, nrm;     ///< 3n: position (local frame), unit normal
-    std::vector<double> sigma;        ///< Gaussian sigma_i
-    std::vector<double> support;      ///< support x sigma_i: the corner evaluation's reach
-    std::vector<double> rho;          ///< radius of the influence disk (passive leaves)
-    std::vector<double> reach;        ///< max(support, rho): what the index is built for
-    std::vector<double> data2;        ///< (data_reach x r_i)^2: how far from p_i the data "is" (issue 15)
+    std::vector<double> pos, nrm;  ///< 3n: position (local frame), unit normal
+    std::vector<double> sigma;     ///< Gaussian sigma_i
+    std::vector<double> inv2s2,
+        wn;                       ///< 1 / (2 sigma_i^2) and eq. 4.1's normalization 1 / sqrt(2 pi sigma_i^2)
+    std::vector<double> support;  ///< support x sigma_i: the corner evaluation's reach
+    std::vector<double> rho;      ///< radius of the influence disk (passive leaves)
+    std::vector<double> reach;    ///< max(support, rho): what the index is built for
+    std::vector<double> data2;    ///< (data_reach x r_i)^2: how far from p_i the data "is" (issue 15)
     std::vector<std::uint8_t> col;    ///< 3n sRGB
     std::vector<std::uint64_t> code;  ///< sorted
 };
@@ -855,9 +857,8 @@ struct Candidates {
         ny.push_back(ps.nrm[3 * id + 1]);
         nz.push_back(ps.nrm[3 * id + 2]);
         sup2.push_back(ps.support[id] * ps.support[id]);
-        const double s = ps.sigma[id];
-        inv2s2.push_back(1.0 / (2.0 * s * s));
-        wn.push_back(1.0 / std::sqrt(2.0 * std::numbers::pi * s * s));  // eq. 4.1's normalization
+        inv2s2.push_back(ps.inv2s2[id]);
+        wn.push_back(ps.wn[id]);
         cr.push_back(ps.col[3 * id]);
         cg.push_back(ps.col[3 * id + 1]);
         cb.push_back(ps.col[3 * id + 2]);
@@ -1230,27 +1231,33 @@ PointSet sorted_points(const BuildInput& in, const Influence& inf, const Frame& 
                         static_cast<std::uint32_t>(j)};
         }
     });
-    std::sort(order.begin(), order.end());
+    pre::radix_sort_by(order, 64, threads, [](const auto& e) { return e.first; });  // stable: by (code, j)
     ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
     ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
+    ps.inv2s2.resize(n), ps.wn.resize(n);
     if (o.data_reach > 0) ps.data2.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t j = order[i].second;
-        const std::uint32_t src = inf.keep[j];
-        const double r = inf.radius[j];
-        const pool::Float3 p = in.positions[src], nv = in.normals[src];
-        const double len = std::sqrt(double(nv.x) * nv.x + double(nv.y) * nv.y + double(nv.z) * nv.z);
-        ps.pos[3 * i] = p.x, ps.pos[3 * i + 1] = p.y, ps.pos[3 * i + 2] = p.z;
-        ps.nrm[3 * i] = nv.x / len, ps.nrm[3 * i + 1] = nv.y / len, ps.nrm[3 * i + 2] = nv.z / len;
-        const pool::Rgba8 c = in.colors.empty() ? pool::Rgba8{255, 255, 255, 255} : in.colors[src];
-        ps.col[3 * i] = c.r, ps.col[3 * i + 1] = c.g, ps.col[3 * i + 2] = c.b;
-        ps.sigma[i] = o.smoothing * r;
-        ps.support[i] = o.support * ps.sigma[i];
-        ps.rho[i] = std::max(r, ps.sigma[i]);
-        ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
-        if (o.data_reach > 0) ps.data2[i] = (o.data_reach * r) * (o.data_reach * r);
-        ps.code[i] = order[i].first;
-    }
+    parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) {
+            const std::uint32_t j = order[i].second;
+            const std::uint32_t src = inf.keep[j];
+            const double r = inf.radius[j];
+            const pool::Float3 p = in.positions[src], nv = in.normals[src];
+            const double len = std::sqrt(double(nv.x) * nv.x + double(nv.y) * nv.y + double(nv.z) * nv.z);
+            ps.pos[3 * i] = p.x, ps.pos[3 * i + 1] = p.y, ps.pos[3 * i + 2] = p.z;
+            ps.nrm[3 * i] = nv.x / len, ps.nrm[3 * i + 1] = nv.y / len, ps.nrm[3 * i + 2] = nv.z / len;
+            const pool::Rgba8 c = in.colors.empty() ? pool::Rgba8{255, 255, 255, 255} : in.colors[src];
+            ps.col[3 * i] = c.r, ps.col[3 * i + 1] = c.g, ps.col[3 * i + 2] = c.b;
+            ps.sigma[i] = o.smoothing * r;
+            const double s = ps.sigma[i];
+            ps.inv2s2[i] = 1.0 / (2.0 * s * s);
+            ps.wn[i] = 1.0 / std::sqrt(2.0 * std::numbers::pi * s * s);
+            ps.support[i] = o.support * ps.sigma[i];
+            ps.rho[i] = std::max(r, ps.sigma[i]);
+            ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
+            if (o.data_reach > 0) ps.data2[i] = (o.data_reach * r) * (o.data_reach * r);
+            ps.code[i] = order[i].first;
+        }
+    });
     return ps;
 }
 

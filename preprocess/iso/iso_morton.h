@@ -89,9 +89,30 @@ inline double exp_nonpositive(double x) {
     return p * std::bit_cast<double>(static_cast<std::uint64_t>(ni + 1023) << 52);
 }
 
+/// The first position in [from, end) whose code is >= value, searched outwards from `from`
+/// (exponential then binary search): a few steps when the answer is near, as it is for the next
+/// node of a row.
+inline const std::uint64_t* gallop_lower_bound(const std::uint64_t* from, const std::uint64_t* end,
+                                               std::uint64_t value) {
+    std::size_t step = 1;
+    const std::uint64_t* lo = from;
+    while (lo < end && *lo < value) {
+        const std::size_t left = static_cast<std::size_t>(end - lo);
+        const std::uint64_t* probe = lo + std::min(step, left - 1);
+        if (*probe >= value) return std::lower_bound(lo + 1, probe + 1, value);
+        lo = probe + 1;
+        step *= 2;
+    }
+    return lo;
+}
+
 /// Calls f(begin, end) for every non-empty range of `codes` (sorted level-K point codes) that
 /// lies in a node at `level` overlapping the box [blo, bhi] (closed). Nodes are visited in x-y-z
-/// loops; at most `max_per_axis`^3 of them (the caller picks a level coarse enough).
+/// loops; at most `max_per_axis`^3 of them (the caller picks a level coarse enough). The codes of
+/// the box lie between those of its lowest and highest nodes (a Morton code grows with each
+/// coordinate), and along a row they grow with x, so each node's range is searched from the row's
+/// previous one inside the box's span: the ISO build's gathers spent half their time in full
+/// binary searches over every point's code before.
 template <class F>
 void for_each_node_range(std::span<const std::uint64_t> codes, const Frame& frame, std::uint32_t level,
                          const double blo[3], const double bhi[3], F&& f) {
@@ -103,17 +124,27 @@ void for_each_node_range(std::span<const std::uint64_t> codes, const Frame& fram
         c1[a] = frame.cell(bhi[a], a, level);
     }
     const std::uint32_t shift = 3 * (k_code_level - level);
+    const std::uint64_t span = (std::uint64_t{1} << shift) - 1;
+    const std::uint64_t* const base = codes.data();
+    const std::uint64_t* const box_begin =
+        std::lower_bound(base, base + codes.size(), pre::morton3(c0[0], c0[1], c0[2]) << shift);
+    const std::uint64_t* const box_end =
+        std::upper_bound(box_begin, base + codes.size(), (pre::morton3(c1[0], c1[1], c1[2]) << shift) + span);
+    if (box_begin == box_end) return;
     for (std::uint32_t z = c0[2]; z <= c1[2]; ++z)
-        for (std::uint32_t y = c0[1]; y <= c1[1]; ++y)
+        for (std::uint32_t y = c0[1]; y <= c1[1]; ++y) {
+            const std::uint64_t* from = box_begin;
             for (std::uint32_t x = c0[0]; x <= c1[0]; ++x) {
-                const std::uint64_t prefix = pre::morton3(x, y, z);
-                const std::uint64_t first = prefix << shift;
-                const std::uint64_t last = first + ((std::uint64_t{1} << shift) - 1);
-                const auto b = std::lower_bound(codes.begin(), codes.end(), first);
-                if (b == codes.end() || *b > last) continue;
-                const auto e = std::upper_bound(b, codes.end(), last);
-                f(static_cast<std::size_t>(b - codes.begin()), static_cast<std::size_t>(e - codes.begin()));
+                const std::uint64_t first = pre::morton3(x, y, z) << shift;
+                const std::uint64_t* b = gallop_lower_bound(from, box_end, first);
+                if (b == box_end) break;  // the row's further nodes have larger codes
+                from = b;
+                if (*b > first + span) continue;
+                const std::uint64_t* e = gallop_lower_bound(b, box_end, first + span + 1);
+                from = e;
+                f(static_cast<std::size_t>(b - base), static_cast<std::size_t>(e - base));
             }
+        }
 }
 
 /// The deepest level (<= max_level) whose cells are at least `extent` / `parts` wide, so that a
