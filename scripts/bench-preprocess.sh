@@ -17,7 +17,9 @@
 #   POINTS     points in the generated file (default 1000000)
 #   THREADS    thread counts, comma separated (default "1,2,N" with N the cores this process has)
 #   REPEAT     runs of the chain per thread count; the fastest counts (default 2)
-# Environment: KEEP=1 keeps the work folder (its path is printed).
+# Environment: KEEP=1 keeps the work folder (its path is printed); CULL_BACKEND=auto|cpu|cuda is
+#   prt-cull's --backend (default cpu: the chain on the cores alone; auto is what a user on a GPU
+#   machine gets).
 set -euo pipefail
 # shellcheck source=lib/bench-common.sh
 . "$(dirname "$0")/lib/bench-common.sh"
@@ -26,6 +28,12 @@ points=${2:-1000000}
 cores=$(nproc)
 threads=${3:-$(printf '1\n2\n%s\n' "$cores" | sort -nu | paste -sd,)}
 repeat=${4:-2}
+cull_backend=${CULL_BACKEND:-cpu}
+case $cull_backend in auto | cpu | cuda) ;; *)
+    echo "bench-preprocess: CULL_BACKEND must be auto, cpu or cuda, not '$cull_backend'" >&2
+    exit 1
+    ;;
+esac
 steps="prt-import prt-radii prt-octree prt-cull prt-iso"
 bins=()
 for s in $steps; do bins+=("$build/bin/$s"); done
@@ -65,7 +73,7 @@ with open(path, "wb") as f:
     v.tofile(f)
 EOF
 
-echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step"
+echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step; prt-cull --backend $cull_backend"
 echo "# machine: $cores cores, $(uname -m), $(bench_cpu_model); load $(bench_load)"
 declare -A best
 IFS=, read -r -a counts <<<"$threads"
@@ -79,7 +87,7 @@ for t in "${counts[@]}"; do
         for s in $steps; do
             out=$work/$s.pool
             extra=()
-            [ "$s" = prt-cull ] && extra=(--backend cpu)
+            [ "$s" = prt-cull ] && extra=(--backend "$cull_backend")
             t0=$(date +%s.%N)
             taskset -c "0-$((t - 1))" "$build/bin/$s" "$in" -o "$out" --quiet "${extra[@]}"
             t1=$(date +%s.%N)
