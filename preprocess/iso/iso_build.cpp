@@ -112,14 +112,15 @@ bool is_filled(std::uint8_t kind) {
 /// The usable points, sorted by their level-K Morton code (structure of arrays).
 struct PointSet {
     std::size_t n = 0;
-    std::vector<double> pos, nrm;  ///< 3n: position (local frame), unit normal
-    std::vector<double> sigma;     ///< Gaussian sigma_i
-    std::vector<double> inv2s2,
-        wn;                       ///< 1 / (2 sigma_i^2) and eq. 4.1's normalization 1 / sqrt(2 pi sigma_i^2)
-    std::vector<double> support;  ///< support x sigma_i: the corner evaluation's reach
-    std::vector<double> rho;      ///< radius of the influence disk (passive leaves)
-    std::vector<double> reach;    ///< max(support, rho): what the index is built for
-    std::vector<double> data2;    ///< (data_reach x r_i)^2: how far from p_i the data "is" (issue 15)
+    std::vector<double> pos, nrm;     ///< 3n: position (local frame), unit normal
+    std::vector<double> sigma;        ///< Gaussian sigma_i
+    std::vector<double> inv2s2;       ///< 1 / (2 sigma_i^2)
+    std::vector<double> wn;           ///< eq. 4.1's normalization 1 / sqrt(2 pi sigma_i^2)
+    std::vector<double> log_sigma;    ///< log sigma_i (far corners' log weights)
+    std::vector<double> support;      ///< support x sigma_i: the corner evaluation's reach
+    std::vector<double> rho;          ///< radius of the influence disk (passive leaves)
+    std::vector<double> reach;        ///< max(support, rho): what the index is built for
+    std::vector<double> data2;        ///< (data_reach x r_i)^2: how far from p_i the data "is" (issue 15)
     std::vector<std::uint8_t> col;    ///< 3n sRGB
     std::vector<std::uint64_t> code;  ///< sorted
 };
@@ -935,7 +936,7 @@ bool near_data(const Sums& s, const double q[3], std::size_t m, Point&& point) {
 /// beyond the data's edge does not.
 CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const double q[3], double support,
                          double sigma_max, double start_radius, bool one_side,
-                         std::vector<std::uint32_t>& ids) {
+                         std::vector<std::uint32_t>& ids, std::vector<double>& weights) {
     double radius = start_radius;
     double d_min2 = std::numeric_limits<double>::infinity();
     for (int round = 0; round < 80 && !std::isfinite(d_min2); ++round, radius *= 2) {
@@ -956,11 +957,18 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
         const double d2 =
             (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]);
         const double s = ps.sigma[id];
-        return -d2 / (2 * s * s) - std::log(s);  // log of eq. 4.1 up to the constant sqrt(2 pi)
+        return -d2 / (2 * s * s) - ps.log_sigma[id];  // log of eq. 4.1 up to the constant sqrt(2 pi)
     };
+    // Each point's log weight, then its weight relative to the heaviest, once: the reach covers the
+    // widest support, so most points lie many sigmas away and their weight underflows to exactly
+    // 0, which std::exp reaches through a slow path; below -746 it is 0 without the call.
+    weights.resize(ids.size());
     std::uint32_t heaviest = ids.empty() ? 0 : ids[0];
-    for (std::uint32_t id : ids)
-        if (log_weight(id) > lmax) lmax = log_weight(id), heaviest = id;
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        weights[i] = log_weight(ids[i]);
+        if (weights[i] > lmax) lmax = weights[i], heaviest = ids[i];
+    }
+    for (double& w : weights) w = w - lmax < -746.0 ? 0.0 : std::exp(w - lmax);
     if (one_side) {  // as in CornerEvaluator::evaluate: the heavier side only
         const double* nb = &ps.nrm[3 * heaviest];
         auto same = [&](std::uint32_t id) {
@@ -968,16 +976,20 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
             return n[0] * nb[0] + n[1] * nb[1] + n[2] * nb[2] >= 0;
         };
         double with = 0, against = 0;
-        for (std::uint32_t id : ids) (same(id) ? with : against) += std::exp(log_weight(id) - lmax);
+        for (std::size_t i = 0; i < ids.size(); ++i) (same(ids[i]) ? with : against) += weights[i];
         const bool keep_same = with >= against;
-        std::erase_if(ids, [&](std::uint32_t id) { return same(id) != keep_same; });
+        std::size_t kept = 0;
+        for (std::size_t i = 0; i < ids.size(); ++i)
+            if (same(ids[i]) == keep_same) ids[kept] = ids[i], weights[kept] = weights[i], ++kept;
+        ids.resize(kept);
     }
     Sums sums;
-    for (std::uint32_t id : ids) {
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+        const std::uint32_t id = ids[i];
         const double* p = &ps.pos[3 * id];
         const double* n = &ps.nrm[3 * id];
-        sums.add(std::exp(log_weight(id) - lmax), p[0] - q[0], p[1] - q[1], p[2] - q[2], n[0], n[1], n[2],
-                 ps.col[3 * id], ps.col[3 * id + 1], ps.col[3 * id + 2]);
+        sums.add(weights[i], p[0] - q[0], p[1] - q[1], p[2] - q[2], n[0], n[1], n[2], ps.col[3 * id],
+                 ps.col[3 * id + 1], ps.col[3 * id + 2]);
     }
     CornerValue v = finish(sums);
     if (!ps.data2.empty())
@@ -990,7 +1002,8 @@ CornerValue evaluate_far(const InfluenceIndex& index, const PointSet& ps, const 
 
 /// Per-thread buffers of CornerEvaluator.
 struct EvaluatorScratch {
-    std::vector<std::uint32_t> ids, idx;
+    std::vector<std::uint32_t> ids, idx, far_ids;
+    std::vector<double> far_weights;
     std::vector<double> d2, arg, w;
     Candidates cand;
     std::uint64_t far = 0, counted = 0;  ///< corners beyond every support; points counted
@@ -1080,8 +1093,8 @@ struct CornerEvaluator {
                     s.unsupported += !out[k].supported;
                 }
             } else {
-                std::vector<std::uint32_t> ids;
-                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, ids);
+                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, s.far_ids,
+                                      s.far_weights);
                 ++s.far;
                 s.unsupported += !out[k].supported;
             }
@@ -1234,7 +1247,7 @@ PointSet sorted_points(const BuildInput& in, const Influence& inf, const Frame& 
     pre::radix_sort_by(order, 64, threads, [](const auto& e) { return e.first; });  // stable: by (code, j)
     ps.pos.resize(3 * n), ps.nrm.resize(3 * n), ps.col.resize(3 * n);
     ps.sigma.resize(n), ps.support.resize(n), ps.rho.resize(n), ps.reach.resize(n), ps.code.resize(n);
-    ps.inv2s2.resize(n), ps.wn.resize(n);
+    ps.inv2s2.resize(n), ps.wn.resize(n), ps.log_sigma.resize(n);
     if (o.data_reach > 0) ps.data2.resize(n);
     parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t i = b; i < e; ++i) {
@@ -1251,6 +1264,7 @@ PointSet sorted_points(const BuildInput& in, const Influence& inf, const Frame& 
             const double s = ps.sigma[i];
             ps.inv2s2[i] = 1.0 / (2.0 * s * s);
             ps.wn[i] = 1.0 / std::sqrt(2.0 * std::numbers::pi * s * s);
+            ps.log_sigma[i] = std::log(s);
             ps.support[i] = o.support * ps.sigma[i];
             ps.rho[i] = std::max(r, ps.sigma[i]);
             ps.reach[i] = std::max(ps.support[i], ps.rho[i]);
