@@ -24,7 +24,9 @@
 // issue's 0.1 % bound on both models while storing 1.16x (sphere) and 1.02x (room) the input's
 // splats, under the 1.5x goal; fewer probes save little time and double the holes, more probes
 // keep replicas for ever smaller slivers. Culling takes 0.20 s (sphere) and 0.18 s (room) on the
-// H200 including the upload, 1.96 s and 1.31 s on its 16 cores (35 and 27 CPU seconds); the
+// H200 including the upload, 1.96 s and 1.31 s on its 16 cores (35 and 27 CPU seconds; since
+// 2026-11-26 the CPU pass tests four splats per step, cull_probe_hits.h: the 1M room's prt-cull
+// 13.6 -> 7.7 s on one core of the H100 host, 1.30 -> 0.99 s on 16, same kept splats); the
 // hole measurement 0.24 s on the GPU. votes saves 2 % of the splats for 2x the probe work and a
 // few more holes, so greedy is the default. Aiming the probes at the part of the leaf its disks
 // reach (ProbeRegion) instead of the whole cell, and probing each line both ways, are what made
