@@ -923,12 +923,18 @@ std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::spa
                                PointBrickStats* stats_out) {
     PointBrickStats stats;
     Partitioner partitioner(positions, normals, radii, colors, params);
-    std::filesystem::remove(folder / "plan.bin");  // a folder holds one plan: an old one goes first
+    // The records go to a temporary file renamed over records.bin once the plan is complete: a plan
+    // that fails leaves the folder's plan, records and parts as they were, and a cell builder still
+    // reading the old records (mapped) keeps them, where truncating the file in place would have
+    // faulted its reads.
+    AtomicFile records(folder / "records.bin");
+    partitioner.plan(stats, records.temporary());
+    std::filesystem::remove(folder / "plan.bin");  // a folder holds one plan: the old one goes
     for (const auto& entry : std::filesystem::directory_iterator(folder))
         if (const std::string name = entry.path().filename().string();
             name.starts_with("cells-") && name.ends_with(".bin"))
             std::filesystem::remove(entry.path());
-    partitioner.plan(stats, folder / "records.bin");
+    records.commit();
     partitioner.save_plan(folder, stats);
     // Reported, not saved: the cells count their own records as they are built.
     stats.cell_records = partitioner.record_count();

@@ -92,7 +92,9 @@ PointBricks build_bricks_from_points(std::span<const pool::Float3> positions,
 /// cells are independent (bricks_from_points.cpp), and culling hashes a leaf's cell, not its index.
 ///  1. plan_brick_cells: steps 1-5 on the points; writes folder/plan.bin (the partition, the options
 ///     that change the result) and folder/records.bin (each cell's points, 32 B a record), removes an
-///     earlier plan's part files, and returns the number of cells.
+///     earlier plan's part files, and returns the number of cells. An earlier plan stays whole until
+///     the new one is complete, and its records file is replaced (renamed over), not rewritten, so a
+///     process still reading it is not cut short.
 ///  2. build_brick_cells: cells [first, last) of the plan (built, culled, cut) into
 ///     folder/cells-FIRST-LAST.bin, written atomically; any number of these, anywhere, in any order.
 ///  3. merge_brick_cells: the top tree, table, payloads and LOD from part files that cover every cell

@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <random>
 #include <vector>
 
@@ -249,6 +250,35 @@ TEST(BricksFromPoints, StagedBuildInPartsEqualsTheInCorePipeline) {
                   pre::merge_brick_cells(folder.path, p);
               }).find("cells 0:" + std::to_string(cells) + " are not built"),
               std::string::npos);
+}
+
+TEST(BricksFromPoints, StagedReplanLeavesTheOldRecordsToTheirReaders) {
+    // A cell builder may still be reading the old plan's records when a new plan starts in the same
+    // folder: the new records must be a new file, not the old one truncated and rewritten.
+    const Scan first = scan_model(12000, 5), second = scan_model(9000, 7);
+    const Pipeline setup;
+    const pre::PointBrickParams p = point_params(setup, 1500);
+    const StageFolder folder;
+    pre::plan_brick_cells(first.positions, first.normals, first.radii, first.colors, p, folder.path);
+    const std::filesystem::path records = folder.path / "records.bin";
+    const auto read_all = [](std::istream& in) {
+        in.clear();
+        in.seekg(0);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    std::ifstream reader(records, std::ios::binary);  // the running builder's view
+    const std::string old_records = read_all(reader);
+    ASSERT_GT(old_records.size(), 0u);
+    const std::uint32_t cells =
+        pre::plan_brick_cells(second.positions, second.normals, second.radii, second.colors, p, folder.path);
+    EXPECT_EQ(read_all(reader), old_records);
+    std::ifstream now(records, std::ios::binary);
+    EXPECT_NE(read_all(now), old_records);
+    // no temporary file left behind, and the new plan builds
+    for (const auto& entry : std::filesystem::directory_iterator(folder.path))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
+    pre::build_brick_cells(folder.path, p, 0, cells);
+    expect_equal(in_core(second, setup, nullptr), pre::merge_brick_cells(folder.path, p));
 }
 
 TEST(BricksFromPoints, StagedBuildRefusesMissingCorruptOverlappingAndForeignParts) {
