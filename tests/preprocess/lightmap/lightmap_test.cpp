@@ -352,6 +352,8 @@ TEST(LightMapTool, APoolPlacedTwiceGetsALightMapPerPlacement) {
                                            near_wall));
     EXPECT_GT(near_wall.x, 0.02f);
     EXPECT_LT(near_wall.y, 0.1f * near_wall.x) << "the red wall reflects no green";
-    if (core::light_map_irradiance(v.models[2].light_map, core::Vec3{0.1f, 0, 0}, core::Vec3{0, 1, 0}, lone))
+    if (core::light_map_irradiance(v.models[2].light_map, core::Vec3{0.1f, 0, 0}, core::Vec3{0, 1, 0},
+                                   lone)) {
         EXPECT_LT(lone.x, 0.01f * near_wall.x) << "the lone floor took the other placement's map";
+    }
 }

@@ -566,11 +566,14 @@ TEST_F(BrickTrace, WhereARayStopsNeverDependsOnWhichBricksAreResident) {
                         1.5 * w * w / k_sphere_radius + 2.0 * v.max_radius + 0.02 * w)
                 << i;
         }
-        if (fraction >= 1.0f / 4) EXPECT_EQ(free, std::size_t(g.size) * g.size) << "no brick needed";
+        if (fraction >= 1.0f / 4) {
+            EXPECT_EQ(free, std::size_t(g.size) * g.size) << "no brick needed";
+        }
         if (fraction >= 1.0f / 64) {
             EXPECT_GT(hits, 0u);
-            if (PRT_COUNT_WORK)
+            if (PRT_COUNT_WORK) {
                 EXPECT_LT(in_core_st.leaves, full_st.leaves) << "coarse stops visit fewer nodes";
+            }
         }
         EXPECT_LE(free, previous_free) << "finer footprints need more bricks";
         previous_free = free;
