@@ -28,11 +28,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <exception>
 #include <limits>
 #include <mutex>
+#include <random>
 #include <string>
 #include <thread>
 #include <type_traits>
@@ -81,15 +83,19 @@ std::uint32_t fine_coordinate(double c, double root_min, double scale) {
 
 // -- the staged build's files (issue 21) ------------------------------------------------------------
 // plan.bin: "PRTPLAN1", then one blob (below) and its checksum (pool::checksum, XXH3).
-// records.bin: the Record array of step 5, cell after cell (plan.bin gives each cell's range).
+// records.bin: the Record array of step 5, cell after cell (plan.bin gives each cell's range), then
+//   the plan id (8 bytes).
 // cells-FIRST-LAST.bin: the payloads of cells [FIRST, LAST) one after the other, then the blob of
-//   their CellBricks and statistics, then a footer: the blob's offset, size and checksum, "PRTCELL1".
+//   their plan id, CellBricks and statistics, then a footer: the blob's offset, size and checksum,
+//   "PRTCELL1".
+// The plan id (random, in plan.bin's blob too) ties the three together: a stage that finds files of
+// two plans (a plan stage ran while cells were being built) refuses them, naming the file.
 // A blob is a sequence of trivially copyable values and vectors of them (a vector: its length, then
 // its elements), in host byte order: the folder is read by the same build of prt-bricks on the same
 // kind of machine (a cluster's workers).
 constexpr std::uint64_t k_plan_magic = 0x314e414c50545250ull;   // "PRTPLAN1"
 constexpr std::uint64_t k_cells_magic = 0x314c4c4543545250ull;  // "PRTCELL1"
-constexpr std::uint32_t k_staged_version = 2;
+constexpr std::uint32_t k_staged_version = 3;  // 3: the plan id in plan.bin, records.bin and parts
 
 class BlobWriter {
 public:
@@ -222,6 +228,12 @@ public:
     }
 
     std::uint32_t cell_count() const { return std::uint32_t(m_cell_nodes.size()); }
+    /// A fresh id for a staged plan (random, never 0).
+    void new_plan_id() {
+        std::random_device rd;
+        const auto now = std::chrono::steady_clock::now().time_since_epoch().count();
+        m_plan_id = ((std::uint64_t{rd()} << 32) ^ rd() ^ static_cast<std::uint64_t>(now)) | 1u;
+    }
     /// Point records over all cells (a point in several cells counts in each).
     std::uint64_t record_count() const { return m_cell_begin.empty() ? 0 : m_cell_begin.back(); }
 
@@ -289,6 +301,7 @@ public:
     void save_plan(const std::filesystem::path& folder, const PointBrickStats& stats) const {
         BlobWriter w;
         w.put(k_staged_version);
+        w.put(m_plan_id);
         w.put_string(staged_fingerprint(m_params));
         w.put(m_has_colors);
         w.put(m_root);
@@ -324,6 +337,7 @@ public:
         BlobReader r(blob, path.string());
         if (r.get<std::uint32_t>() != k_staged_version)
             throw Error(path.string() + ": written by another version of prt-bricks");
+        m_plan_id = r.get<std::uint64_t>();
         const std::string planned = r.get_string(), now = staged_fingerprint(m_params);
         if (planned != now)
             throw Error(path.string() + ": planned with other options (" + planned + "; now " + now +
@@ -344,10 +358,16 @@ public:
             if (m_cell_begin[c] > m_cell_begin[c + 1]) r.fail();
         const std::filesystem::path records = folder / "records.bin";
         m_records_file = MappedFile::open(records, MappedFile::Access::random);
-        const std::uint64_t need = m_cell_begin.back() * sizeof(Record);
-        if (m_records_file.size() < need)
+        const std::uint64_t need = std::max<std::uint64_t>(m_cell_begin.back(), 1) * sizeof(Record);
+        if (m_records_file.size() != need + sizeof m_plan_id)
             throw Error(records.string() + ": " + std::to_string(m_records_file.size()) +
-                        " bytes, the plan needs " + std::to_string(need));
+                        " bytes, the plan needs " + std::to_string(need + sizeof m_plan_id) +
+                        " (records of another plan?)");
+        std::uint64_t records_plan = 0;
+        std::memcpy(&records_plan, m_records_file.data() + need, sizeof records_plan);
+        if (records_plan != m_plan_id)
+            throw Error(records.string() + ": written by another plan than " + path.string() +
+                        " (a plan stage ran meanwhile: run this stage again)");
         m_record_view = {reinterpret_cast<const Record*>(m_records_file.data()),
                          static_cast<std::size_t>(m_cell_begin.back())};
         return stats;
@@ -374,6 +394,7 @@ public:
             },
             stats);
         BlobWriter w;
+        w.put(m_plan_id);
         w.put(first);
         w.put(last);
         for (std::uint32_t c = first; c < last; ++c) {
@@ -424,6 +445,9 @@ public:
             const std::span<const std::byte> blob = all.subspan(footer[0], footer[1]);
             if (pool::checksum(blob) != footer[2]) throw corrupt();
             BlobReader r(blob, path.string());
+            if (r.get<std::uint64_t>() != m_plan_id)
+                throw Error(path.string() + ": built from another plan than " +
+                            (folder / "plan.bin").string() + " (remove it and build its cells again)");
             const auto first = r.get<std::uint32_t>(), last = r.get<std::uint32_t>();
             if (first >= last || last > cell_count())
                 throw Error(path.string() + ": cells " + std::to_string(first) + ":" + std::to_string(last) +
@@ -670,8 +694,10 @@ private:
         const std::size_t cells = m_cell_nodes.size();
         const std::uint64_t records = m_cell_begin[cells];
         const std::uint64_t bytes = std::max<std::uint64_t>(records, 1) * sizeof(Record);
-        m_records = records_file.empty() ? SpillFile(m_params.spill_folder, bytes, "the partitioned points")
-                                         : SpillFile::named(records_file, bytes, "the partitioned points");
+        m_records = records_file.empty()
+                        ? SpillFile(m_params.spill_folder, bytes, "the partitioned points")
+                        : SpillFile::named(records_file, bytes + sizeof m_plan_id, "the partitioned points");
+        if (!records_file.empty()) std::memcpy(m_records.data() + bytes, &m_plan_id, sizeof m_plan_id);
         Record* out = m_records.as<Record>().data();
         std::atomic<std::uint64_t> done{0};
         m_record_view = m_records.as<const Record>().first(records);
@@ -912,6 +938,9 @@ private:
     AppendFile m_payloads;
     std::vector<CellBricks> m_cells;
     std::uint32_t m_depth = 0, m_top_depth = 0;
+    /// The staged build's plan: a random id in plan.bin, at the end of records.bin and in every part,
+    /// so that no stage mixes files of two plans (a re-plan while cells are still being built).
+    std::uint64_t m_plan_id = 0;
     CodecError m_error;
 };
 
@@ -928,6 +957,7 @@ std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::spa
     // reading the old records (mapped) keeps them, where truncating the file in place would have
     // faulted its reads.
     AtomicFile records(folder / "records.bin");
+    partitioner.new_plan_id();
     partitioner.plan(stats, records.temporary());
     std::filesystem::remove(folder / "plan.bin");  // a folder holds one plan: the old one goes
     for (const auto& entry : std::filesystem::directory_iterator(folder))

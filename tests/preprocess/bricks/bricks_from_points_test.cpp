@@ -104,10 +104,10 @@ pre::PointBricks out_of_core(const Scan& s, const Pipeline& setup, std::uint64_t
 /// A fresh folder for a staged build, removed at the end of the test.
 struct StageFolder {
     std::filesystem::path path;
-    StageFolder() {
+    explicit StageFolder(const std::string& suffix = "") {
         path = std::filesystem::temp_directory_path() /
                ("prt-cells-test-" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "-" +
-                ::testing::UnitTest::GetInstance()->current_test_info()->name());
+                ::testing::UnitTest::GetInstance()->current_test_info()->name() + suffix);
         std::filesystem::remove_all(path);
         std::filesystem::create_directories(path);
     }
@@ -261,6 +261,12 @@ TEST(BricksFromPoints, StagedReplanLeavesTheOldRecordsToTheirReaders) {
     const StageFolder folder;
     pre::plan_brick_cells(first.positions, first.normals, first.radii, first.colors, p, folder.path);
     const std::filesystem::path records = folder.path / "records.bin";
+    // a cell builder of the first plan that finishes after the second plan started: its part, and
+    // the first plan's plan.bin read with the second plan's records, are refused
+    pre::build_brick_cells(folder.path, p, 0, 1);
+    const StageFolder old_files("-old");
+    std::filesystem::copy_file(folder.path / "cells-0-1.bin", old_files.path / "cells-0-1.bin");
+    std::filesystem::copy_file(folder.path / "plan.bin", old_files.path / "plan.bin");
     const auto read_all = [](std::istream& in) {
         in.clear();
         in.seekg(0);
@@ -277,7 +283,17 @@ TEST(BricksFromPoints, StagedReplanLeavesTheOldRecordsToTheirReaders) {
     // no temporary file left behind, and the new plan builds
     for (const auto& entry : std::filesystem::directory_iterator(folder.path))
         EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
-    pre::build_brick_cells(folder.path, p, 0, cells);
+    pre::build_brick_cells(folder.path, p, 1, cells);
+    std::filesystem::copy_file(old_files.path / "cells-0-1.bin", folder.path / "cells-0-1.bin");
+    std::string e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    EXPECT_NE(e.find("cells-0-1.bin: built from another plan"), std::string::npos) << e;
+    std::filesystem::rename(folder.path / "plan.bin", old_files.path / "plan-2.bin");
+    std::filesystem::copy_file(old_files.path / "plan.bin", folder.path / "plan.bin");
+    e = error_of([&] { pre::build_brick_cells(folder.path, p, 0, 1); });
+    EXPECT_NE(e.find("records.bin: "), std::string::npos) << e;
+    std::filesystem::copy_file(old_files.path / "plan-2.bin", folder.path / "plan.bin",
+                               std::filesystem::copy_options::overwrite_existing);
+    pre::build_brick_cells(folder.path, p, 0, 1);  // over the stale part
     expect_equal(in_core(second, setup, nullptr), pre::merge_brick_cells(folder.path, p));
 }
 
