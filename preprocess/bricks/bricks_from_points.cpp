@@ -952,10 +952,10 @@ std::uint32_t plan_brick_cells(std::span<const pool::Float3> positions, std::spa
                                PointBrickStats* stats_out) {
     PointBrickStats stats;
     Partitioner partitioner(positions, normals, radii, colors, params);
-    // The records go to a temporary file renamed over records.bin once the plan is complete: a plan
-    // that fails leaves the folder's plan, records and parts as they were, and a cell builder still
-    // reading the old records (mapped) keeps them, where truncating the file in place would have
-    // faulted its reads.
+    // The records go to a temporary file renamed over records.bin once the partition is complete: a
+    // partition that fails leaves the folder's plan, records and parts as they were, and a cell
+    // builder still reading the old records (mapped) keeps them, where truncating the file in place
+    // would have faulted its reads (its part is then refused by the plan id).
     AtomicFile records(folder / "records.bin");
     partitioner.new_plan_id();
     partitioner.plan(stats, records.temporary());

@@ -13,10 +13,10 @@ namespace prt::pre {
 /// The scalar pass branches on every splat test (face, ray range, radius) and took about 15 ns a
 /// test on the 2-core development machine, 86 % of prt-cull's time. This one copies a leaf's splats
 /// once into four-wide structure-of-arrays blocks and tests a probe line against four splats per
-/// step (SSE) without branches, with intersect_splat's operations in the same order (the host compiles
-/// without FMA contraction, as the CUDA backend does), then reduces the hits in splat order as
-/// probe_hits does: the same SideHits, so the same replicas are kept (tests/preprocess/splat/cull_test.cpp,
-/// CullProbeHits.*). Not thread-safe: one per worker.
+/// step (GCC vector extensions: SSE on x86-64) without branches, with intersect_splat's operations in the
+/// same order (prt_cull compiles with -ffp-contract=off, as the CUDA backend uses --fmad=false), then reduces
+/// the hits in splat order as probe_hits does: the same SideHits, so the same replicas are kept
+/// (tests/preprocess/splat/cull_test.cpp, CullProbeHits.*). Not thread-safe: one per worker.
 class LeafProbeHits {
 public:
     void operator()(const core::OctreeView& v, std::uint32_t begin, std::uint32_t end,
@@ -29,7 +29,7 @@ public:
         const F4 ox = broadcast(o.x), oy = broadcast(o.y), oz = broadcast(o.z);
         const F4 dx = broadcast(d.x), dy = broadcast(d.y), dz = broadcast(d.z);
         const F4 lo = broadcast(t0), hi = broadcast(t1), zero = broadcast(0.0f);
-        const I4 inf = reinterpret_cast<I4>(broadcast(core::k_inf)), sign = broadcast_int(INT32_MIN);
+        const I4 sign = broadcast_int(INT32_MIN), one = broadcast_int(1), two = broadcast_int(2);
         for (std::size_t b = 0; b < m_blocks.size(); ++b) {
             const Block& k = m_blocks[b];
             const F4 dn = dx * k.nx + dy * k.ny + dz * k.nz;  // dot(d, n)
@@ -40,9 +40,8 @@ public:
             // face_expected(dn, dn > 0) fails only for dn = 0 (NaN gives a NaN th, refused below)
             const I4 hit = (dn != zero) & (th >= lo) & (th <= hi) & (x2 <= k.r2) & (k.r2 > zero);
             const I4 side = dn > zero;
-            const I4 sd = reinterpret_cast<I4>(th) ^ (side & sign);  // side 1 measures -t
-            m_s[b] = reinterpret_cast<F4>((sd & hit) | (inf & ~hit));
-            m_side[b] = side;
+            m_s[b] = reinterpret_cast<F4>(reinterpret_cast<I4>(th) ^ (side & sign));  // side 1 measures -t
+            m_lane[b] = hit & (one | (side & two));  // 0: no hit, 1: a hit on side 0, 3: on side 1
             m_hit[b] = (hit[0] | hit[1]) | (hit[2] | hit[3]);
         }
         // The hits in splat order (probe_hits' reduction: ties keep the first splat's radius).
@@ -50,10 +49,11 @@ public:
         for (std::size_t b = 0; b < m_blocks.size(); ++b) {
             if (m_hit[b] == 0) continue;
             for (std::uint32_t l = 0; l < 4; ++l) {
+                const std::int32_t lane = m_lane[b][l];
+                if (lane == 0) continue;
                 const float sd = m_s[b][l];
-                if (!(sd < core::k_inf)) continue;
                 const std::uint32_t i = begin + static_cast<std::uint32_t>(b) * 4 + l;
-                core::cull_detail::SideHits& h = hits[m_side[b][l] ? 1 : 0];
+                core::cull_detail::SideHits& h = hits[lane >> 1];
                 if (sd < h.near_s) {
                     h.near_s = sd;
                     h.near_r = splats[i].radius;
@@ -80,7 +80,7 @@ private:
         const std::size_t blocks = (end - begin + 3) / 4;
         m_blocks.assign(blocks, Block{});  // padding lanes: zero normal and radius, never a hit
         m_s.resize(blocks);
-        m_side.resize(blocks);
+        m_lane.resize(blocks);
         m_hit.resize(blocks);
         for (std::uint32_t i = begin; i < end; ++i) {
             const pool::Splat& s = splats[i];
@@ -100,7 +100,7 @@ private:
     std::uint32_t m_begin = 0, m_end = 0;
     std::vector<Block> m_blocks;
     std::vector<F4> m_s;
-    std::vector<I4> m_side;
+    std::vector<I4> m_lane;
     std::vector<std::int32_t> m_hit;  ///< per block: some lane hit
 };
 

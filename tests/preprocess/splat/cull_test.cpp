@@ -398,7 +398,9 @@ TEST(Cull, HoleMeasurementSeesHolesAndNoneWithoutCulling) {
 // backend's) gives, bit for bit, or the backends keep different replicas: random disks with the
 // cases that decide a test at its edge (normals across the line, zero radii, NaN coordinates,
 // coincident disks whose tie the first one wins, lines along an axis with axis-aligned normals),
-// every keep flag, leaves of 1 to 13 splats (padding lanes), lines with empty ranges.
+// every keep flag, leaves of 1 to 13 splats (padding lanes) through one pass object (its per-leaf
+// copy), lines with empty ranges, a zero-radius disk whose centre a line meets exactly, and lines
+// from a disk's plane (hits at t = +0 and -0).
 TEST(CullProbeHits, SameHitsAsTheScalarPass) {
     std::mt19937 rng(11);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
@@ -411,11 +413,14 @@ TEST(CullProbeHits, SameHitsAsTheScalarPass) {
         std::memcpy(&b, &x, 4);
         return b;
     };
-    std::size_t lines = 0, hit_sides = 0;
+    std::size_t lines = 0, hit_sides = 0, zero_sides = 0;
+    std::vector<std::vector<pool::Splat>> leaves(400);  // alive throughout: one pass object for all
+    pre::LeafProbeHits soa;
     for (int trial = 0; trial < 400; ++trial) {
         const std::uint32_t count = 1 + static_cast<std::uint32_t>(trial % 13);
         const std::uint32_t pad = static_cast<std::uint32_t>(trial % 3);  // the leaf's place in the array
-        std::vector<pool::Splat> splats(pad + count + 2);
+        std::vector<pool::Splat>& splats = leaves[static_cast<std::size_t>(trial)];
+        splats.resize(pad + count + 2);
         std::vector<std::uint8_t> keep(splats.size());
         for (std::size_t i = 0; i < splats.size(); ++i) {
             pool::Splat& s = splats[i];
@@ -437,14 +442,27 @@ TEST(CullProbeHits, SameHitsAsTheScalarPass) {
             s.point = static_cast<std::uint32_t>(i);
             keep[i] = static_cast<std::uint8_t>(rng() % 3);
         }
+        pool::Splat& point = splats[pad];  // a zero-radius disk facing z lines
+        point.normal = {0.0f, 0.0f, (trial & 1) ? 1.0f : -1.0f};
+        point.radius = 0.0f;
+        point.position.y = 0.1f;
+        const pool::Splat& flat = splats[pad + count - 1];
         core::OctreeView view;
         view.splats = splats.data();
         view.splat_count = static_cast<std::uint32_t>(splats.size());
-        pre::LeafProbeHits soa;
         for (int k = 0; k < 64; ++k, ++lines) {
-            const core::Vec3 o{u(rng) * 0.3f, u(rng) * 0.3f, -2.0f + u(rng) * 0.1f};
-            const core::Vec3 d = k % 4 == 0 ? core::Vec3{0.0f, 0.0f, 1.0f} : unit();
-            const float t0 = k % 7 == 0 ? 3.0f : std::fabs(u(rng)), t1 = 1.0f + 3.0f * std::fabs(u(rng));
+            core::Vec3 o{u(rng) * 0.3f, u(rng) * 0.3f, -2.0f + u(rng) * 0.1f};
+            core::Vec3 d = k % 4 == 0 ? core::Vec3{0.0f, 0.0f, 1.0f} : unit();
+            float t0 = k % 7 == 0 ? 3.0f : std::fabs(u(rng)), t1 = 1.0f + 3.0f * std::fabs(u(rng));
+            if (k == 1 && count > 1) {  // through the zero-radius disk's centre: x^2 = r^2 = 0
+                o = core::Vec3{point.position.x, point.position.y, -2.0f};
+                d = core::Vec3{0.0f, 0.0f, 1.0f};
+                t0 = 0.0f;
+            }
+            if (k == 2 || k == 3) {  // from a point of the last disk's plane: t = +0 or -0
+                o = core::Vec3{flat.position.x, flat.position.y, flat.position.z};
+                t0 = 0.0f;
+            }
             core::cull_detail::SideHits want[2], got[2];
             core::CullCounters cw, cg;
             core::cull_detail::probe_hits(view, pad, pad + count, keep.data(), core::k_keep_centre, o, d, t0,
@@ -459,11 +477,13 @@ TEST(CullProbeHits, SameHitsAsTheScalarPass) {
                 ASSERT_EQ(bits(want[side].kept_s), bits(got[side].kept_s));
                 ASSERT_EQ(want[side].centre, got[side].centre);
                 hit_sides += want[side].near_s < core::k_inf;
+                zero_sides += want[side].near_s == 0.0f;
             }
             if (k == 40) keep[pad] = core::k_keep_probe;  // cull_leaf keeps a replica mid-leaf
         }
     }
-    EXPECT_GT(hit_sides, lines / 8);  // the lines do meet disks (4055 of 6400 lines x 2 sides)
+    EXPECT_GT(hit_sides, lines / 8);  // the lines do meet disks (3569 of 25600 lines x 2 sides)
+    EXPECT_GT(zero_sides, 100u);      // hits at t = 0 (423)
 }
 
 TEST(Cull, DeterministicAndIndependentOfThreads) {

@@ -133,7 +133,7 @@ PRT_HD PRT_INLINE void probe_hits(const OctreeView& v, std::uint32_t begin, std:
 }
 
 /// The default `Hits` of cull_leaf(): probe_hits over the octree's splats, as the CUDA path runs it.
-/// A backend may pass its own (the CPU path's reads a per-leaf structure-of-arrays copy, eight
+/// A backend may pass its own (the CPU path's reads a per-leaf structure-of-arrays copy, four
 /// splats per step) as long as it gives the same SideHits: the backends must keep the same replicas.
 struct OctreeProbeHits {
     PRT_HD PRT_INLINE void operator()(const OctreeView& v, std::uint32_t begin, std::uint32_t end,
