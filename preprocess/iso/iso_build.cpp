@@ -611,7 +611,7 @@ public:
                         faces &= ~(1u << f);  // the root's face
                         continue;
                     }
-                    const Node& n = nodes[locate(cell, l)];
+                    const Node& n = nodes[m_tree.locate(cell, l)];
                     if (n.child != 0) continue;  // finer leaves beyond: the serial pass decides
                     if (n.kind != k_empty) {
                         if (n.level == l) faces &= ~(1u << f);
@@ -669,11 +669,6 @@ private:
         for (std::uint32_t c = 0; c < 8; ++c) add(first + c);
     }
 
-    /// The node holding cell (x, y, z) at `level`, or the leaf above it.
-    std::uint32_t locate(const std::uint32_t cell[3], std::uint32_t level) const {
-        return m_tree.locate(cell, level);
-    }
-
     /// Trilinear interpolation of 8 corner values at unit-cube coordinates u (double).
     static double trilinear(const double c[8], const double u[3]) {
         const double x00 = c[0] + (c[1] - c[0]) * u[0], x10 = c[2] + (c[3] - c[2]) * u[0];
@@ -705,7 +700,7 @@ private:
         const std::uint32_t l = nodes[leaf].level;
         std::uint32_t cell[3];
         if (!neighbour_cell(leaf, a, side, cell)) return;
-        std::uint32_t node = locate(cell, l);
+        std::uint32_t node = m_tree.locate(cell, l);
         if (nodes[node].child == 0 && nodes[node].level == l) {
             if (nodes[node].kind == k_empty) {
                 if (near_known)
@@ -720,7 +715,7 @@ private:
                 if (!near_known && !m_near(l, cell[0], cell[1], cell[2], m_scratch)) return;
                 while (nodes[node].level < l) {  // bounded by l
                     m_tree.split_by_points(node, TreeBuilder::DiskTest::none);
-                    node = locate(cell, l);
+                    node = m_tree.locate(cell, l);
                 }
                 add(node);
             } else {
@@ -799,7 +794,7 @@ private:
                 const std::uint32_t parent_cell[3] = {std::uint32_t(c[0] >> 1), std::uint32_t(c[1] >> 1),
                                                       std::uint32_t(c[2] >> 1)};
                 for (;;) {  // bounded: each split goes one level down
-                    const std::uint32_t node = locate(parent_cell, l - 1);
+                    const std::uint32_t node = m_tree.locate(parent_cell, l - 1);
                     if (nodes[node].child != 0 || nodes[node].level >= l - 1 || !is_filled(nodes[node].kind))
                         break;
                     split_all(node);
@@ -820,7 +815,7 @@ private:
                             continue;
                         const std::uint32_t cell[3] = {std::uint32_t(c[0]), std::uint32_t(c[1]),
                                                        std::uint32_t(c[2])};
-                        const std::uint32_t node = locate(cell, l + 1);
+                        const std::uint32_t node = m_tree.locate(cell, l + 1);
                         if (nodes[node].child != 0 && nodes[node].level == l + 1 && has_filled(node))
                             split = true;
                     }
@@ -1352,8 +1347,7 @@ struct BlockEvaluation {
     CornerCounts run(const std::vector<std::uint64_t>& keys, CornerValue* out, unsigned threads,
                      const Progress& progress) const {
         if (keys.empty()) return {};
-        const std::uint32_t block_level =
-            detail::level_for_extent(frame, 1.0 * median_support, 1.0, k_code_level);
+        const std::uint32_t block_level = detail::level_for_extent(frame, median_support, 1.0, k_code_level);
         const std::uint32_t block_shift = 3 * (k_code_level - block_level);
         std::vector<std::size_t> blocks{0};
         for (std::size_t i = 1; i < keys.size(); ++i)

@@ -42,14 +42,14 @@ public:
             const I4 side = dn > zero;
             m_s[b] = reinterpret_cast<F4>(reinterpret_cast<I4>(th) ^ (side & sign));  // side 1 measures -t
             m_lane[b] = hit & (one | (side & two));  // 0: no hit, 1: a hit on side 0, 3: on side 1
-            m_hit[b] = (hit[0] | hit[1]) | (hit[2] | hit[3]);
         }
         // The hits in splat order (probe_hits' reduction: ties keep the first splat's radius).
         const pool::Splat* splats = v.splats;
         for (std::size_t b = 0; b < m_blocks.size(); ++b) {
-            if (m_hit[b] == 0) continue;
+            const I4 lanes = m_lane[b];
+            if ((lanes[0] | lanes[1] | lanes[2] | lanes[3]) == 0) continue;
             for (std::uint32_t l = 0; l < 4; ++l) {
-                const std::int32_t lane = m_lane[b][l];
+                const std::int32_t lane = lanes[l];
                 if (lane == 0) continue;
                 const float sd = m_s[b][l];
                 const std::uint32_t i = begin + static_cast<std::uint32_t>(b) * 4 + l;
@@ -81,7 +81,6 @@ private:
         m_blocks.assign(blocks, Block{});  // padding lanes: zero normal and radius, never a hit
         m_s.resize(blocks);
         m_lane.resize(blocks);
-        m_hit.resize(blocks);
         for (std::uint32_t i = begin; i < end; ++i) {
             const pool::Splat& s = splats[i];
             Block& k = m_blocks[(i - begin) / 4];
@@ -101,7 +100,6 @@ private:
     std::vector<Block> m_blocks;
     std::vector<F4> m_s;
     std::vector<I4> m_lane;
-    std::vector<std::int32_t> m_hit;  ///< per block: some lane hit
 };
 
 }  // namespace prt::pre
