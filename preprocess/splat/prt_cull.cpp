@@ -10,10 +10,15 @@
 namespace {
 
 nlohmann::json counts_json(const prt::pre::HoleCounts& c) {
-    return {{"rays", c.rays},         {"hit_unculled", c.hit_full},
-            {"holes", c.holes()},     {"hole_rate", c.hole_rate()},
-            {"missed", c.missed},     {"wrong_surface", c.wrong_surface},
-            {"spurious", c.spurious}, {"mean_normal_error_degrees", c.mean_normal_error()}};
+    return {{"rays", c.rays},
+            {"hit_unculled", c.hit_full},
+            {"on_surface", c.on_surface},
+            {"holes", c.holes()},
+            {"hole_rate", c.hole_rate()},
+            {"missed", c.missed},
+            {"wrong_surface", c.wrong_surface},
+            {"spurious", c.spurious},
+            {"mean_normal_error_degrees", c.mean_normal_error()}};
 }
 
 constexpr const char* k_description =
@@ -26,7 +31,9 @@ constexpr const char* k_description =
     "the leaf are always kept; a replica is kept when a probe needs it (--policy). The node pool is "
     "unchanged; leaf_info, splats and octree_info (k_octree_culled) are rewritten, the other sections "
     "carried over. --measure-holes N then shoots N rays at INPUT and OUTPUT and reports the rays that "
-    "hit the unculled surface but miss the culled one.";
+    "hit the unculled surface but miss the culled one or hit it 3 mean splat radii away or more (a ray whose "
+    "unculled hit lies within 3 mean radii of its origin starts inside the surface's band and is not "
+    "counted).";
 
 using ull = unsigned long long;
 
@@ -74,9 +81,11 @@ void report_holes(const prt::tool::PoolStep& step, const prt::pre::HoleStats& hs
         const pre::HoleCounts& c = hs.family[f];
         step.note(
             "prt-cull: holes %-6s %llu of %llu rays hitting the unculled surface (%.4f %%: %llu miss, "
-            "%llu hit another surface), mean normal change %.2f deg",
+            "%llu hit another surface), mean normal change %.2f deg; %llu rays starting on the surface "
+            "not counted",
             pre::hole_family_name(static_cast<pre::HoleFamily>(f)), ull(c.holes()), ull(c.hit_full),
-            100.0 * c.hole_rate(), ull(c.missed), ull(c.wrong_surface), c.mean_normal_error());
+            100.0 * c.hole_rate(), ull(c.missed), ull(c.wrong_surface), c.mean_normal_error(),
+            ull(c.on_surface));
     }
     step.note("prt-cull: hole rate %.4f %% (%llu of %llu hitting rays, %llu rays, %s, %.3f s)",
               100.0 * hs.total.hole_rate(), ull(hs.total.holes()), ull(hs.total.hit_full), ull(hs.total.rays),

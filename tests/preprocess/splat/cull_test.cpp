@@ -359,6 +359,32 @@ TEST_P(CullModels, ReplicationDropsAndHoleRateStaysBelowTheBound) {
 INSTANTIATE_TEST_SUITE_P(Models, CullModels, ::testing::Values("sphere", "room"),
                          [](const ::testing::TestParamInfo<const char*>& i) { return std::string(i.param); });
 
+TEST(Cull, HoleOutcomeLeavesRaysStartingOnTheSurfaceUncounted) {
+    using pre::HoleOutcome;
+    const double tol = 3.0e-3;  // 3 mean radii of 1e-3
+    auto sample = [](bool hit_full, float t_full, bool hit_culled, float t_culled) {
+        pre::HoleSample s{};
+        s.hit_full = hit_full;
+        s.t_full = t_full;
+        s.hit_culled = hit_culled;
+        s.t_culled = t_culled;
+        return s;
+    };
+    EXPECT_EQ(pre::classify_hole_sample(sample(false, 0, false, 0), tol), HoleOutcome::no_hit);
+    EXPECT_EQ(pre::classify_hole_sample(sample(false, 0, true, 1.0f), tol), HoleOutcome::spurious);
+    // The Stanford bunny's case: a camera 8e-6 from a disk (0.01 radii); the culled octree misses.
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 8e-6f, false, 0), tol), HoleOutcome::on_surface);
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 2.9e-3f, true, 0.5f), tol), HoleOutcome::on_surface);
+    // From the tolerance on, misses and far hits are holes, near hits are not.
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 3.1e-3f, false, 0), tol), HoleOutcome::missed);
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 0.5f, false, 0), tol), HoleOutcome::missed);
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 0.5f, true, 0.504f), tol), HoleOutcome::wrong_surface);
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 0.5f, true, 0.496f), tol), HoleOutcome::wrong_surface);
+    EXPECT_EQ(pre::classify_hole_sample(sample(true, 0.5f, true, 0.502f), tol), HoleOutcome::same);
+    // A non-finite unculled hit is not hidden as "on the surface".
+    EXPECT_NE(pre::classify_hole_sample(sample(true, std::nanf(""), false, 0), tol), HoleOutcome::on_surface);
+}
+
 TEST(Cull, HoleMeasurementSeesHolesAndNoneWithoutCulling) {
     const Model& m = sphere_model();
     pre::HoleParams hp;
