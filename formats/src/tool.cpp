@@ -236,8 +236,22 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
         argc, argv, m_tool, m_description,
         [&](CLI::App& app, CommonOptions&) {
             if (!m_help.input.empty()) app.add_option(m_help.input_name, m_input, m_help.input)->required();
-            if (!m_help.output.empty()) app.add_option("-o,--output", m_output, m_help.output)->required();
+            CLI::Option* output = nullptr;
+            if (!m_help.output.empty()) output = app.add_option("-o,--output", m_output, m_help.output);
             options(app);
+            if (output && m_output_unused) {
+                // Required unless this run writes no OUTPUT: known only once every option parsed.
+                app.parse_complete_callback([this, output] {
+                    const std::string why = m_output_unused();
+                    if (why.empty() && m_output.empty()) throw CLI::RequiredError(output->get_name());
+                    if (!why.empty() && !m_output.empty()) {
+                        m_ignored_output = "-o " + m_output + " ignored: " + why;
+                        m_output.clear();
+                    }
+                });
+            } else if (output) {
+                output->required();
+            }
             if (!m_help.stats.empty()) app.add_option("--stats-json", m_stats, m_help.stats);
             if (!m_help.output.empty() || !m_help.input.empty())
                 app.add_option("--provenance-tag", m_tag,
@@ -253,6 +267,7 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
         [&](const CommonOptions& common) {
             m_common = common;
             m_start = now_seconds();
+            if (!m_ignored_output.empty()) note("%s: %s", m_tool.c_str(), m_ignored_output.c_str());
             if (m_output_in_place && m_output.empty()) m_output = m_input;
             // Refused before any work: a missing input, then an output that cannot be written.
             if (!m_input.empty()) check_input_file(m_input);
@@ -279,6 +294,10 @@ CLI::Option* PoolStep::add_memory(CLI::App& app, std::string& text, const std::s
 CLI::Option* PoolStep::add_output(CLI::App& app, const std::string& help) {
     m_output_in_place = true;
     return app.add_option("-o,--output", m_output, help);
+}
+
+void PoolStep::output_unused_when(std::function<std::string()> unused) {
+    m_output_unused = std::move(unused);
 }
 
 const pool::PoolFile& PoolStep::input() {

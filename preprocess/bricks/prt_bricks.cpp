@@ -168,10 +168,8 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     set_culling(opt);
     p.input_mapped = in.mapped();
     p.memory = tool::memory_limit(opt.memory);
-    p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
-                                               : std::filesystem::absolute(step.output_path()).parent_path();
     const std::filesystem::path folder = opt.cells_folder;
-    if (opt.stage == "plan") {
+    if (opt.stage == "plan") {  // no spill files: the records go to --cells-folder, and no OUTPUT
         pre::PointBrickStats stats;
         tool::StagedProgress progress("prt-bricks", step.quiet());
         report_to(p, progress);
@@ -191,6 +189,8 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                           {"peak_rss_bytes", pre::peak_rss_bytes()}});
         return;
     }
+    p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
+                                               : std::filesystem::absolute(step.output_path()).parent_path();
     step.check_output_folder();
     step.note(
         "prt-bricks: %llu points; octree cells of at most about %llu points (--memory %s, %u cells at once), "
@@ -397,12 +397,25 @@ int main(int argc, char** argv) {
     prt::pre::BrickParams params;
     bool keep_float = false, keep_points = false;
     PointOptions points;
-    prt::tool::PoolStep step("prt-bricks", k_description,
-                             {.input = "Input pool file with a splat octree (prt-octree, prt-cull), or with "
-                                       "points and radii (prt-radii)"});
+    prt::tool::PoolStep step(
+        "prt-bricks", k_description,
+        {.input = "Input pool file with a splat octree (prt-octree, prt-cull), or with points and radii "
+                  "(prt-radii)",
+         .output =
+             "Output pool file (written atomically; may equal INPUT); required except with --stage plan "
+             "or cells, which write only into --cells-folder (a -o given there is ignored, with a "
+             "note) [none]"});
     return step.run(
         argc, argv,
         [&](CLI::App& app) {
+            // --stage plan and cells write the plan and the parts into --cells-folder, never OUTPUT
+            // (plan's records go there too, not to spill files beside OUTPUT): -o is optional there.
+            step.output_unused_when([&points]() -> std::string {
+                if (points.stage == "plan")
+                    return "--stage plan writes plan.bin and records.bin into --cells-folder";
+                if (points.stage == "cells") return "--stage cells writes its part into --cells-folder";
+                return {};
+            });
             app.add_option(
                    "--brick-splats", params.brick_splats,
                    "N: a node whose subtree holds at most N stored splats (replicas counted) becomes a "
@@ -472,9 +485,10 @@ int main(int argc, char** argv) {
                 "Memory for the octree cells' builds (SIZE, e.g. 8G); larger models are split into cells of "
                 "about SIZE / (840 x cell workers) points (default: half the physical memory)")
                 ->group(from_points);
-            app.add_option("--spill-folder", points.spill_folder,
-                           "Folder of the spill files (removed as soon as created; about 32 bytes per point "
-                           "and the brick payloads twice) (default: the output's folder)")
+            app.add_option(
+                   "--spill-folder", points.spill_folder,
+                   "Folder of the spill files of --stage all and merge (removed as soon as created; about "
+                   "32 bytes per point and the brick payloads twice) (default: the output's folder)")
                 ->group(from_points);
             const char* staged = "Staged build (one model's cells on several processes or machines)";
             app.add_option(
@@ -484,7 +498,8 @@ int main(int argc, char** argv) {
                    "gets the number of cells); cells: build cells --cells FIRST:LAST of the plan into a "
                    "part file there (INPUT is not read); merge: assemble the parts into OUTPUT. Every "
                    "stage takes the same options; the result equals --stage all byte for byte "
-                   "(scripts/prt-bricks-dask runs the stages on a Dask cluster)")
+                   "(scripts/prt-bricks-dask runs the stages on a Dask cluster); -o is needed by all and "
+                   "merge only (plan and cells ignore it)")
                 ->check(CLI::IsMember({"all", "plan", "cells", "merge"}))
                 ->capture_default_str()
                 ->group(staged);

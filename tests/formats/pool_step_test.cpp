@@ -1,6 +1,6 @@
 // prt::tool::PoolStep (formats/include/prt/pool_step.h), run in-process: the standard options and
 // their exit codes, carry-over of INPUT's sections, the provenance record, the atomic write (nothing
-// written on error), --stats-json, and the optional in-place -o.
+// written on error), --stats-json, the optional in-place -o, and no -o where a run writes none.
 #include "prt/pool_step.h"
 
 #include <gtest/gtest.h>
@@ -112,7 +112,10 @@ TEST_F(PoolStepTest, StatsJsonNamesTheTool) {
 }
 
 TEST_F(PoolStepTest, UsageAndInputErrorsWriteNothing) {
-    EXPECT_EQ(run_step({path("in.pool")}), k_exit_usage_error);         // no -o
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(run_step({path("in.pool")}), k_exit_usage_error);  // no -o: one line naming the option
+    EXPECT_EQ(testing::internal::GetCapturedStderr(),
+              "prt-test-step: error: --output is required (see --help)\n");
     EXPECT_EQ(run_step({"-o", path("out.pool")}), k_exit_usage_error);  // no INPUT
     EXPECT_EQ(run_step({path("none.pool"), "-o", path("out.pool")}), k_exit_runtime_error);
     EXPECT_EQ(run_step({path("in.pool"), "-o", path("out.pool")}, {}, "bad data"), k_exit_runtime_error);
@@ -131,6 +134,51 @@ TEST_F(PoolStepTest, OptionalOutputRewritesInputInPlace) {
     ASSERT_EQ(run_step({path("in.pool"), "-q"}, in_place, {}, true), 0);
     const pool::PoolFile out = pool::PoolFile::open(path("in.pool"));
     EXPECT_EQ(out.array<float>(pool::SectionType::radii).size(), 10u);
+}
+
+TEST_F(PoolStepTest, OutputUnusedWhereTheStepSaysSo) {
+    // A step whose --dry runs write no OUTPUT (as prt-bricks --stage cells): there -o may be left
+    // out, and one given is ignored with a note (unless --quiet) and not checked; every other run
+    // of the same step still needs -o, with the usual usage error.
+    std::string err, out;
+    const auto run_dry_step = [&](std::vector<std::string> args) {
+        std::vector<char*> argv{const_cast<char*>("prt-test-step")};
+        for (std::string& a : args) argv.push_back(a.data());
+        bool dry = false;
+        out = "(the body did not run)";
+        tool::PoolStep step("prt-test-step", "A test step");
+        testing::internal::CaptureStderr();
+        const int code = step.run(
+            int(argv.size()), argv.data(),
+            [&](CLI::App& app) {
+                app.add_flag("--dry", dry, "Write nothing");
+                step.output_unused_when(
+                    [&] { return dry ? std::string("--dry writes nothing") : std::string(); });
+            },
+            [&](tool::PoolStep& s) {
+                out = s.output_path();
+                if (dry) return;
+                s.writer().add_array(pool::SectionType::radii, std::vector<float>(10, 1.0f));
+                s.write(nlohmann::json::object());
+            });
+        err = testing::internal::GetCapturedStderr();
+        return code;
+    };
+    EXPECT_EQ(run_dry_step({path("in.pool"), "--dry"}), k_exit_ok);
+    EXPECT_EQ(out, "");
+    EXPECT_EQ(err, "");
+    EXPECT_EQ(run_dry_step({path("in.pool"), "--dry", "-o", path("no/such/out.pool")}), k_exit_ok);
+    EXPECT_EQ(out, "");
+    EXPECT_EQ(err, "prt-test-step: -o " + path("no/such/out.pool") + " ignored: --dry writes nothing\n");
+    EXPECT_EQ(run_dry_step({path("in.pool"), "-q", "--dry", "-o", path("out.pool")}), k_exit_ok);
+    EXPECT_EQ(err, "");
+    EXPECT_FALSE(fs::exists(path("out.pool")));
+    EXPECT_EQ(run_dry_step({path("in.pool")}), k_exit_usage_error);
+    EXPECT_EQ(out, "(the body did not run)");
+    EXPECT_EQ(err, "prt-test-step: error: --output is required (see --help)\n");
+    EXPECT_EQ(run_dry_step({path("in.pool"), "-q", "-o", path("out.pool")}), k_exit_ok) << err;
+    EXPECT_EQ(out, path("out.pool"));
+    EXPECT_EQ(pool::PoolFile::open(path("out.pool")).array<float>(pool::SectionType::radii).size(), 10u);
 }
 
 TEST_F(PoolStepTest, UnwritableOutputIsRefusedBeforeTheWork) {

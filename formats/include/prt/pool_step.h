@@ -73,16 +73,18 @@ public:
     PoolStep(std::string tool, std::string description)
         : PoolStep(std::move(tool), std::move(description), Help{}) {}
 
-    /// Runs the tool through prt::tool::run: declares INPUT and -o, then the step's own `options`,
-    /// then --stats-json; `body` runs once the command line parsed, with the clock started.
+    /// Runs the tool through prt::tool::run: declares INPUT and -o (required unless
+    /// output_unused_when() says otherwise), then the step's own `options`, then --stats-json;
+    /// `body` runs once the command line parsed, with the clock started.
     /// Returns main()'s exit code.
     int run(int argc, char** argv, const std::function<void(CLI::App&)>& options,
             const std::function<void(PoolStep&)>& body);
 
     /// Declares -j,--threads on `threads` (0 = every core the process may use).
     template <class T>
-    static CLI::Option* add_threads(CLI::App& app, T& threads,
-                                    const std::string& help = "Worker threads (0 = every core the process may use)") {
+    static CLI::Option* add_threads(
+        CLI::App& app, T& threads,
+        const std::string& help = "Worker threads (0 = every core the process may use)") {
         return app.add_option("-j,--threads", threads, help);
     }
     /// The out-of-core tools' --memory SIZE (tool::memory_limit() reads it; empty: the default),
@@ -92,6 +94,13 @@ public:
     /// Declares an optional -o,--output here (for steps that give Help::output empty): without
     /// one, OUTPUT is INPUT (rewritten in place).
     CLI::Option* add_output(CLI::App& app, const std::string& help);
+    /// For a step some of whose runs write no OUTPUT (prt-bricks --stage cells): once the command
+    /// line parsed, `unused` says why this run writes none ("" when it does write one). Then -o may be
+    /// left out, and a -o given is ignored (not checked, output_path() empty) with the note
+    /// "TOOL: -o OUTPUT ignored: WHY" (unless --quiet); when `unused` returns "", -o is required as
+    /// for every step (the usage error "--output is required"). Call it from run()'s `options`;
+    /// it takes the app's parse_complete_callback.
+    void output_unused_when(std::function<std::string()> unused);
 
     const std::string& tool() const { return m_tool; }
     bool quiet() const { return m_common.quiet; }
@@ -142,7 +151,9 @@ private:
     CommonOptions m_common;
     std::string m_input, m_output, m_stats, m_tag;
     double m_start = 0;
-    bool m_output_in_place = false;  ///< add_output(): OUTPUT defaults to INPUT
+    bool m_output_in_place = false;                ///< add_output(): OUTPUT defaults to INPUT
+    std::function<std::string()> m_output_unused;  ///< output_unused_when()
+    std::string m_ignored_output;                  ///< a -o that this run does not write
     std::optional<pool::PoolFile> m_in;
     std::optional<pool::PoolWriter> m_writer;
 };

@@ -505,6 +505,12 @@ TEST_F(BricksTool, BadInputWritesNothing) {
     // a usage error
     EXPECT_EQ(run(path("points.pool") + " -o " + path("out.pool") + " --brick-splats 0"), 2);
     EXPECT_FALSE(fs::exists(path("out.pool")));
+    // no -o: one line naming the option (only the staged build's plan and cells run without one)
+    write("octree.pool", octree_pool_bytes(500));
+    EXPECT_EQ(run(path("octree.pool")), 2);
+    EXPECT_EQ(m_stderr, "prt-bricks: error: --output is required (see --help)\n");
+    EXPECT_EQ(run(path("octree.pool") + " --stage cells --cells 0:1"), 1);  // past -o, to the stage's check
+    EXPECT_NE(m_stderr.find("--stage cells needs --cells-folder"), std::string::npos) << m_stderr;
 }
 
 }  // namespace
