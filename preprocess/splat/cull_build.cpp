@@ -488,19 +488,31 @@ HoleStats measure_holes(const OctreeSections& full, const OctreeSections& culled
         for (std::uint64_t i = family_begin[f]; i < family_begin[f + 1]; ++i) {
             const HoleSample& s = samples[i];
             ++c.rays;
-            const HoleOutcome outcome = classify_hole_sample(s, tolerance);
-            c.spurious += outcome == HoleOutcome::spurious;
-            c.on_surface += outcome == HoleOutcome::on_surface;
-            if (outcome == HoleOutcome::no_hit || outcome == HoleOutcome::spurious ||
-                outcome == HoleOutcome::on_surface)
-                continue;
-            ++c.hit_full;
-            c.missed += outcome == HoleOutcome::missed;
-            c.wrong_surface += outcome == HoleOutcome::wrong_surface;
-            if (outcome != HoleOutcome::same) continue;
-            const double dp = std::clamp(double(core::dot(s.n_full, s.n_culled)), -1.0, 1.0);
-            c.normal_error_sum += std::acos(dp) * (180.0 / 3.14159265358979323846);
-            ++c.normal_count;
+            switch (classify_hole_sample(s, tolerance)) {
+                case HoleOutcome::no_hit:
+                    break;
+                case HoleOutcome::spurious:
+                    ++c.spurious;
+                    break;
+                case HoleOutcome::on_surface:
+                    ++c.on_surface;
+                    break;
+                case HoleOutcome::missed:
+                    ++c.hit_full;
+                    ++c.missed;
+                    break;
+                case HoleOutcome::wrong_surface:
+                    ++c.hit_full;
+                    ++c.wrong_surface;
+                    break;
+                case HoleOutcome::same: {
+                    ++c.hit_full;
+                    const double dp = std::clamp(double(core::dot(s.n_full, s.n_culled)), -1.0, 1.0);
+                    c.normal_error_sum += std::acos(dp) * (180.0 / 3.14159265358979323846);
+                    ++c.normal_count;
+                    break;
+                }
+            }
         }
         stats.total += c;
     }

@@ -123,7 +123,8 @@ struct BlendOptions {
 /// Where a leaf's splats come from (the template argument `Src` of the functions below): the float
 /// splats of an octree view with the pool's per-point colors (OctreeSplats), or a brick's compressed
 /// splats decoded on the fly (bricks.h). load(i) gives splat i as a pool::Splat whose `point` field
-/// is what color() and point_id() take: the source point index here, a packed colour in a brick.
+/// is what color() takes (and point_id(), which finish_nearest asks of the brick sources): the source
+/// point index here, a packed colour in a brick.
 struct OctreeSplats {
     const pool::Splat* splats;
     const pool::Rgba8* colors;  ///< per point, or null (white)
@@ -135,8 +136,6 @@ struct OctreeSplats {
         constexpr float k = 1.0f / 255.0f;
         return Vec3{c.r * k, c.g * k, c.b * k};
     }
-    /// The source point of a splat's `point` field (material ids), 0xffffffff for none.
-    PRT_HD PRT_INLINE std::uint32_t point_id(std::uint32_t point) const { return point; }
 };
 
 namespace detail {
