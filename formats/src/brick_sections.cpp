@@ -81,8 +81,12 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
         if (e.encoded_count > e.splat_count || (e.encoded_count == 0) != (e.splat_count == 0))
             pool.fail(et, brick_label(b) + std::to_string(e.encoded_count) + " encoded splats for " +
                               std::to_string(e.splat_count) + " references");
+        // a direct brick (no references) has encoded_count = splat_count and the smaller size
+        const bool direct =
+            e.encoded_count == e.splat_count &&
+            e.size == brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, true);
         const std::uint64_t want =
-            brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
+            brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, direct);
         if (e.size != want)
             pool.fail(et, brick_label(b) + "size " + std::to_string(e.size) + " does not match its counts (" +
                               std::to_string(want) + " bytes)");
@@ -190,12 +194,13 @@ BrickView brick_view(std::span<const std::byte> payload) {
     v.leaf_info = {
         reinterpret_cast<const std::uint32_t*>(payload.data() + brick_leaf_info_offset(h.node_count)),
         std::size_t(h.leaf_count) + 1};
-    v.refs = payload.data() + brick_refs_offset(h.node_count, h.leaf_count);
-    v.ref_bytes = brick_ref_bytes(h.encoded_count);
-    v.splats = {
-        reinterpret_cast<const CompressedSplat*>(
-            payload.data() + brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count)),
-        h.encoded_count};
+    const bool direct = brick_is_direct(h);
+    v.refs = direct ? nullptr : payload.data() + brick_refs_offset(h.node_count, h.leaf_count);
+    v.ref_bytes = direct ? 0 : brick_ref_bytes(h.encoded_count);
+    v.splats = {reinterpret_cast<const CompressedSplat*>(
+                    payload.data() +
+                    brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count, direct)),
+                h.encoded_count};
     return v;
 }
 
@@ -253,11 +258,20 @@ void validate_brick(const PoolFile& pool, const BrickSections& sections, std::ui
     if (payload.size() != entry.size)
         fail(std::to_string(payload.size()) + " bytes but its entry says " + std::to_string(entry.size));
     if (payload.size() < sizeof(BrickHeader) || entry.node_count == 0 ||
-        entry.encoded_count > entry.splat_count ||
-        payload.size() !=
-            brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count, entry.encoded_count))
+        entry.encoded_count > entry.splat_count)
         fail("payload size " + std::to_string(payload.size()) + " does not match its entry's counts");
     if (checksum(payload) != entry.checksum) fail("checksum mismatch");
+    const BrickHeader& hdr = *reinterpret_cast<const BrickHeader*>(payload.data());
+    if (hdr.layout != k_brick_referenced && hdr.layout != k_brick_direct)
+        fail("layout " + std::to_string(hdr.layout) + " is neither referenced (0) nor direct (1)");
+    const bool direct = brick_is_direct(hdr);
+    if (direct && entry.encoded_count != entry.splat_count)
+        fail("direct, but " + std::to_string(entry.encoded_count) + " encoded splats for " +
+             std::to_string(entry.splat_count) + " references");
+    if (payload.size() != brick_payload_size(entry.node_count, entry.leaf_count, entry.splat_count,
+                                             entry.encoded_count, direct))
+        fail("payload size " + std::to_string(payload.size()) + " does not match its entry's counts (" +
+             (direct ? "direct" : "referenced") + ")");
     const BrickView v = brick_view(payload);
     const BrickHeader& h = *v.header;
     if (h.node_count != entry.node_count || h.leaf_count != entry.leaf_count ||

@@ -155,10 +155,24 @@ TopCut cut_top_tree(std::span<const std::uint32_t> nodes, const Subtrees& sub, s
     return cut;
 }
 
-/// What phase 3a counts of a brick: its distinct splats and the nodes of its LOD prefix.
+/// What phase 3a counts of a brick: its compressed splats (distinct, or one per reference when
+/// direct) and the nodes of its LOD prefix.
 struct BrickCounts {
     std::uint32_t encoded = 0, lod_nodes = 0;
+    bool direct = false;
 };
+
+/// Whether a brick of `references` splat references to `distinct` distinct splats is stored direct.
+bool store_direct(BrickParams::Direct policy, std::size_t references, std::size_t distinct) {
+    switch (policy) {
+        case BrickParams::Direct::always:
+            return true;
+        case BrickParams::Direct::never:
+            return false;
+        default:
+            return pool::brick_direct_is_smaller(std::uint32_t(references), std::uint32_t(distinct));
+    }
+}
 
 /// Phase 3a: each brick's entry (cube, counts, 64-byte aligned payload offset); sizes out.data, and
 /// the LOD prefixes' table (first node of each) and nodes when `lod`.
@@ -190,7 +204,8 @@ void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeIn
         e.leaf_count = sub.leaves[s];
         e.splat_count = std::uint32_t(sub.splats[s]);
         e.encoded_count = counts[b].encoded;
-        e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count);
+        e.size = pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count,
+                                          counts[b].direct);
         e.top_node = t;
         e.level = cut.level[t];
         offset += (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
@@ -282,15 +297,16 @@ public:
     };
 
     BrickEncoder(const pool::SplatOctreeSections& octree, std::span<const pool::Rgba8> colors,
-                 const TopCut& cut, BrickedOctree& out)
-        : m_octree(octree), m_colors(colors), m_cut(cut), m_out(out) {}
+                 const TopCut& cut, BrickParams::Direct direct, BrickedOctree& out)
+        : m_octree(octree), m_colors(colors), m_cut(cut), m_direct(direct), m_out(out) {}
 
-    /// The distinct splats of brick b (the one whose top node is `top_node`) and its LOD prefix's nodes
-    /// (`lod_splats` M, 0: none).
+    /// The compressed splats of brick b (the one whose top node is `top_node`), whether it is direct,
+    /// and its LOD prefix's nodes (`lod_splats` M, 0: none).
     BrickCounts count(std::uint32_t top_node, std::uint32_t lod_splats, Scratch& scratch) const {
         gather(top_node, scratch);
-        return BrickCounts{std::uint32_t(scratch.encoded.size()),
-                           lod_splats > 0 ? lod_prefix_nodes(lod_splats, scratch) : 0u};
+        const bool direct = store_direct(m_direct, scratch.splats.size(), scratch.encoded.size());
+        return BrickCounts{std::uint32_t(direct ? scratch.splats.size() : scratch.encoded.size()),
+                           lod_splats > 0 ? lod_prefix_nodes(lod_splats, scratch) : 0u, direct};
     }
 
     /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
@@ -302,16 +318,21 @@ public:
     LodSum encode(std::size_t b, CodecError& err, Scratch& scratch) const {
         pool::BrickEntry& e = m_out.table[b];
         gather(e.top_node, scratch);
+        const bool direct = store_direct(m_direct, scratch.splats.size(), scratch.encoded.size());
+        if (direct) scratch.encoded = scratch.splats;  // in leaf order, a replica once per leaf
         if (scratch.encoded.size() != e.encoded_count || scratch.splats.size() != e.splat_count)
             throw Error("brick " + std::to_string(b) + ": counts changed between passes (internal error)");
         std::byte* base = m_out.data.data() + e.offset;
-        const pool::BrickHeader h = brick_header(b, e, scratch.encoded);
+        pool::BrickHeader h = brick_header(b, e, scratch.encoded);
+        h.layout = direct ? pool::k_brick_direct : pool::k_brick_referenced;
         std::memcpy(base, &h, sizeof h);
         std::memcpy(base + pool::brick_nodes_offset(), scratch.nodes.data(), 4 * scratch.nodes.size());
         std::memcpy(base + pool::brick_leaf_info_offset(h.node_count), scratch.leaf_info.data(),
                     4 * scratch.leaf_info.size());
         std::byte* refs = base + pool::brick_refs_offset(h.node_count, h.leaf_count);
-        if (pool::brick_ref_bytes(h.encoded_count) == 2) {
+        if (direct) {
+            // no references: splat i of the leaves is encoded splat i
+        } else if (pool::brick_ref_bytes(h.encoded_count) == 2) {
             for (std::size_t k = 0; k < scratch.refs.size(); ++k) {
                 const auto r = static_cast<std::uint16_t>(scratch.refs[k]);
                 std::memcpy(refs + 2 * k, &r, 2);
@@ -320,7 +341,8 @@ public:
             std::memcpy(refs, scratch.refs.data(), 4 * scratch.refs.size());
         }
         auto* out_splats = reinterpret_cast<pool::CompressedSplat*>(
-            base + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
+            base +
+            pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count, direct));
         const double quantum = double(h.quant_size) / pool::k_position_max_code;
         const double step = std::exp2(1.0 / pool::k_radius_steps_per_octave) * (1.0 + 1e-6);
         for (std::size_t k = 0; k < scratch.encoded.size(); ++k) {
@@ -521,6 +543,7 @@ private:
     const pool::SplatOctreeSections& m_octree;
     std::span<const pool::Rgba8> m_colors;
     const TopCut& m_cut;
+    BrickParams::Direct m_direct;
     BrickedOctree& m_out;
 };
 
@@ -575,6 +598,10 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, std::uint32
     stats.top_depth = top_depth;
     stats.min_brick_splats = out.table.empty() ? 0 : 0xFFFFFFFFu;
     for (const pool::BrickEntry& e : out.table) {
+        if (e.encoded_count == e.splat_count &&
+            e.size ==
+                pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, true))
+            ++stats.direct_bricks;
         info.splat_count += e.splat_count;
         info.encoded_splats += e.encoded_count;
         info.max_brick_splats = std::max(info.max_brick_splats, e.splat_count);
@@ -601,7 +628,7 @@ BrickPart build_brick_part(const pool::SplatOctreeSections& octree, std::span<co
     part.top_depth = *std::max_element(cut.level.begin(), cut.level.end());
     const std::size_t bricks = cut.brick_top.size();
     const unsigned threads = resolve_threads(params.threads);
-    const BrickEncoder encoder(octree, colors, cut, out);
+    const BrickEncoder encoder(octree, colors, cut, params.direct, out);
     std::vector<BrickCounts> counts(bricks);
     parallel_chunks(bricks, 1, threads, [&](std::size_t begin, std::size_t end, unsigned) {  // 3a
         BrickEncoder::Scratch scratch;

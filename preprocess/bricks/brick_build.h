@@ -28,6 +28,12 @@ struct BrickParams {
     /// levels down to the deepest whose non-empty nodes hold at least M splat references on average,
     /// each node with a compressed disc. 0: no prefix (a ray then stops only at top nodes).
     std::uint32_t lod_splats = 32;
+    /// Direct bricks (brick_layout.h): a brick stores its leaves' splats in leaf order, a replica
+    /// once per leaf, with no references, so a splat test makes one dependent read instead of two.
+    /// smaller: where that takes no more bytes than references (little replication: culled pools);
+    /// always; never.
+    enum class Direct { smaller, always, never };
+    Direct direct = Direct::smaller;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
     /// Progress of the encoding, called from the calling thread with (bricks done, bricks); may be empty.
     std::function<void(std::uint64_t, std::uint64_t)> progress;
@@ -50,7 +56,9 @@ struct BrickStats {
     std::uint32_t bricks = 0, top_nodes = 0, top_depth = 0;
     std::uint32_t min_brick_splats = 0, max_brick_splats = 0;
     std::uint64_t splats = 0, data_bytes = 0;
-    std::uint64_t encoded = 0;  ///< compressed splats (each splat once per brick)
+    std::uint64_t encoded =
+        0;  ///< compressed splats (each splat once per brick; per reference in direct bricks)
+    std::uint32_t direct_bricks = 0;  ///< bricks stored direct (BrickParams::direct)
     std::uint64_t lod_nodes =
         0;  ///< nodes of the bricks' LOD prefixes (16 B each with their discs, resident when streaming)
     CodecError error;

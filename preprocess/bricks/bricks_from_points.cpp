@@ -187,7 +187,8 @@ std::string staged_fingerprint(const PointBrickParams& p) {
            " grid=" + std::to_string(c.grid) + " policy=" + std::to_string(int(c.policy)) +
            " window=" + std::to_string(c.window) + " seed=" + std::to_string(c.seed) +
            " brick_splats=" + std::to_string(p.bricks.brick_splats) +
-           " lod_splats=" + std::to_string(p.bricks.lod_splats);
+           " lod_splats=" + std::to_string(p.bricks.lod_splats) +
+           " direct=" + std::to_string(int(p.bricks.direct));
 }
 
 }  // namespace

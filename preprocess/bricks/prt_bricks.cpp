@@ -47,6 +47,18 @@ struct PointOptions {
     std::string cells;          ///< --cells A:B (stage cells)
 };
 
+/// --direct's words.
+const char* direct_policy_name(prt::pre::BrickParams::Direct d) {
+    switch (d) {
+        case prt::pre::BrickParams::Direct::always:
+            return "always";
+        case prt::pre::BrickParams::Direct::never:
+            return "never";
+        default:
+            return "smaller";
+    }
+}
+
 /// --cells "A:B" as [A, B).
 std::pair<std::uint32_t, std::uint32_t> parse_cells(const std::string& text) {
     const std::size_t colon = text.find(':');
@@ -217,6 +229,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     const std::uint64_t point_bytes = drop_points(step, keep_points);
     const nlohmann::json parameters = {{"brick_splats", p.bricks.brick_splats},
                                        {"lod_splats", p.bricks.lod_splats},
+                                       {"direct", direct_policy_name(p.bricks.direct)},
                                        {"leaf_size", p.octree.max_leaf_splats},
                                        {"max_depth", p.octree.max_depth},
                                        {"min_cell", p.octree.min_cell_ratio},
@@ -235,10 +248,11 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         stats.cells, stats.partition_depth, ull(stats.max_cell_points),
         double(stats.cell_records) * per_point, ull(stats.stored_splats), ull(stats.culled_splats));
     step.note(
-        "prt-bricks: %u bricks, top tree %u nodes (depth %u); %llu encoded splats (%.2f per point); LOD "
+        "prt-bricks: %u bricks (%u direct), top tree %u nodes (depth %u); %llu encoded splats (%.2f per "
+        "point); LOD "
         "prefixes %llu nodes (%.2f B per point); pool %.2f B per point%s",
-        stats.bricks.bricks, stats.bricks.top_nodes, stats.bricks.top_depth, ull(stats.bricks.encoded),
-        double(stats.bricks.encoded) * per_point, ull(stats.bricks.lod_nodes),
+        stats.bricks.bricks, stats.bricks.direct_bricks, stats.bricks.top_nodes, stats.bricks.top_depth,
+        ull(stats.bricks.encoded), double(stats.bricks.encoded) * per_point, ull(stats.bricks.lod_nodes),
         double(stats.bricks.lod_nodes * k_lod_node_bytes) * per_point, double(bytes) * per_point,
         point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
     const double seconds = step.seconds();
@@ -269,6 +283,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                       {"bricks", stats.bricks.bricks},
                       {"top_nodes", stats.bricks.top_nodes},
                       {"encoded_splats", stats.bricks.encoded},
+                      {"direct_bricks", stats.bricks.direct_bricks},
                       {"lod_nodes", stats.bricks.lod_nodes},
                       {"lod_bytes", stats.bricks.lod_nodes * k_lod_node_bytes},
                       {"brick_data_bytes", built.data_bytes},
@@ -332,6 +347,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
     const std::uint64_t point_bytes = drop_points(step, keep_points);
     const nlohmann::json parameters = {{"brick_splats", params.brick_splats},
                                        {"lod_splats", params.lod_splats},
+                                       {"direct", direct_policy_name(params.direct)},
                                        {"keep_float", keep_float},
                                        {"keep_points", keep_points}};
     const std::uint64_t bytes = step.write(parameters);
@@ -342,10 +358,11 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
     const std::uint64_t points = octree.info.unique_splats;
     const double per_point = 1.0 / double(points ? points : 1);
     step.note(
-        "prt-bricks: %u bricks (%u to %u splat references), top tree %u nodes (depth %u); %llu references "
-        "to %llu encoded splats (%.2f and %.2f per point); LOD prefixes %llu nodes (%.2f B per point)",
-        stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.top_nodes, stats.top_depth,
-        ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point,
+        "prt-bricks: %u bricks (%u to %u splat references; %u direct), top tree %u nodes (depth %u); %llu "
+        "references to %llu encoded splats (%.2f and %.2f per point); LOD prefixes %llu nodes (%.2f B per "
+        "point)",
+        stats.bricks, stats.min_brick_splats, stats.max_brick_splats, stats.direct_bricks, stats.top_nodes,
+        stats.top_depth, ull(stats.splats), ull(stats.encoded), double(stats.splats) * per_point,
         double(stats.encoded) * per_point, ull(stats.lod_nodes),
         double(stats.lod_nodes * k_lod_node_bytes) * per_point);
     step.note(
@@ -374,6 +391,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
                       {"max_brick_splats", stats.max_brick_splats},
                       {"splats", stats.splats},
                       {"encoded_splats", stats.encoded},
+                      {"direct_bricks", stats.direct_bricks},
                       {"lod_nodes", stats.lod_nodes},
                       {"lod_bytes", stats.lod_nodes * k_lod_node_bytes},
                       {"points", points},
@@ -396,6 +414,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
 int main(int argc, char** argv) {
     prt::pre::BrickParams params;
     bool keep_float = false, keep_points = false;
+    std::string direct_name = "smaller";
     PointOptions points;
     prt::tool::PoolStep step(
         "prt-bricks", k_description,
@@ -427,6 +446,13 @@ int main(int argc, char** argv) {
                            "when streaming) holds its top levels down to the deepest whose non-empty nodes "
                            "hold >= M splat references on average, a compressed disc per node; rays stop at "
                            "a node below a pixel (prt-play --lod-pixels). 0: no prefix")
+                ->capture_default_str();
+            app.add_option("--direct", direct_name,
+                           "Direct bricks: a brick stores its leaves' splats in leaf order, a replica once "
+                           "per leaf, with no references (one read per splat test instead of two): "
+                           "'smaller' where that takes no more bytes (little replication, as in culled "
+                           "pools), 'always', 'never'")
+                ->check(CLI::IsMember({"smaller", "always", "never"}))
                 ->capture_default_str();
             app.add_flag(
                 "--keep-float", keep_float,
@@ -518,6 +544,9 @@ int main(int argc, char** argv) {
         },
         [&](prt::tool::PoolStep& s) {
             points.params.threads = params.threads;
+            params.direct = direct_name == "always"  ? prt::pre::BrickParams::Direct::always
+                            : direct_name == "never" ? prt::pre::BrickParams::Direct::never
+                                                     : prt::pre::BrickParams::Direct::smaller;
             bricks_step(s, params, keep_float, keep_points, points);
         });
 }

@@ -155,15 +155,19 @@ Megakernel megakernel() {
 /// their own kernel, so the float splat kernel does not carry the brick walk) at 3 (H100, culled 1M
 /// sphere, Grays/s primary / shadow / reflect4: 1.297 / 1.774 / 1.757 at 3, 1.177 / 1.658 / 1.479
 /// at 4, 1.193 / 1.619 / 1.605 at 2; preprocess/bench/results/h100-2026-11-25-issue17-onewalk). The
-/// tuning variants of --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4:
-/// runtime/README.md) only with the CMake option PRT_CUDA_TUNING_KERNELS, so a default build
-/// compiles 8 megakernels instead of 26.
+/// bricked kernel carries the brick walk alone, not the float splat code too (a scene mixing float
+/// and bricked splat models takes the general kernel): 740 B of spills at 3 blocks against 824, and
+/// on an H200 shadow rays 5-7 % faster, full4 5-6 %, primary under 1 %; 4 blocks were 6-8 % slower on
+/// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
+/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4: runtime/README.md) only with
+/// the CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 26.
 const Megakernel k_megakernels[] = {
-    megakernel<core::k_mask_splats, 4>(),                        // splats only, the default occupancy
-    megakernel<core::k_mask_patches, 2>(),                       // patches only, the default occupancy
-    megakernel<core::k_mask_all, 4>(),                           // every surface, sampling
-    megakernel<core::k_mask_splats | core::k_mask_bricks, 3>(),  // bricked splats (issue 17)
+    megakernel<core::k_mask_splats, 4>(),   // splats only, the default occupancy
+    megakernel<core::k_mask_patches, 2>(),  // patches only, the default occupancy
+    megakernel<core::k_mask_all, 4>(),      // every surface, sampling
+    megakernel<core::k_mask_bricks, 3>(),   // bricked splats (issue 17)
 #if PRT_CUDA_TUNING_KERNELS
+    // clang-format off
     megakernel<core::k_mask_splats, 1>(),
     megakernel<core::k_mask_splats, 2>(),
     megakernel<core::k_mask_splats, 3>(),
@@ -171,8 +175,9 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_splats, 6>(),
     megakernel<core::k_mask_patches, 1>(),
     megakernel<core::k_mask_patches, 4>(),
-    megakernel<core::k_mask_splats | core::k_mask_bricks, 2>(),
-    megakernel<core::k_mask_splats | core::k_mask_bricks, 4>(),
+    megakernel<core::k_mask_bricks, 2>(),
+    megakernel<core::k_mask_bricks, 4>(),
+// clang-format on
 #endif
 };
 
@@ -187,14 +192,14 @@ const Megakernel k_megakernels[] = {
 const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int asked) {
     const std::uint32_t mask =
         sampling || (surface_mask != core::k_mask_patches && surface_mask != core::k_mask_splats &&
-                     surface_mask != (core::k_mask_splats | core::k_mask_bricks))
+                     surface_mask != core::k_mask_bricks)
             ? std::uint32_t{core::k_mask_all}
             : surface_mask;
     if (asked < 1 || asked > 6) asked = 0;
     int blocks = 4;  // the splat kernel's default, the general kernel's only occupancy
     if (mask == core::k_mask_patches)
         blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
-    else if (mask == (core::k_mask_splats | core::k_mask_bricks))
+    else if (mask == core::k_mask_bricks)
         blocks = asked == 0 ? 3 : asked;  // variants 2, 3 and 4
     else if (mask == core::k_mask_splats && asked != 0)
         blocks = asked;

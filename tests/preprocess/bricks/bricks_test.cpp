@@ -74,15 +74,26 @@ TEST_F(Bricks, BrickedPoolValidates) {
     EXPECT_EQ(b.info.flags & pool::k_bricks_indexed, pool::k_bricks_indexed);
     // each point once per brick that holds it: the encoded splats are the distinct (brick, point)
     // pairs, counted here from the float leaves independently of the builder
+    // (a direct brick, BrickParams::Direct::smaller, stores one record per reference instead)
     std::uint64_t distinct = 0;
+    std::uint32_t direct = 0;
     for (std::uint32_t bi = 0; bi < b.table.size(); ++bi) {
         const pool::BrickView v = pool::brick_view(b.payload(bi));
-        EXPECT_EQ(v.ref_bytes, 2u);
         std::set<std::tuple<std::uint16_t, std::uint16_t, std::uint16_t, std::uint32_t>> seen;
         for (const pool::CompressedSplat& c : v.splats) seen.insert({c.q[0], c.q[1], c.q[2], c.nr});
+        if (pool::brick_is_direct(*v.header)) {
+            ++direct;
+            EXPECT_EQ(v.ref_bytes, 0u);
+            EXPECT_EQ(v.splats.size(), b.table[bi].splat_count);
+            distinct += v.splats.size();
+            continue;
+        }
+        EXPECT_EQ(v.ref_bytes, 2u);
         distinct += seen.size();  // no two encoded splats of a brick alike
         EXPECT_EQ(seen.size(), v.splats.size());
     }
+    EXPECT_EQ(direct, s_stats.direct_bricks);
+    EXPECT_LT(direct, b.info.brick_count);  // this tree is replicated: most bricks reference
     EXPECT_EQ(distinct, b.info.encoded_splats);
     EXPECT_LT(b.info.encoded_splats, b.info.splat_count);  // replicas share their encoded splat
     // 12 B per distinct splat, 2 B per reference, nodes and leaf ranges: well under the float
@@ -386,6 +397,100 @@ TEST_F(Bricks, BadReferencesAndOldLayoutsAreRefused) {
         modified(*s_bricked, [](auto& info, auto&, auto&) { info.flags &= ~pool::k_bricks_indexed; });
     EXPECT_NE(error_of([&] { pool::validate_brick_index(old); }).find("run prt-bricks again"),
               std::string::npos);
+}
+
+/// Brick b's splats in leaf order, decoded (reference i -> its record).
+std::vector<pool::DecodedSplat> leaf_order_splats(const pool::BrickSections& s, std::uint32_t b) {
+    const pool::BrickView v = pool::brick_view(s.payload(b));
+    std::vector<pool::DecodedSplat> out;
+    for (std::uint32_t i = 0; i < v.header->splat_count; ++i)
+        out.push_back(pool::decode_splat(v.splats[v.ref(i)], *v.header));
+    return out;
+}
+
+TEST_F(Bricks, DirectBricksHoldTheLeavesSplatsInLeafOrderAndTheSmallerLayoutIsChosen) {
+    // The same cut written referenced (never), direct (always) and by size (smaller, the default):
+    // every brick's leaves read the same decoded splats in the same order, a direct brick holds
+    // one record per reference and no references, and `smaller` picks the smaller payload.
+    using D = pre::BrickParams::Direct;
+    const PoolFile never =
+        PoolFile::from_bytes(test::bricked_bytes(*s_octree, 700, nullptr, true, 32, D::never), "never");
+    const PoolFile always =
+        PoolFile::from_bytes(test::bricked_bytes(*s_octree, 700, nullptr, true, 32, D::always), "always");
+    const pool::BrickSections n = pool::validate_bricks(never);
+    const pool::BrickSections a = pool::validate_bricks(always);
+    const pool::BrickSections m = pool::validate_bricks(*s_bricked);
+    ASSERT_EQ(n.table.size(), a.table.size());
+    ASSERT_EQ(m.table.size(), a.table.size());
+    EXPECT_EQ(a.info.encoded_splats, a.info.splat_count);
+    EXPECT_LT(n.info.encoded_splats, n.info.splat_count);
+    std::uint32_t chose_direct = 0;
+    for (std::uint32_t b = 0; b < a.table.size(); ++b) {
+        SCOPED_TRACE(::testing::Message() << "brick " << b);
+        const pool::BrickView va = pool::brick_view(a.payload(b));
+        const pool::BrickView vn = pool::brick_view(n.payload(b));
+        EXPECT_TRUE(pool::brick_is_direct(*va.header));
+        EXPECT_FALSE(pool::brick_is_direct(*vn.header));
+        EXPECT_EQ(va.ref_bytes, 0u);
+        EXPECT_EQ(a.table[b].encoded_count, a.table[b].splat_count);
+        // no references: the records start where the references would
+        EXPECT_EQ(reinterpret_cast<const std::byte*>(va.splats.data()) - a.payload(b).data(),
+                  std::ptrdiff_t(pool::brick_refs_offset(va.header->node_count, va.header->leaf_count)));
+        const auto da = leaf_order_splats(a, b), dn = leaf_order_splats(n, b);
+        ASSERT_EQ(da.size(), dn.size());
+        for (std::size_t i = 0; i < da.size(); ++i)
+            ASSERT_EQ(std::memcmp(&da[i], &dn[i], sizeof(pool::DecodedSplat)), 0) << "reference " << i;
+        EXPECT_EQ(std::vector<std::uint32_t>(va.nodes.begin(), va.nodes.end()),
+                  std::vector<std::uint32_t>(vn.nodes.begin(), vn.nodes.end()));
+        // smaller: the layout of the smaller payload (direct on a tie), with the same splats
+        const bool direct = a.table[b].size <= n.table[b].size;
+        EXPECT_EQ(m.table[b].size, std::min(a.table[b].size, n.table[b].size));
+        EXPECT_EQ(pool::brick_is_direct(*pool::brick_view(m.payload(b)).header), direct);
+        chose_direct += direct;
+        const auto dm = leaf_order_splats(m, b);
+        ASSERT_EQ(dm.size(), dn.size());
+        for (std::size_t i = 0; i < dm.size(); ++i)
+            ASSERT_EQ(std::memcmp(&dm[i], &dn[i], sizeof(pool::DecodedSplat)), 0) << "reference " << i;
+    }
+    EXPECT_EQ(chose_direct, s_stats.direct_bricks);
+    // An octree without replication (prt-octree --no-replicate, like a culled one with few
+    // replicas) stores every brick direct, in fewer bytes than referenced.
+    const PoolFile single = PoolFile::from_bytes(octree_pool_bytes(6000, 16, false), "single");
+    pre::BrickStats st;
+    const PoolFile bricked = PoolFile::from_bytes(test::bricked_bytes(single, 700, &st), "b");
+    const pool::BrickSections sb = pool::validate_bricks(bricked);
+    EXPECT_EQ(st.direct_bricks, sb.info.brick_count);
+    EXPECT_EQ(sb.info.encoded_splats, sb.info.splat_count);
+    const PoolFile ref =
+        PoolFile::from_bytes(test::bricked_bytes(single, 700, nullptr, true, 32, D::never), "r");
+    EXPECT_LT(sb.data.size(), pool::validate_brick_index(ref).data.size());
+}
+
+TEST_F(Bricks, DirectBricksWithABadLayoutAreRefused) {
+    using D = pre::BrickParams::Direct;
+    const PoolFile always =
+        PoolFile::from_bytes(test::bricked_bytes(*s_octree, 700, nullptr, true, 32, D::always), "always");
+    const auto with_layout = [&](std::uint32_t layout) {
+        return modified(always, [&](auto&, auto& table, auto& data) {
+            std::byte* base = data.data() + table[2].offset;
+            std::memcpy(base + offsetof(pool::BrickHeader, layout), &layout, 4);
+            table[2].checksum = pool::checksum({base, std::size_t(table[2].size)});
+        });
+    };
+    EXPECT_NO_THROW(pool::validate_bricks(with_layout(pool::k_brick_direct)));
+    // a direct payload whose header says referenced: its size is not the referenced layout's
+    EXPECT_NE(error_of([&] {
+                  pool::validate_bricks(with_layout(pool::k_brick_referenced));
+              }).find("brick 2: payload size"),
+              std::string::npos);
+    EXPECT_NE(error_of([&] { pool::validate_bricks(with_layout(7)); }).find("brick 2: layout 7"),
+              std::string::npos);
+    // an entry with fewer records than references cannot be direct: its size matches no layout
+    const PoolFile fewer = modified(always, [](auto& info, auto& table, auto&) {
+        table[2].encoded_count -= 1;
+        info.encoded_splats -= 1;
+    });
+    EXPECT_NE(error_of([&] { pool::validate_brick_index(fewer); }).find("brick 2: size"), std::string::npos);
 }
 
 TEST_F(Bricks, BadBrickNodesAreRefusedNamingTheBrick) {

@@ -18,12 +18,14 @@
 namespace prt::test {
 
 /// A pool with `cloud`'s points (radii given) and their float octree.
-inline std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, std::uint32_t max_leaf = 16) {
+inline std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, std::uint32_t max_leaf = 16,
+                                                bool replicate = true) {
     pool::PoolWriter w;
     pre::write_point_sections(cloud, w);
     const pool::PoolFile points = pool::PoolFile::from_bytes(w.serialize(), "points");
     pre::OctreeParams params;
     params.max_leaf_splats = max_leaf;
+    params.replicate = replicate;
     params.threads = 2;
     pre::SplatOctree octree = pre::build_octree(points.array<pool::Float3>(pool::SectionType::positions),
                                                 points.array<pool::Float3>(pool::SectionType::normals),
@@ -34,7 +36,8 @@ inline std::vector<std::byte> octree_pool_bytes(const pre::PointCloud& cloud, st
 }
 
 /// A pool with points (sphere of radius 2, colours from the position) and their float octree.
-inline std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16) {
+inline std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max_leaf = 16,
+                                                bool replicate = true) {
     const test::SplatSet s = sphere_points(n, 5, 2.0);
     pre::PointCloud cloud;
     for (std::size_t i = 0; i < s.positions.size(); ++i) {
@@ -45,17 +48,19 @@ inline std::vector<std::byte> octree_pool_bytes(std::size_t n, std::uint32_t max
         cloud.radii.push_back(float(3.0 / std::sqrt(double(n))) * float(1 + i % 3));
     }
     cloud.normals = s.normals;
-    return octree_pool_bytes(cloud, max_leaf);
+    return octree_pool_bytes(cloud, max_leaf, replicate);
 }
 
 /// The pool with bricks added, float sections kept (so the tests can compare) unless `keep_float`
 /// is false (as prt-bricks without --keep-float).
 inline std::vector<std::byte> bricked_bytes(const pool::PoolFile& in, std::uint32_t brick_splats,
                                             pre::BrickStats* stats = nullptr, bool keep_float = true,
-                                            std::uint32_t lod_splats = pre::BrickParams{}.lod_splats) {
+                                            std::uint32_t lod_splats = pre::BrickParams{}.lod_splats,
+                                            pre::BrickParams::Direct direct = pre::BrickParams{}.direct) {
     pre::BrickParams params;
     params.brick_splats = brick_splats;
     params.lod_splats = lod_splats;
+    params.direct = direct;
     params.threads = 2;
     pre::BrickedOctree b = pre::build_bricks(pool::splat_octree(in, "test"),
                                              in.array<pool::Rgba8>(pool::SectionType::colors), params, stats);

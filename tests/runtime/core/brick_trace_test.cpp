@@ -226,6 +226,64 @@ TEST_F(BrickTrace, ImageEqualsTheFloatOctreesWithinTheCodecError) {
     EXPECT_GT(s_views->bricks.brick_count, 8u);
 }
 
+TEST_F(BrickTrace, DirectAndReferencedBricksTraceTheSameImage) {
+    // Direct bricks (splats in leaf order, no references) decode the same splats in the same order
+    // as referenced ones, so the image is the same bit for bit, with the same work.
+    using D = pre::BrickParams::Direct;
+    const Grid g(128);
+    const auto never = make_views(test::bricked_bytes(*s_octree, 1500, nullptr, true, 32, D::never));
+    const auto always = make_views(test::bricked_bytes(*s_octree, 1500, nullptr, true, 32, D::always));
+    ASSERT_EQ(never->bricks.brick_count, always->bricks.brick_count);
+    core::WalkStats sn, sa;
+    const std::vector<Pixel> a = render_bricks(never->bricks, *never, g, sn);
+    const std::vector<Pixel> b = render_bricks(always->bricks, *always, g, sa);
+    std::size_t hits = 0;
+    for (std::uint32_t i = 0; i < a.size(); ++i) {
+        ASSERT_EQ(a[i].hit, b[i].hit) << i;
+        if (!a[i].hit) continue;
+        ++hits;
+        EXPECT_EQ(a[i].s.t, b[i].s.t) << i;
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_EQ(core::component(a[i].s.normal, k), core::component(b[i].s.normal, k)) << i;
+            EXPECT_EQ(core::component(a[i].s.color, k), core::component(b[i].s.color, k)) << i;
+        }
+    }
+    EXPECT_GT(hits, a.size() / 4);
+    if (PRT_COUNT_WORK) {
+        EXPECT_EQ(sn.splat_tests, sa.splat_tests);
+        EXPECT_EQ(sn.leaves, sa.leaves);
+    }
+}
+
+TEST_F(BrickTrace, TheTracersDecodeIsTheCodecs) {
+    // BrickSplats::load decodes as pool::decode_splat does, bit for bit, but for the normal, which it
+    // leaves on the octahedron (the plane test needs no unit normal); unit() gives the codec's unit
+    // normal, bit for bit, and the loaded one points the same way.
+    const Views& v = *s_views;
+    std::size_t checked = 0;
+    for (std::uint32_t b = 0; b < v.bricks.brick_count; ++b) {
+        core::BrickSplats src;
+        core::OctreeView brick;
+        ASSERT_TRUE(core::open_brick(v.bricks, b, src, brick));
+        const pool::BrickView pv = pool::brick_view(v.sections.payload(b));
+        for (std::uint32_t i = 0; i < brick.splat_count; ++i) {
+            const pool::Splat s = src.load(i);
+            const pool::DecodedSplat d = pool::decode_splat(pv.splats[pv.ref(i)], *pv.header);
+            ASSERT_EQ(s.position.x, d.position.x);
+            ASSERT_EQ(s.position.y, d.position.y);
+            ASSERT_EQ(s.position.z, d.position.z);
+            ASSERT_EQ(s.radius, d.radius);
+            const Vec3 u = src.unit(Vec3{s.normal.x, s.normal.y, s.normal.z});
+            ASSERT_EQ(u.x, d.normal.x) << "brick " << b << " splat " << i;
+            ASSERT_EQ(u.y, d.normal.y);
+            ASSERT_EQ(u.z, d.normal.z);
+            ASSERT_NEAR(std::fabs(s.normal.x) + std::fabs(s.normal.y) + std::fabs(s.normal.z), 1.0, 1e-6);
+            ++checked;
+        }
+    }
+    EXPECT_EQ(checked, v.sections.info.splat_count);
+}
+
 TEST_F(BrickTrace, OneWalkVisitsTheFloatOctreesLeaves) {
     // Bricks are subtrees of the same octree and the walk crosses from brick to brick in one walk
     // state (descend_bricked): a ray that meets nothing visits exactly the leaves the float walk

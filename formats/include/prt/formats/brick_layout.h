@@ -17,8 +17,16 @@
 //                                                 splats among the brick's encoded splats; uint16
 //                                                 when encoded_count <= 65536, else uint32;
 //                                                 zero-padded to a multiple of 4 bytes
+//                                                 (absent in a direct brick, below)
 //                            CompressedSplat splats[encoded_count]   12 B each: each splat once,
 //                                                 however many leaves of the brick hold it
+//                          A direct brick (BrickHeader::layout = k_brick_direct) has no refs: its
+//                          leaves' splats are stored in leaf order, a replica once per leaf that
+//                          holds it (encoded_count = splat_count, splat i of the leaves is
+//                          splats[i]), so a splat test reads one record instead of a reference and
+//                          then its record. prt-bricks writes a brick direct when that takes no
+//                          more bytes (little replication: culled pools); the entry's size tells
+//                          the two layouts apart without the payload.
 //   lod_splats (132)       LodSplat[top node count] (32 B), parallel to brick_top_nodes: the
 //                          representative disc of top node i (radius 0 for an empty leaf)
 //   brick_lod (133)        optional, with lod_nodes and lod_discs: BrickLod[brick_count] (32 B):
@@ -138,11 +146,19 @@ struct BrickHeader {
     std::uint32_t splat_count;     ///< 24: = BrickEntry::splat_count (references)
     std::int32_t radius_log2_min;  ///< 28: exponent of radius code 1 (relative to quant_size)
     std::uint32_t encoded_count;   ///< 32: = BrickEntry::encoded_count
-    std::uint32_t reserved[3];     ///< 36: 0
+    std::uint32_t layout;          ///< 36: BrickLayout (0 in pools written before direct bricks)
+    std::uint32_t reserved[2];     ///< 40: 0
 };
 static_assert(sizeof(BrickHeader) == 48);
 static_assert(offsetof(BrickHeader, radius_log2_min) == 28);
 static_assert(offsetof(BrickHeader, encoded_count) == 32);
+static_assert(offsetof(BrickHeader, layout) == 36);
+
+/// BrickHeader::layout: how a brick's leaves name their splats.
+enum BrickLayout : std::uint32_t {
+    k_brick_referenced = 0,  ///< refs[splat_count] index the distinct encoded splats
+    k_brick_direct = 1,      ///< no refs: splats in leaf order, encoded_count = splat_count
+};
 
 /// A compressed splat (12 bytes; bit layout in the file comment).
 struct CompressedSplat {
@@ -208,21 +224,37 @@ PRT_BRICK_HD inline constexpr std::uint64_t brick_refs_offset(std::uint32_t node
                                                               std::uint32_t leaf_count) {
     return brick_leaf_info_offset(node_count) + 4ull * (std::uint64_t(leaf_count) + 1);
 }
+/// Where the compressed splats start; `direct`: a direct brick (no refs).
 PRT_BRICK_HD inline constexpr std::uint64_t brick_splats_offset(std::uint32_t node_count,
                                                                 std::uint32_t leaf_count,
                                                                 std::uint32_t splat_count,
-                                                                std::uint32_t encoded_count) {
+                                                                std::uint32_t encoded_count,
+                                                                bool direct = false) {
+    if (direct) return brick_refs_offset(node_count, leaf_count);
     return (brick_refs_offset(node_count, leaf_count) +
             std::uint64_t(brick_ref_bytes(encoded_count)) * splat_count + 3) /
            4 * 4;
 }
-/// Bytes of a brick payload with these counts (before padding to k_brick_alignment).
+/// Bytes of a brick payload with these counts (before padding to k_brick_alignment); a direct
+/// brick's encoded_count equals its splat_count.
 PRT_BRICK_HD inline constexpr std::uint64_t brick_payload_size(std::uint32_t node_count,
                                                                std::uint32_t leaf_count,
                                                                std::uint32_t splat_count,
-                                                               std::uint32_t encoded_count) {
-    return brick_splats_offset(node_count, leaf_count, splat_count, encoded_count) +
+                                                               std::uint32_t encoded_count,
+                                                               bool direct = false) {
+    return brick_splats_offset(node_count, leaf_count, splat_count, encoded_count, direct) +
            sizeof(CompressedSplat) * std::uint64_t(encoded_count);
+}
+/// Whether a brick of `splat_count` references to `distinct` splats takes no more bytes direct (each
+/// reference its own 12-byte record) than referenced (2-4 B references + the distinct records).
+PRT_BRICK_HD inline constexpr bool brick_direct_is_smaller(std::uint32_t splat_count,
+                                                           std::uint32_t distinct) {
+    return brick_payload_size(1, 0, splat_count, splat_count, true) <=
+           brick_payload_size(1, 0, splat_count, distinct, false);
+}
+/// Whether a payload's header says direct.
+PRT_BRICK_HD inline constexpr bool brick_is_direct(const BrickHeader& h) {
+    return h.layout == k_brick_direct;
 }
 
 // ---- Codec ----------------------------------------------------------------------------------------
@@ -255,19 +287,33 @@ PRT_BRICK_HD inline Rgba8 decode_rgb565(std::uint16_t v) {
                  static_cast<std::uint8_t>((b * 255u + 15u) / 31u), 255};
 }
 
-/// Decodes an octahedral normal code (Cigolle et al. 2014, "A Survey of Efficient Representations
-/// for Independent Unit Vectors", JCGT 3(2), sec. 3.3): unit vector.
-PRT_BRICK_HD inline Float3 decode_octahedral(std::uint32_t code) {
-    const float px = (float(code & 1023u) - k_oct_half) / k_oct_half;
-    const float py = (float((code >> 10) & 1023u) - k_oct_half) / k_oct_half;
+/// 1 / k_oct_half, so decoding multiplies (codes 0, 511 and 1022 still give -1, 0 and 1 exactly).
+inline constexpr float k_oct_inv_half = 1.0f / 511.0f;
+
+/// The octahedral point of a normal code (Cigolle et al. 2014, "A Survey of Efficient
+/// Representations for Independent Unit Vectors", JCGT 3(2), sec. 3.3), folded back onto the
+/// octahedron |x| + |y| + |z| = 1: the normal's direction, not unit. The tracer tests splats with it
+/// (a ray-plane test needs no unit normal) and normalizes only the normals it blends (bricks.h),
+/// which saves a square root and a division per splat test.
+PRT_BRICK_HD inline Float3 decode_octahedral_point(std::uint32_t code) {
+    const float px = (float(code & 1023u) - k_oct_half) * k_oct_inv_half;
+    const float py = (float((code >> 10) & 1023u) - k_oct_half) * k_oct_inv_half;
     float x = px, y = py;
     const float z = 1.0f - fabsf(px) - fabsf(py);
     if (z < 0) {
         x = (1.0f - fabsf(py)) * (px >= 0 ? 1.0f : -1.0f);
         y = (1.0f - fabsf(px)) * (py >= 0 ? 1.0f : -1.0f);
     }
-    const float inv = 1.0f / sqrtf(x * x + y * y + z * z);
-    return Float3{x * inv, y * inv, z * inv};
+    return Float3{x, y, z};
+}
+/// An octahedral point as a unit vector.
+PRT_BRICK_HD inline Float3 normalize_octahedral(Float3 p) {
+    const float inv = 1.0f / sqrtf(p.x * p.x + p.y * p.y + p.z * p.z);
+    return Float3{p.x * inv, p.y * inv, p.z * inv};
+}
+/// Decodes an octahedral normal code: unit vector.
+PRT_BRICK_HD inline Float3 decode_octahedral(std::uint32_t code) {
+    return normalize_octahedral(decode_octahedral_point(code));
 }
 
 /// Octahedral code (20 bits) of a unit normal: of the four codes around the projected point, the

@@ -41,12 +41,13 @@ struct BrickView {
     const BrickHeader* header = nullptr;
     std::span<const std::uint32_t> nodes;      ///< the brick's subtree, node 0 its root
     std::span<const std::uint32_t> leaf_info;  ///< leaf_count + 1 begin indices into the references
-    const std::byte* refs = nullptr;           ///< splat_count references, ref_bytes each
-    std::uint32_t ref_bytes = 2;
-    std::span<const CompressedSplat> splats;  ///< encoded_count compressed splats
+    const std::byte* refs = nullptr;           ///< splat_count references, ref_bytes each; null: direct
+    std::uint32_t ref_bytes = 2;               ///< 2, 4, or 0 in a direct brick
+    std::span<const CompressedSplat> splats;   ///< encoded_count compressed splats
 
-    /// Reference i: the index among `splats` of the leaves' i-th splat.
+    /// Reference i: the index among `splats` of the leaves' i-th splat (i itself in a direct brick).
     std::uint32_t ref(std::size_t i) const {
+        if (ref_bytes == 0) return static_cast<std::uint32_t>(i);
         if (ref_bytes == 2) return reinterpret_cast<const std::uint16_t*>(refs)[i];
         return reinterpret_cast<const std::uint32_t*>(refs)[i];
     }

@@ -111,24 +111,39 @@ struct Rgb565Splats {
         return Vec3{c.r * k, c.g * k, c.b * k};
     }
     PRT_HD PRT_INLINE std::uint32_t point_id(std::uint32_t) const { return 0xffffffffu; }
+    /// A loaded normal as a unit vector (splat.h blends unit normals): LOD discs' are unit already.
+    PRT_HD PRT_INLINE Vec3 unit(Vec3 n) const { return n; }
 };
 
 /// A resident brick's compressed splats, decoded on load (brick_layout.h: decode_splat). Leaves
 /// index references (splat i of the leaves is encoded splat refs[i]: 16-bit, or 32-bit in a brick
-/// of more than 65536 encoded splats), so a splat held by several leaves is stored once.
+/// of more than 65536 encoded splats), so a splat held by several leaves is stored once; a direct
+/// brick (ref_bytes 0) stores its leaves' splats in leaf order, so splat i is read with no reference.
 struct BrickSplats : Rgb565Splats {
     const pool::CompressedSplat* splats;
     const void* refs;
+    std::uint32_t ref_bytes;  ///< 2, 4, or 0: direct
     pool::BrickHeader header;
+    float step;  ///< header.quant_size / 65535: decode_coordinate's step, divided once per brick
     PRT_HD PRT_INLINE std::uint32_t ref(std::uint32_t i) const {
-        if (pool::brick_ref_bytes(header.encoded_count) == 2)
-            return static_cast<const std::uint16_t*>(refs)[i];
+        if (ref_bytes == 0u) return i;
+        if (ref_bytes == 2u) return static_cast<const std::uint16_t*>(refs)[i];
         return static_cast<const std::uint32_t*>(refs)[i];
     }
+    /// Splat i as decode_splat gives it, but its normal the octahedral point (not unit: the
+    /// ray-plane test of intersect_splat and the leaf bounds do not need it unit; unit() below
+    /// normalizes the normals splat.h blends, as decode_octahedral would).
     PRT_HD PRT_INLINE pool::Splat load(std::uint32_t i) const {
         const pool::CompressedSplat c = splats[ref(i)];
-        const pool::DecodedSplat d = pool::decode_splat(c, header);
-        return pool::Splat{d.position, d.radius, d.normal, c.color};
+        const float* lo = header.quant_min;
+        const pool::Float3 p{lo[0] + float(c.q[0]) * step, lo[1] + float(c.q[1]) * step,
+                             lo[2] + float(c.q[2]) * step};
+        return pool::Splat{p, pool::decode_radius(c.nr >> 20, header.quant_size, header.radius_log2_min),
+                           pool::decode_octahedral_point(c.nr & 0xFFFFFu), c.color};
+    }
+    PRT_HD PRT_INLINE Vec3 unit(Vec3 n) const {
+        const pool::Float3 u = pool::normalize_octahedral(pool::Float3{n.x, n.y, n.z});
+        return Vec3{u.x, u.y, u.z};
     }
 };
 
@@ -194,9 +209,13 @@ PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
     BrickSplats src;
     src.header = *reinterpret_cast<const pool::BrickHeader*>(payload);
     const pool::BrickHeader& h = src.header;
+    const bool direct = pool::brick_is_direct(h);
     src.refs = payload + pool::brick_refs_offset(h.node_count, h.leaf_count);
+    src.ref_bytes = direct ? 0u : pool::brick_ref_bytes(h.encoded_count);
+    src.step = h.quant_size / pool::k_position_max_code;
     src.splats = reinterpret_cast<const pool::CompressedSplat*>(
-        payload + pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count));
+        payload +
+        pool::brick_splats_offset(h.node_count, h.leaf_count, h.splat_count, h.encoded_count, direct));
     return src;
 }
 

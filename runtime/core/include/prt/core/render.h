@@ -160,9 +160,11 @@ enum KernelMask : std::uint32_t {
 PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
     std::uint32_t m = (s.params.spp > 1 || s.params.path_tracing != 0) ? k_mask_sampling : 0u;
     for (std::uint32_t i = 0; i < s.model_count; ++i) {
-        m |= 1u << static_cast<std::uint32_t>(s.models[i].surface);
+        // a bricked model needs the brick walk only, not the float splat code (dispatch_surface)
         if (s.models[i].surface == SurfaceKind::splats && s.models[i].bricks.top_nodes != nullptr)
             m |= k_mask_bricks;
+        else
+            m |= 1u << static_cast<std::uint32_t>(s.models[i].surface);
     }
     return m;
 }

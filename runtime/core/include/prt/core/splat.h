@@ -124,11 +124,15 @@ struct BlendOptions {
 /// splats of an octree view with the pool's per-point colors (OctreeSplats), or a brick's compressed
 /// splats decoded on the fly (bricks.h). load(i) gives splat i as a pool::Splat whose `point` field
 /// is what color() takes (and point_id(), which finish_nearest asks of the brick sources): the source
-/// point index here, a packed colour in a brick.
+/// point index here, a packed colour in a brick; unit(n) gives a loaded normal as the unit vector
+/// blending sums (a brick's splats load a normal that is not unit: bricks.h).
 struct OctreeSplats {
     const pool::Splat* splats;
     const pool::Rgba8* colors;  ///< per point, or null (white)
     PRT_HD PRT_INLINE pool::Splat load(std::uint32_t i) const { return load_splat(splats + i); }
+    /// A loaded normal as a unit vector, for blending: float splats' are unit already (a brick's
+    /// are not, bricks.h).
+    PRT_HD PRT_INLINE Vec3 unit(Vec3 n) const { return n; }
     /// The display-encoded colour in [0,1] of a splat's `point` field.
     PRT_HD PRT_INLINE Vec3 color(std::uint32_t point) const {
         if (colors == nullptr) return Vec3{1.0f, 1.0f, 1.0f};
@@ -154,7 +158,7 @@ PRT_HD PRT_INLINE void blend_one(const Src& src, const pool::Splat& s, Vec3 o, V
     const float w = blend_weight(xr);
     acc.w += w;
     acc.wt += w * t;
-    acc.wn += vec3(s.normal) * w;
+    acc.wn += src.unit(vec3(s.normal)) * w;
     acc.wc += src.color(s.point) * w;
 }
 
