@@ -14,6 +14,7 @@
 #include "prt/error.h"
 #include "prt/parallel.h"
 #include "prt/tool.h"
+#include "radix_sort.h"
 #include "spill_file.h"
 
 namespace prt::pre {
@@ -207,53 +208,76 @@ private:
             [&] { m_records.drop(); });  // written records stay in the file (a shared mapping)
         m_records.drop();
         if (m_params.positions_mapped) drop_pages(m_pos.data(), m_pos.size_bytes());
-        // Within each tile: Morton order (10 bits per axis over the tile's bounding box), then
-        // blocks of k_block records with their boxes.
+        // Within each tile: Morton order, then blocks of records with their boxes (order_tile).
         m_block_begin.assign(tiles + 1, 0);
         std::vector<std::pair<std::uint32_t, std::uint32_t>> keys;
         std::vector<Record> sorted;
-        for (std::size_t t = 0; t < tiles; ++t) {
-            Record* r = out + m_begin[t];
-            const std::size_t m = m_begin[t + 1] - m_begin[t];
-            float lo[3] = {std::numeric_limits<float>::max(), std::numeric_limits<float>::max(),
-                           std::numeric_limits<float>::max()};
-            float hi[3] = {-lo[0], -lo[1], -lo[2]};
-            for (std::size_t i = 0; i < m; ++i)
+        for (std::size_t t = 0; t < tiles; ++t) order_tile(t, out, keys, sorted);
+    }
+
+    /// Tile t's records in Morton order (10 bits per axis over the tile's bounding box; equal codes
+    /// in index order, the order the scatter wrote them in: the radix sort is stable), then cut into
+    /// blocks of k_block records with their boxes. Each step runs over the tile's records in
+    /// parallel; the order and the blocks are those of a serial sort by (code, index).
+    void order_tile(std::size_t t, Record* out, std::vector<std::pair<std::uint32_t, std::uint32_t>>& keys,
+                    std::vector<Record>& sorted) {
+        constexpr std::size_t k_chunk = std::size_t{1} << 16;
+        Record* r = out + m_begin[t];
+        const std::size_t m = m_begin[t + 1] - m_begin[t];
+        const std::size_t chunks = (m + k_chunk - 1) / k_chunk;
+        constexpr float k_max = std::numeric_limits<float>::max();
+        std::vector<std::array<float, 6>> boxes(chunks, {k_max, k_max, k_max, -k_max, -k_max, -k_max});
+        parallel_chunks(m, k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            std::array<float, 6>& box = boxes[b / k_chunk];
+            for (std::size_t i = b; i < e; ++i)
                 for (int a = 0; a < 3; ++a) {
-                    lo[a] = std::min(lo[a], (&r[i].x)[a]);
-                    hi[a] = std::max(hi[a], (&r[i].x)[a]);
+                    box[a] = std::min(box[a], (&r[i].x)[a]);
+                    box[3 + a] = std::max(box[3 + a], (&r[i].x)[a]);
                 }
-            keys.resize(m);
-            for (std::size_t i = 0; i < m; ++i) {
+        });
+        float lo[3] = {k_max, k_max, k_max}, hi[3] = {-k_max, -k_max, -k_max};
+        for (const std::array<float, 6>& box : boxes)
+            for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], box[a]), hi[a] = std::max(hi[a], box[3 + a]);
+        keys.resize(m);
+        parallel_chunks(m, k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i) {
                 std::uint32_t c[3];
                 for (int a = 0; a < 3; ++a) {
-                    const double e = double(hi[a]) - double(lo[a]);
-                    const double f = e > 0 ? (double((&r[i].x)[a]) - lo[a]) / e : 0.0;
+                    const double ext = double(hi[a]) - double(lo[a]);
+                    const double f = ext > 0 ? (double((&r[i].x)[a]) - lo[a]) / ext : 0.0;
                     c[a] = static_cast<std::uint32_t>(std::clamp(f * 1024.0, 0.0, 1023.0));
                 }
                 keys[i] = {static_cast<std::uint32_t>(spread_bits21(c[0]) | spread_bits21(c[1]) << 1 |
                                                       spread_bits21(c[2]) << 2),
                            static_cast<std::uint32_t>(i)};
             }
-            std::sort(keys.begin(), keys.end());
-            sorted.resize(m);
-            for (std::size_t i = 0; i < m; ++i) sorted[i] = r[keys[i].second];
-            std::copy(sorted.begin(), sorted.end(), r);
-            for (std::size_t b = 0; b < m; b += k_block) {
-                Block block{m_begin[t] + b, m_begin[t] + std::min(m, b + k_block), {}, {}};
+        });
+        radix_sort_by(keys, 30, m_threads,
+                      [](const std::pair<std::uint32_t, std::uint32_t>& k) { return k.first; });
+        sorted.resize(m);
+        parallel_chunks(m, k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i) sorted[i] = r[keys[i].second];
+        });
+        parallel_chunks(m, k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            std::copy(sorted.begin() + std::ptrdiff_t(b), sorted.begin() + std::ptrdiff_t(e), r + b);
+        });
+        const std::size_t first = m_blocks.size(), blocks = (m + k_block - 1) / k_block;
+        m_blocks.resize(first + blocks);
+        parallel_chunks(blocks, 64, m_threads, [&](std::size_t jb, std::size_t je, unsigned) {
+            for (std::size_t j = jb; j < je; ++j) {
+                const std::size_t b = j * k_block, e = std::min(m, b + k_block);
+                Block& block = m_blocks[first + j];
+                block = Block{m_begin[t] + b, m_begin[t] + e, {}, {}};
                 for (int a = 0; a < 3; ++a) block.lo[a] = block.hi[a] = (&r[b].x)[a];
-                for (std::size_t i = b; i < std::min(m, b + k_block); ++i)
+                for (std::size_t i = b; i < e; ++i)
                     for (int a = 0; a < 3; ++a) {
                         block.lo[a] = std::min(block.lo[a], (&r[i].x)[a]);
                         block.hi[a] = std::max(block.hi[a], (&r[i].x)[a]);
                     }
-                m_blocks.push_back(block);
             }
-            m_block_begin[t + 1] = m_blocks.size();
-            drop_pages(r, m * sizeof(Record));
-        }
-        keys = {};
-        sorted = {};
+        });
+        m_block_begin[t + 1] = m_blocks.size();
+        drop_pages(r, m * sizeof(Record));
     }
 
     /// Calls f(record) for every record of the blocks meeting [lo, hi] (tiles whose region meets it).

@@ -115,6 +115,37 @@ TEST(TiledKnn, NeighboursEqualTheInCoreSearchWithTies) {
     }
 }
 
+TEST(TiledKnn, LargeTilesOrderedInParallelGiveTheInCoreNeighbours) {
+    // Tiles of more than 2^16 records, so each tile's Morton order, sort and blocks are computed by
+    // several workers (tiled_knn.cpp order_tile): the neighbours still equal the in-core search's.
+    std::vector<Float3> p = prt::test::sphere_points(300000, 7, 2.0).positions;
+    std::mt19937_64 rng(3);
+    std::shuffle(p.begin(), p.end(), rng);
+    const std::uint32_t k = 9;
+    std::vector<std::uint32_t> want_nb;
+    std::vector<float> want_d2;
+    in_core_knn(p, k, want_nb, want_d2);
+    prt::pre::TiledKnnParams params;
+    params.k = k;
+    params.threads = 4;
+    params.tile_points = 140000;
+    params.spill_folder = fs::temp_directory_path();
+    std::vector<std::uint32_t> got_nb(p.size() * k, ~0u);
+    prt::pre::TiledKnnStats stats;
+    prt::pre::tiled_knn(
+        p, params,
+        [&](const prt::pre::KnnBatch& b) {
+            for (std::size_t q = 0; q < b.queries.size(); ++q)
+                for (std::uint32_t j = 0; j < k; ++j)
+                    got_nb[std::size_t(b.global[b.queries[q]]) * k + j] = b.global[b.neighbours[q * k + j]];
+        },
+        {}, &stats);
+    EXPECT_GE(stats.tiles, 2u);
+    EXPECT_GT(stats.halo_queries, 0u);
+    for (std::size_t i = 0; i < got_nb.size(); ++i)
+        ASSERT_EQ(got_nb[i], want_nb[i]) << "point " << i / k << " neighbour " << i % k;
+}
+
 TEST(TiledKnn, BadInputIsRefused) {
     prt::pre::TiledKnnParams params;
     params.k = 4;
