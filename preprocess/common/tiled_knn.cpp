@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -321,20 +322,33 @@ private:
         if (m_progress) m_progress(m_done);
     }
 
+    /// Records by increasing index (indices are unique, so any sort gives this order): a parallel
+    /// radix sort for large sets, std::sort for small ones (halo groups of a few points).
+    void sort_by_index(std::vector<Record>& recs) const {
+        if (recs.size() < (std::size_t{1} << 16)) {
+            std::sort(recs.begin(), recs.end(),
+                      [](const Record& p, const Record& q) { return p.index < q.index; });
+            return;
+        }
+        const auto bits = static_cast<std::uint32_t>(std::bit_width(std::uint64_t(m_pos.size())));
+        radix_sort_by(recs, bits, m_threads, [](const Record& r) { return r.index; });
+    }
+
     /// One tile: round 1 over its own points, then the halo groups.
     void tile(std::size_t t) {
         std::vector<Record> recs(tile_records(t).begin(), tile_records(t).end());
         const std::size_t m = recs.size();
         if (m == 0) return;
-        std::sort(recs.begin(), recs.end(),
-                  [](const Record& p, const Record& q) { return p.index < q.index; });
+        sort_by_index(recs);
         const std::uint32_t k = m_k;
         std::vector<pool::Float3> pts(m);
         std::vector<std::uint32_t> global(m);
-        for (std::size_t i = 0; i < m; ++i) {
-            pts[i] = {recs[i].x, recs[i].y, recs[i].z};
-            global[i] = recs[i].index;
-        }
+        parallel_chunks(m, std::size_t{1} << 16, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i) {
+                pts[i] = {recs[i].x, recs[i].y, recs[i].z};
+                global[i] = recs[i].index;
+            }
+        });
         m_stats.max_gathered = std::max<std::uint64_t>(m_stats.max_gathered, m);
         std::vector<std::pair<double, std::uint32_t>> failing;  // (tile-only k-th distance^2, local index)
         if (m > k) {
@@ -457,7 +471,7 @@ private:
             return true;
         });
         if (!fits) return false;
-        std::sort(out.begin(), out.end(), [](const Record& p, const Record& q) { return p.index < q.index; });
+        sort_by_index(out);
         return true;
     }
 
@@ -483,7 +497,9 @@ private:
         ++m_stats.halo_groups;
         std::vector<pool::Float3> gp(g);
         std::vector<std::uint32_t> gi(g);
-        for (std::size_t i = 0; i < g; ++i) gp[i] = {set[i].x, set[i].y, set[i].z}, gi[i] = set[i].index;
+        parallel_chunks(g, std::size_t{1} << 16, m_threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t i = b; i < e; ++i) gp[i] = {set[i].x, set[i].y, set[i].z}, gi[i] = set[i].index;
+        });
         set = {};
         std::vector<std::uint32_t> queries(b - a);
         for (std::size_t i = a; i < b; ++i) {
