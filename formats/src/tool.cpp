@@ -270,7 +270,8 @@ int PoolStep::run(int argc, char** argv, const std::function<void(CLI::App&)>& o
             if (!m_ignored_output.empty()) note("%s: %s", m_tool.c_str(), m_ignored_output.c_str());
             if (m_output_in_place && m_output.empty()) m_output = m_input;
             // Refused before any work: a missing input, then an output that cannot be written.
-            if (!m_input.empty()) check_input_file(m_input);
+            const bool input_unused = m_input_unused && !m_input_unused().empty();
+            if (!m_input.empty() && !input_unused) check_input_file(m_input);
             if (!m_output.empty()) check_writable(m_output);
             if (!m_stats.empty()) check_writable(m_stats);
             body(*this);
@@ -298,6 +299,10 @@ CLI::Option* PoolStep::add_output(CLI::App& app, const std::string& help) {
 
 void PoolStep::output_unused_when(std::function<std::string()> unused) {
     m_output_unused = std::move(unused);
+}
+
+void PoolStep::input_unused_when(std::function<std::string()> unused) {
+    m_input_unused = std::move(unused);
 }
 
 const pool::PoolFile& PoolStep::input() {

@@ -429,6 +429,9 @@ int main(int argc, char** argv) {
         [&](CLI::App& app) {
             // --stage plan and cells write the plan and the parts into --cells-folder, never OUTPUT
             // (plan's records go there too, not to spill files beside OUTPUT): -o is optional there.
+            step.input_unused_when([&points]() -> std::string {
+                return points.stage == "cells" ? "--stage cells reads only --cells-folder" : "";
+            });
             step.output_unused_when([&points]() -> std::string {
                 if (points.stage == "plan")
                     return "--stage plan writes plan.bin and records.bin into --cells-folder";

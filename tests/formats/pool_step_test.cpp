@@ -181,6 +181,39 @@ TEST_F(PoolStepTest, OutputUnusedWhereTheStepSaysSo) {
     EXPECT_EQ(pool::PoolFile::open(path("out.pool")).array<float>(pool::SectionType::radii).size(), 10u);
 }
 
+TEST_F(PoolStepTest, InputUnusedWhereTheStepSaysSo) {
+    // A step whose --dry runs never read INPUT (as prt-bricks --stage cells): there INPUT need not
+    // exist; every other run of the same step still refuses a missing INPUT before its work.
+    std::string err;
+    const auto run_step_without_input = [&](std::vector<std::string> args, bool& ran) {
+        std::vector<char*> argv{const_cast<char*>("prt-test-step")};
+        for (std::string& a : args) argv.push_back(a.data());
+        bool dry = false;
+        ran = false;
+        tool::PoolStep step("prt-test-step", "A test step");
+        testing::internal::CaptureStderr();
+        const int code = step.run(
+            int(argv.size()), argv.data(),
+            [&](CLI::App& app) {
+                app.add_flag("--dry", dry, "Read nothing");
+                step.input_unused_when(
+                    [&] { return dry ? std::string("--dry reads nothing") : std::string(); });
+            },
+            [&](tool::PoolStep&) { ran = true; });
+        err = testing::internal::GetCapturedStderr();
+        return code;
+    };
+    bool ran = false;
+    EXPECT_EQ(run_step_without_input({path("missing.pool"), "--dry", "-o", path("out.pool")}, ran), k_exit_ok)
+        << err;
+    EXPECT_TRUE(ran);
+    EXPECT_EQ(err, "");
+    EXPECT_EQ(run_step_without_input({path("missing.pool"), "-o", path("out.pool")}, ran),
+              k_exit_runtime_error);
+    EXPECT_FALSE(ran);
+    EXPECT_EQ(err, "prt-test-step: error: " + path("missing.pool") + ": no such file\n");
+}
+
 TEST_F(PoolStepTest, UnwritableOutputIsRefusedBeforeTheWork) {
     const auto refused = [&](std::vector<std::string> args, const std::string& named) {
         SCOPED_TRACE(named);

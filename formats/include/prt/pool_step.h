@@ -101,6 +101,11 @@ public:
     /// for every step (the usage error "--output is required"). Call it from run()'s `options`;
     /// it takes the app's parse_complete_callback.
     void output_unused_when(std::function<std::string()> unused);
+    /// For a step some of whose runs never read INPUT (prt-bricks --stage cells reads only its
+    /// --cells-folder): once the command line parsed, `unused` says why this run reads none ("" when
+    /// it does). Then INPUT is not checked, so a worker need not see the file; input() must not be
+    /// called. Call it from run()'s `options`.
+    void input_unused_when(std::function<std::string()> unused);
 
     const std::string& tool() const { return m_tool; }
     bool quiet() const { return m_common.quiet; }
@@ -153,6 +158,7 @@ private:
     double m_start = 0;
     bool m_output_in_place = false;                ///< add_output(): OUTPUT defaults to INPUT
     std::function<std::string()> m_output_unused;  ///< output_unused_when()
+    std::function<std::string()> m_input_unused;   ///< input_unused_when()
     std::string m_ignored_output;                  ///< a -o that this run does not write
     std::optional<pool::PoolFile> m_in;
     std::optional<pool::PoolWriter> m_writer;

@@ -354,8 +354,17 @@ TEST(BricksFromPoints, StagedBuildNeedsOutputOnlyToMerge) {
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("prt-bricks: -o " + elsewhere + " ignored: --stage plan writes"), std::string::npos)
         << r.err;
-    r = run("--stage cells --cells 0:" + all + staged + " -q");
+    // a cell worker need not see INPUT either (it reads only --cells-folder); the whole build does
+    const auto run_without_input = [&](const std::string& args) {
+        return test::run_tool(
+            "prt-bricks",
+            file("nowhere.pool") + " " + args + " --backend cpu -j 2 --cell-points 1500 --brick-splats 700",
+            dir.path);
+    };
+    r = run_without_input("--stage cells --cells 0:" + all + staged + " -q");
     ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(run_without_input("-q -o " + file("x.pool")).err,
+              "prt-bricks: error: " + file("nowhere.pool") + ": no such file\n");
     // the merge and the whole build write OUTPUT: without -o, the same usage error as every tool's
     r = run("--stage merge" + staged);
     EXPECT_EQ(r.code, 2);
