@@ -81,12 +81,8 @@ void check_table(const PoolFile& pool, const BrickSections& s) {
         if (e.encoded_count > e.splat_count || (e.encoded_count == 0) != (e.splat_count == 0))
             pool.fail(et, brick_label(b) + std::to_string(e.encoded_count) + " encoded splats for " +
                               std::to_string(e.splat_count) + " references");
-        // a direct brick (no references) has encoded_count = splat_count and the smaller size
-        const bool direct =
-            e.encoded_count == e.splat_count &&
-            e.size == brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, true);
-        const std::uint64_t want =
-            brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, direct);
+        const std::uint64_t want = brick_payload_size(e.node_count, e.leaf_count, e.splat_count,
+                                                      e.encoded_count, brick_entry_is_direct(e));
         if (e.size != want)
             pool.fail(et, brick_label(b) + "size " + std::to_string(e.size) + " does not match its counts (" +
                               std::to_string(want) + " bytes)");

@@ -598,10 +598,7 @@ BrickStats fill_info(BrickedOctree& out, const pool::OctreeInfo& oi, std::uint32
     stats.top_depth = top_depth;
     stats.min_brick_splats = out.table.empty() ? 0 : 0xFFFFFFFFu;
     for (const pool::BrickEntry& e : out.table) {
-        if (e.encoded_count == e.splat_count &&
-            e.size ==
-                pool::brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, true))
-            ++stats.direct_bricks;
+        if (pool::brick_entry_is_direct(e)) ++stats.direct_bricks;
         info.splat_count += e.splat_count;
         info.encoded_splats += e.encoded_count;
         info.max_brick_splats = std::max(info.max_brick_splats, e.splat_count);

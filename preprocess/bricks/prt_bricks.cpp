@@ -1,6 +1,7 @@
 // prt-bricks: cuts the splat octree into bricks of compressed splats with a level-of-detail disc per
 // top node (issue 17; format in formats/POOL.md, "Bricks and level of detail").
 #include <cstdio>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -47,16 +48,16 @@ struct PointOptions {
     std::string cells;          ///< --cells A:B (stage cells)
 };
 
-/// --direct's words.
+/// --direct's words and what they select (the option's value is looked up here, provenance names it).
+const std::map<std::string, prt::pre::BrickParams::Direct> k_direct_words = {
+    {"smaller", prt::pre::BrickParams::Direct::smaller},
+    {"always", prt::pre::BrickParams::Direct::always},
+    {"never", prt::pre::BrickParams::Direct::never}};
+
 const char* direct_policy_name(prt::pre::BrickParams::Direct d) {
-    switch (d) {
-        case prt::pre::BrickParams::Direct::always:
-            return "always";
-        case prt::pre::BrickParams::Direct::never:
-            return "never";
-        default:
-            return "smaller";
-    }
+    for (const auto& [word, value] : k_direct_words)
+        if (value == d) return word.c_str();
+    return "smaller";
 }
 
 /// --cells "A:B" as [A, B).
@@ -414,7 +415,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
 int main(int argc, char** argv) {
     prt::pre::BrickParams params;
     bool keep_float = false, keep_points = false;
-    std::string direct_name = "smaller";
+    std::string direct_word = "smaller";
     PointOptions points;
     prt::tool::PoolStep step(
         "prt-bricks", k_description,
@@ -450,7 +451,7 @@ int main(int argc, char** argv) {
                            "hold >= M splat references on average, a compressed disc per node; rays stop at "
                            "a node below a pixel (prt-play --lod-pixels). 0: no prefix")
                 ->capture_default_str();
-            app.add_option("--direct", direct_name,
+            app.add_option("--direct", direct_word,
                            "Direct bricks: a brick stores its leaves' splats in leaf order, a replica once "
                            "per leaf, with no references (one read per splat test instead of two): "
                            "'smaller' where that takes no more bytes (little replication, as in culled "
@@ -547,9 +548,7 @@ int main(int argc, char** argv) {
         },
         [&](prt::tool::PoolStep& s) {
             points.params.threads = params.threads;
-            params.direct = direct_name == "always"  ? prt::pre::BrickParams::Direct::always
-                            : direct_name == "never" ? prt::pre::BrickParams::Direct::never
-                                                     : prt::pre::BrickParams::Direct::smaller;
+            params.direct = k_direct_words.at(direct_word);
             bricks_step(s, params, keep_float, keep_points, points);
         });
 }

@@ -256,6 +256,13 @@ PRT_BRICK_HD inline constexpr bool brick_direct_is_smaller(std::uint32_t splat_c
 PRT_BRICK_HD inline constexpr bool brick_is_direct(const BrickHeader& h) {
     return h.layout == k_brick_direct;
 }
+/// Whether a table entry is a direct brick's, from its counts and size alone (with equal counts a
+/// referenced payload is larger by its references), so the index tells the layouts apart without
+/// the payloads.
+PRT_BRICK_HD inline constexpr bool brick_entry_is_direct(const BrickEntry& e) {
+    return e.encoded_count == e.splat_count &&
+           e.size == brick_payload_size(e.node_count, e.leaf_count, e.splat_count, e.encoded_count, true);
+}
 
 // ---- Codec ----------------------------------------------------------------------------------------
 // Encoders run on the host (prt-bricks) in double; decoders are float, host and device.
