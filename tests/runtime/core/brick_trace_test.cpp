@@ -257,8 +257,8 @@ TEST_F(BrickTrace, DirectAndReferencedBricksTraceTheSameImage) {
 
 TEST_F(BrickTrace, TheTracersDecodeIsTheCodecs) {
     // BrickSplats::load decodes as pool::decode_splat does, bit for bit, but for the normal, which it
-    // leaves on the octahedron (the plane test needs no unit normal); unit() gives the codec's unit
-    // normal, bit for bit, and the loaded one points the same way.
+    // leaves on the octahedron scaled by k_oct_half (the plane test needs no unit normal); unit()
+    // gives the codec's unit normal, bit for bit, and the loaded one points the same way.
     const Views& v = *s_views;
     std::size_t checked = 0;
     for (std::uint32_t b = 0; b < v.bricks.brick_count; ++b) {
@@ -277,7 +277,11 @@ TEST_F(BrickTrace, TheTracersDecodeIsTheCodecs) {
             ASSERT_EQ(u.x, d.normal.x) << "brick " << b << " splat " << i;
             ASSERT_EQ(u.y, d.normal.y);
             ASSERT_EQ(u.z, d.normal.z);
-            ASSERT_NEAR(std::fabs(s.normal.x) + std::fabs(s.normal.y) + std::fabs(s.normal.z), 1.0, 1e-6);
+            // on the scaled octahedron, in exact integers
+            ASSERT_EQ(std::fabs(s.normal.x) + std::fabs(s.normal.y) + std::fabs(s.normal.z),
+                      pool::k_oct_half);
+            ASSERT_EQ(s.normal.x, std::round(s.normal.x));
+            ASSERT_EQ(s.normal.y, std::round(s.normal.y));
             ++checked;
         }
     }

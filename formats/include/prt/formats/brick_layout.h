@@ -294,22 +294,32 @@ PRT_BRICK_HD inline Rgba8 decode_rgb565(std::uint16_t v) {
                  static_cast<std::uint8_t>((b * 255u + 15u) / 31u), 255};
 }
 
-/// 1 / k_oct_half, so decoding multiplies (codes 0, 511 and 1022 still give -1, 0 and 1 exactly).
-inline constexpr float k_oct_inv_half = 1.0f / 511.0f;
+/// float(v) - k for v < 2^23 and an integer 0 <= k < 2^23, exactly. On the GPU without a
+/// conversion instruction: the float whose mantissa holds v is 2^23 + v, so one logic op and one add
+/// on the FMA pipes, where float(v) - k takes an I2F on the slower conversion pipe and the same add.
+PRT_BRICK_HD inline float small_uint_minus(std::uint32_t v, float k) {
+#if defined(__CUDA_ARCH__)
+    return __int_as_float(0x4B000000 | v) - (8388608.0f + k);
+#else
+    return float(v) - k;
+#endif
+}
 
 /// The octahedral point of a normal code (Cigolle et al. 2014, "A Survey of Efficient
 /// Representations for Independent Unit Vectors", JCGT 3(2), sec. 3.3), folded back onto the
-/// octahedron |x| + |y| + |z| = 1: the normal's direction, not unit. The tracer tests splats with it
-/// (a ray-plane test needs no unit normal) and normalizes only the normals it blends (bricks.h),
-/// which saves a square root and a division per splat test.
+/// octahedron |x| + |y| + |z| = k_oct_half: the normal's direction, not unit, scaled by k_oct_half
+/// so that every component is a small integer, exact in float (codes 0, 511 and 1022 give -511, 0
+/// and 511). The tracer tests splats with it (a ray-plane test needs neither a unit normal nor a
+/// scale) and normalizes only the normals it blends (bricks.h), which saves a square root, a division
+/// and the scaling per splat test.
 PRT_BRICK_HD inline Float3 decode_octahedral_point(std::uint32_t code) {
-    const float px = (float(code & 1023u) - k_oct_half) * k_oct_inv_half;
-    const float py = (float((code >> 10) & 1023u) - k_oct_half) * k_oct_inv_half;
+    const float px = small_uint_minus(code & 1023u, k_oct_half);
+    const float py = small_uint_minus((code >> 10) & 1023u, k_oct_half);
     float x = px, y = py;
-    const float z = 1.0f - fabsf(px) - fabsf(py);
-    if (z < 0) {
-        x = (1.0f - fabsf(py)) * (px >= 0 ? 1.0f : -1.0f);
-        y = (1.0f - fabsf(px)) * (py >= 0 ? 1.0f : -1.0f);
+    const float z = k_oct_half - fabsf(px) - fabsf(py);
+    if (z < 0) {  // the lower half: folded (px = 0 is +0, so it takes the + side, as px >= 0 did)
+        x = copysignf(k_oct_half - fabsf(py), px);
+        y = copysignf(k_oct_half - fabsf(px), py);
     }
     return Float3{x, y, z};
 }

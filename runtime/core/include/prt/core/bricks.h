@@ -105,10 +105,13 @@ PRT_HD PRT_INLINE bool node_is_brick(std::uint32_t node) {
 /// Splats decoded from a brick (bricks.h): `point` holds the splat's RGB565 colour, so color()
 /// decodes it; bricks carry no source point (point_id: none).
 struct Rgb565Splats {
+    /// The RGB565 colour as it is stored, each channel its code over the code range (r / 31, g / 63,
+    /// b / 31), rather than through decode_rgb565's 8-bit rounding (within 0.5 / 255 of it): the
+    /// blend decodes one colour per blended splat, and the integer divisions of the 8-bit path made
+    /// the colour decode 5 % of the bricked kernel's instructions (ncu, room primary, H200).
     PRT_HD PRT_INLINE Vec3 color(std::uint32_t point) const {
-        const pool::Rgba8 c = pool::decode_rgb565(static_cast<std::uint16_t>(point));
-        constexpr float k = 1.0f / 255.0f;
-        return Vec3{c.r * k, c.g * k, c.b * k};
+        return Vec3{float((point >> 11) & 31u) * (1.0f / 31.0f), float((point >> 5) & 63u) * (1.0f / 63.0f),
+                    float(point & 31u) * (1.0f / 31.0f)};
     }
     PRT_HD PRT_INLINE std::uint32_t point_id(std::uint32_t) const { return 0xffffffffu; }
     /// A loaded normal as a unit vector (splat.h blends unit normals): LOD discs' are unit already.
@@ -260,8 +263,11 @@ PRT_HD PRT_INLINE std::uint32_t lod_stop_level(float f) {
 /// inside brick `brick`, whose root is at `level`: the walk's path entries below that level index
 /// the brick's nodes, the entry at it the top tree's brick node. Inside a resident brick the walk
 /// reads its payload (whose first nodes are the LOD prefix), inside one that is not resident its
-/// resident LOD prefix (payload null). After each descent, `stop` says whether the walk ended at a
-/// disc instead of a leaf (and `request` whether for want of the brick).
+/// resident LOD prefix (payload null). What the walk needs of the brick at each descent and each
+/// leaf (its node count, its leaf count, where its leaf bounds start) is read once, when the walk
+/// enters it, so a descent or a leaf inside a brick reads no header. After each descent, `stop`
+/// says whether the walk ended at a disc instead of a leaf (and `request` whether for want of the
+/// brick).
 struct BrickCursor {
     static constexpr std::uint32_t k_top_tree = 0xffffffffu;
     enum Stop : std::uint32_t { k_none = 0, k_top_disc = 1, k_prefix_disc = 2 };
@@ -269,10 +275,48 @@ struct BrickCursor {
     std::uint32_t brick = 0;
     const unsigned char* payload = nullptr;      ///< the brick's payload, null when it is not resident
     std::uint32_t lod_first = 0, lod_count = 0;  ///< the brick's prefix in lod_nodes (count 0: none)
+    std::uint32_t node_count = 0;    ///< nodes walked in the brick: the payload's, else the prefix's
+    std::uint32_t leaf_count = 0;    ///< the resident brick's filled leaves (0 when not resident)
+    std::uint32_t bounds_first = 0;  ///< the brick's first LeafBounds in the view's leaf_bounds
     std::uint32_t stop = k_none;
     std::uint32_t stop_node = 0;  ///< top node (k_top_disc) or index into lod_nodes (k_prefix_disc)
     bool request = false;
 };
+
+/// The node words of the cursor's brick: its payload's, or its resident prefix's when it is not
+/// resident.
+PRT_HD PRT_INLINE const std::uint32_t* brick_cursor_nodes(const BrickView& v, const BrickCursor& cur) {
+    return cur.payload != nullptr
+               ? reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset())
+               : v.lod_nodes + cur.lod_first;
+}
+
+/// The walk enters brick b (brick node at `level`): the cursor's brick state, read once. False
+/// when the brick is not resident and has no prefix (the walk then stops at its top-node disc).
+PRT_HD PRT_INLINE bool enter_brick(const BrickView& v, std::uint32_t b, std::uint32_t level,
+                                   BrickCursor& cur) {
+    cur.brick = b;
+    cur.lod_first = cur.lod_count = 0;
+    if (v.lod_table != nullptr) {
+        cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
+        cur.lod_count = v.lod_table[b].node_count;
+    }
+    const unsigned char* payload = brick_payload(v, b);
+    cur.payload = payload;
+    if (payload != nullptr) {  // resident: its payload (its first nodes are the prefix)
+        if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
+        const auto* h = reinterpret_cast<const pool::BrickHeader*>(payload);
+        cur.node_count = h->node_count;
+        cur.leaf_count = h->leaf_count;
+        cur.bounds_first = v.leaf_bounds_first != nullptr ? v.leaf_bounds_first[b] : 0u;
+    } else {  // not resident: its resident prefix, if any
+        if (cur.lod_count == 0) return false;
+        cur.node_count = cur.lod_count;
+        cur.leaf_count = 0;
+    }
+    cur.level = level;
+    return true;
+}
 
 /// thesis 2.2.2 over a bricked tree, with the level-of-detail stop: descends from path[level] to the
 /// leaf holding `p`, entering a brick at its brick node (its payload when resident, else its LOD
@@ -281,6 +325,13 @@ struct BrickCursor {
 /// with a disc ends the descent (cur.stop). Returns the node word where it ended: a filled or empty
 /// leaf (in the cursor's brick for a filled one), or the node of the disc (cur.stop set). Corrupt
 /// addresses end in an empty leaf, as descend does.
+///
+/// One loop body for the top tree, a resident brick and a missing brick's prefix (what differs is
+/// which node words, how many, and how many of them have discs), so the rays of a warp that walk in
+/// different places run the same instructions per level; entering a brick is the one other case.
+/// Written as the float descent's inner loop with the exits sorted out after it, it ran primary rays
+/// 1-3 % faster on an H200 but shadow rays 28-40 % slower, with fewer instructions and more stalls
+/// (preprocess/bench/results/h200-2026-11-28-issue17-walk, w4: variant A).
 PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3& p, std::uint32_t* path,
                                                 std::uint32_t& level, BrickCursor& cur,
                                                 std::uint32_t stop_level = k_no_lod_stop) {
@@ -289,92 +340,78 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     cur.request = false;
     if (l < cur.level) cur.level = BrickCursor::k_top_tree;  // the next cell is outside the brick
     bool in_brick = cur.level != BrickCursor::k_top_tree;
+    // The nodes walked, how many, the first `with_disc` of them having a disc (a stop may end
+    // there: every top node when the pool has lod_splats, a brick's prefix), and lod_base + index
+    // the disc of node index.
     const std::uint32_t* nodes = v.top_nodes;
     std::uint32_t count = v.top_node_count;
-    if (in_brick && cur.payload != nullptr) {
-        nodes = reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_nodes_offset());
-        count = reinterpret_cast<const pool::BrickHeader*>(cur.payload)->node_count;
-    } else if (in_brick) {
-        nodes = v.lod_nodes + cur.lod_first;
-        count = cur.lod_count;
+    std::uint32_t with_disc = v.lod != nullptr ? count : 0u;
+    std::uint32_t lod_base = 0;
+    if (in_brick) {
+        nodes = brick_cursor_nodes(v, cur);
+        count = cur.node_count;
+        with_disc = cur.lod_count;
+        lod_base = cur.lod_first;
     }
+    // in a prefix without its payload: the payload is needed below the prefix and at filled leaves
+    bool prefix_only = in_brick && cur.payload == nullptr;
     std::uint32_t index = in_brick && l == cur.level ? 0u : path[l];
     std::uint32_t node = load_node_word(nodes, index);
-    // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick (then its payload) once
+    // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick (then its nodes) once
     for (;;) {
-        const bool stop = l >= stop_level;
-        if (!in_brick) {
-            if (node_is_brick(node)) {
-                const std::uint32_t b = node_addr(node);
-                if (b >= v.brick_count) return level = l, k_empty_leaf_node;
-                if (stop && v.lod != nullptr) {
-                    cur.stop = BrickCursor::k_top_disc;
-                    cur.stop_node = index;
-                    break;
-                }
-                cur.brick = b;
-                cur.lod_first = cur.lod_count = 0;
-                if (v.lod_table != nullptr) {
-                    cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
-                    cur.lod_count = v.lod_table[b].node_count;
-                }
-                const unsigned char* payload = brick_payload(v, b);
-                cur.payload = payload;
-                if (payload != nullptr) {  // resident: its payload (its first nodes are the prefix)
-                    if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
-                    nodes = reinterpret_cast<const std::uint32_t*>(payload + pool::brick_nodes_offset());
-                    count = reinterpret_cast<const pool::BrickHeader*>(payload)->node_count;
-                } else if (cur.lod_count > 0) {  // not resident: its resident prefix
-                    nodes = v.lod_nodes + cur.lod_first;
-                    count = cur.lod_count;
-                } else {  // not resident, no prefix: the brick's top-node disc
-                    cur.request = true;
-                    cur.stop = BrickCursor::k_top_disc;
-                    cur.stop_node = index;
-                    break;
-                }
-                cur.level = l;
-                in_brick = true;
-                index = 0;
-                node = load_node_word(nodes, 0);
-                continue;
+        if (node_is_internal(node)) {
+            if (l >= stop_level && index < with_disc) {
+                cur.stop = in_brick ? BrickCursor::k_prefix_disc : BrickCursor::k_top_disc;
+                cur.stop_node = lod_base + index;
+                break;
             }
-            if (!node_is_internal(node)) break;  // an empty top node
-            if (stop && v.lod != nullptr) {
+            const std::uint32_t addr = node_addr(node);
+            if (l >= k_fixed_bits) return level = l, k_empty_leaf_node;
+            if (addr >= count || count - addr < 8u) {
+                if (!prefix_only) return level = l, k_empty_leaf_node;  // a corrupt address
+                cur.request = true;  // the payload is needed below this node: this node's disc
+                cur.stop = BrickCursor::k_prefix_disc;
+                cur.stop_node = lod_base + index;
+                break;
+            }
+            const std::uint32_t shift = k_fixed_bits - 1u - l;
+            const std::uint32_t c =
+                ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
+            index = addr + c;
+            path[++l] = index;
+            node = load_node_word(nodes, index);
+            continue;
+        }
+        if (!in_brick && node_is_brick(node)) {
+            const std::uint32_t b = node_addr(node);
+            if (b >= v.brick_count) return level = l, k_empty_leaf_node;
+            if (l >= stop_level && v.lod != nullptr) {
                 cur.stop = BrickCursor::k_top_disc;
                 cur.stop_node = index;
                 break;
             }
-        } else if (cur.payload == nullptr) {  // in the prefix of a brick that is not resident
-            if (node_is_internal(node) && stop) {
-                cur.stop = BrickCursor::k_prefix_disc;
-                cur.stop_node = cur.lod_first + index;
-                break;
-            }
-            if (!node_is_internal(node) && !node_is_filled(node)) break;  // an empty leaf
-            if (!node_is_internal(node) || node_addr(node) + 8u > count) {
-                // the payload is needed below this node, or for this filled leaf: this node's disc
+            if (!enter_brick(v, b, l, cur)) {  // not resident, no prefix: the brick's top-node disc
                 cur.request = true;
-                cur.stop = BrickCursor::k_prefix_disc;
-                cur.stop_node = cur.lod_first + index;
+                cur.stop = BrickCursor::k_top_disc;
+                cur.stop_node = index;
                 break;
             }
-        } else {                                 // in the brick's payload
-            if (!node_is_internal(node)) break;  // a leaf
-            if (stop && index < cur.lod_count) {
-                cur.stop = BrickCursor::k_prefix_disc;
-                cur.stop_node = cur.lod_first + index;
-                break;
-            }
+            in_brick = true;
+            nodes = brick_cursor_nodes(v, cur);
+            count = cur.node_count;
+            with_disc = cur.lod_count;
+            lod_base = cur.lod_first;
+            prefix_only = cur.payload == nullptr;
+            index = 0;
+            node = load_node_word(nodes, 0);
+            continue;
         }
-        const std::uint32_t addr = node_addr(node);
-        if (l >= k_fixed_bits || addr >= count || count - addr < 8u) return level = l, k_empty_leaf_node;
-        const std::uint32_t shift = k_fixed_bits - 1u - l;
-        const std::uint32_t c =
-            ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
-        index = addr + c;
-        path[++l] = index;
-        node = load_node_word(nodes, index);
+        if (prefix_only && node_is_filled(node)) {  // a filled leaf of a missing brick: its disc
+            cur.request = true;
+            cur.stop = BrickCursor::k_prefix_disc;
+            cur.stop_node = lod_base + index;
+        }
+        break;  // a leaf (an empty top node, an empty or filled leaf of a brick)
     }
     level = l;
     return node;
@@ -407,17 +444,18 @@ PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, Bric
     });
 }
 
-/// The reference range [begin, end) of filled leaf `node` of the cursor's brick, or, with the
-/// view's leaf bounds and `culling`, false when its bounds rule out a hit in [lo, hi] (counted as
-/// culled) or it is empty; as next_leaf does it on the float path (splat.h).
-PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur,
-                                        const pool::BrickHeader& h, std::uint32_t node, std::uint32_t culling,
-                                        Vec3 o, Vec3 d, float inv_dlen, bool inside, float lo, float hi,
-                                        std::uint32_t& begin, std::uint32_t& end, WalkStats& stats) {
+/// The reference range [begin, end) of filled leaf `node` of the cursor's (resident) brick, or,
+/// with the view's leaf bounds and `culling`, false when its bounds rule out a hit in [lo, hi]
+/// (counted as culled) or it is empty; as next_leaf does it on the float path (splat.h). Reads no
+/// brick header: the cursor holds what it needs (enter_brick).
+PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur, std::uint32_t node,
+                                        std::uint32_t culling, Vec3 o, Vec3 d, float inv_dlen, bool inside,
+                                        float lo, float hi, std::uint32_t& begin, std::uint32_t& end,
+                                        WalkStats& stats) {
     const std::uint32_t a = node_addr(node);
-    if (a >= h.leaf_count) return false;
+    if (a >= cur.leaf_count) return false;
     if (culling != k_cull_none && v.leaf_bounds != nullptr) {
-        const LeafBounds b = load_leaf_bounds(v.leaf_bounds + v.leaf_bounds_first[cur.brick] + a);
+        const LeafBounds b = load_leaf_bounds(v.leaf_bounds + cur.bounds_first + a);
         begin = b.begin;
         end = b.end;
         if (begin >= end) return false;
@@ -427,11 +465,12 @@ PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& c
         }
         return true;
     }
+    const auto* h = reinterpret_cast<const pool::BrickHeader*>(cur.payload);
     const std::uint32_t* info =
-        reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_leaf_info_offset(h.node_count));
+        reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_leaf_info_offset(cur.node_count));
     begin = info[a];
     end = info[a + 1];
-    if (end > h.splat_count) end = h.splat_count;
+    if (end > h->splat_count) end = h->splat_count;
     return begin < end;
 }
 
@@ -475,12 +514,12 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
         }
         if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
         const float lo = replicated ? leaf.t0 : 0.0f;
-        const BrickSplats src = brick_splats(cur.payload);
         std::uint32_t begin = 0, end = 0;
-        if (!brick_leaf_range(v, cur, src.header, leaf.node, culling, o, d, inv_dlen, inside,
+        if (!brick_leaf_range(v, cur, leaf.node, culling, o, d, inv_dlen, inside,
                               fmaxf(lo, h.found ? h.t_near : 0.0f), fminf(hi, h.found ? h.window_end : k_inf),
                               begin, end, stats))
             continue;
+        const BrickSplats src = brick_splats(cur.payload);  // the header, for a leaf whose splats are read
         if (detail::closest_in_leaf(src, begin, end, o, d, inside, inv_dlen, lo, hi, blend, h, stats)) break;
     }
     if (walk.truncated) ++stats.truncated;
@@ -514,12 +553,11 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
             continue;
         }
         if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
-        const BrickSplats src = brick_splats(cur.payload);
         std::uint32_t begin = 0, end = 0;
-        if (!brick_leaf_range(v, cur, src.header, leaf.node, culling, o, d, inv_dlen, inside,
-                              own_range ? leaf.t0 : 0.0f, own_range ? fminf(leaf.t1, hi) : hi, begin, end,
-                              stats))
+        if (!brick_leaf_range(v, cur, leaf.node, culling, o, d, inv_dlen, inside, own_range ? leaf.t0 : 0.0f,
+                              own_range ? fminf(leaf.t1, hi) : hi, begin, end, stats))
             continue;
+        const BrickSplats src = brick_splats(cur.payload);
         if (detail::any_in_leaf(src, begin, end, o, d, inside, 0.0f, hi, stats)) return true;
     }
     if (walk.truncated) ++stats.truncated;
