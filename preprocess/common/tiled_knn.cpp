@@ -350,7 +350,7 @@ private:
             }
         });
         m_stats.max_gathered = std::max<std::uint64_t>(m_stats.max_gathered, m);
-        std::vector<std::pair<double, std::uint32_t>> failing;  // (tile-only k-th distance^2, local index)
+        std::vector<Failing> failing;
         if (m > k) {
             const KdTree<float> tree(
                 m, [&](std::size_t i, float c[3]) { c[0] = pts[i].x, c[1] = pts[i].y, c[2] = pts[i].z; },
@@ -391,30 +391,71 @@ private:
         }
         if (failing.empty()) return;
         m_stats.halo_queries += failing.size();
-        std::sort(failing.begin(), failing.end());
 
-        // Round 2: the failing points by increasing bound u. Each step takes the longest run
-        // [start, c) whose box (the run's bounding box grown by the halo of u[c - 1]) holds at most
-        // the group cap by the block count (an upper bound, no record read), searches it as one
-        // group, and goes on with the rest; when not even one more point fits, the rest are scanned.
+        // Round 2, by the tile face each failing point is nearest (its halo reaches out through
+        // that face): six thin slabs, each gathered with its halo, instead of one set spanning the
+        // whole tile (the boxes of points from every face). Points with no finite face (a lone
+        // tile) or no bound (fewer than k + 1 points in the tile) form their own group.
+        std::array<std::vector<Failing>, 7> by_face;
+        for (const Failing& f : failing) {
+            const pool::Float3& q = pts[f.second];
+            int face = 6;
+            double best = k_inf;
+            for (int c = 0; c < 3; ++c) {
+                const double lo_d = double(coord(q, c)) - m_part.lo[t][c],
+                             hi_d = m_part.hi[t][c] - double(coord(q, c));
+                if (std::isfinite(lo_d) && lo_d < best) best = lo_d, face = 2 * c;
+                if (std::isfinite(hi_d) && hi_d < best) best = hi_d, face = 2 * c + 1;
+            }
+            by_face[std::isfinite(f.first) ? face : 6].push_back(f);
+        }
+        failing = {};
         const std::uint64_t cap = std::min<std::uint64_t>(m_max_gathered, m + m / 2 + 4096);
-        std::size_t start = 0;
-        while (start < failing.size()) {
-            double lo[3] = {k_inf, k_inf, k_inf}, hi[3] = {-k_inf, -k_inf, -k_inf};
-            for (std::size_t i = start; i < failing.size(); ++i)
+        for (std::vector<Failing>& group_points : by_face) {
+            std::sort(group_points.begin(), group_points.end());
+            round2(pts, global, group_points, 0, group_points.size(), cap);
+            group_points = {};
+        }
+    }
+
+    using Failing = std::pair<double, std::uint32_t>;  ///< (tile-only k-th distance^2, local index)
+
+    /// Round 2 over failing points sorted by increasing bound u. Each step takes the longest run
+    /// [start, c) whose box (the run's bounding box grown by the halo of u[c - 1]) holds at most
+    /// `cap` points by the block count (an upper bound, no record read), searches it as one group,
+    /// and goes on with the rest. When not even one more point fits, the rest is split in two at
+    /// the middle of its box's widest axis and each half goes the same way (the few points of
+    /// large bound, outliers, end in small groups of their own), and a point that does not fit
+    /// alone (or below 64 splits) is searched by a streaming scan.
+    void round2(const std::vector<pool::Float3>& pts, const std::vector<std::uint32_t>& global,
+                std::vector<Failing>& failing, std::size_t begin, std::size_t end, std::uint64_t cap,
+                int depth = 0) {
+        std::size_t start = begin;
+        // box[i]: the bounding box of [start, start + i] (floats, as the coordinates: 24 bytes a
+        // point, the one working array round 2 adds to the tile's)
+        std::vector<std::array<float, 6>> box;
+        while (start < end) {
+            const std::size_t n = end - start;
+            box.resize(n);
+            for (std::size_t i = 0; i < n; ++i) {
+                const pool::Float3& q = pts[failing[start + i].second];
                 for (int c = 0; c < 3; ++c) {
-                    lo[c] = std::min(lo[c], double(coord(pts[failing[i].second], c)));
-                    hi[c] = std::max(hi[c], double(coord(pts[failing[i].second], c)));
+                    const float v = coord(q, c);
+                    box[i][c] = i == 0 ? v : std::min(box[i - 1][c], v);
+                    box[i][3 + c] = i == 0 ? v : std::max(box[i - 1][3 + c], v);
                 }
-            auto fits = [&](std::size_t end) {
-                const double u = failing[end - 1].first;
+            }
+            auto fits = [&](std::size_t e) {
+                const double u = failing[e - 1].first;
+                const std::array<float, 6>& f = box[e - 1 - start];
+                const double lo[3] = {f[0], f[1], f[2]}, hi[3] = {f[3], f[4], f[5]};
                 return std::isfinite(u) && count_upper(lo, hi, halo_of(u), cap) <= cap;
             };
-            std::size_t good = start, bad = failing.size() + 1;  // fits(good) (or good == start)
-            if (fits(failing.size())) {
-                good = failing.size();
+            std::size_t good = start, bad = end + 1;  // fits(good) (or good == start)
+            if (fits(end)) {
+                good = end;
             } else {
-                bad = failing.size();
+                bad = end;
                 while (bad - good > 1) {
                     const std::size_t mid = good + (bad - good) / 2;
                     if (fits(mid))
@@ -427,11 +468,31 @@ private:
                 start = good;
                 continue;
             }
-            // Not even the next point fits with the others' box: the rest (bounds at least as
-            // large) are scanned one by one, each within its own halo.
-            for (; start < failing.size(); ++start)
-                scan(pts[failing[start].second], global[failing[start].second], failing[start].first);
+            if (n == 1 || !std::isfinite(failing[start].first) || depth >= 64) break;
+            // Not even the next point fits with the others' box: split the rest in two at the
+            // middle of its box's widest axis, in place (a stable partition keeps each half in
+            // increasing bound order).
+            const std::array<float, 6> b = box[n - 1];
+            box = {};
+            int axis = 0;
+            for (int c = 1; c < 3; ++c)
+                if (b[3 + c] - b[c] > b[3 + axis] - b[axis]) axis = c;
+            if (!(b[3 + axis] > b[axis])) break;  // coincident points: no smaller box
+            float split = b[axis] + 0.5f * (b[3 + axis] - b[axis]);
+            if (!(split > b[axis])) split = b[3 + axis];  // adjacent floats: the lowest alone
+            const auto first = failing.begin() + std::ptrdiff_t(start);
+            const auto mid =
+                std::stable_partition(first, failing.begin() + std::ptrdiff_t(end),
+                                      [&](const Failing& f) { return coord(pts[f.second], axis) < split; });
+            const std::size_t cut = start + static_cast<std::size_t>(mid - first);
+            round2(pts, global, failing, start, cut, cap, depth + 1);
+            round2(pts, global, failing, cut, end, cap, depth + 1);
+            return;
         }
+        // What is left does not fit even split (or is one point, or unbounded): scanned one by
+        // one, each within its own halo.
+        for (; start < end; ++start)
+            scan(pts[failing[start].second], global[failing[start].second], failing[start].first);
     }
 
     /// The points in the blocks meeting [lo - h, hi + h], counted up to just above `cap`.
@@ -495,6 +556,7 @@ private:
         const std::size_t g = set.size();
         m_stats.max_gathered = std::max<std::uint64_t>(m_stats.max_gathered, g);
         ++m_stats.halo_groups;
+        m_stats.gathered += g;
         std::vector<pool::Float3> gp(g);
         std::vector<std::uint32_t> gi(g);
         parallel_chunks(g, std::size_t{1} << 16, m_threads, [&](std::size_t b, std::size_t e, unsigned) {

@@ -51,6 +51,7 @@ struct TiledKnnStats {
     std::uint64_t halo_groups = 0;   ///< gathered sets searched in round 2
     std::uint64_t scanned = 0;       ///< points searched by a streaming scan (halo over the memory)
     std::uint64_t max_gathered = 0;  ///< the largest set held at once
+    std::uint64_t gathered = 0;      ///< points gathered by round 2's groups, in all
     /// The largest anonymous resident memory (RssAnon: heap, not the mapped files the kernel can
     /// reclaim) seen when a batch was complete, the moment the search holds the most.
     std::uint64_t peak_anon_rss = 0;

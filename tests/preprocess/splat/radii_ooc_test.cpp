@@ -146,6 +146,45 @@ TEST(TiledKnn, LargeTilesOrderedInParallelGiveTheInCoreNeighbours) {
         ASSERT_EQ(got_nb[i], want_nb[i]) << "point " << i / k << " neighbour " << i % k;
 }
 
+TEST(TiledKnn, HalosThatDoNotFitAsOneSetAreSearchedByFaceNotScanned) {
+    // A jittered plane cut into tiles whose memory holds a tile and a little more, not a tile with
+    // its halo all round: round 2 gathers each face's failing points as a thin slab with its halo
+    // (tiled_knn.cpp round2), so nothing is left to the serial streaming scan. Before, the failing
+    // points' box spanned the whole tile, did not fit, and every one of them was scanned alone.
+    std::vector<Float3> p;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+    for (int x = 0; x < 450; ++x)
+        for (int y = 0; y < 450; ++y) p.push_back({x + jitter(rng), y + jitter(rng), 0.1f * jitter(rng)});
+    std::shuffle(p.begin(), p.end(), rng);
+    const std::uint32_t k = 9;
+    std::vector<std::uint32_t> want_nb;
+    std::vector<float> want_d2;
+    in_core_knn(p, k, want_nb, want_d2);
+    prt::pre::TiledKnnParams params;
+    params.k = k;
+    params.threads = 2;
+    params.tile_points = 20000;
+    params.memory = 24000 * prt::pre::tiled_knn_bytes_per_point(k);
+    params.spill_folder = fs::temp_directory_path();
+    std::vector<std::uint32_t> got_nb(p.size() * k, ~0u);
+    prt::pre::TiledKnnStats stats;
+    prt::pre::tiled_knn(
+        p, params,
+        [&](const prt::pre::KnnBatch& b) {
+            for (std::size_t q = 0; q < b.queries.size(); ++q)
+                for (std::uint32_t j = 0; j < k; ++j)
+                    got_nb[std::size_t(b.global[b.queries[q]]) * k + j] = b.global[b.neighbours[q * k + j]];
+        },
+        {}, &stats);
+    EXPECT_GE(stats.tiles, 8u);
+    EXPECT_GT(stats.halo_queries, stats.tiles * 100);
+    EXPECT_EQ(stats.scanned, 0u);
+    EXPECT_LE(stats.max_gathered, 24000u);
+    for (std::size_t i = 0; i < got_nb.size(); ++i)
+        ASSERT_EQ(got_nb[i], want_nb[i]) << "point " << i / k << " neighbour " << i % k;
+}
+
 TEST(TiledKnn, BadInputIsRefused) {
     prt::pre::TiledKnnParams params;
     params.k = 4;
