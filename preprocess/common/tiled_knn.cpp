@@ -419,14 +419,20 @@ private:
     }
 
     using Failing = std::pair<double, std::uint32_t>;  ///< (tile-only k-th distance^2, local index)
+    /// Runs of at most this many points are scanned, not gathered: a run of a few points of large
+    /// bound (outliers) gathered a wide region and built a kd-tree for a handful of queries (on an
+    /// 11M-point scan-like room at --memory 128M, groups of 64 points or fewer held 70 % of all the
+    /// points gathered, for 0.1 % of the queries).
+    static constexpr std::size_t k_scan_run = 32;
 
     /// Round 2 over failing points sorted by increasing bound u. Each step takes the longest run
     /// [start, c) whose box (the run's bounding box grown by the halo of u[c - 1]) holds at most
     /// `cap` points by the block count (an upper bound, no record read), searches it as one group,
     /// and goes on with the rest. When not even one more point fits, the rest is split in two at
     /// the middle of its box's widest axis and each half goes the same way (the few points of
-    /// large bound, outliers, end in small groups of their own), and a point that does not fit
-    /// alone (or below 64 splits) is searched by a streaming scan.
+    /// large bound, outliers, end in small groups of their own). Runs of at most k_scan_run
+    /// points, and a point that does not fit alone (or below 64 splits), are searched by streaming
+    /// scans (in parallel).
     void round2(const std::vector<pool::Float3>& pts, const std::vector<std::uint32_t>& global,
                 std::vector<Failing>& failing, std::size_t begin, std::size_t end, std::uint64_t cap,
                 int depth = 0) {
@@ -464,6 +470,11 @@ private:
                         bad = mid;
                 }
             }
+            if (good > start && good - start <= k_scan_run) {  // a few points: scans, no kd-tree
+                scan_all(pts, global, failing, start, good);
+                start = good;
+                continue;
+            }
             if (good > start && group(pts, global, failing, start, good, halo_of(failing[good - 1].first))) {
                 start = good;
                 continue;
@@ -489,10 +500,9 @@ private:
             round2(pts, global, failing, cut, end, cap, depth + 1);
             return;
         }
-        // What is left does not fit even split (or is one point, or unbounded): scanned one by
-        // one, each within its own halo.
-        for (; start < end; ++start)
-            scan(pts[failing[start].second], global[failing[start].second], failing[start].first);
+        // What is left does not fit even split (or is one point, or unbounded): scanned, each
+        // within its own halo.
+        scan_all(pts, global, failing, start, end);
     }
 
     /// The points in the blocks meeting [lo - h, hi + h], counted up to just above `cap`.
@@ -587,13 +597,11 @@ private:
         return true;
     }
 
-    /// One point by a streaming scan of the records within its bound (all of them when unbounded).
-    void scan(const pool::Float3& p, std::uint32_t self, double u) {
-        ++m_stats.scanned;
-        const std::uint32_t k = m_k;
-        std::vector<std::uint32_t> index(k);
-        std::vector<float> distance2(k);
-        Best best{k, 0, index.data(), distance2.data()};
+    /// The k nearest other points of p by a streaming scan of the records within its bound (all of
+    /// them when unbounded), into index/distance2; returns how many were found. Reads only.
+    std::uint32_t scan_best(const pool::Float3& p, std::uint32_t self, double u, std::uint32_t* index,
+                            float* distance2) const {
+        Best best{m_k, 0, index, distance2};
         const double h = std::isfinite(u) ? halo_of(u) : k_inf;
         const float q[3] = {p.x, p.y, p.z};
         const double slo[3] = {q[0] - h, q[1] - h, q[2] - h}, shi[3] = {q[0] + h, q[1] + h, q[2] + h};
@@ -603,9 +611,42 @@ private:
             if (r.index != self) best.offer(d2, r.index);
             return true;
         });
-        if (best.count != k) throw Error("internal: tiled k-NN scan found fewer than k neighbours");
-        // A batch of the point and its neighbours, in index order.
-        std::vector<std::uint32_t> gi(index.begin(), index.end());
+        return best.count;
+    }
+
+    /// The failing points [a, b) by streaming scans, each within its own bound: the scans in
+    /// parallel (a few thousand points at a time), the batches visited in order from this thread.
+    void scan_all(const std::vector<pool::Float3>& pts, const std::vector<std::uint32_t>& global,
+                  const std::vector<Failing>& failing, std::size_t a, std::size_t b) {
+        const std::uint32_t k = m_k;
+        constexpr std::size_t k_batch = 4096;
+        std::vector<std::uint32_t> index;
+        std::vector<float> distance2;
+        for (std::size_t first = a; first < b; first += k_batch) {
+            const std::size_t n = std::min(k_batch, b - first);
+            index.assign(n * k, 0);
+            distance2.assign(n * k, 0.0f);
+            std::atomic<bool> short_found{false};
+            parallel_chunks(n, 1, m_threads, [&](std::size_t s, std::size_t e, unsigned) {
+                for (std::size_t i = s; i < e; ++i) {
+                    const Failing& f = failing[first + i];
+                    if (scan_best(pts[f.second], global[f.second], f.first, index.data() + i * k,
+                                  distance2.data() + i * k) != k)
+                        short_found = true;
+                }
+            });
+            if (short_found) throw Error("internal: tiled k-NN scan found fewer than k neighbours");
+            for (std::size_t i = 0; i < n; ++i)
+                visit_scanned(global[failing[first + i].second], index.data() + i * k,
+                              distance2.data() + i * k);
+        }
+    }
+
+    /// One scanned point's batch: the point and its neighbours, in index order.
+    void visit_scanned(std::uint32_t self, const std::uint32_t* index, const float* distance2) {
+        ++m_stats.scanned;
+        const std::uint32_t k = m_k;
+        std::vector<std::uint32_t> gi(index, index + k);
         gi.push_back(self);
         std::sort(gi.begin(), gi.end());
         std::vector<pool::Float3> gp(gi.size());
@@ -617,7 +658,8 @@ private:
         std::vector<std::uint32_t> nb(k);
         for (std::uint32_t j = 0; j < k; ++j) nb[j] = local(index[j]);
         sample_memory();
-        m_visit(KnnBatch{gp, gi, std::span<const std::uint32_t>(&query, 1), nb, distance2});
+        m_visit(KnnBatch{gp, gi, std::span<const std::uint32_t>(&query, 1), nb,
+                         std::span<const float>(distance2, k)});
         report(1);
     }
 

@@ -16,7 +16,8 @@
 //     neighbour lies within d of the point, hence inside the tile's box grown by h = max d. The tile
 //     plus that halo (read from the neighbouring tiles' records) is gathered and searched; when the
 //     halo would exceed the memory, the points are split by d and done in smaller groups, and a
-//     point whose own halo is still too big (an isolated outlier) is searched by a streaming scan.
+//     point whose own halo is still too big (an isolated outlier), or a run of a few points, is
+//     searched by a streaming scan (scans run in parallel).
 //  Ties: the kd-tree orders equally distant points by index; every gathered set is kept in index
 //  order, so local index order equals global order and the same tie-break picks the same points.
 //  Distances are computed the same way (dx * dx + dy * dy + dz * dz in float, d = point - query).
