@@ -101,14 +101,21 @@ struct Partition {
     }
 };
 
-/// Distance from q to the outside of a region (inf when it has no finite face).
-double border_distance(const float q[3], const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+/// Distance from q to the outside of a region (inf when it has no finite face), and the face it
+/// is nearest: 2 * axis for the low face, 2 * axis + 1 for the high one (6: no finite face).
+double nearest_face(const float q[3], const std::array<double, 3>& lo, const std::array<double, 3>& hi,
+                    int& face) {
     double b = k_inf;
+    face = 6;
     for (int a = 0; a < 3; ++a) {
-        if (std::isfinite(lo[a])) b = std::min(b, double(q[a]) - lo[a]);
-        if (std::isfinite(hi[a])) b = std::min(b, hi[a] - double(q[a]));
+        if (std::isfinite(lo[a]) && double(q[a]) - lo[a] < b) b = double(q[a]) - lo[a], face = 2 * a;
+        if (std::isfinite(hi[a]) && hi[a] - double(q[a]) < b) b = hi[a] - double(q[a]), face = 2 * a + 1;
     }
     return b;
+}
+double border_distance(const float q[3], const std::array<double, 3>& lo, const std::array<double, 3>& hi) {
+    int face;
+    return nearest_face(q, lo, hi, face);
 }
 
 /// The k best candidates by (squared distance, index), exactly as KdTree's search keeps them.
@@ -398,15 +405,9 @@ private:
         // tile) or no bound (fewer than k + 1 points in the tile) form their own group.
         std::array<std::vector<Failing>, 7> by_face;
         for (const Failing& f : failing) {
-            const pool::Float3& q = pts[f.second];
-            int face = 6;
-            double best = k_inf;
-            for (int c = 0; c < 3; ++c) {
-                const double lo_d = double(coord(q, c)) - m_part.lo[t][c],
-                             hi_d = m_part.hi[t][c] - double(coord(q, c));
-                if (std::isfinite(lo_d) && lo_d < best) best = lo_d, face = 2 * c;
-                if (std::isfinite(hi_d) && hi_d < best) best = hi_d, face = 2 * c + 1;
-            }
+            const float q[3] = {pts[f.second].x, pts[f.second].y, pts[f.second].z};
+            int face;
+            nearest_face(q, m_part.lo[t], m_part.hi[t], face);
             by_face[std::isfinite(f.first) ? face : 6].push_back(f);
         }
         failing = {};
@@ -451,10 +452,14 @@ private:
                     box[i][3 + c] = i == 0 ? v : std::max(box[i - 1][3 + c], v);
                 }
             }
+            auto bounds = [&](std::size_t e, double lo[3], double hi[3]) {  // the box of [start, e)
+                const std::array<float, 6>& f = box[e - 1 - start];
+                for (int c = 0; c < 3; ++c) lo[c] = f[c], hi[c] = f[3 + c];
+            };
             auto fits = [&](std::size_t e) {
                 const double u = failing[e - 1].first;
-                const std::array<float, 6>& f = box[e - 1 - start];
-                const double lo[3] = {f[0], f[1], f[2]}, hi[3] = {f[3], f[4], f[5]};
+                double lo[3], hi[3];
+                bounds(e, lo, hi);
                 return std::isfinite(u) && count_upper(lo, hi, halo_of(u), cap) <= cap;
             };
             std::size_t good = start, bad = end + 1;  // fits(good) (or good == start)
@@ -475,9 +480,13 @@ private:
                 start = good;
                 continue;
             }
-            if (good > start && group(pts, global, failing, start, good, halo_of(failing[good - 1].first))) {
-                start = good;
-                continue;
+            if (good > start) {
+                double lo[3], hi[3];
+                bounds(good, lo, hi);
+                if (group(pts, global, failing, start, good, lo, hi, halo_of(failing[good - 1].first))) {
+                    start = good;
+                    continue;
+                }
             }
             if (n == 1 || !std::isfinite(failing[start].first) || depth >= 64) break;
             // Not even the next point fits with the others' box: split the rest in two at the
@@ -546,20 +555,14 @@ private:
         return true;
     }
 
-    /// The failing points [a, b) with halo h: one kd-tree over their box grown by h. False when
-    /// that set is over the memory.
+    /// The failing points [a, b), whose bounding box is [lo, hi], with halo h: one kd-tree over that
+    /// box grown by h. False when that set is over the memory.
     bool group(const std::vector<pool::Float3>& pts, const std::vector<std::uint32_t>& global,
-               const std::vector<std::pair<double, std::uint32_t>>& failing, std::size_t a, std::size_t b,
-               double h) {
+               const std::vector<Failing>& failing, std::size_t a, std::size_t b, const double lo[3],
+               const double hi[3], double h) {
         const std::uint64_t cap =
             b - a <= 64 ? m_max_gathered
                         : std::min<std::uint64_t>(m_max_gathered, pts.size() + pts.size() / 2 + 4096);
-        double lo[3] = {k_inf, k_inf, k_inf}, hi[3] = {-k_inf, -k_inf, -k_inf};
-        for (std::size_t i = a; i < b; ++i)
-            for (int c = 0; c < 3; ++c) {
-                lo[c] = std::min(lo[c], double(coord(pts[failing[i].second], c)));
-                hi[c] = std::max(hi[c], double(coord(pts[failing[i].second], c)));
-            }
         std::vector<Record> set;
         if (!gather(lo, hi, h, cap, set)) return false;
         const std::uint32_t k = m_k;

@@ -330,7 +330,7 @@ PRT_HD PRT_INLINE bool enter_brick(const BrickView& v, std::uint32_t b, std::uin
 /// which node words, how many, and how many of them have discs), so the rays of a warp that walk in
 /// different places run the same instructions per level; entering a brick is the one other case.
 /// Written as the float descent's inner loop with the exits sorted out after it, it ran primary rays
-/// 1-3 % faster on an H200 but shadow rays 28-40 % slower, with fewer instructions and more stalls
+/// 1-3 % faster on an H200 but shadow rays 25-28 % slower, with fewer instructions and more stalls
 /// (preprocess/bench/results/h200-2026-11-28-issue17-walk, w4: variant A).
 PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3& p, std::uint32_t* path,
                                                 std::uint32_t& level, BrickCursor& cur,
@@ -347,14 +347,16 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     std::uint32_t count = v.top_node_count;
     std::uint32_t with_disc = v.lod != nullptr ? count : 0u;
     std::uint32_t lod_base = 0;
-    if (in_brick) {
+    // in a prefix without its payload: the payload is needed below the prefix and at filled leaves
+    bool prefix_only = false;
+    const auto walk_in_brick = [&] {  // the cursor's brick's nodes
         nodes = brick_cursor_nodes(v, cur);
         count = cur.node_count;
         with_disc = cur.lod_count;
         lod_base = cur.lod_first;
-    }
-    // in a prefix without its payload: the payload is needed below the prefix and at filled leaves
-    bool prefix_only = in_brick && cur.payload == nullptr;
+        prefix_only = cur.payload == nullptr;
+    };
+    if (in_brick) walk_in_brick();
     std::uint32_t index = in_brick && l == cur.level ? 0u : path[l];
     std::uint32_t node = load_node_word(nodes, index);
     // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick (then its nodes) once
@@ -397,11 +399,7 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
                 break;
             }
             in_brick = true;
-            nodes = brick_cursor_nodes(v, cur);
-            count = cur.node_count;
-            with_disc = cur.lod_count;
-            lod_base = cur.lod_first;
-            prefix_only = cur.payload == nullptr;
+            walk_in_brick();
             index = 0;
             node = load_node_word(nodes, 0);
             continue;
