@@ -195,7 +195,9 @@ TEST(IsoBuild, DeterministicAcrossThreadCounts) {
         o.threads = 1;
         const iso::IsoModel a = iso::build_iso(s.input(), o);
         EXPECT_GT(a.stats.balance_splits, 0u);
-        if (noise > 0.01) EXPECT_GT(a.stats.closure_leaves, 0u);
+        if (noise > 0.01) {
+            EXPECT_GT(a.stats.closure_leaves, 0u);
+        }
         o.threads = 3;
         const iso::IsoModel b = iso::build_iso(s.input(), o);
         EXPECT_EQ(a.stats.balance_splits, b.stats.balance_splits);
