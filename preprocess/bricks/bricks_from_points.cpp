@@ -618,14 +618,24 @@ private:
             }
         }
         m_cell_count.assign(std::size_t(cells) * m_chunks, 0);
+        // The inner nodes' child boxes, once: the count and scatter passes classify every point at
+        // each inner node it reaches (prepared once per point, prepare_build_splat).
+        m_boxes.assign(m_nodes.size(), ChildBoxes{});
+        for (std::size_t k = 0; k < m_nodes.size(); ++k)
+            if (inner(std::uint32_t(k))) m_boxes[k] = child_boxes(m_root, m_nodes[k].at);
     }
 
     bool inner(std::uint32_t i) const { return m_nodes[i].cell == k_no_cell; }
 
-    /// Calls visit(cell) for each cell the point's splat goes to, accumulating inner nodes' counts
-    /// into `counts` / `sums` (per node) when given.
+    /// Point i prepared for classify(); false for a point the octree builder skips.
+    bool prepare(std::size_t i, BuildSplat& s) const {
+        return prepare_build_splat(m_positions[i], m_normals[i], m_radii[i], s);
+    }
+
+    /// Calls visit(cell) for each cell the splat of point i (prepared as `s`) goes to, accumulating
+    /// inner nodes' counts into `counts` / `sums` (per node) when given.
     template <class Visit>
-    void classify(std::size_t i, Visit&& visit, std::uint64_t* counts, double* sums) const {
+    void classify(std::size_t i, const BuildSplat& s, Visit&& visit, std::uint64_t* counts, double* sums) const {
         std::uint32_t stack[64];
         std::uint32_t top = 0;
         stack[top++] = 0;
@@ -637,8 +647,7 @@ private:
                 continue;
             }
             if (counts) ++counts[k], sums[k] += m_radii[i];
-            const std::uint8_t mask = child_overlap_mask(m_root, m_nodes[k].at, m_positions[i], m_normals[i],
-                                                         m_radii[i], replicate);
+            const std::uint8_t mask = child_overlap_mask(s, m_boxes[k], replicate);
             for (std::uint32_t c = 8; c-- > 0;)  // children in order, depth first
                 if (mask >> c & 1u) stack[top++] = m_nodes[k].first + c;
         }
@@ -654,10 +663,11 @@ private:
         parallel_chunks(
             m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
                 std::uint64_t* row = m_cell_count.data() + (b / k_chunk) * cells;
+                BuildSplat s;
                 for (std::size_t i = b; i < e; ++i) {
-                    if (!usable(i)) continue;
+                    if (!prepare(i, s)) continue;
                     classify(
-                        i, [&](std::uint32_t cell) { ++row[cell]; }, counts[w].data(), sums[w].data());
+                        i, s, [&](std::uint32_t cell) { ++row[cell]; }, counts[w].data(), sums[w].data());
                 }
                 drop_input(b, e);
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
@@ -706,12 +716,13 @@ private:
             m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
                 std::uint64_t* slot = m_slot.data() + (b / k_chunk) * cells;
                 const std::vector<std::uint64_t> first(slot, slot + cells);
+                BuildSplat s;
                 for (std::size_t i = b; i < e; ++i) {
-                    if (!usable(i)) continue;
+                    if (!prepare(i, s)) continue;
                     const Record r{m_positions[i], m_normals[i], m_radii[i],
                                    m_colors.empty() ? pool::Rgba8{255, 255, 255, 255} : m_colors[i]};
                     classify(
-                        i, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
+                        i, s, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
                 }
                 drop_input(b, e);
                 // the records written stay in the spill file (shared mapping), not in the process
@@ -928,6 +939,7 @@ private:
     std::size_t m_chunks = 0;
     std::vector<PartNode> m_nodes;
     std::vector<std::uint32_t> m_cell_nodes;  // cell -> partition node
+    std::vector<ChildBoxes> m_boxes;          // partition node -> its children's boxes (inner nodes)
     std::vector<std::uint64_t> m_cell_count;  // [chunk][cell]
     std::vector<std::uint64_t> m_slot;        // [chunk][cell]: next record index
     std::vector<std::uint64_t> m_cell_begin;  // cell -> first record

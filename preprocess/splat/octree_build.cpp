@@ -36,16 +36,8 @@ using pool::NodeType;
 constexpr std::uint32_t k_max_supported_depth = 30;  // cell coordinates fit 30 bits
 constexpr std::uint32_t k_local_task_ref = 3;        // top-tree node type: "subtree built by task"
 
-/// A splat prepared for building: the disk plus its axis-aligned bounding box, rounded outward to
-/// float so that rejecting a child by the box is always safe.
-struct BuildSplat {
-    float c[3];
-    float r;
-    float n[3];  // unit (normalised in double, then rounded)
-    std::uint32_t point;
-    float box_lo[3];
-    float box_hi[3];
-};
+// BuildSplat (octree_build.h): the disk plus its axis-aligned bounding box, rounded outward to
+// float so that rejecting a child by the box is always safe.
 
 /// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell):
 /// replication mode: the disk overlaps the child's closed box (thesis 3.4); otherwise the child
@@ -684,12 +676,26 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
 
 std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
                                 const pool::Float3& normal, float radius, bool replicate) {
+    BuildSplat s;
+    if (!prepare_build_splat(position, normal, radius, s)) return 0;
+    return child_overlap_mask(s, child_boxes(root, node), replicate);
+}
+
+bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius, BuildSplat& out) {
     double len;
-    if (!usable_splat(position, normal, radius, len)) return 0;
-    const BuildSplat s = make_build_splat(position, normal, radius, len, 0);
-    double mid[3], lo[8][3], hi[8][3];
-    child_cell_boxes(root, node.level, node.cell, mid, lo, hi);
-    return classify_splat(s, replicate, mid, lo, hi);
+    if (!usable_splat(position, normal, radius, len)) return false;
+    out = make_build_splat(position, normal, radius, len, 0);
+    return true;
+}
+
+ChildBoxes child_boxes(const pool::OctreeInfo& root, NodeCell node) {
+    ChildBoxes b;
+    child_cell_boxes(root, node.level, node.cell, b.mid, b.lo, b.hi);
+    return b;
+}
+
+std::uint8_t child_overlap_mask(const BuildSplat& splat, const ChildBoxes& boxes, bool replicate) {
+    return classify_splat(splat, replicate, boxes.mid, boxes.lo, boxes.hi);
 }
 
 void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer) {

@@ -116,6 +116,32 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
 std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
                                 const pool::Float3& normal, float radius, bool replicate);
 
+/// A point as build_octree classifies it: the disk (centre, radius, unit normal rounded to float)
+/// and its bounding box rounded outward. Prepared once (prepare_build_splat), it is classified at
+/// any number of nodes (the out-of-core brick build walks each point down its partition twice).
+struct BuildSplat {
+    float c[3];
+    float r;
+    float n[3];  ///< unit (normalised in double, then rounded)
+    std::uint32_t point;
+    float box_lo[3];
+    float box_hi[3];
+};
+
+/// The point's build record; false for a point build_octree skips (octree_uses_point()).
+bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius, BuildSplat& out);
+
+/// A node's children's closed boxes (node_box()) and its mid-planes, for child_overlap_mask().
+struct ChildBoxes {
+    double mid[3];
+    double lo[8][3];
+    double hi[8][3];
+};
+ChildBoxes child_boxes(const pool::OctreeInfo& root, NodeCell node);
+
+/// child_overlap_mask() of a prepared point at a node whose child boxes are `boxes`: the same bits.
+std::uint8_t child_overlap_mask(const BuildSplat& splat, const ChildBoxes& boxes, bool replicate);
+
 /// build_octree's split rule (thesis 3.2) for a node whose list holds `count` splats whose radii
 /// sum to `radius_sum`, `centres` of them with their centre in the node's half-open cell (read
 /// only with split_by_centres).

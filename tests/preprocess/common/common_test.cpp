@@ -1,16 +1,19 @@
 // The shared algorithm layer (issue 16): prt/parallel.h's fork-join, the Morton codes (morton.h),
-// the radix sort (radix_sort.h) and the exact kd-tree (kd_tree.h), each against a brute-force or
-// standard-library reference.
+// the radix sort (radix_sort.h), the exact kd-tree (kd_tree.h) and the outward float rounding
+// (float_round.h), each against a brute-force or standard-library reference.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
+#include "float_round.h"
 #include "kd_tree.h"
 #include "morton.h"
 #include "prt/parallel.h"
@@ -74,6 +77,48 @@ TEST(Parallel, ZeroThreadsMeansTheCoresTheAffinityMaskAllows) {
     EXPECT_EQ(asked, 5u);  // an explicit count is kept
 }
 #endif
+
+TEST(FloatRound, NextFloatIsStdNextafterAndRoundingIsOutward) {
+    // next_float_down / up on the bits equal std::nextafter (bit for bit, signed zeros and
+    // subnormals included); round_down / round_up give the float nearest v on its side.
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    auto bits = [](float f) {
+        std::uint32_t u;
+        std::memcpy(&u, &f, sizeof u);
+        return u;
+    };
+    std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::denorm_min(),
+                                 -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
+                                 -std::numeric_limits<float>::min(), std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(), 1.0f, -1.0f, 0.1f, -3e-39f};
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<std::uint32_t> any;
+    for (int i = 0; i < 200000; ++i) {
+        const std::uint32_t u = any(rng);
+        float f;
+        std::memcpy(&f, &u, sizeof f);
+        if (std::isfinite(f)) values.push_back(f);
+    }
+    for (const float f : values) {
+        ASSERT_EQ(bits(pre::next_float_down(f)), bits(std::nextafter(f, -inf))) << f;
+        ASSERT_EQ(bits(pre::next_float_up(f)), bits(std::nextafter(f, inf))) << f;
+    }
+    EXPECT_EQ(pre::next_float_down(inf), std::numeric_limits<float>::max());
+    EXPECT_EQ(pre::next_float_up(-inf), -std::numeric_limits<float>::max());
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-160, 140);
+    for (int i = 0; i < 200000; ++i) {
+        const double v = std::ldexp(mantissa(rng), exponent(rng));
+        const float lo = pre::round_down(v), hi = pre::round_up(v);
+        ASSERT_LE(double(lo), v);
+        ASSERT_GE(double(hi), v);
+        ASSERT_GT(double(std::nextafter(lo, inf)), v) << v;  // the largest float not above v
+        ASSERT_LT(double(std::nextafter(hi, -inf)), v) << v;
+    }
+    EXPECT_EQ(pre::round_up(1e300), inf);
+    EXPECT_EQ(pre::round_down(1e300), std::numeric_limits<float>::max());
+    EXPECT_EQ(pre::round_down(-1e300), -inf);
+}
 
 TEST(Morton, InterleavesXLowestAndInverts) {
     for (std::uint32_t x : {0u, 1u, 5u, 1023u, (1u << 20), (1u << 21) - 1})
