@@ -635,7 +635,8 @@ private:
     /// Calls visit(cell) for each cell the splat of point i (prepared as `s`) goes to, accumulating
     /// inner nodes' counts into `counts` / `sums` (per node) when given.
     template <class Visit>
-    void classify(std::size_t i, const BuildSplat& s, Visit&& visit, std::uint64_t* counts, double* sums) const {
+    void classify(std::size_t i, const BuildSplat& s, Visit&& visit, std::uint64_t* counts,
+                  double* sums) const {
         std::uint32_t stack[64];
         std::uint32_t top = 0;
         stack[top++] = 0;

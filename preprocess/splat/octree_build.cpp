@@ -681,7 +681,8 @@ std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, con
     return child_overlap_mask(s, child_boxes(root, node), replicate);
 }
 
-bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius, BuildSplat& out) {
+bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
+                         BuildSplat& out) {
     double len;
     if (!usable_splat(position, normal, radius, len)) return false;
     out = make_build_splat(position, normal, radius, len, 0);

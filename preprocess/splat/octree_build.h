@@ -129,7 +129,8 @@ struct BuildSplat {
 };
 
 /// The point's build record; false for a point build_octree skips (octree_uses_point()).
-bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius, BuildSplat& out);
+bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
+                         BuildSplat& out);
 
 /// A node's children's closed boxes (node_box()) and its mid-planes, for child_overlap_mask().
 struct ChildBoxes {

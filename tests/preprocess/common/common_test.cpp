@@ -87,10 +87,18 @@ TEST(FloatRound, NextFloatIsStdNextafterAndRoundingIsOutward) {
         std::memcpy(&u, &f, sizeof u);
         return u;
     };
-    std::vector<float> values = {0.0f, -0.0f, std::numeric_limits<float>::denorm_min(),
-                                 -std::numeric_limits<float>::denorm_min(), std::numeric_limits<float>::min(),
-                                 -std::numeric_limits<float>::min(), std::numeric_limits<float>::max(),
-                                 -std::numeric_limits<float>::max(), 1.0f, -1.0f, 0.1f, -3e-39f};
+    std::vector<float> values = {0.0f,
+                                 -0.0f,
+                                 std::numeric_limits<float>::denorm_min(),
+                                 -std::numeric_limits<float>::denorm_min(),
+                                 std::numeric_limits<float>::min(),
+                                 -std::numeric_limits<float>::min(),
+                                 std::numeric_limits<float>::max(),
+                                 -std::numeric_limits<float>::max(),
+                                 1.0f,
+                                 -1.0f,
+                                 0.1f,
+                                 -3e-39f};
     std::mt19937 rng(7);
     std::uniform_int_distribution<std::uint32_t> any;
     for (int i = 0; i < 200000; ++i) {
