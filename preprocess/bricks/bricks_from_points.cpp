@@ -632,11 +632,10 @@ private:
         return prepare_build_splat(m_positions[i], m_normals[i], m_radii[i], s);
     }
 
-    /// Calls visit(cell) for each cell the splat of point i (prepared as `s`) goes to, accumulating
-    /// inner nodes' counts into `counts` / `sums` (per node) when given.
+    /// Calls visit(cell) for each cell the prepared point's splat goes to, accumulating inner nodes'
+    /// counts and radii (s.r, the point's radius) into `counts` / `sums` (per node) when given.
     template <class Visit>
-    void classify(std::size_t i, const BuildSplat& s, Visit&& visit, std::uint64_t* counts,
-                  double* sums) const {
+    void classify(const BuildSplat& s, Visit&& visit, std::uint64_t* counts, double* sums) const {
         std::uint32_t stack[64];
         std::uint32_t top = 0;
         stack[top++] = 0;
@@ -647,7 +646,7 @@ private:
                 visit(m_nodes[k].cell);
                 continue;
             }
-            if (counts) ++counts[k], sums[k] += m_radii[i];
+            if (counts) ++counts[k], sums[k] += s.r;
             const std::uint8_t mask = child_overlap_mask(s, m_boxes[k], replicate);
             for (std::uint32_t c = 8; c-- > 0;)  // children in order, depth first
                 if (mask >> c & 1u) stack[top++] = m_nodes[k].first + c;
@@ -668,7 +667,7 @@ private:
                 for (std::size_t i = b; i < e; ++i) {
                     if (!prepare(i, s)) continue;
                     classify(
-                        i, s, [&](std::uint32_t cell) { ++row[cell]; }, counts[w].data(), sums[w].data());
+                        s, [&](std::uint32_t cell) { ++row[cell]; }, counts[w].data(), sums[w].data());
                 }
                 drop_input(b, e);
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
@@ -723,7 +722,7 @@ private:
                     const Record r{m_positions[i], m_normals[i], m_radii[i],
                                    m_colors.empty() ? pool::Rgba8{255, 255, 255, 255} : m_colors[i]};
                     classify(
-                        i, s, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
+                        s, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
                 }
                 drop_input(b, e);
                 // the records written stay in the spill file (shared mapping), not in the process

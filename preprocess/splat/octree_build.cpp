@@ -674,13 +674,6 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
     return octree;
 }
 
-std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
-                                const pool::Float3& normal, float radius, bool replicate) {
-    BuildSplat s;
-    if (!prepare_build_splat(position, normal, radius, s)) return 0;
-    return child_overlap_mask(s, child_boxes(root, node), replicate);
-}
-
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
                          BuildSplat& out) {
     double len;

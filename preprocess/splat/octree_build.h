@@ -110,12 +110,6 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
                               std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
                               const OctreeParams& params, OctreeStats* stats = nullptr);
 
-/// Bit c is set when build_octree puts the point's splat in child c of `node` (replicate: its disk
-/// overlaps the child's closed box, thesis 3.4; otherwise the child holding its centre); 0 for a
-/// point build_octree skips.
-std::uint8_t child_overlap_mask(const pool::OctreeInfo& root, NodeCell node, const pool::Float3& position,
-                                const pool::Float3& normal, float radius, bool replicate);
-
 /// A point as build_octree classifies it: the disk (centre, radius, unit normal rounded to float)
 /// and its bounding box rounded outward. Prepared once (prepare_build_splat), it is classified at
 /// any number of nodes (the out-of-core brick build walks each point down its partition twice).
@@ -140,7 +134,9 @@ struct ChildBoxes {
 };
 ChildBoxes child_boxes(const pool::OctreeInfo& root, NodeCell node);
 
-/// child_overlap_mask() of a prepared point at a node whose child boxes are `boxes`: the same bits.
+/// Bit c is set when build_octree puts the prepared point's splat in child c of the node whose child
+/// boxes are `boxes` (replicate: its disk overlaps the child's closed box, thesis 3.4; otherwise the
+/// child holding its centre).
 std::uint8_t child_overlap_mask(const BuildSplat& splat, const ChildBoxes& boxes, bool replicate);
 
 /// build_octree's split rule (thesis 3.2) for a node whose list holds `count` splats whose radii
