@@ -8,6 +8,9 @@
 #include <string>
 
 #include "kd_tree.h"
+#ifdef PRT_HAVE_CUDA
+#include "prt/cuda/knn_cuda.h"
+#endif
 #include "prt/error.h"
 #include "prt/parallel.h"
 #include "prt/tool.h"
@@ -36,6 +39,17 @@ struct RadiusSummary {
         stats.zero = zero;
     }
 };
+
+/// The checks every compute_radii path makes before searching (knn_distances' own, and the clamp's).
+void check_radii_params(std::size_t n, const RadiiParams& params) {
+    const std::uint32_t k = params.k;
+    if (k == 0) throw Error("k-NN radii: k must be at least 1");
+    if (n <= k)
+        throw Error("k-NN radii: " + std::to_string(n) + " points, need more than k = " + std::to_string(k) +
+                    " (lower --k)");
+    if (!(params.clamp_factor >= 0) || !std::isfinite(params.clamp_factor))
+        throw Error("k-NN radii: the clamp factor must be finite and >= 0");
+}
 
 }  // namespace
 
@@ -153,9 +167,76 @@ void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_
     stats.clamped = clamped.load();
 }
 
+std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k,
+                                  std::string* why) {
+    if (name == "cpu") return "cpu";
+    if (name != "cuda" && name != "auto")
+        throw Error("unknown backend '" + name + "' (expected auto, cpu or cuda)");
+#ifdef PRT_HAVE_CUDA
+    std::string reason;
+    if (cuda::knn_radii_usable(n, k, &reason)) return "cuda";
+#else
+    (void)n, (void)k;
+    const std::string reason =
+        "this build has no CUDA backend (configured without nvcc or with PRT_WITH_CUDA=OFF)";
+#endif
+    if (name == "cuda") throw Error("--backend cuda: " + reason + " (use --backend cpu)");
+    if (why) *why = reason;
+    return "cpu";
+}
+
+namespace {
+
+#ifdef PRT_HAVE_CUDA
+/// compute_radii() on device 0: the search, the clamp and the medians there, the sums here (in
+/// index order, as clamp_radii adds them).
+std::vector<float> compute_radii_cuda(std::span<const pool::Float3> positions, const RadiiParams& params,
+                                      RadiiStats& stats, const std::function<void(std::uint64_t)>& progress) {
+    const std::size_t n = positions.size();
+    const std::uint32_t k = params.k;
+    check_radii_params(n, params);
+    const cuda::KnnClamp clamp = params.clamp_factor == 0            ? cuda::KnnClamp::none
+                                 : params.scope == ClampScope::local ? cuda::KnnClamp::local
+                                                                     : cuda::KnnClamp::global;
+    std::vector<float> radii(n);
+    const cuda::KnnRadiiResult r =
+        cuda::knn_radii_cuda({reinterpret_cast<const float*>(positions.data()), 3 * n}, k, clamp,
+                             params.clamp_factor, radii, progress);
+    if (r.non_finite >= 0)
+        throw Error("k-NN radii: point " + std::to_string(r.non_finite) + " has a non-finite position");
+    stats.points = n;
+    stats.raw_median = r.raw_median;
+    stats.clamp_limit = r.clamp_limit;
+    stats.clamped = r.clamped;
+    RadiusSummary summary;
+    for (const float v : radii) summary.add(v);
+    summary.into(stats);
+    stats.median = r.median;
+    stats.seconds_index = r.seconds_upload + r.seconds_index;
+    stats.seconds_search = r.seconds_search;
+    stats.backend = "cuda";
+    return radii;
+}
+#endif
+
+}  // namespace
+
 std::vector<float> compute_radii(std::span<const pool::Float3> positions, const RadiiParams& params,
                                  RadiiStats* stats, const std::function<void(std::uint64_t)>& progress) {
     const double start = tool::now_seconds();
+    if (params.backend != "cpu") {
+#ifdef PRT_HAVE_CUDA
+        if (params.backend != "cuda")
+            throw Error("k-NN radii: unknown backend '" + params.backend + "' (resolve it first)");
+        RadiiStats local;
+        std::vector<float> radii = compute_radii_cuda(positions, params, local, progress);
+        local.seconds = tool::now_seconds() - start;
+        if (stats) *stats = local;
+        return radii;
+#else
+        throw Error("k-NN radii: backend '" + params.backend + "': this build has no CUDA backend");
+#endif
+    }
     RadiiStats local;
     const bool local_clamp = params.scope == ClampScope::local && params.clamp_factor > 0;
     std::vector<std::uint32_t> neighbours;
@@ -250,12 +331,7 @@ SpillFile compute_radii_tiled(std::span<const pool::Float3> positions, const Rad
     const double start = tool::now_seconds();
     const std::size_t n = positions.size();
     const std::uint32_t k = params.k;
-    if (k == 0) throw Error("k-NN radii: k must be at least 1");
-    if (n <= k)
-        throw Error("k-NN radii: " + std::to_string(n) + " points, need more than k = " + std::to_string(k) +
-                    " (lower --k)");
-    if (!(params.clamp_factor >= 0) || !std::isfinite(params.clamp_factor))
-        throw Error("k-NN radii: the clamp factor must be finite and >= 0");
+    check_radii_params(n, params);
     tiling.k = k;
     tiling.threads = params.threads;
     const unsigned threads = resolve_threads(params.threads);

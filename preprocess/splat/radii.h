@@ -32,6 +32,10 @@ struct RadiiParams {
     float clamp_factor = 3.0f;  ///< radii above clamp_factor x the scope's median are clamped to it; 0 = off
     ClampScope scope = ClampScope::local;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
+    /// compute_radii()'s search: "cpu" (the kd-tree over `threads` workers) or "cuda" (device 0,
+    /// runtime/cuda/src/knn.cu: the same radii bit for bit); resolve_radii_backend() turns "auto"
+    /// into one of them.
+    std::string backend = "cpu";
 };
 
 struct RadiiStats {
@@ -40,9 +44,16 @@ struct RadiiStats {
     std::uint64_t zero = 0;     ///< radii equal to 0 (k or more coincident neighbours): prt-octree skips them
     double raw_median = 0;      ///< median k-NN distance before clamping
     double clamp_limit = 0;     ///< global scope: clamp_factor x raw_median (0 otherwise)
-    double min = 0, median = 0, mean = 0, max = 0;  ///< of the final radii
-    double seconds_index = 0, seconds_search = 0, seconds = 0;
+    double min = 0, median = 0, mean = 0, max = 0;              ///< of the final radii
+    double seconds_index = 0, seconds_search = 0, seconds = 0;  ///< cuda: the index includes the upload
+    std::string backend = "cpu";                                ///< the search that ran: "cpu" or "cuda"
 };
+
+/// "cpu", or "cuda" when `name` is "cuda" or "auto" and device 0 can search n points with k
+/// neighbours (prt/cuda/knn_cuda.h knn_radii_usable: a device, k <= 32, enough free memory).
+/// "auto" falls back to "cpu" with the reason in `why`; "cuda" throws prt::Error with it.
+std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k,
+                                  std::string* why = nullptr);
 
 /// Distance from every point to its k-th nearest other point (exact k-NN through the shared kd-tree,
 /// kd_tree.h, searched from `threads` threads). Coincident points count as neighbours at
@@ -65,7 +76,8 @@ void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stat
 void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_t>& neighbours,
                        std::uint32_t k, float clamp_factor, RadiiStats& stats, unsigned threads = 0);
 
-/// knn_distances() then the clamp of params.scope.
+/// knn_distances() then the clamp of params.scope, on the CPU; with params.backend "cuda" the same
+/// on device 0 (every radius and statistic equal; knn_cuda.h).
 std::vector<float> compute_radii(std::span<const pool::Float3> positions, const RadiiParams& params,
                                  RadiiStats* stats = nullptr,
                                  const std::function<void(std::uint64_t)>& progress = {});

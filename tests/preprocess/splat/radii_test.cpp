@@ -36,6 +36,25 @@ TEST(KnnRadii, EqualBruteForce) {
     }
 }
 
+TEST(KnnRadii, BackendNames) {
+    EXPECT_EQ(prt::pre::resolve_radii_backend("cpu", 1000, 9), "cpu");
+    EXPECT_THROW(prt::pre::resolve_radii_backend("gpu", 1000, 9), prt::Error);
+    std::string why;
+    const std::string a = prt::pre::resolve_radii_backend("auto", 1000, 9, &why);
+    if (a == "cpu")
+        EXPECT_FALSE(why.empty());  // the reason the tool prints
+    else
+        EXPECT_EQ(a, "cuda");
+    // above the GPU search's k, auto always falls back, and --backend cuda says why
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 33, &why), "cpu");
+    try {
+        prt::pre::resolve_radii_backend("cuda", 1000, 33);
+        FAIL() << "k = 33 on the GPU";
+    } catch (const prt::Error& e) {
+        EXPECT_NE(std::string(e.what()).find("--backend cuda"), std::string::npos) << e.what();
+    }
+}
+
 TEST(KnnRadii, ThreadCountDoesNotChangeTheResult) {
     const std::vector<Float3> p = prt::test::sphere_points(20000, 23).positions;
     EXPECT_EQ(prt::pre::knn_distances(p, 9, 1), prt::pre::knn_distances(p, 9, 3));

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -92,12 +93,32 @@ TEST_F(SplatTools, HelpDocumentsEveryOption) {
     if (!built("prt-radii")) GTEST_SKIP() << "prt-radii is not built (needs FLANN) in " << PRT_BIN_DIR;
     if (!built("prt-octree")) GTEST_SKIP() << "prt-octree is not built in " << PRT_BIN_DIR;
     ASSERT_EQ(run("prt-radii", "--help"), 0);
-    for (const char* opt : {"--k", "--clamp-factor", "--threads", "--output", "--quiet", "9", "3"})
+    for (const char* opt :
+         {"--k", "--clamp-factor", "--threads", "--output", "--quiet", "--backend", "9", "3"})
         EXPECT_NE(m_stdout.find(opt), std::string::npos) << "prt-radii --help lacks " << opt;
     ASSERT_EQ(run("prt-octree", "--help"), 0);
     for (const char* opt : {"--leaf-size", "--max-depth", "--min-cell", "--no-replicate", "--threads",
                             "--output", "--quiet", "48", "24", "0.25"})
         EXPECT_NE(m_stdout.find(opt), std::string::npos) << "prt-octree --help lacks " << opt;
+}
+
+TEST_F(SplatTools, RadiiBackendsWriteTheSameRadiiOrCudaSaysWhyNot) {
+    if (!built("prt-radii")) GTEST_SKIP() << "prt-radii is not built (needs FLANN) in " << PRT_BIN_DIR;
+    write_pool(sphere_cloud(3000), "in.pool");
+    ASSERT_EQ(run("prt-radii", path("in.pool") + " -o " + path("cpu.pool") + " --backend cpu"), 0)
+        << m_stderr;
+    const int rc = run("prt-radii", path("in.pool") + " -o " + path("cuda.pool") + " --backend cuda");
+    if (rc != 0) {
+        // no usable device here: one line saying why, and no output
+        EXPECT_NE(m_stderr.find("--backend cuda: "), std::string::npos) << m_stderr;
+        EXPECT_FALSE(std::filesystem::exists(path("cuda.pool")));
+        return;
+    }
+    EXPECT_NE(m_stderr.find("time (cuda)"), std::string::npos) << m_stderr;
+    const PoolFile a = PoolFile::open(path("cpu.pool")), b = PoolFile::open(path("cuda.pool"));
+    const auto ra = a.array<float>(SectionType::radii), rb = b.array<float>(SectionType::radii);
+    ASSERT_EQ(ra.size(), rb.size());
+    EXPECT_EQ(std::memcmp(ra.data(), rb.data(), ra.size() * sizeof(float)), 0);
 }
 
 TEST_F(SplatTools, RadiiThenOctree) {
