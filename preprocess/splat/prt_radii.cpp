@@ -6,7 +6,6 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "prt/parallel.h"
 #include "prt/pool_step.h"
 #include "radii.h"
 
@@ -24,9 +23,6 @@ constexpr const char* k_description =
     "depends on the radii) is dropped. When the search does not fit --memory, it runs out of core "
     "(issue 17): tile by tile with a halo of neighbouring points, the sorted points, raw radii and "
     "neighbour lists in spill files (--spill-folder), with results equal to the in-core run.";
-
-/// --backend auto takes the CPU below this many points per CPU thread.
-constexpr std::uint64_t k_gpu_points_per_thread = 100000;
 
 /// The out-of-core options of prt-radii.
 struct MemoryOptions {
@@ -73,21 +69,20 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
     const std::uint64_t in_core = pre::radii_in_core_bytes(positions.size(), params);
     // The GPU search holds only the radii here (4 bytes per point); above --memory, or with
     // --tile-points (a test of the CPU's out-of-core search), auto takes the CPU's tiles.
-    // Below about 100k points per CPU thread the CPU is as fast as the GPU once its context is
-    // made (about 0.2 s; H200 host, 1M points on 16 threads: 0.23 s CPU, 0.28 s CUDA in all).
     const bool host_fits = 4 * std::uint64_t(positions.size()) <= memory;
-    const bool small = positions.size() < k_gpu_points_per_thread * prt::resolve_threads(params.threads);
     const std::string requested = params.backend;
     std::string why;
-    if (requested == "auto" && (mem.tile_points > 0 || !host_fits || small)) {
+    if (requested == "auto" && (mem.tile_points > 0 || !host_fits)) {
         params.backend = "cpu";
         why = mem.tile_points > 0 ? "--tile-points tests the CPU's out-of-core search"
-              : !host_fits        ? "the radii alone, 4 bytes per point, exceed --memory"
-                                  : "under 100k points per CPU thread the CPU is as fast";
+                                  : "the radii alone, 4 bytes per point, exceed --memory";
     } else {
-        params.backend = pre::resolve_radii_backend(requested, positions.size(), params.k, &why);
+        params.backend =
+            pre::resolve_radii_backend(requested, positions.size(), params.k, params.threads, &why);
     }
-    if (requested == "auto" && params.backend == "cpu")
+    // (a small model's CPU search is the usual case: its "time (cpu)" line says it)
+    if (requested == "auto" && params.backend == "cpu" &&
+        pre::radii_gpu_pays(positions.size(), params.threads))
         step.note("prt-radii: --backend auto: using the CPU (%s)", why.c_str());
     const bool tiled = params.backend == "cpu" && (mem.tile_points > 0 || in_core > memory);
     tool::Progress progress(tiled                      ? "prt-radii: k-NN search by tiles"

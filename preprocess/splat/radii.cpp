@@ -167,16 +167,24 @@ void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_
     stats.clamped = clamped.load();
 }
 
-std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k,
+bool radii_gpu_pays(std::uint64_t n, unsigned threads) {
+    return n >= std::uint64_t{100000} * resolve_threads(threads);
+}
+
+std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k, unsigned threads,
                                   std::string* why) {
     if (name == "cpu") return "cpu";
     if (name != "cuda" && name != "auto")
         throw Error("unknown backend '" + name + "' (expected auto, cpu or cuda)");
+    if (name == "auto" && !radii_gpu_pays(n, threads)) {
+        if (why) *why = "under 100k points per CPU thread the CPU is as fast";
+        return "cpu";
+    }
 #ifdef PRT_HAVE_CUDA
     std::string reason;
     if (cuda::knn_radii_usable(n, k, &reason)) return "cuda";
 #else
-    (void)n, (void)k;
+    (void)n, (void)k, (void)threads;
     const std::string reason =
         "this build has no CUDA backend (configured without nvcc or with PRT_WITH_CUDA=OFF)";
 #endif

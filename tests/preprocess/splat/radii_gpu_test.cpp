@@ -59,7 +59,7 @@ std::vector<Float3> plane_points(std::size_t n) {
 
 bool usable(std::string& why) {
     try {
-        prt::pre::resolve_radii_backend("cuda", 1000, 9);
+        prt::pre::resolve_radii_backend("cuda", 1000, 9, 1);
         return true;
     } catch (const prt::Error& e) {
         why = e.what();
@@ -154,13 +154,15 @@ TEST(KnnRadiiGpu, NamesTheFirstNonFinitePointAsTheCpuDoes) {
     EXPECT_EQ(cpu, gpu);
 }
 
-TEST(KnnRadiiGpu, AutoPicksTheGpuAndFallsBackAboveItsK) {
+TEST(KnnRadiiGpu, AutoPicksTheGpuAndFallsBackAboveItsKAndBelowItsSize) {
     std::string why;
     if (!usable(why)) GTEST_SKIP() << why;
-    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 9), "cuda");
-    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 33, &why), "cpu");
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000000, 9, 1), "cuda");
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000000, 33, 1, &why), "cpu");
     EXPECT_NE(why.find("k = 33"), std::string::npos) << why;
-    EXPECT_THROW(prt::pre::resolve_radii_backend("cuda", 1000, 33), prt::Error);
+    EXPECT_THROW(prt::pre::resolve_radii_backend("cuda", 1000, 33, 1), prt::Error);
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 9, 1), "cpu");   // small: the CPU is as fast
+    EXPECT_EQ(prt::pre::resolve_radii_backend("cuda", 1000, 9, 1), "cuda");  // unless asked
 }
 
 }  // namespace

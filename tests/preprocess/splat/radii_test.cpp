@@ -37,18 +37,22 @@ TEST(KnnRadii, EqualBruteForce) {
 }
 
 TEST(KnnRadii, BackendNames) {
-    EXPECT_EQ(prt::pre::resolve_radii_backend("cpu", 1000, 9), "cpu");
-    EXPECT_THROW(prt::pre::resolve_radii_backend("gpu", 1000, 9), prt::Error);
+    EXPECT_EQ(prt::pre::resolve_radii_backend("cpu", 1000, 9, 1), "cpu");
+    EXPECT_THROW(prt::pre::resolve_radii_backend("gpu", 1000, 9, 1), prt::Error);
     std::string why;
-    const std::string a = prt::pre::resolve_radii_backend("auto", 1000, 9, &why);
+    const std::string a = prt::pre::resolve_radii_backend("auto", 1000000, 9, 1, &why);
     if (a == "cpu")
         EXPECT_FALSE(why.empty());  // the reason the tool prints
     else
         EXPECT_EQ(a, "cuda");
-    // above the GPU search's k, auto always falls back, and --backend cuda says why
-    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 33, &why), "cpu");
+    // a small model, or k above the GPU search's: auto always falls back, --backend cuda says why
+    EXPECT_FALSE(prt::pre::radii_gpu_pays(99999, 1));
+    EXPECT_TRUE(prt::pre::radii_gpu_pays(200000, 2));
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000, 9, 1, &why), "cpu");
+    EXPECT_NE(why.find("CPU is as fast"), std::string::npos) << why;
+    EXPECT_EQ(prt::pre::resolve_radii_backend("auto", 1000000, 33, 1, &why), "cpu");
     try {
-        prt::pre::resolve_radii_backend("cuda", 1000, 33);
+        prt::pre::resolve_radii_backend("cuda", 1000, 33, 1);
         FAIL() << "k = 33 on the GPU";
     } catch (const prt::Error& e) {
         EXPECT_NE(std::string(e.what()).find("--backend cuda"), std::string::npos) << e.what();
