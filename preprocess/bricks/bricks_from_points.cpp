@@ -522,7 +522,7 @@ private:
         if (!m_params.input_mapped) return;
         drop_pages(m_positions.data() + b, (e - b) * sizeof(pool::Float3));
         drop_pages(m_normals.data() + b, (e - b) * sizeof(pool::Float3));
-        drop_pages(m_radii.data() + b, (e - b) * sizeof(float));
+        if (m_params.radii_mapped) drop_pages(m_radii.data() + b, (e - b) * sizeof(float));
         if (!m_colors.empty()) drop_pages(m_colors.data() + b, (e - b) * sizeof(pool::Rgba8));
     }
 

@@ -34,6 +34,9 @@ struct PointBrickParams {
     /// the pages they are done with (spill_file.h drop_pages), so the resident set stays bounded.
     /// Never true for arrays in anonymous memory (dropping would zero them).
     bool input_mapped = false;
+    /// With input_mapped: the radii are part of a file mapping too (the input's section or a spill
+    /// file); false when they are anonymous memory (computed in the process), whose pages are kept.
+    bool radii_mapped = true;
     unsigned threads = 0;  ///< 0 = every hardware thread
     /// Cells built at the same time, each with threads / cell_workers threads; --memory is shared
     /// among them (cells of memory / (cell_workers x k_cell_bytes_per_point) points). 0: one per

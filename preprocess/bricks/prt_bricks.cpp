@@ -11,6 +11,7 @@
 #include "prt/formats/octree_sections.h"
 #include "prt/pool_step.h"
 #include "prt/tool.h"
+#include "radii.h"
 
 namespace {
 
@@ -34,7 +35,60 @@ constexpr const char* k_description =
     "and cuts it itself, out of core: the model is partitioned into octree cells that each fit in "
     "--memory and each cell's subtree is built, culled and cut alone, the points and payloads going "
     "through spill files; the result equals prt-octree -> prt-cull -> prt-bricks with the same "
-    "options byte for byte.";
+    "options byte for byte. Given points and normals without radii (prt-import), it first computes "
+    "the radii as prt-radii does with its defaults (k = 9, local clamp at 3; on the GPU when there is "
+    "one, else on the CPU, out of core above --memory), the same radii, without writing and reading "
+    "them back as a pool.";
+
+/// The radii of a pool that has none, as prt-radii computes them with its defaults (in memory, or
+/// in a spill file when the CPU's search runs out of core), and what the provenance records.
+struct OwnRadii {
+    std::vector<float> values;
+    prt::pre::SpillFile spill;
+    std::span<const float> radii;
+    nlohmann::json parameters;
+};
+
+OwnRadii compute_own_radii(prt::tool::PoolStep& step, std::span<const prt::pool::Float3> positions,
+                           unsigned threads, std::uint64_t memory,
+                           const std::filesystem::path& spill_folder) {
+    using namespace prt;
+    OwnRadii out;
+    pre::RadiiParams rp;  // prt-radii's defaults
+    rp.threads = threads;
+    rp.backend = pre::resolve_radii_backend("auto", positions.size(), rp.k, threads);
+    const bool tiled = rp.backend == "cpu" && pre::radii_in_core_bytes(positions.size(), rp) > memory;
+    pre::RadiiStats rs;
+    {
+        tool::Progress progress("prt-bricks: k-NN radii (no radii in the input)", positions.size(),
+                                step.quiet());
+        const auto update = [&](std::uint64_t done) { progress.update(done); };
+        if (tiled) {
+            pre::TiledKnnParams tiling;
+            tiling.memory = memory;
+            tiling.positions_mapped = step.input().mapped();
+            tiling.spill_folder = spill_folder;
+            out.spill = step.about_input(
+                [&] { return pre::compute_radii_tiled(positions, rp, tiling, &rs, nullptr, update); });
+            out.radii = out.spill.as<const float>();
+        } else {
+            out.values = step.about_input([&] { return pre::compute_radii(positions, rp, &rs, update); });
+            out.radii = out.values;
+        }
+        progress.finish();
+    }
+    step.note(
+        "prt-bricks: no radii in the input: computed them as prt-radii does (k = %u, clamp %g x the median "
+        "of the point's neighbours; %s%s): median %.6g, %llu clamped, %.1f s",
+        rp.k, double(rp.clamp_factor), rs.backend.c_str(), tiled ? ", out of core" : "", rs.median,
+        static_cast<unsigned long long>(rs.clamped), rs.seconds);
+    out.parameters = {{"k", rp.k},
+                      {"clamp_factor", rp.clamp_factor},
+                      {"clamp_scope", pre::clamp_scope_name(rp.scope)},
+                      {"backend", rs.backend},
+                      {"seconds", rs.seconds}};
+    return out;
+}
 
 /// The options of the build from points (out of core).
 struct PointOptions {
@@ -171,8 +225,10 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     const pool::PoolFile& in = step.input();
     const char* tool = "prt-bricks (from points)";
     const auto positions = in.require<pool::Float3>(pool::SectionType::positions, tool);
+    if (!in.has(pool::SectionType::normals))
+        throw Error(step.input_path() +
+                    ": no octree and no normals: run prt-import (it estimates normals) or prt-octree first");
     const auto normals = in.require<pool::Float3>(pool::SectionType::normals, tool);
-    const auto radii = in.require<float>(pool::SectionType::radii, tool);
     const auto colors = in.array<pool::Rgba8>(pool::SectionType::colors);
     if (keep_float)
         throw Error(step.input_path() +
@@ -182,6 +238,19 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     p.input_mapped = in.mapped();
     p.memory = tool::memory_limit(opt.memory);
     const std::filesystem::path folder = opt.cells_folder;
+    if (opt.stage != "plan") step.check_output_folder();
+    OwnRadii own;  // a pool without radii: computed here (the merge reads the cells' records only)
+    const bool has_radii = in.has(pool::SectionType::radii);
+    const bool own_radii = !has_radii && opt.stage != "merge";
+    if (own_radii)
+        own = compute_own_radii(step, positions, p.threads, p.memory,
+                                !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
+                                : opt.stage == "plan"
+                                    ? folder
+                                    : std::filesystem::absolute(step.output_path()).parent_path());
+    p.radii_mapped = own.values.empty();  // a vector's pages would be zeroed by dropping them
+    const std::span<const float> radii =
+        has_radii ? in.require<float>(pool::SectionType::radii, tool) : own.radii;
     if (opt.stage == "plan") {  // no spill files: the records go to --cells-folder, and no OUTPUT
         pre::PointBrickStats stats;
         tool::StagedProgress progress("prt-bricks", step.quiet());
@@ -204,7 +273,6 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
     }
     p.spill_folder = !opt.spill_folder.empty() ? std::filesystem::path(opt.spill_folder)
                                                : std::filesystem::absolute(step.output_path()).parent_path();
-    step.check_output_folder();
     step.note(
         "prt-bricks: %llu points; octree cells of at most about %llu points (--memory %s, %u cells at once), "
         "spill files in %s",
@@ -228,19 +296,24 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                     {data->data(), static_cast<std::size_t>(built.data_bytes)},
                     std::shared_ptr<const void>(data, data->data()), true);
     const std::uint64_t point_bytes = drop_points(step, keep_points);
-    const nlohmann::json parameters = {{"brick_splats", p.bricks.brick_splats},
-                                       {"lod_splats", p.bricks.lod_splats},
-                                       {"direct", direct_policy_name(p.bricks.direct)},
-                                       {"leaf_size", p.octree.max_leaf_splats},
-                                       {"max_depth", p.octree.max_depth},
-                                       {"min_cell", p.octree.min_cell_ratio},
-                                       {"cull", p.cull},
-                                       {"directions", p.culling.directions},
-                                       {"grid", p.culling.grid},
-                                       {"policy", opt.policy},
-                                       {"memory", p.memory},
-                                       {"keep_points", keep_points},
-                                       {"staged", opt.stage == "merge"}};
+    if (keep_points && own_radii)  // the per-point sections kept: the radii computed here with them
+        step.writer().add_array(pool::SectionType::radii,
+                                own.values.empty() ? std::vector<float>(own.radii.begin(), own.radii.end())
+                                                   : std::move(own.values));
+    nlohmann::json parameters = {{"brick_splats", p.bricks.brick_splats},
+                                 {"lod_splats", p.bricks.lod_splats},
+                                 {"direct", direct_policy_name(p.bricks.direct)},
+                                 {"leaf_size", p.octree.max_leaf_splats},
+                                 {"max_depth", p.octree.max_depth},
+                                 {"min_cell", p.octree.min_cell_ratio},
+                                 {"cull", p.cull},
+                                 {"directions", p.culling.directions},
+                                 {"grid", p.culling.grid},
+                                 {"policy", opt.policy},
+                                 {"memory", p.memory},
+                                 {"keep_points", keep_points},
+                                 {"staged", opt.stage == "merge"}};
+    if (own_radii) parameters["radii"] = own.parameters;
     const std::uint64_t bytes = step.write(parameters);
     const double per_point = 1.0 / double(stats.points ? stats.points : 1);
     step.note(
@@ -310,11 +383,7 @@ void bricks_step(prt::tool::PoolStep& step, prt::pre::BrickParams params, bool k
     check_stage_options(from_points);
     if (from_points.stage == "cells") return cells_step(step, from_points);
     const pool::PoolFile& in = step.input();
-    if (!pool::has_splat_octree(in)) {
-        if (!in.has(pool::SectionType::radii))
-            throw Error(step.input_path() + ": no octree and no radii: run prt-radii (or prt-octree) first");
-        return points_step(step, from_points, keep_float, keep_points);
-    }
+    if (!pool::has_splat_octree(in)) return points_step(step, from_points, keep_float, keep_points);
     if (from_points.stage != "all")
         throw Error(
             step.input_path() + ": --stage " + from_points.stage +

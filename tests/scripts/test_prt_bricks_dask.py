@@ -3,6 +3,7 @@ local Dask cluster of 3 worker processes equals prt-bricks in one process byte f
 killed while it builds cells loses nothing; a second run does nothing; bad input is one line. Run
 by ctest (prt_bricks_dask_test) with Debian's python3; PRT_BIN_DIR names the tools, PRT_BRICKS_DASK
 the script."""
+import math
 import os
 import signal
 import subprocess
@@ -113,13 +114,15 @@ def cells_pids(pool):
 
 def test_bad_input_is_one_line(tmp_path):
     xyz = str(tmp_path / "scan.xyz")
-    sphere_xyz(xyz, 2000)
+    with open(xyz, "w") as f:  # points without normals, imported without estimating them
+        for i in range(2000):
+            f.write("%f %f %f\n" % (math.cos(i * 0.1), math.sin(i * 0.1), i * 1e-3))
     imported = str(tmp_path / "scan.pool")
-    subprocess.run([tool("prt-import"), xyz, "-o", imported, "-q"], check=True)
+    subprocess.run([tool("prt-import"), xyz, "-o", imported, "-q", "--normals", "keep"], check=True)
     out = str(tmp_path / "out.pool")
     code, stdout, stderr = run(imported, "-o", out, "-j", "2")
     assert code == 1, stdout + stderr
-    assert stdout.strip().startswith("prt-bricks-dask: failed: prt-bricks: error: %s: no octree and no radii" % imported), stdout
+    assert stdout.strip().startswith("prt-bricks-dask: failed: prt-bricks: error: %s: no octree and no normals" % imported), stdout
     assert not os.path.exists(out)
     assert os.listdir(tmp_path) == ["scan.xyz", "scan.pool"] or sorted(os.listdir(tmp_path)) == ["scan.pool", "scan.xyz"]
     code, _, stderr = run(imported, "-o", out, "--bricks-args", "--stage plan")

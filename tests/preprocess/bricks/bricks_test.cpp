@@ -23,6 +23,7 @@
 #include "prt/formats/brick_sections.h"
 #include "prt/formats/octree_sections.h"
 #include "prt/formats/pool.h"
+#include "radii.h"
 #include "runtime/tool_run.h"
 
 namespace {
@@ -587,6 +588,49 @@ TEST_F(BricksTool, WritesAValidBrickedPool) {
     EXPECT_TRUE(keep.has(SectionType::colors));
     EXPECT_TRUE(keep.has(SectionType::positions));
     EXPECT_EQ(pool::validate_bricks(keep).info.flags & pool::k_bricks_float_kept, pool::k_bricks_float_kept);
+}
+
+TEST_F(BricksTool, PointsWithoutRadiiGetPrtRadiisRadii) {
+    // points with normals and no radii (as prt-import writes them), and the same with prt-radii's
+    const test::SplatSet s = test::sphere_points(6000, 7, 2.0);
+    pre::PointCloud cloud;
+    for (const pool::Float3& p : s.positions) cloud.positions.push_back({p.x, p.y, p.z});
+    cloud.normals = s.normals;
+    {
+        pool::PoolWriter w;
+        pre::write_point_sections(cloud, w);
+        w.write(path("points.pool"));
+    }
+    const pre::RadiiParams defaults;  // prt-radii's defaults, over the positions as the pool holds them
+    cloud.radii = pre::compute_radii(
+        PoolFile::open(path("points.pool")).array<pool::Float3>(SectionType::positions), defaults);
+    {
+        pool::PoolWriter w;
+        pre::write_point_sections(cloud, w);
+        w.write(path("radii.pool"));
+    }
+    const std::string opts = " --brick-splats 2000 --cell-points 2500 --quiet";
+    ASSERT_EQ(run(path("radii.pool") + " -o " + path("a.pool") + opts), 0) << m_stderr;
+    ASSERT_EQ(run(path("points.pool") + " -o " + path("b.pool") + opts), 0) << m_stderr;
+    // --memory below the in-core search: the CPU's out-of-core radii (in a spill file); kept
+    ASSERT_EQ(run(path("points.pool") + " -o " + path("c.pool") + opts + " --memory 200K --keep-points"), 0)
+        << m_stderr;
+    const PoolFile a = PoolFile::open(path("a.pool")), b = PoolFile::open(path("b.pool")),
+                   c = PoolFile::open(path("c.pool"));
+    for (const SectionType t :
+         {SectionType::brick_info, SectionType::brick_top_nodes, SectionType::brick_table,
+          SectionType::brick_data, SectionType::brick_lod, SectionType::lod_nodes, SectionType::lod_discs}) {
+        ASSERT_TRUE(a.find(t)) << int(t);
+        for (const PoolFile* o : {&b, &c}) {
+            ASSERT_TRUE(o->find(t)) << int(t);
+            EXPECT_EQ(a.find(t)->checksum, o->find(t)->checksum) << "section " << int(t);
+        }
+    }
+    const auto kept = c.array<float>(SectionType::radii);
+    ASSERT_EQ(kept.size(), cloud.radii.size());
+    EXPECT_EQ(std::memcmp(kept.data(), cloud.radii.data(), kept.size_bytes()), 0);
+    EXPECT_NE(c.provenance_json().find("\"radii\":{"), std::string::npos) << c.provenance_json();
+    EXPECT_EQ(a.provenance_json().find("\"radii\":{"), std::string::npos);
 }
 
 TEST_F(BricksTool, BadInputWritesNothing) {
