@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # Benchmarks the preprocessing chain of a splat and ISO pool (issue 19: "preprocessing scales with
 # cores"): a generated binary PLY of POINTS points with normals is imported and run through
-# prt-import -> prt-radii -> prt-octree -> prt-cull (CPU backend) -> prt-iso, each step a separate
-# tool reading the previous step's pool, as a user runs them. Every thread count of THREADS runs
-# the whole chain pinned to that many cores (taskset: the tools use the cores they are given), REPEAT
+# prt-import -> prt-radii -> prt-octree -> prt-cull -> prt-iso (CPU backends unless BACKEND), each
+# step a separate tool reading the previous step's pool, as a user runs them. Every thread count of
+# THREADS runs the whole chain pinned to that many cores (taskset: the tools use the cores they are given), REPEAT
 # times; the table shows each step's fastest wall time (process start, read, work, atomic write with
 # fsync) and the speedup of the largest count over the smallest. Builds nothing: it runs the binaries
 # of an existing build.
@@ -17,8 +17,9 @@
 #   POINTS     points in the generated file (default 1000000)
 #   THREADS    thread counts, comma separated (default "1,2,N" with N the cores this process has)
 #   REPEAT     runs of the chain per thread count; the fastest counts (default 2)
-# Environment: KEEP=1 keeps the work folder (its path is printed); CULL_BACKEND=auto|cpu|cuda is
-#   prt-cull's --backend (default cpu: the chain on the cores alone; auto is what a user on a GPU
+# Environment: KEEP=1 keeps the work folder (its path is printed); BACKEND=auto|cpu|cuda is
+#   prt-radii's and prt-cull's --backend (CULL_BACKEND, its older name, still works) (default cpu:
+#   the chain on the cores alone; auto is what a user on a GPU
 #   machine gets).
 set -euo pipefail
 # shellcheck source=lib/bench-common.sh
@@ -28,9 +29,9 @@ points=${2:-1000000}
 cores=$(nproc)
 threads=${3:-$(printf '1\n2\n%s\n' "$cores" | sort -nu | paste -sd,)}
 repeat=${4:-2}
-cull_backend=${CULL_BACKEND:-cpu}
+cull_backend=${BACKEND:-${CULL_BACKEND:-cpu}}
 case $cull_backend in auto | cpu | cuda) ;; *)
-    echo "bench-preprocess: CULL_BACKEND must be auto, cpu or cuda, not '$cull_backend'" >&2
+    echo "bench-preprocess: BACKEND must be auto, cpu or cuda, not '$cull_backend'" >&2
     exit 1
     ;;
 esac
@@ -73,7 +74,7 @@ with open(path, "wb") as f:
     v.tofile(f)
 EOF
 
-echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step; prt-cull --backend $cull_backend"
+echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step; prt-radii and prt-cull --backend $cull_backend"
 echo "# machine: $cores cores, $(uname -m), $(bench_cpu_model); load $(bench_load)"
 declare -A best
 IFS=, read -r -a counts <<<"$threads"
@@ -87,7 +88,7 @@ for t in "${counts[@]}"; do
         for s in $steps; do
             out=$work/$s.pool
             extra=()
-            [ "$s" = prt-cull ] && extra=(--backend "$cull_backend")
+            [ "$s" = prt-cull ] || [ "$s" = prt-radii ] && extra=(--backend "$cull_backend")
             t0=$(date +%s.%N)
             taskset -c "0-$((t - 1))" "$build/bin/$s" "$in" -o "$out" --quiet "${extra[@]}"
             t1=$(date +%s.%N)
