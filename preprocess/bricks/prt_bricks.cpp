@@ -46,7 +46,8 @@ struct OwnRadii {
     std::vector<float> values;
     prt::pre::SpillFile spill;
     std::span<const float> radii;
-    nlohmann::json parameters;
+    nlohmann::json parameters;  ///< for the provenance
+    nlohmann::json stats;       ///< for --stats-json
 };
 
 OwnRadii compute_own_radii(prt::tool::PoolStep& step, std::span<const prt::pool::Float3> positions,
@@ -82,11 +83,11 @@ OwnRadii compute_own_radii(prt::tool::PoolStep& step, std::span<const prt::pool:
         "of the point's neighbours; %s%s): median %.6g, %llu clamped, %.1f s",
         rp.k, double(rp.clamp_factor), rs.backend.c_str(), tiled ? ", out of core" : "", rs.median,
         static_cast<unsigned long long>(rs.clamped), rs.seconds);
-    out.parameters = {{"k", rp.k},
-                      {"clamp_factor", rp.clamp_factor},
-                      {"clamp_scope", pre::clamp_scope_name(rp.scope)},
-                      {"backend", rs.backend},
-                      {"seconds", rs.seconds}};
+    // what decides the radii (the backend does not: its radii are the same)
+    out.parameters = {
+        {"k", rp.k}, {"clamp_factor", rp.clamp_factor}, {"clamp_scope", pre::clamp_scope_name(rp.scope)}};
+    out.stats = {
+        {"backend", rs.backend}, {"seconds", rs.seconds}, {"median", rs.median}, {"clamped", rs.clamped}};
     return out;
 }
 
@@ -371,6 +372,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                         {"cull", stats.cull_seconds},
                         {"bricks", stats.brick_seconds},
                         {"assemble", stats.assemble_seconds}}},
+                      {"radii", own_radii ? own.stats : nlohmann::json(nullptr)},
                       {"points_per_second", double(positions.size()) / std::max(stats.seconds, 1e-9)},
                       {"peak_rss_bytes", pre::peak_rss_bytes()},
                       {"total_seconds", seconds}});
