@@ -57,8 +57,10 @@ OwnRadii compute_own_radii(prt::tool::PoolStep& step, std::span<const prt::pool:
     OwnRadii out;
     pre::RadiiParams rp;  // prt-radii's defaults
     rp.threads = threads;
-    rp.backend = pre::resolve_radii_backend("auto", positions.size(), rp.k, threads);
-    const bool tiled = rp.backend == "cpu" && pre::radii_in_core_bytes(positions.size(), rp) > memory;
+    rp.backend = "auto";
+    const pre::RadiiPlan plan = pre::plan_radii(positions.size(), rp, memory, false);
+    rp.backend = plan.backend;
+    const bool tiled = plan.tiled;
     pre::RadiiStats rs;
     {
         tool::Progress progress("prt-bricks: k-NN radii (no radii in the input)", positions.size(),

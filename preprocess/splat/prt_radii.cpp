@@ -67,24 +67,15 @@ void radii_step(prt::tool::PoolStep& step, prt::pre::RadiiParams params, const s
     params.scope = pre::parse_clamp_scope(scope);
     const std::uint64_t memory = tool::memory_limit(mem.memory);
     const std::uint64_t in_core = pre::radii_in_core_bytes(positions.size(), params);
-    // The GPU search holds only the radii here (4 bytes per point); above --memory, or with
-    // --tile-points (a test of the CPU's out-of-core search), auto takes the CPU's tiles.
-    const bool host_fits = 4 * std::uint64_t(positions.size()) <= memory;
     const std::string requested = params.backend;
     std::string why;
-    if (requested == "auto" && (mem.tile_points > 0 || !host_fits)) {
-        params.backend = "cpu";
-        why = mem.tile_points > 0 ? "--tile-points tests the CPU's out-of-core search"
-                                  : "the radii alone, 4 bytes per point, exceed --memory";
-    } else {
-        params.backend =
-            pre::resolve_radii_backend(requested, positions.size(), params.k, params.threads, &why);
-    }
+    const pre::RadiiPlan plan = pre::plan_radii(positions.size(), params, memory, mem.tile_points > 0, &why);
+    params.backend = plan.backend;
     // (a small model's CPU search is the usual case: its "time (cpu)" line says it)
     if (requested == "auto" && params.backend == "cpu" &&
         pre::radii_gpu_pays(positions.size(), params.threads))
         step.note("prt-radii: --backend auto: using the CPU (%s)", why.c_str());
-    const bool tiled = params.backend == "cpu" && (mem.tile_points > 0 || in_core > memory);
+    const bool tiled = plan.tiled;
     tool::Progress progress(tiled                      ? "prt-radii: k-NN search by tiles"
                             : params.backend == "cuda" ? "prt-radii: k-NN search (CUDA)"
                                                        : "prt-radii: k-NN search",

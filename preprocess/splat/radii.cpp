@@ -193,6 +193,21 @@ std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std:
     return "cpu";
 }
 
+RadiiPlan plan_radii(std::uint64_t n, const RadiiParams& params, std::uint64_t memory, bool force_tiles,
+                     std::string* why) {
+    RadiiPlan plan;
+    if (params.backend == "auto" && (force_tiles || 4 * n > memory)) {
+        plan.backend = "cpu";
+        if (why)
+            *why = force_tiles ? "--tile-points tests the CPU's out-of-core search"
+                               : "the radii alone, 4 bytes per point, exceed --memory";
+    } else {
+        plan.backend = resolve_radii_backend(params.backend, n, params.k, params.threads, why);
+    }
+    plan.tiled = plan.backend == "cpu" && (force_tiles || radii_in_core_bytes(n, params) > memory);
+    return plan;
+}
+
 namespace {
 
 #ifdef PRT_HAVE_CUDA

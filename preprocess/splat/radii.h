@@ -61,6 +61,19 @@ bool radii_gpu_pays(std::uint64_t n, unsigned threads);
 std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k, unsigned threads,
                                   std::string* why = nullptr);
 
+/// How a tool computes the radii of n points within `memory` bytes of its own.
+struct RadiiPlan {
+    std::string backend;  ///< "cpu" or "cuda"
+    bool tiled = false;   ///< the CPU search out of core (compute_radii_tiled)
+};
+
+/// params.backend resolved as resolve_radii_backend() does, except that "auto" keeps the CPU when
+/// the radii alone (4 bytes per point, what the CUDA search holds here) exceed `memory` or when
+/// `force_tiles` (tests of the tiled search); the CPU search runs tiled when forced or when
+/// radii_in_core_bytes() exceeds `memory`. `why`: why "auto" took the CPU.
+RadiiPlan plan_radii(std::uint64_t n, const RadiiParams& params, std::uint64_t memory, bool force_tiles,
+                     std::string* why = nullptr);
+
 /// Distance from every point to its k-th nearest other point (exact k-NN through the shared kd-tree,
 /// kd_tree.h, searched from `threads` threads). Coincident points count as neighbours at
 /// distance 0. Throws prt::Error when there are not more than k points. `progress`, if set, is
