@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -261,6 +262,68 @@ TEST_F(BrickStreamTest, FallbacksCountRaysNotBrickVisits) {
     EXPECT_GT(rays, 0u);
     EXPECT_EQ(fs.fallbacks, rays);
     EXPECT_GT(visits, rays) << "some rays pass several bricks' discs: visits would count more";
+}
+
+/// What a ray asks streaming for (bricks.h stopped_at_disc, descend_bricked), ray by ray over the
+/// whole sphere at discs eight pixels wide: with nothing resident it requests at most one brick, the
+/// first missing one on its way, which is one whose payload its in-core walk needs (flags used); and
+/// a ray whose in-core walk needs no payload (it stops in prefixes) requests none. So a view asks for
+/// part of what its in-core render needs, never for bricks seen through a stand-in disc.
+TEST_F(BrickStreamTest, ARayAsksForTheFirstMissingBrickItsInCoreWalkNeeds) {
+    const Terms t = budget_terms();
+    rt::RenderScene full = rt::RenderScene::from_pool(s_pool);  // every brick resident
+    rt::RenderScene rs = deferred();
+    auto backend = cpu::make_cpu_backend(2);
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 4});
+    ASSERT_TRUE(stream.streaming());
+    const core::SceneView in_core = full.view(), missing = rs.view();  // nothing resident yet
+    std::vector<std::uint32_t> used(t.bricks), requested(t.bricks);
+    core::BrickView with_all = in_core.models[0].bricks, with_none = missing.models[0].bricks;
+    with_all.used = used.data();
+    with_all.requests = requested.data();
+    with_none.used = used.data();
+    with_none.requests = requested.data();
+    ASSERT_EQ(with_all.resident, nullptr);
+    const core::PinholeCamera cam = full.camera();
+    const core::BlendOptions blend{full.params().blend_window, full.params().deep_blending != 0};
+    const float spread = 8.0f * core::pixel_angle(cam, k_size);
+    std::uint32_t rays_needing = 0, rays_with_several = 0, rays_in_prefixes = 0;
+    for (std::uint32_t y = 0; y < k_size; ++y)
+        for (std::uint32_t x = 0; x < k_size; ++x) {
+            const core::Ray r = core::primary_ray(cam, x, y, k_size, k_size);
+            core::Vec3 o, d;
+            core::to_model_frame(in_core.models[0], r, o, d);
+            const core::LodCone cone{0.0f, spread * in_core.models[0].inv_scale};
+            auto walk = [&](const core::BrickView& v) {
+                std::fill(used.begin(), used.end(), 0u);
+                std::fill(requested.begin(), requested.end(), 0u);
+                core::WalkStats st;
+                core::SplatSample h{};
+                core::closest_hit_bricks(v, o, d, false, r.t_max, blend, full.params().max_steps, h, st,
+                                         full.params().leaf_culling, cone);
+                return st;
+            };
+            walk(with_all);
+            ASSERT_EQ(std::count(requested.begin(), requested.end(), 1u), 0) << "in core: no request";
+            const std::vector<std::uint32_t> needs = used;
+            const auto n_needs = std::count(needs.begin(), needs.end(), 1u);
+            const core::WalkStats st = walk(with_none);
+            ASSERT_EQ(std::count(used.begin(), used.end(), 1u), 0) << "nothing resident: nothing used";
+            const auto n_requests = std::count(requested.begin(), requested.end(), 1u);
+            ASSERT_EQ(n_requests, n_needs > 0 ? 1 : 0) << "pixel " << x << ", " << y;
+            for (std::uint32_t b = 0; b < t.bricks; ++b) {
+                if (requested[b] != 0) {
+                    ASSERT_EQ(needs[b], 1u) << "pixel " << x << ", " << y << " brick " << b;
+                }
+            }
+            rays_needing += n_needs > 0;
+            rays_with_several += n_needs > 1;
+            rays_in_prefixes += n_needs == 0 && st.fallbacks == 0 && st.leaves > 0;
+        }
+    EXPECT_GT(rays_needing, 0u);
+    EXPECT_GT(rays_with_several, 0u) << "some rays need several bricks: only the first is asked for";
+    std::printf("  rays needing a brick %u (several %u), staying in prefixes %u\n", rays_needing,
+                rays_with_several, rays_in_prefixes);
 }
 
 /// The window refines frame after frame: under xvfb-run, after 20 frames under a budget the

@@ -22,7 +22,9 @@
 // there read the prefix's discs); the descent walks a missing brick's prefix from its resident
 // copy, and a ray that needs a brick that is not resident meets
 // the deepest disc it reached (the prefix node, else the brick's top-node disc) inside that node's
-// cell, counts a fallback and, when the view has a request array, flags the brick. Colours come from
+// cell, counts a fallback and, when the view has a request array and it is the first missing brick
+// on the ray's way, flags the brick (a resident brick is flagged used where the walk needs its
+// payload, up to that first missing brick: stopped_at_disc says why). Colours come from
 // the splats (RGB565; white in a pool without colors); bricks carry no source point, so hits shade
 // with the model's material.
 #pragma once
@@ -57,8 +59,10 @@ struct BrickView {
     const unsigned char* const* resident = nullptr;
     /// Per brick, or null: set to 1 when a ray fell back to the brick's LOD disc (streaming requests).
     std::uint32_t* requests = nullptr;
-    /// Per brick, or null: set to 1 when a ray opened the resident brick (streaming: the bricks a
-    /// frame used are not evicted, the others leave least recently used first; rt::BrickStream).
+    /// Per brick, or null: set to 1 when a ray needed the resident brick's payload (a filled leaf or
+    /// a node below its LOD prefix: where it would have requested the brick were it missing), so
+    /// the bricks a frame used are not evicted, the others leave least recently used first
+    /// (rt::BrickStream). A walk that stays in the prefix does not keep the brick.
     std::uint32_t* used = nullptr;
     /// Per filled leaf of every brick, or null: LeafBounds (octree.h) over the decoded splats, so
     /// rays pass leaves unread as on the float path; brick b's at leaf_bounds + leaf_bounds_first[b].
@@ -201,12 +205,6 @@ PRT_HD PRT_INLINE void flag_brick(std::uint32_t* flags, std::uint32_t b) {
 #endif
 }
 
-/// Counts a fallback to brick b's LOD disc and flags its request (streaming).
-PRT_HD PRT_INLINE void note_fallback(const BrickView& v, std::uint32_t b, WalkStats& stats) {
-    ++stats.fallbacks;
-    if (v.requests != nullptr) flag_brick(v.requests, b);
-}
-
 /// The splat source of a resident brick's payload.
 PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
     BrickSplats src;
@@ -281,6 +279,12 @@ struct BrickCursor {
     std::uint32_t stop = k_none;
     std::uint32_t stop_node = 0;  ///< top node (k_top_disc) or index into lod_nodes (k_prefix_disc)
     bool request = false;
+    /// The descent ended in a resident brick where its payload is needed (a filled leaf, or a node
+    /// below its prefix): where the walk would have requested the brick were it missing.
+    bool needs_payload = false;
+    /// The ray has met a missing brick's disc: streaming flags (requests, used) are set up to the
+    /// first missing brick on a ray's way only (stopped_at_disc).
+    bool fell_back = false;
 };
 
 /// The node words of the cursor's brick: its payload's, or its resident prefix's when it is not
@@ -304,7 +308,6 @@ PRT_HD PRT_INLINE bool enter_brick(const BrickView& v, std::uint32_t b, std::uin
     const unsigned char* payload = brick_payload(v, b);
     cur.payload = payload;
     if (payload != nullptr) {  // resident: its payload (its first nodes are the prefix)
-        if (v.used != nullptr) flag_brick(v.used, b);  // streaming: kept by this frame (LRU)
         const auto* h = reinterpret_cast<const pool::BrickHeader*>(payload);
         cur.node_count = h->node_count;
         cur.leaf_count = h->leaf_count;
@@ -338,6 +341,7 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     std::uint32_t l = level;
     cur.stop = BrickCursor::k_none;
     cur.request = false;
+    cur.needs_payload = false;
     if (l < cur.level) cur.level = BrickCursor::k_top_tree;  // the next cell is outside the brick
     bool in_brick = cur.level != BrickCursor::k_top_tree;
     // The nodes walked, how many, the first `with_disc` of them having a disc (a stop may end
@@ -408,6 +412,9 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
             cur.request = true;
             cur.stop = BrickCursor::k_prefix_disc;
             cur.stop_node = lod_base + index;
+        } else if (v.used != nullptr && in_brick && cur.payload != nullptr &&
+                   (node_is_filled(node) || index >= with_disc)) {
+            cur.needs_payload = true;  // where a missing brick's walk would have asked for it
         }
         break;  // a leaf (an empty top node, an empty or filled leaf of a brick)
     }
@@ -474,10 +481,28 @@ PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& c
 
 /// A disc the walk stopped at (LOD stop, or a missing brick): its hits are accepted inside the
 /// stopping node's cell only, [max(t0, lo), min(t1, hi)], so neighbouring discs never stack.
-PRT_HD PRT_INLINE bool stopped_at_disc(const BrickView& v, const BrickCursor& cur, WalkStats& stats,
+/// Streaming: a ray requests the first missing brick on its way only, and keeps (flags used) no
+/// brick past it: up to there its walk is the in-core walk, past it the walk goes on behind a disc
+/// that stands in for the brick's splats, so what it meets there may not be what the in-core
+/// image needs. A view's requests and used bricks are so a part of what its in-core render needs,
+/// and a budget that holds that converges (a stalled view, counting the bricks seen through its
+/// stand-in discs, asked for more than it needed). Later frames, the brick resident, go further.
+PRT_HD PRT_INLINE bool stopped_at_disc(const BrickView& v, BrickCursor& cur, WalkStats& stats,
                                        LodSplats& disc) {
-    if (cur.request) note_fallback(v, cur.brick, stats);
+    if (cur.request) {
+        ++stats.fallbacks;
+        if (!cur.fell_back && v.requests != nullptr) flag_brick(v.requests, cur.brick);
+        cur.fell_back = true;
+    }
     return stop_disc(v, cur, disc);
+}
+
+/// A leaf the walk reads (after the blend window's test, as a missing brick's disc is met):
+/// streaming keeps (flags used) a resident brick whose payload it needs, up to the first missing
+/// brick on the ray's way, exactly where a missing brick's walk requests it (stopped_at_disc). A
+/// walk that stays in a brick's prefix (a LOD stop, an empty prefix leaf) does not keep it.
+PRT_HD PRT_INLINE void note_payload_use(const BrickView& v, const BrickCursor& cur) {
+    if (v.used != nullptr && cur.needs_payload && !cur.fell_back) flag_brick(v.used, cur.brick);
 }
 
 /// Closest hit of a ray with a bricked model's splats (model local frame; d need not be unit), as
@@ -510,6 +535,7 @@ PRT_HD inline bool closest_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool i
                 break;
             continue;
         }
+        note_payload_use(v, cur);
         if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
         const float lo = replicated ? leaf.t0 : 0.0f;
         std::uint32_t begin = 0, end = 0;
@@ -550,6 +576,7 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
                 return true;
             continue;
         }
+        note_payload_use(v, cur);
         if (!node_is_filled(leaf.node) || cur.level == BrickCursor::k_top_tree) continue;
         std::uint32_t begin = 0, end = 0;
         if (!brick_leaf_range(v, cur, leaf.node, culling, o, d, inv_dlen, inside, own_range ? leaf.t0 : 0.0f,

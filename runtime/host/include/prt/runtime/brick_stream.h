@@ -5,8 +5,9 @@
 // resident table, each brick's first leaf bound, the use and request flags). The rest of the budget
 // is an arena of 64-byte granules; a resident brick takes one block of it: its payload (copied as
 // opaque bytes: table[b].offset, table[b].size) and its leaf bounds (computed at upload from that
-// brick alone). Rays that reach a brick that is not resident use its LOD disc and flag it (core
-// bricks.h note_fallback); rays that open a resident one flag it used. After each frame: the flags
+// brick alone). A ray that reaches a brick that is not resident uses its LOD disc and flags it
+// (core bricks.h stopped_at_disc: the first such brick on its way only); rays that need a resident
+// one's payload flag it used (not past a missing one). After each frame: the flags
 // are read, the requested bricks are checked by their own checksum (pool::validate_brick) and
 // uploaded, at most StreamOptions::upload_per_frame bytes per frame, each into the first free block
 // that fits (first fit, free blocks merged), evicting bricks the frame did not use, least recently
