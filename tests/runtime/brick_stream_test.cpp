@@ -131,6 +131,53 @@ TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
                 without.last.needed, c.passes, c.uploaded, t.bricks);
 }
 
+/// Level of detail through bounces (render.h lod_cone): a ray leaving a hit starts with the footprint
+/// its camera ray had there, so shadow and reflected rays ask for no finer bricks than the camera
+/// rays they come from. The whole
+/// sphere at discs eight pixels wide: its shadow rays (toward a light in front) and mirror rays
+/// (away from a convex surface) need no brick beyond the camera rays' own; starting with no
+/// footprint they needed every brick they left. Converged, the image is the in-core one.
+TEST_F(BrickStreamTest, RaysLeavingAHitNeedNoFinerBricksThanTheirCameraRays) {
+    const Terms t = budget_terms();
+    auto backend = cpu::make_cpu_backend(2);
+    rt::LoadOptions lo;
+    lo.defer_bricks = true;
+    // Half the bricks: streamed, so each frame counts the bricks its rays reached.
+    const rt::StreamOptions ample{.budget = t.fixed + t.all / 2};
+    auto needed = [&](bool bounces, rt::Image* image) {
+        scene::Scene sc = rt::RenderScene::from_pool(s_pool).scene();
+        sc.materials.at(0).reflectivity = bounces ? 0.5f : 0.0f;
+        rt::RenderScene rs = rt::RenderScene::load(sc, s_pool, lo);
+        rs.params().shadows = bounces ? 1 : 0;
+        rt::BrickStream stream(rs, *backend, ample);
+        EXPECT_TRUE(stream.streaming());
+        const Converged c = converge(rs, *backend, stream, 50, 8.0f);
+        EXPECT_TRUE(c.converged) << rt::describe(c.last);
+        if (bounces) {
+            EXPECT_GT(c.stats.shadow, 0u);
+            EXPECT_GT(c.stats.secondary, 0u);
+        }
+        if (image) *image = c.image;
+        return c.last.needed;
+    };
+    const std::uint32_t camera = needed(false, nullptr);
+    rt::Image img;
+    const std::uint32_t all = needed(true, &img);
+    EXPECT_GT(camera, 0u) << "the front of the sphere is finer than the prefixes";
+    EXPECT_LE(all, camera + camera / 10) << "shadow and mirror rays asked for finer bricks than their hits";
+    std::printf("  bricks needed: camera rays %u, with shadow and mirror rays %u (of %u)\n", camera, all,
+                t.bricks);
+    // In core, the same image.
+    scene::Scene sc = rt::RenderScene::from_pool(s_pool).scene();
+    sc.materials.at(0).reflectivity = 0.5f;
+    rt::RenderScene rs = rt::RenderScene::load(sc, s_pool);
+    auto in_core_backend = cpu::make_cpu_backend(2);
+    in_core_backend->set_scene(rs.view());
+    rt::Image ref;
+    in_core_backend->render(request(rs, 8.0f), ref);
+    EXPECT_TRUE(img.rgba8 == ref.rgba8) << "converged: the in-core image with the same stops";
+}
+
 /// Below the always-resident part and the largest brick: one line with the minimum.
 TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
     const Terms t = budget_terms();

@@ -35,7 +35,7 @@ public:
         if (image.width != w || image.height != h) image.resize(w, h);
         core::SceneView scene = m_scene;
         scene.params = req.params;
-        scene.params.lod_spread = req.params.lod_pixels * core::pixel_angle(req.camera, req.height);
+        core::set_lod_cone(scene.params, req.camera, req.height);
         const std::uint32_t tiles_x = (w + k_tile - 1) / k_tile;
         const std::uint32_t tiles_y = y1 > y0 ? (y1 - y0 + k_tile - 1) / k_tile : 0;
         const std::uint32_t tiles = tiles_x * tiles_y;

@@ -379,7 +379,7 @@ public:
         m_rgba.reserve(pixels);
         core::SceneView scene = m_scene;
         scene.params = req.params;
-        scene.params.lod_spread = req.params.lod_pixels * core::pixel_angle(req.camera, req.height);
+        core::set_lod_cone(scene.params, req.camera, req.height);
         PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
         PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
         // Sampled frames (spp > 1, path tracing: seed 002, 7) run in the megakernel only.

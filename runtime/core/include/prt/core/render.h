@@ -276,23 +276,42 @@ PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneV
 }
 
 // Bricked splats (issue 17, bricks.h): the same blending; colours from the splats, no source point.
+// Level of detail: a ray's footprint t from its origin o is lod_spread * (|o - eye| + t) (bricks.h
+// LodCone, in model units: render units times inv_scale). A camera ray starts at the eye (0 wide); a
+// ray leaving a hit (shadow, reflected, refracted) starts with the pixel cone's width there, the ray
+// cone of Amanatides 1984 carried through a bounce as Akenine-Moller et al. 2019 (Ray Tracing Gems,
+// ch. 20) do with surfaces taken as planar: exact for the rays leaving a camera ray's hit, and for
+// deeper bounces, |o - eye| being at most the path's length, never wider than that cone. So shadow
+// and mirror rays stop no finer than the hits they leave (they asked for the full-resolution brick
+// under every hit when they started 0 wide). The width comes from the ray's origin and the eye
+// (RenderParams::lod_eye), so no ray carries it (a wider Ray cost the float kernel 7 %).
+/// A frame's level-of-detail cone (RenderParams::lod_spread, lod_eye) from its camera; the backends
+/// call it for each frame.
+PRT_HD PRT_INLINE void set_lod_cone(RenderParams& p, const PinholeCamera& cam, std::uint32_t height) {
+    p.lod_spread = p.lod_pixels * pixel_angle(cam, height);
+    p.lod_eye = cam.position;
+}
+PRT_HD PRT_INLINE LodCone lod_cone(const SceneView& s, const ModelRay& q) {
+    const float spread = s.params.lod_spread * q.mv.inv_scale;
+    if (!(spread > 0.0f) || q.ray.from_model == k_no_model)
+        return LodCone{0.0f, spread};  // camera rays: 0 wide
+    return LodCone{spread * length(q.ray.origin - s.params.lod_eye), spread};
+}
 PRT_HD PRT_INLINE bool closest_on(BricksTag, const SceneView& s, const ModelRay& q, float t_max,
                                   ModelHit& out, RayCounters& c) {
     WalkStats ws;
     SplatSample h{};
     const bool hit = closest_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, t_max,
                                         BlendOptions{s.params.blend_window, s.params.deep_blending != 0},
-                                        s.params.max_steps, h, ws, s.params.leaf_culling,
-                                        LodCone{0.0f, s.params.lod_spread * q.mv.inv_scale});
+                                        s.params.max_steps, h, ws, s.params.leaf_culling, lod_cone(s, q));
     add_stats(c, ws);
     if (hit) out = ModelHit{h.t, h.normal, h.color, h.point};
     return hit;
 }
 PRT_HD PRT_INLINE bool occluded_on(BricksTag, const SceneView& s, const ModelRay& q, RayCounters& c) {
     WalkStats ws;
-    const bool hit =
-        any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
-                       s.params.leaf_culling, LodCone{0.0f, s.params.lod_spread * q.mv.inv_scale});
+    const bool hit = any_hit_bricks(q.mv.bricks, q.o, q.d, q.inside, q.ray.t_max, s.params.max_steps, ws,
+                                    s.params.leaf_culling, lod_cone(s, q));
     add_stats(c, ws);
     return hit;
 }

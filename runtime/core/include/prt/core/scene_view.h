@@ -88,10 +88,12 @@ struct RenderParams {
     /// most this many pixels wide at the ray's distance and takes the node's disc. 0 (the core's
     /// default): never; prt-play and prt-bench default to 1.
     float lod_pixels = 0.0f;
-    /// Set by the backends from the frame's camera: lod_pixels * pixel_angle(). A ray's footprint is
-    /// lod_spread * t, t from its origin: rays leaving a surface start a new cone (narrower than
-    /// the true one: they stop no coarser than a camera ray would there).
+    /// Set by the backends from the frame's camera: lod_pixels * pixel_angle(), and the camera's
+    /// position (render frame). A ray's footprint t from its origin o is lod_spread * (|o - lod_eye|
+    /// + t): 0 wide at the eye for camera rays; a ray leaving a hit starts with the pixel cone's
+    /// width there (render.h lod_cone).
     float lod_spread = 0.0f;
+    Vec3 lod_eye{0, 0, 0};
     /// seed 002, 7: path trace (path.h) instead of Whitted ray tracing; samples per pixel (both
     /// modes: stratified and jittered, so spp > 1 antialiases the ray tracer too); the depth at
     /// which a path gathers direct light and ends; the frame number (progressive accumulation:
