@@ -20,14 +20,14 @@ namespace prt::pre {
 
 struct BrickParams {
     /// N: a node whose subtree holds at most N stored splats (replicas counted) becomes a brick,
-    /// cutting greedily from the root. 32768 (12 B each: 384 KiB of splats per brick; a 500M-point
-    /// model gets about 33,000 bricks): streamed under a budget of an eighth of the pool, a close view
-    /// of the 500M-point room converged with these bricks and did not with 131072, which held only
-    /// 430 of the 949 bricks the view needed (the parts of large bricks its rays only pass near);
-    /// models that fit trace 1-1.5 % slower with them (H200, 2026-11-28,
-    /// preprocess/bench/results/h200-2026-11-28-issue17-stream500). Uploads of that size still run
-    /// at 3-4 GB/s there.
-    std::uint32_t brick_splats = 32768;
+    /// cutting greedily from the root. 8192 (12 B each: 96 KiB of splats per brick; a 500M-point
+    /// room gets about 121,000 bricks): streamed under a budget of an eighth of the pool, that room's
+    /// 100-frame orbit converged in 89 of 100 frames with these bricks, 46 with 32768 (the default
+    /// on 2026-11-28, which had made its close view converge where 131072 held only 430 of the 949
+    /// bricks it needed): a ray wants a brick whole for the part it passes near. Models that fit
+    /// trace 1.7-2.3 % slower with them than with 32768; uploads still run at 3-3.5 GB/s (H200,
+    /// 2026-11-29, preprocess/bench/results/h200-2026-11-29-issue17-cones).
+    std::uint32_t brick_splats = 8192;
     /// M of each brick's level-of-detail prefix (sections brick_lod, lod_nodes): the brick's top
     /// levels down to the deepest whose non-empty nodes hold at least M splat references on average,
     /// each node with a compressed disc. 0: no prefix (a ray then stops only at top nodes).
