@@ -275,6 +275,13 @@ PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneV
     return hit;
 }
 
+/// A frame's level-of-detail cone (RenderParams::lod_spread, lod_eye) from its camera; the backends
+/// call it for each frame.
+PRT_HD PRT_INLINE void set_lod_cone(RenderParams& p, const PinholeCamera& cam, std::uint32_t height) {
+    p.lod_spread = p.lod_pixels * pixel_angle(cam, height);
+    p.lod_eye = cam.position;
+}
+
 // Bricked splats (issue 17, bricks.h): the same blending; colours from the splats, no source point.
 // Level of detail: a ray's footprint t from its origin o is lod_spread * (|o - eye| + t) (bricks.h
 // LodCone, in model units: render units times inv_scale). A camera ray starts at the eye (0 wide); a
@@ -285,12 +292,6 @@ PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::splats>, const SceneV
 // and mirror rays stop no finer than the hits they leave (they asked for the full-resolution brick
 // under every hit when they started 0 wide). The width comes from the ray's origin and the eye
 // (RenderParams::lod_eye), so no ray carries it (a wider Ray cost the float kernel 7 %).
-/// A frame's level-of-detail cone (RenderParams::lod_spread, lod_eye) from its camera; the backends
-/// call it for each frame.
-PRT_HD PRT_INLINE void set_lod_cone(RenderParams& p, const PinholeCamera& cam, std::uint32_t height) {
-    p.lod_spread = p.lod_pixels * pixel_angle(cam, height);
-    p.lod_eye = cam.position;
-}
 PRT_HD PRT_INLINE LodCone lod_cone(const SceneView& s, const ModelRay& q) {
     const float spread = s.params.lod_spread * q.mv.inv_scale;
     if (!(spread > 0.0f) || q.ray.from_model == k_no_model)
