@@ -286,5 +286,61 @@ TEST(ScanFrame, DefaultViewOfAPoolFramesTheModelNotItsOutliers) {
     EXPECT_LT(angle_degrees(d3_sub(z.position, z.look_at), {0, -1, 0.35}), 1e-6);
 }
 
+/// A closed room: the six faces of the box [-1, 1] x [-0.5, 0.5] x [-1.5, 1.5], 40 x 40 points
+/// each, normals inward.
+std::vector<TestPoint> closed_room() {
+    std::vector<TestPoint> pts;
+    const D3 half{1.0, 0.5, 1.5};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = -1; side <= 1; side += 2)
+            for (int i = 0; i < 40; ++i)
+                for (int j = 0; j < 40; ++j) {
+                    const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+                    D3 p{0, 0, 0}, n{0, 0, 0};
+                    p[axis] = side * half[axis];
+                    p[u] = half[u] * (-1 + (i + 0.5) / 20.0);
+                    p[v] = half[v] * (-1 + (j + 0.5) / 20.0);
+                    n[axis] = -side;
+                    pts.push_back({p, n, 0.05});
+                }
+    return pts;
+}
+
+bool inside_room(const DVec3& p) {
+    return std::fabs(p[0]) < 1.0 && std::fabs(p[1]) < 0.5 && std::fabs(p[2]) < 1.5;
+}
+
+TEST(ScanFrame, TheDefaultLightOfACameraInsideAClosedRoomIsInsideIt) {
+    // A light outside a closed room is walled off: every shadow ray ends on a wall and the view
+    // is unlit. From inside, the default light goes above and right of the camera, inside the
+    // room's bounds (the room is convex, so it reaches every wall the camera sees).
+    scene::Scene sc;
+    sc.materials.push_back(scene::Material{});
+    rt::RenderScene rs = rt::RenderScene::from_pools(sc, {make_pool(make_model(closed_room(), {0, 0, 0}))});
+    const struct {
+        DVec3 eye, look_at, up;
+    } views[] = {{{0.1, -0.2, 0.4}, {-0.5, -0.4, -1.0}, {0, 1, 0}},
+                 {{-0.9, 0.45, 1.4}, {0.5, -0.5, -1.5}, {0, 1, 0}},  // close to a corner
+                 {{0.3, 0.0, -0.5}, {0.3, 0.0, 1.5}, {1, 0, 0}}};    // another up
+    for (const auto& view : views) {
+        rs.scene().camera.position = view.eye;
+        rs.scene().camera.look_at = view.look_at;
+        rs.scene().camera.up = view.up;
+        rs.place_default_light();
+        ASSERT_EQ(rs.scene().point_lights.size(), 1u);
+        const DVec3 light = rs.scene().point_lights[0].position;
+        EXPECT_TRUE(inside_room(light)) << light[0] << " " << light[1] << " " << light[2];
+        EXPECT_GT(d3_dot(d3_sub(light, view.eye), view.up), 0.0);  // above the camera
+    }
+    // From outside (the default view), the light stays where it was: 1.5, 3 and 2.5 radii from
+    // the look-at point along right, up and back, outside the room.
+    rs.scene().camera = rs.default_camera(256, 256);
+    rs.place_default_light();
+    EXPECT_FALSE(inside_room(rs.scene().point_lights[0].position));
+    const rt::Box& b = rs.robust_bounds();
+    EXPECT_NEAR(d3_len(d3_sub(rs.scene().point_lights[0].position, rs.scene().camera.look_at)),
+                std::sqrt(1.5 * 1.5 + 3.0 * 3.0 + 2.5 * 2.5) * 0.5 * d3_len(d3_sub(b.hi, b.lo)), 1e-9);
+}
+
 }  // namespace
 }  // namespace prt::test

@@ -144,9 +144,12 @@ public:
     /// default_direction(up, front_hint()).
     scene::Camera default_camera(std::uint32_t width, std::uint32_t height, const DVec3& up = {0, 1, 0},
                                  double fov_y_degrees = 45.0) const;
-    /// Replaces the scene's lights by the default one: right of, above and behind the camera (from
-    /// its look-at point: 1.5, 3 and 2.5 x the radius of robust_bounds(), along the camera's right,
-    /// its up and the way back to it), and updates the render-frame lights.
+    /// Replaces the scene's lights by the default one, and updates the render-frame lights. From
+    /// outside robust_bounds() the camera gets a light right of, above and behind it (from its
+    /// look-at point: 1.5, 3 and 2.5 x the radius of robust_bounds(), along the camera's right,
+    /// its up and the way back to it); from inside (a room scan), a light inside the box, above and
+    /// right of the camera (half the way to the box along up, a third along right), which walls
+    /// that enclose the camera do not shut out.
     void place_default_light();
 
     /// The default viewing direction (from the model toward the camera) for an up direction: the
