@@ -134,6 +134,15 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
                    "Streaming: brick bytes uploaded at most after each frame, so frames stay short (at "
                    "least one brick; K/M/G suffixes)")
         ->default_val("256M");
+    app.add_option(
+           "--frame-time", b.frame_time_ms,
+           "Streaming: uploads after a frame stop once the frame (its render, then the uploads) has "
+           "taken this many milliseconds, the other bricks waiting for the next frames, so a view "
+           "that turns to bricks not yet resident refines over several short frames (a render longer than "
+           "that, as on the CPU, leaves the uploads a quarter of its time; at least one brick is "
+           "uploaded; 0: no time limit)")
+        ->default_val(50.0)
+        ->check(CLI::Range(0.0, 1e6));
 }
 
 rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& backend) {
@@ -146,6 +155,7 @@ rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& back
         s.budget = tool::parse_byte_size(b.gpu_budget, "--gpu-budget");  // 0 is refused
     }
     s.upload_per_frame = tool::parse_byte_size(b.upload_per_frame, "--upload-per-frame");
+    s.frame_seconds = 1e-3 * b.frame_time_ms;
     return s;
 }
 

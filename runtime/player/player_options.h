@@ -67,9 +67,11 @@ struct BackendChoice {
     unsigned threads = 0;
     int min_blocks = 0;             ///< cuda megakernel occupancy hint (0: default)
     bool default_carveout = false;  ///< cuda: leave the L1/shared split to the driver
-    /// Streamed bricks (rt::BrickStream): --gpu-budget ("": the backend's default), --upload-per-frame.
+    /// Streamed bricks (rt::BrickStream): --gpu-budget ("": the backend's default), --upload-per-frame,
+    /// --frame-time (milliseconds).
     std::string gpu_budget;
     std::string upload_per_frame = "256M";
+    double frame_time_ms = 50;
 };
 
 /// Declares --tonemap, --exposure, --max-bounces, --no-shadows, ... on `app`.
@@ -85,8 +87,8 @@ rt::LoadOptions load_options(const RenderOverrides& o);
 /// The backend options of a choice.
 rt::BackendOptions backend_options(const BackendChoice& b);
 /// The streaming settings of a choice on this backend: --gpu-budget (default: the backend's
-/// default_memory_budget(), CUDA: free memory minus a margin; CPU: unlimited) and
-/// --upload-per-frame. Throws prt::Error for a size that does not parse.
+/// default_memory_budget(), CUDA: free memory minus a margin; CPU: unlimited), --upload-per-frame
+/// and --frame-time. Throws prt::Error for a size that does not parse.
 rt::StreamOptions stream_options(const BackendChoice& b, const rt::Backend& backend);
 
 /// Declares --eye, --look-at, --up and --fov on `app`: values are checked as they are parsed

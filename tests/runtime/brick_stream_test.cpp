@@ -68,6 +68,40 @@ TEST_F(BrickStreamTest, ConvergesToTheInCoreImage) {
     std::printf("  converged in %u passes, %u uploads\n", c.passes, c.uploaded);
 }
 
+/// A frame whose time is spent uploads one brick (not the many its rays asked for) and leaves the
+/// rest to the next frames; frames with time left upload them all.
+TEST_F(BrickStreamTest, AFrameOutOfTimeUploadsOneBrickAndTheNextFramesTheRest) {
+    rt::FrameStats ref_stats;
+    const rt::Image ref = in_core(0.3, &ref_stats);
+    const Terms t = budget_terms();
+    rt::RenderScene rs = deferred();
+    close_view(rs, 0.3);
+    auto backend = cpu::make_cpu_backend(2);
+    rt::StreamOptions options{.budget = t.fixed + t.all * 2 / 5 / 64 * 64, .frame_seconds = 1e-9};
+    rt::BrickStream stream(rs, *backend, options);
+    ASSERT_TRUE(stream.streaming());
+    rt::Image img;
+    rt::FrameStats s = backend->render(request(rs), img);
+    s.seconds = 0;  // (a quarter of the render's time is left to streaming: none here)
+    const rt::StreamFrame first = stream.after_frame(s);
+    ASSERT_GT(first.needed, 3u) << "the test wants a view that asks for several bricks";
+    EXPECT_EQ(first.uploaded, 1u);
+    EXPECT_TRUE(first.timed_out);
+    EXPECT_EQ(first.missing + 1, first.needed) << rt::describe(first);
+    // With a render of 10 s (a quarter of it left to streaming), the next frames upload the rest:
+    // the in-core image.
+    std::uint32_t passes = 1;
+    for (rt::StreamFrame f = first; !f.converged() && passes < 50; ++passes) {
+        s = backend->render(request(rs), img);
+        s.seconds = 10;
+        f = stream.after_frame(s);
+        EXPECT_FALSE(f.timed_out);
+    }
+    s = backend->render(request(rs), img);
+    EXPECT_EQ(s.fallbacks, 0u) << "after " << passes << " passes";
+    EXPECT_TRUE(img.rgba8 == ref.rgba8) << "converged: the in-core image, byte for byte";
+}
+
 /// A moving camera under a budget smaller than the union of its views: bricks are evicted, and
 /// every view still converges to its in-core image.
 TEST_F(BrickStreamTest, AMovingCameraEvictsAndStillConverges) {

@@ -138,7 +138,10 @@ std::string describe(const StreamFrame& f) {
                   tool::format_bytes(f.resident_bytes).c_str(), f.resident_bricks, f.brick_count, f.uploaded,
                   tool::format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
                   f.copy_seconds * 1e3, f.evicted, static_cast<unsigned long long>(f.fallback_rays));
-    return buf;
+    std::string out = buf;
+    if (f.timed_out)
+        out += "; " + std::to_string(f.missing) + " requested bricks wait for the next frames (--frame-time)";
+    return out;
 }
 
 struct BrickStream::Model {
@@ -332,40 +335,77 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         f.missing += static_cast<std::uint32_t>(missing.size() - taken);
     }
     // Each brick checked by its own checksum and its leaf bounds computed from it alone (in
-    // parallel; on the device by the CUDA storage), then copied into its block.
-    const auto prepare_start = std::chrono::steady_clock::now();
-    parallel_chunks(uploads.size(), 1, resolve_threads(0), [&](std::size_t i0, std::size_t i1, unsigned) {
-        for (std::size_t i = i0; i < i1; ++i) {
-            Upload& u = uploads[i];
-            const Model& m = *u.model;
-            const pool::BrickEntry& e = m.sections.table[u.brick];
-            pool::validate_brick(*m.pool, m.sections, u.brick, m.sections.payload(u.brick));
-            if (!m.storage->derives_leaf_bounds())
-                u.bounds = build_one_brick_leaf_bounds(
-                    e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
+    // parallel; on the device by the CUDA storage), then copied into its block. In rounds of 1, 2,
+    // 4, ... 512 bricks while the frame (its render, then this) can end within frame_seconds, each
+    // round no larger than the time left at the rate of the rounds before, 3 ms kept for the
+    // commit (with 1 ms, one pass of the 500M room's orbit took 50.68 ms). The rest give their
+    // blocks back and wait for the next frames, so a view that turns to a new region refines over
+    // several short frames instead of one long one (the first round, at least, uploads). A render
+    // that leaves less than a quarter of its own time (the CPU backend, a large image) gets that
+    // quarter: its frames are long anyway, and the view still refines in a few of them.
+    const bool timed = m_options.frame_seconds > 0;
+    const double stop_after = std::max(m_options.frame_seconds - stats.seconds, 0.25 * stats.seconds) - 3e-3;
+    double prepare = 0, copy = 0;
+    std::size_t done = 0;
+    for (std::size_t round = 1; done < uploads.size(); round = std::min<std::size_t>(2 * round, 512)) {
+        if (timed && done > 0) {
+            const double spent =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double per_brick = (prepare + copy) / double(done);
+            const double fits = (stop_after - spent) / std::max(per_brick, 1e-9);
+            if (fits < 1) break;
+            round = std::min(round, static_cast<std::size_t>(fits));
         }
-    });
-    const auto copy_start = std::chrono::steady_clock::now();
-    for (Upload& u : uploads) {
-        Model& m = *u.model;
-        const pool::BrickEntry& e = m.sections.table[u.brick];
-        const auto payload = m.sections.payload(u.brick);
-        const std::uint64_t bounds_offset = u.offset + round_up_64(e.size);
-        m.storage->upload(u.offset, {reinterpret_cast<const unsigned char*>(payload.data()), payload.size()},
-                          bounds_offset, u.bounds);
-        m.storage->set_resident(u.brick, u.offset,
-                                static_cast<std::uint32_t>(bounds_offset / sizeof(core::LeafBounds)));
-        m.resident_bytes += block_bytes(e);
-        ++m.resident;
-        ++f.uploaded;
-        f.uploaded_bytes += e.size;
+        const std::size_t first = done, last = std::min(uploads.size(), done + round);
+        const auto prepare_start = std::chrono::steady_clock::now();
+        parallel_chunks(last - first, 1, resolve_threads(0), [&](std::size_t i0, std::size_t i1, unsigned) {
+            for (std::size_t i = first + i0; i < first + i1; ++i) {
+                Upload& u = uploads[i];
+                const Model& m = *u.model;
+                const pool::BrickEntry& e = m.sections.table[u.brick];
+                pool::validate_brick(*m.pool, m.sections, u.brick, m.sections.payload(u.brick));
+                if (!m.storage->derives_leaf_bounds())
+                    u.bounds = build_one_brick_leaf_bounds(
+                        e, reinterpret_cast<const unsigned char*>(m.sections.payload(u.brick).data()));
+            }
+        });
+        const auto copy_start = std::chrono::steady_clock::now();
+        for (std::size_t i = first; i < last; ++i) {
+            Upload& u = uploads[i];
+            Model& m = *u.model;
+            const pool::BrickEntry& e = m.sections.table[u.brick];
+            const auto payload = m.sections.payload(u.brick);
+            const std::uint64_t bounds_offset = u.offset + round_up_64(e.size);
+            m.storage->upload(u.offset,
+                              {reinterpret_cast<const unsigned char*>(payload.data()), payload.size()},
+                              bounds_offset, u.bounds);
+            m.storage->set_resident(u.brick, u.offset,
+                                    static_cast<std::uint32_t>(bounds_offset / sizeof(core::LeafBounds)));
+            m.resident_bytes += block_bytes(e);
+            ++m.resident;
+            ++f.uploaded;
+            f.uploaded_bytes += e.size;
+            std::vector<core::LeafBounds>().swap(u.bounds);
+        }
+        const auto round_end = std::chrono::steady_clock::now();
+        prepare += std::chrono::duration<double>(copy_start - prepare_start).count();
+        copy += std::chrono::duration<double>(round_end - copy_start).count();
+        done = last;
     }
+    for (std::size_t i = done; i < uploads.size(); ++i) {  // out of time: their blocks go back
+        Model& m = *uploads[i].model;
+        m.allocator->release(uploads[i].offset, block_bytes(m.sections.table[uploads[i].brick]));
+        m.block_of[uploads[i].brick] = BrickStorage::k_not_resident;
+        ++f.missing;
+        f.timed_out = true;
+    }
+    const auto commit_start = std::chrono::steady_clock::now();
     for (auto& m : m_models) m->storage->commit();
     if (!uploads.empty()) {
         const auto end = std::chrono::steady_clock::now();
         f.upload_seconds = std::chrono::duration<double>(end - start).count();
-        f.prepare_seconds = std::chrono::duration<double>(copy_start - prepare_start).count();
-        f.copy_seconds = std::chrono::duration<double>(end - copy_start).count();
+        f.prepare_seconds = prepare;
+        f.copy_seconds = copy + std::chrono::duration<double>(end - commit_start).count();
     }
     f.resident_bytes = m_fixed_bytes;
     for (const auto& m : m_models) {

@@ -9,10 +9,11 @@
 // (core bricks.h stopped_at_disc: the first such brick on its way only); rays that need a resident
 // one's payload flag it used (not past a missing one). After each frame: the flags
 // are read, the requested bricks are checked by their own checksum (pool::validate_brick) and
-// uploaded, at most StreamOptions::upload_per_frame bytes per frame, each into the first free block
-// that fits (first fit, free blocks merged), evicting bricks the frame did not use, least recently
-// used first, until one fits; then the resident table is updated for the next frame. When the whole
-// scene fits the budget, every brick is loaded as without streaming (in core).
+// uploaded, at most StreamOptions::upload_per_frame bytes per frame and until the frame has taken
+// StreamOptions::frame_seconds, each into the first free block that fits (first fit, free blocks
+// merged), evicting bricks the frame did not use, least recently used first, until one fits; then
+// the resident table is updated for the next frame. When the whole scene fits the budget, every
+// brick is loaded as without streaming (in core).
 #pragma once
 
 #include <cstdint>
@@ -73,6 +74,10 @@ struct StreamOptions {
     std::uint64_t budget = 0;
     /// Payload bytes uploaded at most per frame (at least one brick is), so frames stay short.
     std::uint64_t upload_per_frame = 256ull << 20;
+    /// Uploads stop once the frame (its render, FrameStats::seconds, and the streaming after it)
+    /// has taken this long, or a quarter of the render's time after the render where that is later
+    /// (at least one brick is uploaded); 0: no time limit.
+    double frame_seconds = 0;
 };
 
 /// What streaming did after one frame.
@@ -94,6 +99,8 @@ struct StreamFrame {
     /// Requests remain and no room could be freed: the arena holds only bricks the frame used (the
     /// budget holds fewer bricks than the view needs).
     bool stalled = false;
+    /// Uploads stopped at StreamOptions::frame_seconds, bricks left for the next frames.
+    bool timed_out = false;
     double gb_per_s() const { return upload_seconds > 0 ? uploaded_bytes / upload_seconds * 1e-9 : 0.0; }
 };
 
