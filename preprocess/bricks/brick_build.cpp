@@ -18,10 +18,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <string>
-#include <unordered_map>
 
 #include "prt/error.h"
 #include "prt/parallel.h"
@@ -277,6 +277,41 @@ pool::BrickHeader brick_header(std::size_t b, const pool::BrickEntry& e,
 }
 
 /// Phase 3b: writes bricks' payloads, checksums and LOD discs (one worker's scratch).
+/// Point id -> the index of its first encoded splat within one brick: open addressing with linear
+/// probing over a power-of-two table at most half full, sized per brick (reset(references)). It
+/// replaced a std::unordered_map whose node allocations and frees took about 15 % of the brick
+/// step (perf, prt-bricks on a culled 1M room, one thread).
+class PointIndex {
+public:
+    /// Empties the index for up to `count` points.
+    void reset(std::size_t count) {
+        std::size_t size = 64;
+        while (size < 2 * count) size *= 2;
+        m_shift = 64 - static_cast<unsigned>(std::countr_zero(size));
+        m_keys.assign(size, k_empty);
+        m_values.resize(size);
+    }
+    /// The index stored for `point`, or `value` stored for it now (second: true) if it had none.
+    std::pair<std::uint32_t, bool> try_emplace(std::uint32_t point, std::uint32_t value) {
+        const std::size_t mask = m_keys.size() - 1;
+        const std::uint64_t key = point;
+        for (std::size_t i = (key * 0x9E3779B97F4A7C15ull) >> m_shift;; i = (i + 1) & mask) {
+            if (m_keys[i] == key) return {m_values[i], false};
+            if (m_keys[i] == k_empty) {
+                m_keys[i] = key;
+                m_values[i] = value;
+                return {value, true};
+            }
+        }
+    }
+
+private:
+    static constexpr std::uint64_t k_empty = ~std::uint64_t{0};  // no point id is 2^64 - 1
+    std::vector<std::uint64_t> m_keys;
+    std::vector<std::uint32_t> m_values;
+    unsigned m_shift = 58;
+};
+
 class BrickEncoder {
 public:
     /// One worker's reusable buffers.
@@ -288,10 +323,10 @@ public:
         std::vector<const pool::Splat*> splats;   // per reference, in leaf order
         std::vector<std::uint32_t> refs;          // per reference: index into `encoded`
         std::vector<const pool::Splat*> encoded;  // the distinct splats, in order of first reference
-        std::unordered_map<std::uint32_t, std::uint32_t> first;  // point -> its first encoded index
-        std::vector<std::uint32_t> parent;                       // per local node (root: itself)
-        std::vector<std::uint32_t> level_nodes;                  // non-empty nodes per local level
-        std::vector<LodSum> lod_sum, lod_any;                    // per LOD prefix node
+        PointIndex first;                         // point -> its first encoded index
+        std::vector<std::uint32_t> parent;        // per local node (root: itself)
+        std::vector<std::uint32_t> level_nodes;   // non-empty nodes per local level
+        std::vector<LodSum> lod_sum, lod_any;     // per LOD prefix node
         std::vector<pool::LodSplat> lod_disc;
         std::vector<double> lod_cover;
     };
@@ -513,7 +548,10 @@ private:
         s.centre.clear();
         s.refs.clear();
         s.encoded.clear();
-        s.first.clear();
+        std::size_t references = 0;
+        for (const auto& leaf : s.leaves)
+            references += m_octree.leaf_info[leaf.first + 1] - m_octree.leaf_info[leaf.first];
+        s.first.reset(references);
         for (std::size_t l = 0; l < s.leaves.size(); ++l) {
             s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
             const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
@@ -528,12 +566,12 @@ private:
                 bool inside = true;
                 for (int ax = 0; ax < 3; ++ax) inside = inside && cp[ax] >= lo[ax] && cp[ax] < hi[ax];
                 s.centre.push_back(inside);
-                const auto [it, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
-                if (fresh || !same_splat(*s.encoded[it->second], sp)) {
+                const auto [at, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
+                if (fresh || !same_splat(*s.encoded[at], sp)) {
                     s.refs.push_back(std::uint32_t(s.encoded.size()));
                     s.encoded.push_back(&sp);
                 } else {
-                    s.refs.push_back(it->second);
+                    s.refs.push_back(at);
                 }
             }
             s.leaf_info[l + 1] = std::uint32_t(s.splats.size());
