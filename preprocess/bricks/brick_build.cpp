@@ -276,7 +276,6 @@ pool::BrickHeader brick_header(std::size_t b, const pool::BrickEntry& e,
     return h;
 }
 
-/// Phase 3b: writes bricks' payloads, checksums and LOD discs (one worker's scratch).
 /// Point id -> the index of its first encoded splat within one brick: open addressing with linear
 /// probing over a power-of-two table at most half full, sized per brick (reset(references)). It
 /// replaced a std::unordered_map whose node allocations and frees took about 15 % of the brick
@@ -312,6 +311,7 @@ private:
     unsigned m_shift = 58;
 };
 
+/// Phase 3b: writes bricks' payloads, checksums and LOD discs (one worker's scratch).
 class BrickEncoder {
 public:
     /// One worker's reusable buffers.

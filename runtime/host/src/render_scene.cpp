@@ -489,27 +489,28 @@ void RenderScene::place_default_light() {
             if (!(cam.position[a] > b.lo[a] && cam.position[a] < b.hi[a])) return false;
         return true;
     }();
-    if (rl > 0 && std::isfinite(rl) && inside) {
-        // The camera inside the model (a room, a corridor, a scan seen from its scanner): a light
-        // outside would be walled off and leave the view in shadow. It goes above and right of
-        // the camera, half the way to the bounds along up and a third along right: a convex
-        // combination of the camera and two points of the box, so inside the box too.
+    if (rl > 0 && std::isfinite(rl)) {
         right = mul(right, 1.0 / rl);
-        auto reach = [&](const DVec3& dir) {  // distance from the camera to the box along dir
-            double t = std::numeric_limits<double>::infinity();
-            for (int a = 0; a < 3; ++a) {
-                if (dir[a] > 0) t = std::min(t, (b.hi[a] - cam.position[a]) / dir[a]);
-                if (dir[a] < 0) t = std::min(t, (b.lo[a] - cam.position[a]) / dir[a]);
-            }
-            return std::isfinite(t) ? t : 0.0;
-        };
-        light.position = add(cam.position, add(mul(u, 0.5 * reach(u)), mul(right, reach(right) / 3.0)));
-    } else if (rl > 0 && std::isfinite(rl)) {
-        right = mul(right, 1.0 / rl);
-        back = {right[1] * u[2] - right[2] * u[1], right[2] * u[0] - right[0] * u[2],
-                right[0] * u[1] - right[1] * u[0]};  // right x up: toward the camera, perpendicular to up
-        light.position =
-            add(cam.look_at, mul(add(add(mul(right, 1.5), mul(u, 3.0)), mul(back, 2.5)), radius));
+        if (inside) {
+            // The camera inside the model (a room, a corridor, a scan seen from its scanner): a
+            // light outside would be walled off and leave the view in shadow. It goes above and
+            // right of the camera, half the way to the bounds along up and a third along right: a
+            // convex combination of the camera and two points of the box, so inside the box too.
+            auto reach = [&](const DVec3& dir) {  // distance from the camera to the box along dir
+                double t = std::numeric_limits<double>::infinity();
+                for (int a = 0; a < 3; ++a) {
+                    if (dir[a] > 0) t = std::min(t, (b.hi[a] - cam.position[a]) / dir[a]);
+                    if (dir[a] < 0) t = std::min(t, (b.lo[a] - cam.position[a]) / dir[a]);
+                }
+                return std::isfinite(t) ? t : 0.0;
+            };
+            light.position = add(cam.position, add(mul(u, 0.5 * reach(u)), mul(right, reach(right) / 3.0)));
+        } else {
+            back = {right[1] * u[2] - right[2] * u[1], right[2] * u[0] - right[0] * u[2],
+                    right[0] * u[1] - right[1] * u[0]};  // right x up: toward the camera, perpendicular to up
+            light.position =
+                add(cam.look_at, mul(add(add(mul(right, 1.5), mul(u, 3.0)), mul(back, 2.5)), radius));
+        }
     } else {
         light.position = add(cam.look_at, mul(DVec3{1.5, 3.0, 2.5}, radius));
     }
