@@ -94,7 +94,7 @@ protected:
         Terms t;
         for (const pool::BrickEntry& e : s.table) {
             const std::uint64_t block =
-                (e.size + 63) / 64 * 64 + (e.leaf_count * sizeof(core::LeafBounds) + 63) / 64 * 64;
+                (e.size + 63) / 64 * 64 + (e.leaf_count * sizeof(core::BrickLeafBounds) + 63) / 64 * 64;
             t.largest = std::max(t.largest, block);
             t.all += block;
         }

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <random>
 
+#include "prt/core/leaf_bounds.h"
 #include "prt/core/render.h"
 #include "prt/cpu/cpu_backend.h"
 #include "prt/runtime/render_scene.h"
@@ -25,6 +26,7 @@ struct OneLeaf {
     std::vector<std::uint32_t> leaf_info;
     core::OctreeView view;
     core::LeafBounds bounds;
+    core::BrickLeafBounds compact;  // a brick leaf's 16 bytes, over the same splats
 
     explicit OneLeaf(std::vector<pool::Splat> s) : splats(std::move(s)), leaf_info{0, 0} {
         leaf_info[1] = static_cast<std::uint32_t>(splats.size());
@@ -33,6 +35,7 @@ struct OneLeaf {
         view.splats = splats.data();
         view.splat_count = static_cast<std::uint32_t>(splats.size());
         bounds = rt::build_leaf_bounds(view, 1).at(0);
+        compact = core::brick_leaf_bounds_of(core::SplatArray{splats.data()}, 0, view.splat_count);
     }
 };
 
@@ -82,7 +85,7 @@ TEST_P(LeafBoundsConservative, NeverPassesALeafHoldingAnAcceptedHit) {
     const BoundsCase c = GetParam();
     std::mt19937 rng(1234);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
-    int accepted_leaves = 0, passed = 0, rays = 0;
+    int accepted_leaves = 0, passed = 0, compact_passed = 0, rays = 0;
     for (int leaf = 0; leaf < 60; ++leaf) {
         const core::Vec3 centre{c.offset + u(rng) * c.scale, u(rng) * c.scale, u(rng) * c.scale};
         const OneLeaf L(random_splats(rng, centre, c.scale * 0.05f, random_unit(rng), c.spread, 24));
@@ -113,6 +116,14 @@ TEST_P(LeafBoundsConservative, NeverPassesALeafHoldingAnAcceptedHit) {
                                      << ": bounds pass a leaf with an accepted hit";
                 }
                 passed += !may;
+                // The compact bounds (integer axis, no range) are as conservative.
+                const bool may16 =
+                    core::brick_leaf_may_hit(L.compact, o, d, inv_dlen, inside, t_lo, t_hi, mode);
+                if (any) {
+                    ASSERT_TRUE(may16) << "leaf " << leaf << " ray " << k << " mode " << mode
+                                       << ": compact bounds pass a leaf with an accepted hit";
+                }
+                compact_passed += !may16;
             }
             accepted_leaves += any;
             ++rays;
@@ -120,6 +131,8 @@ TEST_P(LeafBoundsConservative, NeverPassesALeafHoldingAnAcceptedHit) {
     }
     EXPECT_GT(accepted_leaves, rays / 50) << "too few hits: the test would prove nothing";
     EXPECT_GT(passed, rays / 4) << "the bounds pass almost nothing";
+    // Quantizing the axis to 16 bits costs a little tightness only.
+    EXPECT_GE(compact_passed, passed * 0.98) << "compact " << compact_passed << " float " << passed;
 }
 
 INSTANTIATE_TEST_SUITE_P(Cases, LeafBoundsConservative,

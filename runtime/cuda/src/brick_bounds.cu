@@ -31,12 +31,10 @@ __global__ void brick_bounds_kernel(const BrickBoundsJob* jobs, std::uint32_t jo
     const core::BrickSplats src = core::brick_splats(job.payload);
     const std::uint32_t* leaf_info = reinterpret_cast<const std::uint32_t*>(
         job.payload + pool::brick_leaf_info_offset(src.header.node_count));
-    // As rt::build_leaf_bounds over the brick's decoded splats: the range clamped as leaf_splats does.
+    // As rt::build_brick_leaf_bounds over the brick's decoded splats: the range clamped as there.
     std::uint32_t e = leaf_info[l + 1] < src.header.splat_count ? leaf_info[l + 1] : src.header.splat_count;
     std::uint32_t b = leaf_info[l] < e ? leaf_info[l] : e;
-    core::LeafBounds out = core::leaf_bounds_of(src, b, e);
-    out.begin = b;
-    out.end = e;
+    const core::BrickLeafBounds out = core::brick_leaf_bounds_of(src, b, e);
     job.bounds[l] = out;
 }
 

@@ -1,5 +1,5 @@
 // PointRT CUDA: leaf bounds of streamed bricks derived on the GPU (issue 17): after a brick's
-// payload reaches the device arena, one thread per filled leaf computes its core::LeafBounds from
+// payload reaches the device arena, one thread per filled leaf computes its core::BrickLeafBounds from
 // the payload (prt/core/leaf_bounds.h, the host's arithmetic) into the brick's bounds block, so the
 // host only checks and copies.
 #pragma once
@@ -16,7 +16,7 @@ namespace prt::cuda {
 /// index of its first leaf among the batch's leaves (jobs sorted by it, the first at 0).
 struct BrickBoundsJob {
     const unsigned char* payload;
-    core::LeafBounds* bounds;
+    core::BrickLeafBounds* bounds;
     std::uint32_t first_leaf;
     std::uint32_t leaf_count;
 };

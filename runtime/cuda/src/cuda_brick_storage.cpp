@@ -54,7 +54,7 @@ public:
 
     bool derives_leaf_bounds() const override { return true; }
     void upload(std::uint64_t offset, std::span<const unsigned char> payload, std::uint64_t bounds_offset,
-                std::span<const core::LeafBounds> bounds) override {
+                std::span<const core::BrickLeafBounds> bounds) override {
         stage(m_arena.data() + offset, payload.data(), payload.size());
         if (!bounds.empty()) {
             stage(m_arena.data() + bounds_offset, reinterpret_cast<const unsigned char*>(bounds.data()),
@@ -64,9 +64,9 @@ public:
         // Derived on the device at commit(), from the payload once its copy has run.
         pool::BrickHeader h;
         std::memcpy(&h, payload.data(), sizeof(h));  // a validated payload (BrickStream checks it first)
-        m_jobs.push_back(BrickBoundsJob{m_arena.data() + offset,
-                                        reinterpret_cast<core::LeafBounds*>(m_arena.data() + bounds_offset),
-                                        m_job_leaves, h.leaf_count});
+        m_jobs.push_back(BrickBoundsJob{
+            m_arena.data() + offset, reinterpret_cast<core::BrickLeafBounds*>(m_arena.data() + bounds_offset),
+            m_job_leaves, h.leaf_count});
         m_job_leaves += h.leaf_count;
     }
     void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) override {
@@ -124,7 +124,7 @@ public:
         v.data = nullptr;
         v.data_bytes = 0;
         v.resident = reinterpret_cast<const unsigned char* const*>(m_resident.data());
-        v.leaf_bounds = reinterpret_cast<const core::LeafBounds*>(m_arena.data());
+        v.leaf_bounds = reinterpret_cast<const core::BrickLeafBounds*>(m_arena.data());
         v.leaf_bounds_first = m_first.data();
         v.used = m_flags.data();
         v.requests = m_flags.data() + m_bricks;

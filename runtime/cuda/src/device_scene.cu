@@ -96,7 +96,7 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     // (leaf_bounds' size is read from the host's leaf_bounds_first: that one goes after it)
     const std::size_t brick_leaves =
         b.leaf_bounds_first && !streamed ? b.leaf_bounds_first[b.brick_count] : 0;
-    f(b.leaf_bounds, brick_leaves * sizeof(core::LeafBounds));
+    f(b.leaf_bounds, brick_leaves * sizeof(core::BrickLeafBounds));
     f(b.leaf_bounds_first, b.leaf_bounds_first && !streamed ? (std::size_t{b.brick_count} + 1) * 4 : 0);
     f(b.resident, 0);
     f(b.requests, 0);

@@ -19,6 +19,8 @@ namespace prt::rt {
 
 namespace {
 
+/// The largest arena of one model: its leaf bounds are found by 32-bit indices from its start.
+constexpr std::uint64_t k_max_arena_bytes = (std::uint64_t{1} << 32) * sizeof(core::BrickLeafBounds);
 /// Per-brick tables always resident: the resident table (a pointer), the first leaf bound, the
 /// use and request flags.
 constexpr std::uint64_t k_table_bytes_per_brick = sizeof(void*) + 3 * sizeof(std::uint32_t);
@@ -39,7 +41,7 @@ public:
         m_requested.assign(a.brick_count, 0);
         core::BrickView v = scene.models().at(model).view.bricks;
         v.resident = m_resident.data();
-        v.leaf_bounds = reinterpret_cast<const core::LeafBounds*>(m_arena.get());
+        v.leaf_bounds = reinterpret_cast<const core::BrickLeafBounds*>(m_arena.get());
         v.leaf_bounds_first = m_first.data();
         v.used = m_used.data();
         v.requests = m_requested.data();
@@ -47,7 +49,7 @@ public:
     }
 
     void upload(std::uint64_t offset, std::span<const unsigned char> payload, std::uint64_t bounds_offset,
-                std::span<const core::LeafBounds> bounds) override {
+                std::span<const core::BrickLeafBounds> bounds) override {
         std::memcpy(m_arena.get() + offset, payload.data(), payload.size());
         std::memcpy(m_arena.get() + bounds_offset, bounds.data(), bounds.size_bytes());
     }
@@ -116,7 +118,7 @@ private:
 
 /// The block a brick takes: its payload, then its leaf bounds, each rounded up to 64 bytes.
 std::uint64_t block_bytes(const pool::BrickEntry& e) {
-    return round_up_64(e.size) + round_up_64(std::uint64_t{e.leaf_count} * sizeof(core::LeafBounds));
+    return round_up_64(e.size) + round_up_64(std::uint64_t{e.leaf_count} * sizeof(core::BrickLeafBounds));
 }
 
 }  // namespace
@@ -194,7 +196,7 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         }
         m->data_bytes = m->sections.data.size();
         m_in_core_bytes +=
-            m->data_bytes + leaves * sizeof(core::LeafBounds) + (std::uint64_t{bricks} + 1) * 4;
+            m->data_bytes + leaves * sizeof(core::BrickLeafBounds) + (std::uint64_t{bricks} + 1) * 4;
         m_fixed_bytes += std::uint64_t{bricks} * k_table_bytes_per_brick;
         block_minimum += m->largest_block;
         models.push_back(std::move(m));
@@ -221,7 +223,8 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
     for (auto& m : models) {
         const double share = data_total > 0 ? static_cast<double>(m->data_bytes) / data_total : 1.0;
         const std::uint64_t extra = static_cast<std::uint64_t>(share * static_cast<double>(spare)) / 64 * 64;
-        m->arena.bytes = m->largest_block + extra;
+        // At most 64 GiB a model (k_max_arena_bytes): the rest of a larger budget stays unused.
+        m->arena.bytes = std::min<std::uint64_t>(m->largest_block + extra, k_max_arena_bytes);
         m->allocator = std::make_unique<ArenaAllocator>(m->arena.bytes);
         m->block_of.assign(m->arena.brick_count, BrickStorage::k_not_resident);
         m->last_used.assign(m->arena.brick_count, 0);
@@ -278,7 +281,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         Model* model;
         std::uint32_t brick;
         std::uint64_t offset;
-        std::vector<core::LeafBounds> bounds;
+        std::vector<core::BrickLeafBounds> bounds;
     };
     std::vector<Upload> uploads;
     for (auto& mp : m_models) {
@@ -379,13 +382,13 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             m.storage->upload(u.offset,
                               {reinterpret_cast<const unsigned char*>(payload.data()), payload.size()},
                               bounds_offset, u.bounds);
-            m.storage->set_resident(u.brick, u.offset,
-                                    static_cast<std::uint32_t>(bounds_offset / sizeof(core::LeafBounds)));
+            m.storage->set_resident(
+                u.brick, u.offset, static_cast<std::uint32_t>(bounds_offset / sizeof(core::BrickLeafBounds)));
             m.resident_bytes += block_bytes(e);
             ++m.resident;
             ++f.uploaded;
             f.uploaded_bytes += e.size;
-            std::vector<core::LeafBounds>().swap(u.bounds);
+            std::vector<core::BrickLeafBounds>().swap(u.bounds);
         }
         const auto round_end = std::chrono::steady_clock::now();
         prepare += std::chrono::duration<double>(copy_start - prepare_start).count();

@@ -26,22 +26,29 @@ std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsig
 
 namespace {
 
-/// The leaf bounds of a brick opened by core::open_brick.
-std::vector<core::LeafBounds> opened_brick_bounds(const core::BrickSplats& src, core::OctreeView brick,
-                                                  std::vector<pool::Splat>& decoded) {
+/// The compact leaf bounds of a brick opened by core::open_brick, over its splats decoded once.
+std::vector<core::BrickLeafBounds> opened_brick_bounds(const core::BrickSplats& src,
+                                                       const core::OctreeView& brick,
+                                                       std::vector<pool::Splat>& decoded) {
     decoded.resize(brick.splat_count);
     for (std::uint32_t i = 0; i < brick.splat_count; ++i) decoded[i] = src.load(i);
-    brick.splats = decoded.data();
-    return build_leaf_bounds(brick, 1);
+    std::vector<core::BrickLeafBounds> out(brick.filled_leaves);
+    for (std::uint32_t l = 0; l < brick.filled_leaves; ++l) {
+        std::uint32_t e = std::min(brick.leaf_info[l + 1], brick.splat_count);
+        std::uint32_t b = std::min(brick.leaf_info[l], e);
+        out[l] = core::brick_leaf_bounds_of(core::SplatArray{decoded.data()}, b, e);
+    }
+    return out;
 }
 
 }  // namespace
 
-std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
-                                                      std::vector<std::uint32_t>& first, unsigned threads) {
+std::vector<core::BrickLeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
+                                                           std::vector<std::uint32_t>& first,
+                                                           unsigned threads) {
     first.assign(std::size_t{v.brick_count} + 1, 0);
     for (std::uint32_t b = 0; b < v.brick_count; ++b) first[b + 1] = first[b] + v.table[b].leaf_count;
-    std::vector<core::LeafBounds> out(first.back());
+    std::vector<core::BrickLeafBounds> out(first.back());
     parallel_chunks(
         v.brick_count, 1, resolve_threads(threads), [&](std::size_t b0, std::size_t b1, unsigned) {
             std::vector<pool::Splat> decoded;
@@ -49,15 +56,15 @@ std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
                 core::BrickSplats src;
                 core::OctreeView brick;
                 if (!core::open_brick(v, static_cast<std::uint32_t>(b), src, brick)) continue;
-                const std::vector<core::LeafBounds> leaves = opened_brick_bounds(src, brick, decoded);
+                const std::vector<core::BrickLeafBounds> leaves = opened_brick_bounds(src, brick, decoded);
                 std::copy(leaves.begin(), leaves.end(), out.begin() + first[b]);
             }
         });
     return out;
 }
 
-std::vector<core::LeafBounds> build_one_brick_leaf_bounds(const pool::BrickEntry& entry,
-                                                          const unsigned char* payload) {
+std::vector<core::BrickLeafBounds> build_one_brick_leaf_bounds(const pool::BrickEntry& entry,
+                                                               const unsigned char* payload) {
     const unsigned char* resident[1] = {payload};
     core::BrickView v;
     v.table = &entry;

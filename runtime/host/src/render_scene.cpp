@@ -118,10 +118,11 @@ void load_bricks(const pool::PoolFile& pf, LoadedModel& lm, std::vector<std::str
                s.lod_table.size_bytes() + s.lod_nodes.size_bytes() + s.lod_discs.size_bytes();
     if (!defer) {
         // Leaf bounds over the decoded splats, so rays pass leaves unread as on the float path.
-        lm.leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);
-        lm.view.bricks.leaf_bounds = lm.leaf_bounds.data();  // vectors' buffers survive LoadedModel's moves
+        lm.brick_leaf_bounds = build_brick_leaf_bounds(lm.view.bricks, lm.brick_leaf_first);
+        lm.view.bricks.leaf_bounds =
+            lm.brick_leaf_bounds.data();  // vectors' buffers survive LoadedModel's moves
         lm.view.bricks.leaf_bounds_first = lm.brick_leaf_first.data();
-        lm.bytes += s.data.size_bytes() + lm.leaf_bounds.size() * sizeof(core::LeafBounds) +
+        lm.bytes += s.data.size_bytes() + lm.brick_leaf_bounds.size() * sizeof(core::BrickLeafBounds) +
                     lm.brick_leaf_first.size() * 4;
     }
     if (pf.has(pool::SectionType::material_ids) || pf.has(pool::SectionType::intensities))
@@ -869,7 +870,8 @@ void RenderScene::load_deferred_bricks() {
         const std::uint64_t index_and_rest = lm.bytes;  // the index, and GI sections if any
         load_bricks(*lm.pool, lm, warnings, false);
         lm.bytes = index_and_rest + lm.view.bricks.data_bytes +
-                   lm.leaf_bounds.size() * sizeof(core::LeafBounds) + lm.brick_leaf_first.size() * 4;
+                   lm.brick_leaf_bounds.size() * sizeof(core::BrickLeafBounds) +
+                   lm.brick_leaf_first.size() * 4;
         m_model_views[i].bricks = lm.view.bricks;
     }
 }

@@ -54,7 +54,7 @@ struct Views {
     std::vector<core::LeafBounds> bounds;
     const pool::Rgba8* colors = nullptr;
     core::BrickView bricks;
-    std::vector<core::LeafBounds> brick_bounds;
+    std::vector<core::BrickLeafBounds> brick_bounds;
     std::vector<std::uint32_t> brick_first;
     pool::BrickSections sections;
     Vec3 centre;  ///< the sphere's centre, local frame

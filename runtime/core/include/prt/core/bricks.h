@@ -64,10 +64,11 @@ struct BrickView {
     /// the bricks a frame used are not evicted, the others leave least recently used first
     /// (rt::BrickStream). A walk that stays in the prefix does not keep the brick.
     std::uint32_t* used = nullptr;
-    /// Per filled leaf of every brick, or null: LeafBounds (octree.h) over the decoded splats, so
-    /// rays pass leaves unread as on the float path; brick b's at leaf_bounds + leaf_bounds_first[b].
-    /// Derived on the host at load (rt::build_brick_leaf_bounds), not in the pool.
-    const LeafBounds* leaf_bounds = nullptr;
+    /// Per filled leaf of every brick, or null: BrickLeafBounds (octree.h, 16 bytes) over the decoded
+    /// splats, so rays pass leaves unread as on the float path; brick b's at leaf_bounds +
+    /// leaf_bounds_first[b]. Derived at load or upload (rt::build_brick_leaf_bounds, the CUDA
+    /// storage's derive_brick_leaf_bounds), not in the pool.
+    const BrickLeafBounds* leaf_bounds = nullptr;
     const std::uint32_t* leaf_bounds_first = nullptr;
     Vec3 root_min{0, 0, 0};  ///< root cube of the whole tree, model local frame
     float root_size = 1.0f;
@@ -221,7 +222,7 @@ PRT_HD PRT_INLINE BrickSplats brick_splats(const unsigned char* payload) {
 }
 
 /// Opens resident brick b alone (host tools: leaf bounds of a brick): its splat source and octree
-/// view (with its leaf bounds when the view has them). False when b is out of range or not
+/// view (without leaf bounds: a brick's are BrickLeafBounds). False when b is out of range or not
 /// resident. Tracing enters bricks through descend_bricked instead.
 PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSplats& src, OctreeView& brick) {
     if (b >= v.brick_count) return false;
@@ -229,7 +230,6 @@ PRT_HD PRT_INLINE bool open_brick(const BrickView& v, std::uint32_t b, BrickSpla
     if (payload == nullptr) return false;
     src = brick_splats(payload);
     brick = brick_octree(v.table[b], src.header, payload);
-    if (v.leaf_bounds != nullptr) brick.leaf_bounds = v.leaf_bounds + v.leaf_bounds_first[b];
     return true;
 }
 
@@ -275,7 +275,7 @@ struct BrickCursor {
     std::uint32_t lod_first = 0, lod_count = 0;  ///< the brick's prefix in lod_nodes (count 0: none)
     std::uint32_t node_count = 0;    ///< nodes walked in the brick: the payload's, else the prefix's
     std::uint32_t leaf_count = 0;    ///< the resident brick's filled leaves (0 when not resident)
-    std::uint32_t bounds_first = 0;  ///< the brick's first LeafBounds in the view's leaf_bounds
+    std::uint32_t bounds_first = 0;  ///< the brick's first BrickLeafBounds in the view's leaf_bounds
     std::uint32_t stop = k_none;
     std::uint32_t stop_node = 0;  ///< top node (k_top_disc) or index into lod_nodes (k_prefix_disc)
     bool request = false;
@@ -451,8 +451,10 @@ PRT_HD PRT_INLINE bool walk_next_bricked(const BrickView& v, OctreeWalk& w, Bric
 
 /// The reference range [begin, end) of filled leaf `node` of the cursor's (resident) brick, or,
 /// with the view's leaf bounds and `culling`, false when its bounds rule out a hit in [lo, hi]
-/// (counted as culled) or it is empty; as next_leaf does it on the float path (splat.h). Reads no
-/// brick header: the cursor holds what it needs (enter_brick).
+/// (counted as culled) or it is empty; as next_leaf does it on the float path (splat.h). The
+/// compact bounds hold no range: a leaf they keep reads its range from the brick's leaf_info (a
+/// validated payload's: monotone, ending at its reference count, so no clamp). Reads no brick
+/// header: the cursor holds what it needs (enter_brick).
 PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& cur, std::uint32_t node,
                                         std::uint32_t culling, Vec3 o, Vec3 d, float inv_dlen, bool inside,
                                         float lo, float hi, std::uint32_t& begin, std::uint32_t& end,
@@ -460,22 +462,16 @@ PRT_HD PRT_INLINE bool brick_leaf_range(const BrickView& v, const BrickCursor& c
     const std::uint32_t a = node_addr(node);
     if (a >= cur.leaf_count) return false;
     if (culling != k_cull_none && v.leaf_bounds != nullptr) {
-        const LeafBounds b = load_leaf_bounds(v.leaf_bounds + cur.bounds_first + a);
-        begin = b.begin;
-        end = b.end;
-        if (begin >= end) return false;
-        if (!leaf_may_hit(b, o, d, inv_dlen, inside, lo, hi, culling)) {
+        const BrickLeafBounds b = load_brick_leaf_bounds(v.leaf_bounds + cur.bounds_first + a);
+        if (!brick_leaf_may_hit(b, o, d, inv_dlen, inside, lo, hi, culling)) {
             PRT_COUNT(stats.culled);
             return false;
         }
-        return true;
     }
-    const auto* h = reinterpret_cast<const pool::BrickHeader*>(cur.payload);
     const std::uint32_t* info =
         reinterpret_cast<const std::uint32_t*>(cur.payload + pool::brick_leaf_info_offset(cur.node_count));
     begin = info[a];
     end = info[a + 1];
-    if (end > h->splat_count) end = h->splat_count;
     return begin < end;
 }
 

@@ -57,6 +57,24 @@ struct alignas(16) LeafBounds {
 };
 static_assert(sizeof(LeafBounds) == 32);
 
+/// LeafBounds in 16 bytes, for the leaves of bricks (issue 17: 32-byte bounds were a third of a
+/// streamed brick's block on the GPU, so half as many bytes fit a sixth more bricks in a budget).
+/// The same normal cone and slab, about an axis quantized to integers (each component round(32767
+/// a), |axis| about 32767) and built about that integer axis exactly as the test reads it, so
+/// quantizing loses no conservativeness, only a little tightness:
+///   cone:  dot(axis, d) / |d| >= sin_code passes the leaf (outside rays; inside rays negate), i.e.
+///          sin(theta) + margin scaled by |axis| and rounded up; 65535 never passes (> |axis|);
+///   slab:  lo <= dot(axis, p) <= hi for every point of every disk, in the same scale.
+/// No splat range: a leaf that may hold a hit reads it from the brick's leaf_info (bricks.h).
+struct alignas(16) BrickLeafBounds {
+    std::int16_t axis_x, axis_y, axis_z;  ///< 0: the cone axis and slab normal, |axis| ~ 32767
+    std::uint16_t sin_code;               ///< 6: the cone's threshold on dot(axis, d) / |d|
+    float lo, hi;                         ///< 8, 12: the slab; lo > hi when no splat can be hit
+};
+static_assert(sizeof(BrickLeafBounds) == 16);
+inline constexpr float k_brick_axis_scale = 32767.0f;
+inline constexpr std::uint16_t k_brick_cone_never = 0xffffu;
+
 /// A non-owning view of a model's octree sections (pool section types 16-19).
 struct OctreeView {
     const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words

@@ -83,21 +83,49 @@ PRT_HD PRT_INLINE LeafBounds load_leaf_bounds(const LeafBounds* p) {
 ///     rays accept dot(d, n) > 0: the same test with -axis.
 ///   slab: every hit point lies in the slab lo <= dot(axis, p) <= hi; the ray is inside the slab
 ///     only for t in one interval, which must meet [t_lo, t_hi].
-PRT_HD PRT_INLINE bool leaf_may_hit(const LeafBounds& b, Vec3 o, Vec3 d, float inv_dlen, bool inside,
-                                    float t_lo, float t_hi, std::uint32_t mode) {
-    const float sd = b.axis_x * d.x + b.axis_y * d.y + b.axis_z * d.z;
-    if ((inside ? -sd : sd) * inv_dlen >= b.sin_theta) return false;
+PRT_HD PRT_INLINE bool bounds_may_hit(float ax, float ay, float az, float sin_theta, float blo, float bhi,
+                                      Vec3 o, Vec3 d, float inv_dlen, bool inside, float t_lo, float t_hi,
+                                      std::uint32_t mode) {
+    const float sd = ax * d.x + ay * d.y + az * d.z;
+    if ((inside ? -sd : sd) * inv_dlen >= sin_theta) return false;
     if (mode < k_cull_slabs) return true;
-    const float so = b.axis_x * o.x + b.axis_y * o.y + b.axis_z * o.z;
+    const float so = ax * o.x + ay * o.y + az * o.z;
     // Rounding margin for the ray's side (the builder widened lo, hi for the splats' side): a few
     // hundred float ulps of the largest term, so a hit intersect_splat accepts is never lost.
-    const float m = 1e-5f * (fabsf(so) + fabsf(b.lo) + fabsf(b.hi));
-    const float lo = b.lo - m, hi = b.hi + m;
+    const float m = 1e-5f * (fabsf(so) + fabsf(blo) + fabsf(bhi));
+    const float lo = blo - m, hi = bhi + m;
     if (!(lo <= hi)) return false;  // no splat of the leaf can be hit
     if (sd == 0.0f) return so >= lo && so <= hi;
     const float inv = 1.0f / sd;
     const float ta = (lo - so) * inv, tb = (hi - so) * inv;
     return fmaxf(ta, tb) >= t_lo && fminf(ta, tb) <= t_hi;
+}
+
+PRT_HD PRT_INLINE bool leaf_may_hit(const LeafBounds& b, Vec3 o, Vec3 d, float inv_dlen, bool inside,
+                                    float t_lo, float t_hi, std::uint32_t mode) {
+    return bounds_may_hit(b.axis_x, b.axis_y, b.axis_z, b.sin_theta, b.lo, b.hi, o, d, inv_dlen, inside, t_lo,
+                          t_hi, mode);
+}
+
+/// Reads a brick leaf's bounds: one 16-byte read-only load on the GPU (arena blocks are 64-byte
+/// aligned).
+PRT_HD PRT_INLINE BrickLeafBounds load_brick_leaf_bounds(const BrickLeafBounds* p) {
+#if PRT_DEVICE_CODE
+    const uint4 a = __ldg(reinterpret_cast<const uint4*>(p));
+    BrickLeafBounds b;
+    memcpy(&b, &a, sizeof(a));
+    return b;
+#else
+    return *p;
+#endif
+}
+
+/// leaf_may_hit for a brick leaf's compact bounds (octree.h, BrickLeafBounds): the same tests about
+/// the integer axis, whose scale the threshold and the slab carry.
+PRT_HD PRT_INLINE bool brick_leaf_may_hit(const BrickLeafBounds& b, Vec3 o, Vec3 d, float inv_dlen,
+                                          bool inside, float t_lo, float t_hi, std::uint32_t mode) {
+    return bounds_may_hit(float(b.axis_x), float(b.axis_y), float(b.axis_z), float(b.sin_code), b.lo, b.hi, o,
+                          d, inv_dlen, inside, t_lo, t_hi, mode);
 }
 
 /// thesis 3.3, eq. 3.1: blending weight of a hit at x/R from its disk's centre. Floored at a

@@ -38,7 +38,7 @@ struct BrickArena {
 
 /// Where a backend keeps one bricked model's streamed bricks; BrickStream drives it between frames.
 /// Offsets are bytes from the arena's start (multiples of 64); leaf bounds are addressed as
-/// core::LeafBounds indices from the arena's start (BrickView::leaf_bounds = the arena).
+/// core::BrickLeafBounds indices from the arena's start (BrickView::leaf_bounds = the arena).
 class BrickStorage {
 public:
     static constexpr std::uint64_t k_not_resident = ~std::uint64_t{0};
@@ -49,7 +49,7 @@ public:
     /// Copies a validated payload to `offset` and its leaf bounds to `bounds_offset` (empty `bounds`
     /// where derives_leaf_bounds(): derived there at commit()); visible to frames after commit().
     virtual void upload(std::uint64_t offset, std::span<const unsigned char> payload,
-                        std::uint64_t bounds_offset, std::span<const core::LeafBounds> bounds) = 0;
+                        std::uint64_t bounds_offset, std::span<const core::BrickLeafBounds> bounds) = 0;
     /// Brick b's payload is now at `offset` (k_not_resident: not resident) and its first leaf bound
     /// at index `first_bound`; applied at commit().
     virtual void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) = 0;

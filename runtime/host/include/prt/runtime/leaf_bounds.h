@@ -19,17 +19,18 @@ namespace prt::rt {
 /// threads).
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads = 0);
 
-/// The same for every filled leaf of every brick of a bricked pool (issue 17), over each brick's
-/// decoded splats (the ones the core intersects), splat ranges relative to the brick; brick b's
-/// leaves start at `first[b]` (brick_count + 1 entries, set here). Every brick must be resident.
-std::vector<core::LeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
-                                                      std::vector<std::uint32_t>& first,
-                                                      unsigned threads = 0);
+/// The compact bounds (core::BrickLeafBounds, 16 bytes: the same cone and slab about an integer
+/// axis, no splat range) of every filled leaf of every brick of a bricked pool (issue 17), over each
+/// brick's decoded splats (the ones the core intersects); brick b's leaves start at `first[b]`
+/// (brick_count + 1 entries, set here). Every brick must be resident.
+std::vector<core::BrickLeafBounds> build_brick_leaf_bounds(const core::BrickView& v,
+                                                           std::vector<std::uint32_t>& first,
+                                                           unsigned threads = 0);
 
 /// The same for one brick alone (streaming: computed when the brick is uploaded, from its payload
-/// only): entry.leaf_count bounds, splat ranges relative to the brick; equal to that brick's part of
-/// build_brick_leaf_bounds. `payload` must be a validated payload of this entry.
-std::vector<core::LeafBounds> build_one_brick_leaf_bounds(const pool::BrickEntry& entry,
-                                                          const unsigned char* payload);
+/// only): entry.leaf_count bounds, equal to that brick's part of build_brick_leaf_bounds.
+/// `payload` must be a validated payload of this entry.
+std::vector<core::BrickLeafBounds> build_one_brick_leaf_bounds(const pool::BrickEntry& entry,
+                                                               const unsigned char* payload);
 
 }  // namespace prt::rt

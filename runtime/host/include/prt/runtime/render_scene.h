@@ -34,7 +34,9 @@ struct LoadedModel {
     core::ModelView view;  ///< pointers into the mapped pool (and leaf_bounds below)
     /// Per filled leaf: bounds that let rays pass it unread (derived at load, not in the pool).
     std::vector<core::LeafBounds> leaf_bounds;
-    /// Bricked pools: brick b's first leaf in leaf_bounds (core::BrickView::leaf_bounds_first).
+    /// Bricked pools: per filled leaf of every brick, the compact bounds (core::BrickLeafBounds).
+    std::vector<core::BrickLeafBounds> brick_leaf_bounds;
+    /// Bricked pools: brick b's first leaf in brick_leaf_bounds (core::BrickView::leaf_bounds_first).
     std::vector<std::uint32_t> brick_leaf_first;
     /// Bricked pools loaded with LoadOptions::defer_bricks: only the index is validated (top tree,
     /// table, LOD), the payloads are not read and view.bricks has no leaf bounds yet (streaming,
