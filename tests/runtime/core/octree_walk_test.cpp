@@ -3,6 +3,9 @@
 // offsets, for rays grazing faces, edges and corners, and for trees 20+ levels deep.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 
 #include "prt/core/octree.h"
@@ -277,6 +280,29 @@ TEST(OctreeWalk, CorruptAddressesEndInEmptyLeaves) {
     const Walked w = walk(v, {-1, 0.5f, 0.5f}, {1, 0, 0});
     ASSERT_EQ(w.leaves.size(), 1u);
     EXPECT_FALSE(core::node_is_filled(w.leaves[0].node));
+}
+
+// The shadow rays' upper bound (splat.h, bricks.h: t_max one ulp toward zero) on the bits, against
+// libm's nextafterf on random bit patterns (every sign, exponent, subnormals, NaN, inf) and the edges.
+TEST(CoreMath, NextTowardZeroIsNextafterfTowardZero) {
+    const auto same = [](float a, float b) {
+        if (std::isnan(a) || std::isnan(b)) return std::isnan(a) && std::isnan(b);
+        std::uint32_t x, y;
+        std::memcpy(&x, &a, 4);
+        std::memcpy(&y, &b, 4);
+        return x == y;  // +0 and -0 apart
+    };
+    const float lim = std::numeric_limits<float>::max(), tiny = std::numeric_limits<float>::denorm_min();
+    for (float x : {0.0f, -0.0f, tiny, -tiny, std::numeric_limits<float>::min(), 1.0f, -1.0f, lim, -lim,
+                    core::k_inf, -core::k_inf, std::numeric_limits<float>::quiet_NaN()})
+        EXPECT_TRUE(same(core::next_toward_zero(x), std::nextafter(x, 0.0f))) << x;
+    std::mt19937 rng(5);
+    for (int i = 0; i < 200000; ++i) {
+        const std::uint32_t bits = static_cast<std::uint32_t>(rng());
+        float x;
+        std::memcpy(&x, &bits, 4);
+        ASSERT_TRUE(same(core::next_toward_zero(x), std::nextafter(x, 0.0f))) << std::hex << bits;
+    }
 }
 
 }  // namespace

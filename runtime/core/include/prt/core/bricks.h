@@ -554,7 +554,7 @@ PRT_HD inline bool any_hit_bricks(const BrickView& v, Vec3 o, Vec3 d, bool insid
     const OctreeView top = brick_top_octree(v);
     OctreeWalk walk;
     if (!walk_begin(top, o, d, 0.0f, t_max, max_steps, walk)) return false;
-    const float hi = nextafterf(t_max, 0.0f);
+    const float hi = next_toward_zero(t_max);
     const float inv_dlen = 1.0f / length(d);
     cone.width *= v.inv_root_size;
     cone.spread *= v.inv_root_size;

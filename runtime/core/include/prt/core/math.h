@@ -28,6 +28,20 @@ inline float fmaxf(float a, float b) {
 #endif
 
 inline constexpr float k_inf = std::numeric_limits<float>::infinity();
+
+/// nextafterf(x, 0): the float next to x toward zero (+0 for +-0, as nextafterf gives its second
+/// argument when the two are equal; NaN for NaN; FLT_MAX for inf). Written on the bits: the host
+/// compiler calls libm for nextafterf, once per shadow ray.
+PRT_HD PRT_INLINE float next_toward_zero(float x) {
+    if (x == 0.0f) return 0.0f;
+    if (x != x) return x;
+    std::uint32_t b;
+    memcpy(&b, &x, sizeof b);
+    --b;  // magnitude one ulp smaller, sign kept: toward zero from either side (inf -> FLT_MAX)
+    float r;
+    memcpy(&r, &b, sizeof r);
+    return r;
+}
 inline constexpr float k_pi = 3.14159265358979323846f;
 
 /// A 3-vector of floats: points, directions, and linear RGB colors.
@@ -125,6 +139,15 @@ PRT_HD PRT_INLINE Vec3 normalize(Vec3 a) {
 /// Component `i` (0, 1, 2) of a vector.
 PRT_HD PRT_INLINE float component(Vec3 a, int i) {
     return i == 0 ? a.x : (i == 1 ? a.y : a.z);
+}
+/// Sets component `i` (0, 1, 2) of a vector.
+PRT_HD PRT_INLINE void set_component(Vec3& a, int i, float v) {
+    if (i == 0)
+        a.x = v;
+    else if (i == 1)
+        a.y = v;
+    else
+        a.z = v;
 }
 
 /// A 3x3 matrix stored by rows (rotations between a model's local frame and the render frame).

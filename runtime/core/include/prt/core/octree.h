@@ -33,6 +33,15 @@
 
 namespace prt::core {
 
+#ifndef PRT_DEVICE_WALK_RCP
+/// 1: device code, too, crosses cell planes by multiplying with the walk's 1 / d (walk_step_out), as
+/// the host always does; 0 (the default): it divides (CUDA's fast division). Measured on an H200
+/// (prt-bench, culled 1M room and sphere): 1 is 4-6 % slower for the float kernel's shadow rays and
+/// 0.5-1 % for primary rays (preprocess/bench/results/h200-2026-12-01-issue19-cpu).
+#define PRT_DEVICE_WALK_RCP 0
+#endif
+#define PRT_WALK_RCP (!PRT_DEVICE_CODE || PRT_DEVICE_WALK_RCP)
+
 /// Bits of the fixed-point coordinates: the deepest level the walk can resolve. Pool positions are
 /// floats (24-bit mantissa), so deeper trees carry no extra information.
 inline constexpr std::uint32_t k_fixed_bits = 30;
@@ -162,6 +171,7 @@ struct OctreeLeaf {
 struct OctreeWalk {
     Vec3 o;       ///< ray origin in normalized root coordinates
     Vec3 d;       ///< ray direction in normalized root coordinates (same t as the ray)
+    Vec3 inv_d;   ///< 1 / d per axis (0 where d is 0), walk_step_out's plane crossings (PRT_WALK_RCP)
     Fixed3 p;     ///< current point (inside the next cell to visit)
     float t;      ///< ray parameter where the next cell is entered
     float t_end;  ///< min(t_max, the root's exit)
@@ -199,6 +209,9 @@ PRT_HD inline bool walk_begin(const OctreeView& v, Vec3 o_local, Vec3 d_local, f
     if (!is_finite(o_local) || !is_finite(d_local) || v.nodes == nullptr || v.node_count == 0) return false;
     w.o = (o_local - v.root_min) * v.inv_root_size;
     w.d = d_local * v.inv_root_size;
+#if PRT_WALK_RCP
+    w.inv_d = Vec3{0.0f, 0.0f, 0.0f};
+#endif
     // Slab test against the unit cube [0,1]^3 (closed).
     float t_enter = t_min;
     float t_exit = t_max;
@@ -212,6 +225,9 @@ PRT_HD inline bool walk_begin(const OctreeView& v, Vec3 o_local, Vec3 d_local, f
             continue;
         }
         const float inv = 1.0f / d;
+#if PRT_WALK_RCP
+        set_component(w.inv_d, a, inv);
+#endif
         const float ta = (0.0f - o) * inv;
         const float tb = (1.0f - o) * inv;
         const float near = fminf(ta, tb);
@@ -301,7 +317,14 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
         if (d == 0.0f) continue;
         const float c = static_cast<float>(fixed_get(cell, a));
         const float plane = (d > 0.0f ? c + 1.0f : c) * size;
+#if !PRT_WALK_RCP
         const float ta = (plane - component(w.o, a)) / d;
+#else
+        // The host multiplies by the walk's 1 / d: three divisions a step were the largest cost of
+        // the CPU walk's step (perf on prt-bench-embree's room). t orders hits and bounds a leaf's
+        // range only; which cell comes next is integer arithmetic, so the walk is as robust.
+        const float ta = (plane - component(w.o, a)) * component(w.inv_d, a);
+#endif
         if (ta < t1) {
             t1 = ta;
             axis = a;
@@ -382,8 +405,9 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
 /// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
 /// root, passed t_max or used up its steps. Top-down descent (thesis 2.2.2), from the deepest node
 /// the previous leaf's path shares with this cell rather than from the root: the same leaf, found
-/// with fewer dependent reads.
-PRT_HD inline bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+/// with fewer dependent reads. Always inlined: g++ once left it a call per step in the host's splat
+/// walks (63 % of a CPU frame's samples).
+PRT_HD PRT_INLINE bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
     return walk_step(w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); });
 }
 

@@ -96,9 +96,21 @@ PRT_HD PRT_INLINE bool bounds_may_hit(float ax, float ay, float az, float sin_th
     const float lo = blo - m, hi = bhi + m;
     if (!(lo <= hi)) return false;  // no splat of the leaf can be hit
     if (sd == 0.0f) return so >= lo && so <= hi;
+#if PRT_DEVICE_CODE
     const float inv = 1.0f / sd;
     const float ta = (lo - so) * inv, tb = (hi - so) * inv;
     return fmaxf(ta, tb) >= t_lo && fminf(ta, tb) <= t_hi;
+#else
+    // The host compares in the slab's scale instead of dividing by sd (a division per leaf test):
+    // the ray is in the slab for t between a / sd and b / sd (a = lo - so, b = hi - so), which meets
+    // [t_lo, t_hi] iff b >= t_lo sd and a <= t_hi sd (sd > 0), or a <= t_lo sd and b >= t_hi sd
+    // (sd < 0). t sd is rounded once, and where a comparison is close |t sd| is about |a| or |b|: an
+    // error of a few ulps of |lo| + |so|, far inside the margin m. t_hi = inf gives +-inf and passes,
+    // as the division did.
+    const float a = lo - so, b = hi - so;
+    if (sd > 0.0f) return b >= t_lo * sd && a <= t_hi * sd;
+    return a <= t_lo * sd && b >= t_hi * sd;
+#endif
 }
 
 PRT_HD PRT_INLINE bool leaf_may_hit(const LeafBounds& b, Vec3 o, Vec3 d, float inv_dlen, bool inside,
@@ -391,6 +403,11 @@ PRT_HD inline bool closest_hit_splats(const OctreeView& v, const pool::Rgba8* co
                 PRT_COUNT(stats.splat_tests);
                 if (!intersect_splat(s, o, d, inside, lo, hi, t, xr)) continue;
                 if (i - begin < 32u) mask |= 1u << (i - begin);
+#if !PRT_DEVICE_CODE
+                // Pass 2 blends this splat's colour, a read by source point (a cache miss on the
+                // host, where it was ~3 % of a shadow frame): start it now.
+                if (colors != nullptr) __builtin_prefetch(colors + s.point);
+#endif
                 if (t < t_near || !found) {
                     t_near = t;
                     window_end = t + blend.window * s.radius * inv_dlen;
@@ -434,7 +451,7 @@ PRT_HD inline bool any_hit_splats(const OctreeView& v, Vec3 o, Vec3 d, bool insi
     if (!walk_begin(v, o, d, 0.0f, t_max, max_steps, walk)) return false;
     OctreeLeaf leaf;
     // An occluder anywhere on [0, t_max) counts, whichever leaf finds it.
-    const float hi = nextafterf(t_max, 0.0f);
+    const float hi = next_toward_zero(t_max);
     const LeafBounds* bounds = culling != k_cull_none ? v.leaf_bounds : nullptr;
     const float inv_dlen = bounds != nullptr ? 1.0f / length(d) : 0.0f;
     // In a fully replicated tree every hit also lies in the leaf holding the hit point, which the
