@@ -15,7 +15,11 @@
 #   FRAMES     timed frames per scenario and renderer, the median is reported (default 3)
 # Environment: THREADS (default 0 = all cores, the same for both), JSON=FILE writes the results,
 #   JOBS (build jobs, default: all cores), EXTRA (more prt-bench-embree arguments, e.g.
-#   "--scenarios primary,shadow" or "--max-leaf 64").
+#   "--scenarios primary,shadow" or "--max-leaf 64"), CULLED=1: ours traces the room after prt-cull
+#   (the default chain's octree: prt-bench --save-pool, then prt-cull with its defaults) with the
+#   same camera and light (preprocess/bench/bench_room.json), Embree the same points.
+# The two renderers draw their frames in turns (ours, Embree, ours, ...) and ours / Embree is the
+# median over those frame pairs, so a shared machine's changing speed moves both alike.
 set -euo pipefail
 # shellcheck source=lib/bench-common.sh
 . "$(dirname "$0")/lib/bench-common.sh"
@@ -29,7 +33,18 @@ if ! cmake --build "$build" -j "${JOBS:-$(nproc)}" --target prt-bench-embree >/d
     exit 1
 fi
 echo "# machine: $(nproc) cores, $(bench_cpu_model), load average $(bench_load)"
-args=(--synthetic "$points" --width "$size" --height "$size" --frames "$frames" --warmup 1 --threads "${THREADS:-0}" --quiet)
+args=(--width "$size" --height "$size" --frames "$frames" --warmup 1 --threads "${THREADS:-0}" --quiet)
+if [ "${CULLED:-0}" = 1 ]; then
+    cmake --build "$build" -j "${JOBS:-$(nproc)}" --target prt-bench prt-cull >/dev/null
+    bench_workdir bench-embree
+    "$build/bin/prt-bench" --backend cpu --synthetic "$points" --save-pool "$work/room.pool" --frames 1 --warmup 0 \
+        --width 16 --height 16 --scenarios primary --quiet >/dev/null
+    "$build/bin/prt-cull" "$work/room.pool" -o "$work/room_c.pool" --quiet
+    sed 's/"room.pool"/"room_c.pool"/' "$(dirname "$0")/../preprocess/bench/bench_room.json" >"$work/scene.json"
+    args+=("$work/room_c.pool" --scene "$work/scene.json")
+else
+    args+=(--synthetic "$points")
+fi
 [ -n "${JSON:-}" ] && args+=(--json "$JSON")
 # shellcheck disable=SC2086
 "$build/bin/prt-bench-embree" "${args[@]}" ${EXTRA:-}

@@ -10,8 +10,9 @@
 //           inside rays only back faces, no minimum distance), so secondary and shadow rays leave
 //           their surface exactly as ours do. Shading, secondary rays and tone mapping are the
 //           core's functions (render.h); only closest-hit and any-hit queries differ.
-// Both render with the same number of threads over 16x16 tiles; each scenario's frame time is the
-// median over --frames frames after --warmup. The table gives both rates and ours / Embree.
+// Both render with the same number of threads over 16x16 tiles, frame about frame (ours, Embree,
+// ours, ...), so a shared machine's changing speed moves both alike; each scenario's frame time is
+// the median over --frames frames after --warmup, and ours / Embree the median over the frame pairs.
 //
 // What differs, by design: ours blends the hits within the blending window (eq. 3.1, more work per
 // hit); Embree returns the nearest disc. The run reports how often the two agree on the primary
@@ -269,16 +270,31 @@ rt::FrameStats render_embree(const EmbreeTracer& tracer, const core::PinholeCame
     return s;
 }
 
-/// Median frame time (seconds) of `frames` frames after `warmup`, and the last frame's stats.
-double time_frames(std::uint32_t warmup, std::uint32_t frames, const std::function<rt::FrameStats()>& frame,
-                   rt::FrameStats& last) {
-    for (std::uint32_t i = 0; i < warmup; ++i) frame();
-    std::vector<double> t;
-    for (std::uint32_t i = 0; i < frames; ++i) {
-        last = frame();
-        t.push_back(last.seconds);
+/// Both renderers' frame times, frame by frame.
+struct PairedTimes {
+    double a = 0, b = 0;  ///< median frame time (seconds) of each
+    double ratio = 0;     ///< median over the frame pairs of b's time / a's
+};
+
+/// `frames` frames of `a` and of `b` after `warmup` of each, in turns (a, b, a, b, ...), so a
+/// machine that slows down or speeds up during the run (a shared VM) moves both alike and the
+/// ratio of a pair's times stays the comparison; the last frame's stats of each.
+PairedTimes time_paired(std::uint32_t warmup, std::uint32_t frames, const std::function<rt::FrameStats()>& a,
+                        const std::function<rt::FrameStats()>& b, rt::FrameStats& last_a,
+                        rt::FrameStats& last_b) {
+    for (std::uint32_t i = 0; i < warmup; ++i) {
+        a();
+        b();
     }
-    return player::median(t);
+    std::vector<double> ta, tb, r;
+    for (std::uint32_t i = 0; i < frames; ++i) {
+        last_a = a();
+        last_b = b();
+        ta.push_back(last_a.seconds);
+        tb.push_back(last_b.seconds);
+        r.push_back(last_b.seconds / std::max(last_a.seconds, 1e-12));
+    }
+    return PairedTimes{player::median(ta), player::median(tb), player::median(r)};
 }
 
 void run(const Options& o, const tool::CommonOptions& common) {
@@ -329,12 +345,12 @@ void run(const Options& o, const tool::CommonOptions& common) {
         req.height = h;
         rt::Image ours_img, embree_img;
         rt::FrameStats ours_last, embree_last;
-        const double ours_s = time_frames(
-            o.warmup, o.frames, [&] { return ours->render(req, ours_img); }, ours_last);
         const EmbreeTracer tracer(es, view);
-        const double embree_s = time_frames(
-            o.warmup, o.frames,
-            [&] { return render_embree(tracer, cam, sc.params, w, h, threads, embree_img); }, embree_last);
+        const PairedTimes pt = time_paired(
+            o.warmup, o.frames, [&] { return ours->render(req, ours_img); },
+            [&] { return render_embree(tracer, cam, sc.params, w, h, threads, embree_img); }, ours_last,
+            embree_last);
+        const double ours_s = pt.a, embree_s = pt.b;
         double diff = 0;
         for (std::size_t i = 0; i < ours_img.rgba8.size(); ++i)
             for (int c = 0; c < 3; ++c)
@@ -343,8 +359,12 @@ void run(const Options& o, const tool::CommonOptions& common) {
         diff /= 3.0 * std::max<std::size_t>(1, ours_img.rgba8.size());
         const double ours_rate = ours_last.rays() / ours_s * 1e-6,
                      embree_rate = embree_last.rays() / embree_s * 1e-6;
+        // ours / Embree in rays per second: the median pair's time ratio, scaled by the ray counts
+        // (the same rays but for the blending's secondary-ray differences).
+        const double ratio = pt.ratio * static_cast<double>(ours_last.rays()) /
+                             static_cast<double>(std::max<std::uint64_t>(embree_last.rays(), 1));
         std::printf("%-10s %12.1f %12.1f %14.2f %14.2f %12.2f %10.2f\n", sc.name.c_str(), ours_s * 1e3,
-                    embree_s * 1e3, ours_rate, embree_rate, ours_rate / embree_rate, diff);
+                    embree_s * 1e3, ours_rate, embree_rate, ratio, diff);
         report["scenarios"].push_back({{"name", sc.name},
                                        {"ours_ms", ours_s * 1e3},
                                        {"embree_ms", embree_s * 1e3},
@@ -352,7 +372,7 @@ void run(const Options& o, const tool::CommonOptions& common) {
                                        {"embree_rays", embree_last.rays()},
                                        {"ours_mrays_per_s", ours_rate},
                                        {"embree_mrays_per_s", embree_rate},
-                                       {"ratio_ours_over_embree", ours_rate / embree_rate},
+                                       {"ratio_ours_over_embree", ratio},
                                        {"mean_abs_diff_8bit", diff}});
     }
     // The same surface: primary hit distances of both, on every 4th pixel in each direction.
