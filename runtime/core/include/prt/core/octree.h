@@ -320,8 +320,9 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
 #if !PRT_WALK_RCP
         const float ta = (plane - component(w.o, a)) / d;
 #else
-        // The host multiplies by the walk's 1 / d: three divisions a step were the largest cost of
-        // the CPU walk's step (perf on prt-bench-embree's room). t orders hits and bounds a leaf's
+        // Multiplies by the walk's 1 / d (the host; device code only with PRT_DEVICE_WALK_RCP):
+        // three divisions a step were the largest cost of the CPU walk's step (perf on
+        // prt-bench-embree's room). t orders hits and bounds a leaf's
         // range only; which cell comes next is integer arithmetic, so the walk is as robust.
         const float ta = (plane - component(w.o, a)) * component(w.inv_d, a);
 #endif
