@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <mutex>
 #include <numeric>
 #include <string>
 
@@ -1062,6 +1063,7 @@ struct EvaluatorScratch {
     std::vector<double> far_weights;
     std::vector<double> d2, arg, w;
     Candidates cand;
+    std::vector<std::size_t> far_corners;  ///< evaluate()'s corners beyond every support (indices into out)
     std::uint64_t far = 0, counted = 0;  ///< corners beyond every support; points counted
     std::uint64_t unsupported = 0;       ///< corners whose projection lies away from the data
 };
@@ -1076,7 +1078,8 @@ struct CornerEvaluator {
     double start_radius;  ///< first search radius for far corners
     bool one_side;        ///< BuildOptions::one_side
 
-    /// The `count` corners at qs[3 k .. 3 k + 2], all within the closed box [blo, bhi], into out[k].
+    /// The `count` corners at qs[3 k .. 3 k + 2], all within the closed box [blo, bhi], into out[k];
+    /// a corner beyond every point's support is left to far() and its k appended to s.far_corners.
     void evaluate(const double* qs, std::size_t count, const double blo[3], const double bhi[3],
                   CornerValue* out, EvaluatorScratch& s) const {
         s.ids.clear();
@@ -1149,12 +1152,14 @@ struct CornerEvaluator {
                     s.unsupported += !out[k].supported;
                 }
             } else {
-                out[k] = evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, s.far_ids,
-                                      s.far_weights);
-                ++s.far;
-                s.unsupported += !out[k].supported;
+                s.far_corners.push_back(k);
             }
         }
+    }
+
+    /// The corner at q beyond every point's support (evaluate_far).
+    CornerValue far(const double q[3], EvaluatorScratch& s) const {
+        return evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, s.far_ids, s.far_weights);
     }
 };
 
@@ -1424,6 +1429,8 @@ struct BlockEvaluation {
         blocks.push_back(keys.size());
         std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
         const double corner_step = frame.edge(k_code_level);
+        std::vector<std::size_t> far_keys;  // corners beyond every support: evaluated after the blocks
+        std::mutex far_mutex;
         parallel_chunks(blocks.size() - 1, 16, threads, [&](std::size_t b0, std::size_t b1, unsigned worker) {
             EvaluatorScratch scratch;
             std::vector<double> qs;
@@ -1440,14 +1447,34 @@ struct BlockEvaluation {
                     qs.push_back(frame.lo[1] + corner_step * pre::compact_bits21(key >> 1));
                     qs.push_back(frame.lo[2] + corner_step * pre::compact_bits21(key >> 2));
                 }
+                scratch.far_corners.clear();
                 evaluator.evaluate(qs.data(), last - first, blo, bhi, out + first, scratch);
+                if (!scratch.far_corners.empty()) {
+                    const std::lock_guard<std::mutex> lock(far_mutex);
+                    for (const std::size_t k : scratch.far_corners) far_keys.push_back(first + k);
+                }
                 const std::uint64_t d = corners_done.fetch_add(last - first) + (last - first);
                 if (worker == 0 && progress) progress("corners", d, keys.size());
             }
-            far += scratch.far;
             counted += scratch.counted;
             unsupported += scratch.unsupported;
         });
+        // Far corners cost one growing ball search each (tens of times a block's corner) and gather
+        // in a few blocks, mostly the closure's: one at a time they leave the other workers idle.
+        // A far corner's value depends on its position alone, so the order does not matter.
+        parallel_chunks(far_keys.size(), 4, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            EvaluatorScratch scratch;
+            for (std::size_t i = b; i < e; ++i) {
+                const std::uint64_t key = keys[far_keys[i]];
+                const double q[3] = {frame.lo[0] + corner_step * pre::compact_bits21(key),
+                                     frame.lo[1] + corner_step * pre::compact_bits21(key >> 1),
+                                     frame.lo[2] + corner_step * pre::compact_bits21(key >> 2)};
+                CornerValue& v = out[far_keys[i]];
+                v = evaluator.far(q, scratch);
+                if (!v.supported) ++unsupported;
+            }
+        });
+        far += far_keys.size();
         return CornerCounts{far.load(), counted.load(), unsupported.load()};
     }
 };
