@@ -14,6 +14,13 @@ check() {  # check DESCRIPTION COMMAND...: the command must succeed
     fi
 }
 contains() { grep -qF -- "$2" "$1"; }
+# contains_any FILE TEXT...: FILE contains one of the texts.
+contains_any() {
+    local file=$1 text
+    shift
+    for text in "$@"; do grep -qF -- "$text" "$file" && return 0; done
+    return 1
+}
 # The exit status of the test: 0 when every check passed.
 finish_checks() {
     echo "$failures failed checks"
