@@ -4,12 +4,18 @@
 # outputs only for the good ones (each a valid pool), every failure named with its reason, exit
 # statuses, usage errors, --help documenting every option, an existing output of a failing input
 # left untouched, the optional steps, and an interrupted batch leaving no partial output.
-# Usage: prt_batch_test.sh PRT_BATCH BIN_DIR   (exit 77 = skipped: the build lacks prt-import)
+# Usage: prt_batch_test.sh PRT_BATCH BIN_DIR   (exit 77 = skipped: the build lacks prt-import, or
+# the Python prt-batch runs with lacks Dask)
 set -uo pipefail
 batch=$(cd "$(dirname "$1")" && pwd)/$(basename "$1")
 bin=$(cd "$2" && pwd)
 if [ ! -x "$bin/prt-import" ] || [ ! -x "$bin/prt-info" ]; then
     echo "SKIP: prt-import or prt-info not built in $bin"
+    exit 77
+fi
+python=$(head -n 1 "$batch" | sed -n 's/^#! *//p')  # prt-batch's interpreter (its first line)
+if ! ${python:-python3} -c "import dask, distributed, cloudpickle" 2>/dev/null; then
+    echo "SKIP: ${python:-python3} lacks Dask (python3-dask, python3-distributed), which prt-batch runs on"
     exit 77
 fi
 
