@@ -9,14 +9,14 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <numbers>
 #include <mutex>
+#include <numbers>
 #include <numeric>
 #include <string>
 
+#include "buffer.h"
 #include "disk_box.h"
 #include "iso_morton.h"
-#include "buffer.h"
 #include "kd_tree.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
@@ -112,7 +112,7 @@ bool is_filled(std::uint8_t kind) {
 }
 
 /// The usable points, sorted by their level-K Morton code (structure of arrays). Buffers: the
-/// parallel fill of sorted_points touches their pages first, not a serial zeroing (160 MB at 1M points).
+/// parallel fill of sorted_points touches their pages first, not a serial zeroing (120 MB at 1M points).
 struct PointSet {
     std::size_t n = 0;
     pre::Buffer<double> pos, nrm;     ///< 3n: position (local frame), unit normal
@@ -303,6 +303,7 @@ public:
             });
         }
     }
+
     /// What split_by_points does with children without points: leave them empty (none), test them
     /// against the influence disks near the parent now (passive or empty), or mark them k_untested
     /// for test_untested (later).
@@ -1064,7 +1065,7 @@ struct EvaluatorScratch {
     std::vector<double> d2, arg, w;
     Candidates cand;
     std::vector<std::size_t> far_corners;  ///< evaluate()'s corners beyond every support (indices into out)
-    std::uint64_t far = 0, counted = 0;  ///< corners beyond every support; points counted
+    std::uint64_t counted = 0;           ///< points counted
     std::uint64_t unsupported = 0;       ///< corners whose projection lies away from the data
 };
 
