@@ -1428,7 +1428,7 @@ struct BlockEvaluation {
         for (std::size_t i = 1; i < keys.size(); ++i)
             if ((keys[i] >> block_shift) != (keys[i - 1] >> block_shift)) blocks.push_back(i);
         blocks.push_back(keys.size());
-        std::atomic<std::uint64_t> corners_done{0}, far{0}, counted{0}, unsupported{0};
+        std::atomic<std::uint64_t> corners_done{0}, counted{0}, unsupported{0};
         const double corner_step = frame.edge(k_code_level);
         std::vector<std::size_t> far_keys;  // corners beyond every support: evaluated after the blocks
         std::mutex far_mutex;
@@ -1475,8 +1475,7 @@ struct BlockEvaluation {
                 if (!v.supported) ++unsupported;
             }
         });
-        far += far_keys.size();
-        return CornerCounts{far.load(), counted.load(), unsupported.load()};
+        return CornerCounts{far_keys.size(), counted.load(), unsupported.load()};
     }
 };
 
