@@ -25,7 +25,7 @@
 
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::pre {
 

@@ -46,7 +46,7 @@
 #include "prt/formats/pool.h"
 #include "prt/mapped_file.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::pre {
 

@@ -16,7 +16,7 @@
 #include "poses.h"
 #include "prt/error.h"
 #include "prt/mapped_file.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "quote.h"
 #include "xyz_reader.h"
 
@@ -81,7 +81,15 @@ std::string fmt(const char* format, double a) {
 }
 
 std::string vec(const double* v) {
-    return "(" + fmt("%g", v[0]) + ", " + fmt("%g", v[1]) + ", " + fmt("%g", v[2]) + ")";
+    // Appended in place: g++ 12's -Wrestrict misreads '"(" + std::string' once this is inlined.
+    std::string s = "(";
+    s += fmt("%g", v[0]);
+    s += ", ";
+    s += fmt("%g", v[1]);
+    s += ", ";
+    s += fmt("%g", v[2]);
+    s += ")";
+    return s;
 }
 
 std::string count(std::uint64_t n, const char* what) {

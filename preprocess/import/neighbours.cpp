@@ -12,7 +12,7 @@
 #include "prt/error.h"
 #include "prt/parallel.h"
 #include "prt/symmetric_eigen.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "spill_file.h"
 
 namespace prt::pre::import {

@@ -18,7 +18,7 @@
 #include "prt/error.h"
 #include "prt/formats/pool.h"
 #include "prt/mapped_file.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "tiled_knn.h"
 #include "xyz_reader.h"
 

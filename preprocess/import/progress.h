@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::pre::import {
 

@@ -9,7 +9,7 @@
 #include "photons.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 #if defined(PRT_HAVE_CUDA)
 #include "prt/cuda/lightmap_cuda.h"

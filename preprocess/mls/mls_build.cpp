@@ -13,7 +13,7 @@
 #include "morton.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "radix_sort.h"
 
 namespace prt::mls {

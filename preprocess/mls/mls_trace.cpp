@@ -4,7 +4,7 @@
 #include <mutex>
 
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::mls {
 

@@ -11,7 +11,7 @@
 #include "buffer.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 #if defined(PRT_HAVE_CUDA)
 #include "prt/cuda/device.h"

@@ -49,7 +49,7 @@
 #include "prt/core/scene_view.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/cull_cuda.h"
 #endif

@@ -23,7 +23,7 @@
 #include "float_round.h"
 #include "morton.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "radix_sort.h"
 
 namespace prt::pre {

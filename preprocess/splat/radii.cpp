@@ -13,7 +13,7 @@
 #endif
 #include "prt/error.h"
 #include "prt/parallel.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::pre {
 

@@ -1,7 +1,6 @@
 // PointRT player: options shared by prt-play and prt-bench (render-setting overrides).
 #pragma once
 
-#include <CLI/CLI.hpp>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -11,7 +10,16 @@
 #include "prt/runtime/backend.h"
 #include "prt/runtime/brick_stream.h"
 #include "prt/runtime/render_scene.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
+
+// Declared, not included: CLI11 is heavy and window.cpp (through window.h) needs none of it;
+// player_options.cpp, prt_play.cpp and prt_bench.cpp include prt/tool.h.
+namespace CLI {
+class App;
+}
+namespace prt::tool {
+struct CommonOptions;
+}
 
 namespace prt::player {
 

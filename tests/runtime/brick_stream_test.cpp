@@ -19,7 +19,7 @@
 #include "prt/cpu/cpu_backend.h"
 #include "prt/error.h"
 #include "prt/runtime/image.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "tool_run.h"
 
 namespace prt::test {

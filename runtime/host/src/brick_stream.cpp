@@ -13,7 +13,7 @@
 #include "prt/formats/brick_sections.h"
 #include "prt/parallel.h"
 #include "prt/runtime/leaf_bounds.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 
 namespace prt::rt {
 

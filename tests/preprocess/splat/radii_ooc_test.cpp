@@ -17,7 +17,7 @@
 #include "kd_tree.h"
 #include "point_cloud.h"
 #include "prt/formats/pool.h"
-#include "prt/tool.h"
+#include "prt/tool_util.h"
 #include "radii.h"
 #include "splat_test_data.h"
 #include "tiled_knn.h"
