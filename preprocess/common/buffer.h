@@ -1,23 +1,70 @@
-// PointRT preprocess: an uninitialised array for large scratch data filled by parallel loops.
-// std::vector<T>(n) zeroes its n elements on the calling thread before any worker starts: for the
-// hundreds of MB of a 10M-sample sort that serial first touch (a page fault per 4 KiB, slower still
-// in a VM) cost more than the parallel work itself. A Buffer leaves the elements uninitialised, so
-// the pages are first touched by the workers that fill them, and on Linux asks for transparent huge
-// pages when large (a fault per 2 MiB).
+// PointRT preprocess: memory for large data. A Buffer is an uninitialised array for scratch data
+// filled by parallel loops. std::vector<T>(n) zeroes its n elements on the calling thread before any
+// worker starts: for the hundreds of MB of a 10M-sample sort that serial first touch (a page fault
+// per 4 KiB, slower still in a VM) cost more than the parallel work itself. A Buffer leaves the
+// elements uninitialised, so the pages are first touched by the workers that fill them. A
+// LargeVector is a std::vector for tables that grow (octree nodes, corner values). Both ask Linux
+// for transparent huge pages when large: a fault per 2 MiB instead of per 4 KiB.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <span>
 #include <type_traits>
 #include <utility>
+#include <vector>
 
 #if defined(__linux__)
 #include <sys/mman.h>
 #endif
 
 namespace prt::pre {
+
+/// `bytes` of memory (std::free releases it), never null (std::bad_alloc). From 2 MiB up: aligned
+/// to 2 MiB, rounded up to whole 2 MiB pages and advised as transparent huge pages (the system's
+/// setting "madvise", Debian's default, gives them only to memory so advised).
+inline void* allocate_large(std::size_t bytes) {
+    constexpr std::size_t k_huge = std::size_t{2} << 20;
+    void* p = nullptr;
+    if (bytes >= k_huge) {
+        const std::size_t rounded = (bytes + k_huge - 1) / k_huge * k_huge;
+        p = std::aligned_alloc(k_huge, rounded);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+        if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
+#endif
+    } else {
+        p = std::malloc(bytes > 0 ? bytes : 1);
+    }
+    if (!p) throw std::bad_alloc();
+    return p;
+}
+
+/// std::vector's allocator with allocate_large's policy (types of fundamental alignment only).
+template <class T>
+struct LargeAllocator {
+    static_assert(alignof(T) <= alignof(std::max_align_t), "LargeAllocator: over-aligned type");
+    using value_type = T;
+    LargeAllocator() = default;
+    template <class U>
+    LargeAllocator(const LargeAllocator<U>&) noexcept {}
+    T* allocate(std::size_t n) {
+        if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
+        return static_cast<T*>(allocate_large(n * sizeof(T)));
+    }
+    void deallocate(T* p, std::size_t) noexcept {
+        std::free(p);
+    }
+    template <class U>
+    bool operator==(const LargeAllocator<U>&) const noexcept {
+        return true;
+    }
+};
+
+/// A std::vector whose large blocks are huge pages (LargeAllocator).
+template <class T>
+using LargeVector = std::vector<T, LargeAllocator<T>>;
 
 template <class T>
 class Buffer {
@@ -28,19 +75,10 @@ public:
     Buffer() = default;
     /// `n` uninitialised elements.
     explicit Buffer(std::size_t n) : m_size(n) {
+        static_assert(alignof(T) <= alignof(std::max_align_t), "Buffer: over-aligned type");
         if (n == 0) return;
-        const std::size_t bytes = n * sizeof(T);
-        constexpr std::size_t k_huge = std::size_t{2} << 20;
-        if (bytes >= 4 * k_huge && alignof(T) <= k_huge) {
-            const std::size_t rounded = (bytes + k_huge - 1) / k_huge * k_huge;
-            m_data = static_cast<T*>(std::aligned_alloc(k_huge, rounded));
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-            if (m_data) madvise(m_data, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
-#endif
-        } else {
-            m_data = static_cast<T*>(std::malloc(bytes));
-        }
-        if (!m_data) throw std::bad_alloc();
+        if (n > std::size_t(-1) / sizeof(T)) throw std::bad_array_new_length();
+        m_data = static_cast<T*>(allocate_large(n * sizeof(T)));
     }
     Buffer(Buffer&& o) noexcept
         : m_data(std::exchange(o.m_data, nullptr)), m_size(std::exchange(o.m_size, 0)) {}
@@ -96,5 +134,29 @@ private:
     T* m_data = nullptr;
     std::size_t m_size = 0;
 };
+
+/// v.reserve(n) for an empty std::vector of another allocator (the formats' model vectors): the
+/// new block is advised as huge pages (those 2 MiB pages that lie wholly inside it) before the
+/// caller fills it.
+template <class T, class A>
+void reserve_on_huge_pages(std::vector<T, A>& v, std::size_t n) {
+    const bool fresh = v.capacity() < n;
+    v.reserve(n);
+#if defined(__linux__) && defined(MADV_HUGEPAGE)
+    constexpr std::uintptr_t k_huge = std::uintptr_t{2} << 20;
+    const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
+    const std::uintptr_t first = (begin + k_huge - 1) / k_huge * k_huge;
+    const std::uintptr_t last = (begin + v.capacity() * sizeof(T)) / k_huge * k_huge;
+    if (fresh && v.empty() && last > first)  // advice only: failure is harmless
+        madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+#endif
+}
+
+/// v.resize(n) after reserve_on_huge_pages (resize zeroes the elements on the calling thread).
+template <class T, class A>
+void resize_on_huge_pages(std::vector<T, A>& v, std::size_t n) {
+    reserve_on_huge_pages(v, n);
+    v.resize(n);
+}
 
 }  // namespace prt::pre

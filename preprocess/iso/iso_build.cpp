@@ -12,6 +12,7 @@
 #include <mutex>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <string>
 
 #include "buffer.h"
@@ -133,8 +134,8 @@ struct PointSet {
 struct ClassIndex {
     std::uint32_t level = 0;  ///< cells at least as wide as the group's largest reach
     double reach = 0;
-    std::vector<std::uint64_t> codes;
-    std::vector<std::uint32_t> ids;  ///< into PointSet
+    pre::LargeVector<std::uint64_t> codes;
+    pre::LargeVector<std::uint32_t> ids;  ///< into PointSet
 };
 
 struct InfluenceIndex {
@@ -251,7 +252,7 @@ public:
     TreeBuilder(const PointSet& ps, const InfluenceIndex& index, const Frame& frame, const BuildOptions& o)
         : m_ps(ps), m_index(index), m_frame(frame), m_options(o) {}
 
-    std::vector<Node> nodes;
+    pre::LargeVector<Node> nodes;
 
     void check_size(std::size_t more) const {
         if (nodes.size() + more > pool::k_node_address_max)
@@ -607,9 +608,9 @@ public:
     /// the serial order, with m_near's answer where it was asked.
     template <class SignMask, class Values>
     std::vector<std::uint32_t> close(const std::vector<std::uint32_t>& frontier,
-                                     const std::vector<std::uint32_t>& leaf_slot, SignMask&& sign_mask,
+                                     const pre::LargeVector<std::uint32_t>& leaf_slot, SignMask&& sign_mask,
                                      Values&& values, unsigned threads) {
-        std::vector<Node>& nodes = m_tree.nodes;
+        pre::LargeVector<Node>& nodes = m_tree.nodes;
         m_added.clear();
         m_work.clear();
         auto evaluated = [&](std::uint32_t i) { return i < leaf_slot.size() && leaf_slot[i] != UINT32_MAX; };
@@ -739,7 +740,7 @@ private:
     template <class Mask, class Values>
     void beyond_face(std::uint32_t leaf, std::uint32_t a, std::uint32_t side, std::uint32_t located,
                      bool near_known, Mask&& mask, Values&& values) {
-        std::vector<Node>& nodes = m_tree.nodes;
+        pre::LargeVector<Node>& nodes = m_tree.nodes;
         const std::uint32_t l = nodes[leaf].level;
         std::uint32_t cell[3];
         if (!neighbour_cell(leaf, a, side, cell)) return;
@@ -807,7 +808,7 @@ private:
     /// leaves (their children on the face are empty where it was) and fills others. `stack`: scratch.
     bool empty_on_face(std::uint32_t i, std::uint32_t a, std::uint32_t facing,
                        std::vector<std::uint32_t>& stack) const {
-        const std::vector<Node>& nodes = m_tree.nodes;
+        const pre::LargeVector<Node>& nodes = m_tree.nodes;
         stack.assign(1, i);
         while (!stack.empty()) {  // bounded by the subtree
             const std::uint32_t k = stack.back();
@@ -824,7 +825,7 @@ private:
 
     /// Whether the subtree of node i holds a filled leaf.
     bool has_filled(std::uint32_t i) const {
-        const std::vector<Node>& nodes = m_tree.nodes;
+        const pre::LargeVector<Node>& nodes = m_tree.nodes;
         std::vector<std::uint32_t> stack{i};
         while (!stack.empty()) {
             const std::uint32_t k = stack.back();
@@ -840,7 +841,7 @@ private:
 
     /// 2:1 balance around the new leaves (worklist: splits add more).
     void keep_balanced() {
-        std::vector<Node>& nodes = m_tree.nodes;
+        pre::LargeVector<Node>& nodes = m_tree.nodes;
         while (!m_work.empty()) {  // bounded: every iteration removes one entry; splits add finitely many
             const std::uint32_t leaf = m_work.back();
             m_work.pop_back();
@@ -1199,11 +1200,12 @@ RadiusSource checked_radius_source(const BuildInput& in, const BuildOptions& o) 
 
 /// The points the build uses (indices into the input) and their radii of influence r_i.
 struct Influence {
-    std::vector<std::uint32_t> keep;
-    std::vector<double> radius;
+    pre::LargeVector<std::uint32_t> keep;
+    pre::LargeVector<double> radius;
 };
 
-double median_of(std::vector<double> v) {
+double median_of(std::span<const double> values) {
+    pre::LargeVector<double> v(values.begin(), values.end());
     std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
     return v[v.size() / 2];
 }
@@ -1235,7 +1237,8 @@ Influence radii_of_influence(const BuildInput& in, RadiusSource source, const Bu
             const pool::Float3 p = in.positions[inf.keep[j]];
             pos[3 * j] = p.x, pos[3 * j + 1] = p.y, pos[3 * j + 2] = p.z;
         }
-        inf.radius = knn_distances(pos, o.knn, threads, progress);
+        const std::vector<double> knn = knn_distances(pos, o.knn, threads, progress);
+        inf.radius.assign(knn.begin(), knn.end());
         // prt-radii's outlier rule: radii above clamp x median become clamp x median.
         const double limit = o.knn_clamp > 0 ? o.knn_clamp * median_of(inf.radius) : 0.0;
         for (double& r : inf.radius)
@@ -1348,10 +1351,10 @@ PointSet sorted_points(const BuildInput& in, const Influence& inf, const Frame& 
 /// The corner values of the evaluated leaves: each owns 8 corner slots, which slot_corner maps into
 /// `values` (a corner shared by several leaves is one value).
 struct CornerTable {
-    std::vector<CornerValue> values;
-    std::vector<std::uint32_t> slot_corner;
-    std::vector<std::uint32_t> leaf_slot;  ///< node -> its evaluated leaf (UINT32_MAX: never evaluated)
-    std::vector<std::uint64_t> keys;       ///< sorted codes of values[0, keys.size()): step 5's corners
+    pre::LargeVector<CornerValue> values;
+    pre::LargeVector<std::uint32_t> slot_corner;
+    pre::LargeVector<std::uint32_t> leaf_slot;  ///< node -> its evaluated leaf (UINT32_MAX: never evaluated)
+    pre::LargeVector<std::uint64_t> keys;       ///< sorted codes of values[0, keys.size()): step 5's corners
     std::unordered_map<std::uint64_t, std::uint32_t> added;  ///< code -> value: the closure's corners
 
     /// The value index of the corner with code `key`, or UINT32_MAX when not evaluated yet.
@@ -1384,7 +1387,7 @@ struct CornerTable {
 };
 
 /// The filled leaves (active and passive, counted in `st`), in node order.
-std::vector<std::uint32_t> filled_leaves(const std::vector<Node>& nodes, BuildStats& st) {
+std::vector<std::uint32_t> filled_leaves(const pre::LargeVector<Node>& nodes, BuildStats& st) {
     std::vector<std::uint32_t> filled;
     for (std::size_t i = 0; i < nodes.size(); ++i)
         if (nodes[i].child == 0 && is_filled(nodes[i].kind)) {
@@ -1419,7 +1422,7 @@ struct BlockEvaluation {
     const Frame& frame;
     double median_support;
 
-    CornerCounts run(const std::vector<std::uint64_t>& keys, CornerValue* out, unsigned threads,
+    CornerCounts run(std::span<const std::uint64_t> keys, CornerValue* out, unsigned threads,
                      const Progress& progress) const {
         if (keys.empty()) return {};
         const std::uint32_t block_level = detail::level_for_extent(frame, median_support, 1.0, k_code_level);
@@ -1481,7 +1484,7 @@ struct BlockEvaluation {
 
 /// Step 5 (thesis 4.2-4.3, eq. 4.1-4.3): f(Q), n(Q) and the color at every distinct corner of the
 /// `filled` leaves, sorted by code (BlockEvaluation).
-CornerTable evaluate_corners(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& filled,
+CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vector<std::uint32_t>& filled,
                              const BlockEvaluation& blocks, unsigned threads, const Progress& progress,
                              BuildStats& st) {
     CornerTable table;
@@ -1508,7 +1511,7 @@ CornerTable evaluate_corners(const std::vector<Node>& nodes, const std::vector<s
         before[b / k_chunk + 1] = count;
     });
     for (std::size_t c = 0; c < chunks; ++c) before[c + 1] += before[c];
-    std::vector<std::uint64_t>& corner_keys = table.keys;
+    pre::LargeVector<std::uint64_t>& corner_keys = table.keys;
     corner_keys.resize(before[chunks]);
     table.slot_corner.resize(m);
     parallel_chunks(m, k_chunk, threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -1535,7 +1538,7 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
                    const BlockEvaluation& blocks, const BuildOptions& o, unsigned threads, BuildStats& st) {
     const CornerEvaluator& evaluator = blocks.evaluator;
     const Frame& frame = blocks.frame;
-    std::vector<Node>& nodes = tree.nodes;
+    pre::LargeVector<Node>& nodes = tree.nodes;
     SurfaceClosure closure(tree, o.max_level,
                            [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
                                std::vector<std::uint32_t>& near_ids) {
@@ -1589,7 +1592,7 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
 
 /// Step 6: which nodes survive: filled leaves whose corners change sign (and, unless
 /// drop_uncrossed, those without a change that are not unsupported), and their ancestors.
-std::vector<std::uint8_t> crossed_leaves(const std::vector<Node>& nodes, const CornerTable& table,
+std::vector<std::uint8_t> crossed_leaves(const pre::LargeVector<Node>& nodes, const CornerTable& table,
                                          const BuildOptions& o, unsigned threads, BuildStats& st) {
     std::vector<std::uint8_t> keep_node(nodes.size(), 0);
     std::atomic<std::uint64_t> slots{0}, unsupported{0}, uncrossed{0};
@@ -1620,7 +1623,7 @@ std::vector<std::uint8_t> crossed_leaves(const std::vector<Node>& nodes, const C
 }
 
 /// The kept leaves in depth-first (Morton) order; leaf_of[node] is a leaf's index among them.
-std::vector<std::uint32_t> depth_first_leaves(const std::vector<Node>& nodes,
+std::vector<std::uint32_t> depth_first_leaves(const pre::LargeVector<Node>& nodes,
                                               const std::vector<std::uint8_t>& keep_node,
                                               std::vector<std::uint32_t>& leaf_of) {
     leaf_of.assign(nodes.size(), UINT32_MAX);
@@ -1641,12 +1644,13 @@ std::vector<std::uint32_t> depth_first_leaves(const std::vector<Node>& nodes,
 }
 
 /// Step 7 (thesis 4.4): the leaf arrays, quantized (56 bytes per leaf) and/or in floats.
-void encode_leaves(const std::vector<Node>& nodes, const std::vector<std::uint32_t>& dfs_leaves,
+void encode_leaves(const pre::LargeVector<Node>& nodes, const std::vector<std::uint32_t>& dfs_leaves,
                    const CornerTable& table, const Frame& frame, const BuildOptions& o, bool colors,
                    unsigned threads, IsoModel& model) {
     const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
-    if (q8) model.leaves_q8.resize(dfs_leaves.size());
-    if (f32) model.leaves_f32.resize(dfs_leaves.size());
+    // IsoModel's vectors zero their elements on this thread: on huge pages, a fault per 2 MiB.
+    if (q8) pre::resize_on_huge_pages(model.leaves_q8, dfs_leaves.size());
+    if (f32) pre::resize_on_huge_pages(model.leaves_f32, dfs_leaves.size());
     parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t li = b; li < e; ++li) {
             const Node& nd = nodes[dfs_leaves[li]];
@@ -1675,7 +1679,7 @@ void encode_leaves(const std::vector<Node>& nodes, const std::vector<std::uint32
 }
 
 /// Step 7: the node pool, breadth first; subtrees without a filled leaf become one empty leaf.
-void encode_nodes(const std::vector<Node>& nodes, const std::vector<std::uint8_t>& keep_node,
+void encode_nodes(const pre::LargeVector<Node>& nodes, const std::vector<std::uint8_t>& keep_node,
                   const std::vector<std::uint32_t>& leaf_of, IsoModel& model) {
     BuildStats& st = model.stats;
     std::vector<std::uint32_t> bfs{0};
@@ -1757,7 +1761,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     st.seconds_balance = seconds_since(t0);
 
     t0 = Clock::now();
-    const std::vector<Node>& nodes = tree.nodes;
+    const pre::LargeVector<Node>& nodes = tree.nodes;
     const double median_support = median_of({ps.support.begin(), ps.support.end()});
     const CornerEvaluator evaluator{index, ps, o.support, cube.sigma_max, 2 * median_support, o.one_side};
     const std::vector<std::uint32_t> filled = filled_leaves(nodes, st);

@@ -19,6 +19,7 @@
 #include <numeric>
 #include <string>
 
+#include "buffer.h"
 #include "disk_box.h"
 #include "float_round.h"
 #include "morton.h"
@@ -113,7 +114,7 @@ struct Scratch {
 
 class Builder {
 public:
-    Builder(std::vector<BuildSplat> splats, const pool::OctreeInfo& info, const OctreeParams& params,
+    Builder(pre::LargeVector<BuildSplat> splats, const pool::OctreeInfo& info, const OctreeParams& params,
             NodeCell root = {})
         : m_splats(std::move(splats)), m_info(info), m_params(params), m_root(root) {}
 
@@ -364,7 +365,7 @@ private:
                 return Handle{pool::node_address(m_top.nodes[h.index]) + 1, 0};
             return h;
         };
-        octree.nodes.reserve(nodes_total);
+        pre::reserve_on_huge_pages(octree.nodes, nodes_total);
         std::vector<Handle> level_nodes{resolve(Handle{0, 0})}, next;
         while (!level_nodes.empty()) {
             next.clear();
@@ -397,8 +398,9 @@ private:
         }
 
         // -- leaf ranges and leaf-contiguous splats (depth-first leaf order) ---------------------
-        octree.leaf_info.resize(filled + 1);
-        octree.splats.resize(stored);
+        // SplatOctree's vectors zero their elements on this thread: on huge pages, a fault per 2 MiB.
+        pre::resize_on_huge_pages(octree.leaf_info, filled + 1);
+        pre::resize_on_huge_pages(octree.splats, stored);
         parallel_chunks(task_count, 1, threads, [&](std::size_t tb, std::size_t te, unsigned) {
             for (std::size_t t = tb; t < te; ++t) {
                 LocalTree& tree = m_tasks[t].tree;
@@ -437,7 +439,7 @@ private:
         return octree;
     }
 
-    std::vector<BuildSplat> m_splats;
+    pre::LargeVector<BuildSplat> m_splats;
     pool::OctreeInfo m_info;
     OctreeParams m_params;
     NodeCell m_root;  // the node the tree is built from (the octree's root, or one cell of it)
@@ -533,14 +535,14 @@ void check_params(const OctreeParams& params, std::size_t points) {
 }
 
 /// The usable points as build records (point = index in the arrays), skipped ones counted.
-std::vector<BuildSplat> build_splats(std::span<const pool::Float3> positions,
+pre::LargeVector<BuildSplat> build_splats(std::span<const pool::Float3> positions,
                                      std::span<const pool::Float3> normals, std::span<const float> radii,
                                      OctreeStats& stats, RootBounds* bounds) {
     if (normals.size() != positions.size() || radii.size() != positions.size())
         throw Error("octree build: " + std::to_string(positions.size()) + " positions but " +
                     std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
                     " radii");
-    std::vector<BuildSplat> splats;
+    pre::LargeVector<BuildSplat> splats;
     splats.reserve(positions.size());
     for (std::size_t i = 0; i < positions.size(); ++i) {
         double len;
@@ -562,8 +564,12 @@ std::vector<BuildSplat> build_splats(std::span<const pool::Float3> positions,
 /// the input order (a random-order input otherwise makes every access a cache miss). Ties keep
 /// the input order, so the result does not depend on the thread count, and a subset of the
 /// points (one cell of an out-of-core build) keeps the order it has among all of them.
-void sort_by_morton(std::vector<BuildSplat>& splats, const pool::OctreeInfo& info, unsigned threads) {
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keys(splats.size());
+void sort_by_morton(pre::LargeVector<BuildSplat>& splats, const pool::OctreeInfo& info, unsigned threads) {
+    struct MortonKey {
+        std::uint64_t key;
+        std::uint32_t index;
+    };
+    pre::Buffer<MortonKey> keys(splats.size());  // first touched by the workers
     const double scale = 2097151.0 / double(info.root_size);
     parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t i = b; i < e; ++i) {
@@ -571,13 +577,15 @@ void sort_by_morton(std::vector<BuildSplat>& splats, const pool::OctreeInfo& inf
             for (int a = 0; a < 3; ++a)
                 q[a] = static_cast<std::uint32_t>(
                     std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0));
-            keys[i] = {pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
+            keys[i] = MortonKey{pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
         }
     });
     // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
-    pre::radix_sort_by(keys, 63, threads, [](const auto& k) { return k.first; });
-    std::vector<BuildSplat> sorted(splats.size());
-    for (std::size_t i = 0; i < keys.size(); ++i) sorted[i] = splats[keys[i].second];
+    pre::radix_sort_by(keys, 63, threads, [](const MortonKey& k) { return k.key; });
+    pre::LargeVector<BuildSplat> sorted(splats.size());
+    parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) sorted[i] = splats[keys[i].index];
+    });
     splats = std::move(sorted);
 }
 
@@ -646,7 +654,7 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
     const unsigned threads = resolve_threads(params.threads);
     OctreeStats stats;
     RootBounds bounds;
-    std::vector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds);  // thesis 3.1
+    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds);  // thesis 3.1
     const pool::OctreeInfo info = bounds.root();
     sort_by_morton(splats, info, threads);
     Builder builder(std::move(splats), info, params);
@@ -665,7 +673,7 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
         throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
     const unsigned threads = resolve_threads(params.threads);
     OctreeStats stats;
-    std::vector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr);
+    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr);
     sort_by_morton(splats, root, threads);
     Builder builder(std::move(splats), root, params, cell);
     SplatOctree octree = builder.run(threads, stats);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -13,6 +14,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "buffer.h"
 #include "float_round.h"
 #include "kd_tree.h"
 #include "morton.h"
@@ -268,3 +270,34 @@ TEST(KdTree, FewPointsAndExclusion) {
 }
 
 }  // namespace
+
+// buffer.h: large blocks on 2 MiB boundaries (huge pages), small ones from malloc; a LargeVector
+// keeps its elements across growth; resize_on_huge_pages zeroes as resize does.
+TEST(LargeMemory, LargeBlocksAre2MiBAlignedAndHoldTheirContents) {
+    constexpr std::size_t k_huge = std::size_t{2} << 20;
+    pre::Buffer<std::uint64_t> big(3 * k_huge / 8 + 5);  // not a whole number of huge pages
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(big.data()) % k_huge, 0u);
+    for (std::size_t i = 0; i < big.size(); ++i) big[i] = i * 7;
+    EXPECT_EQ(big[big.size() - 1], (big.size() - 1) * 7);
+    pre::Buffer<double> small(10);
+    ASSERT_NE(small.data(), nullptr);
+    EXPECT_TRUE(pre::Buffer<int>(0).empty());
+    EXPECT_THROW(pre::Buffer<std::uint64_t>(std::size_t(-1) / 4), std::bad_array_new_length);
+
+    pre::LargeVector<std::uint32_t> v;
+    for (std::uint32_t i = 0; i < 3'000'000; ++i) v.push_back(i ^ 0x5a5au);  // grows past 8 MiB
+    EXPECT_EQ(reinterpret_cast<std::uintptr_t>(v.data()) % k_huge, 0u);
+    for (std::uint32_t i = 0; i < v.size(); i += 999) ASSERT_EQ(v[i], i ^ 0x5a5au);
+    pre::LargeVector<std::uint32_t> w(v.begin(), v.begin() + 100);
+    EXPECT_EQ(w.back(), 99u ^ 0x5a5au);
+
+    std::vector<double> z;
+    pre::resize_on_huge_pages(z, 1'000'000);
+    ASSERT_EQ(z.size(), 1'000'000u);
+    EXPECT_TRUE(std::all_of(z.begin(), z.end(), [](double x) { return x == 0.0; }));
+    std::vector<int> r{1, 2, 3};
+    pre::reserve_on_huge_pages(r, 2'000'000);  // not empty: kept, no advice needed
+    EXPECT_EQ(r.size(), 3u);
+    EXPECT_EQ(r[2], 3);
+    EXPECT_GE(r.capacity(), 2'000'000u);
+}
