@@ -22,18 +22,28 @@
 
 namespace prt::pre {
 
-/// `bytes` of memory (std::free releases it), never null (std::bad_alloc). From 2 MiB up: aligned
-/// to 2 MiB, rounded up to whole 2 MiB pages and advised as transparent huge pages (the system's
-/// setting "madvise", Debian's default, gives them only to memory so advised).
-inline void* allocate_large(std::size_t bytes) {
-    constexpr std::size_t k_huge = std::size_t{2} << 20;
-    void* p = nullptr;
-    if (bytes >= k_huge) {
-        const std::size_t rounded = (bytes + k_huge - 1) / k_huge * k_huge;
-        p = std::aligned_alloc(k_huge, rounded);
+inline constexpr std::size_t k_huge_page = std::size_t{2} << 20;
+
+/// Advises the whole 2 MiB pages inside [p, p + bytes) as transparent huge pages (the system's
+/// setting "madvise", Debian's default, gives them only to memory so advised). Advice only: a
+/// failure, or a system without it, changes nothing but the page size.
+inline void advise_huge_pages([[maybe_unused]] void* p, [[maybe_unused]] std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-        if (p) madvise(p, rounded, MADV_HUGEPAGE);  // advice only: failure is harmless
+    const auto begin = reinterpret_cast<std::uintptr_t>(p);
+    const std::uintptr_t first = (begin + k_huge_page - 1) / k_huge_page * k_huge_page;
+    const std::uintptr_t last = (begin + bytes) / k_huge_page * k_huge_page;
+    if (p && last > first) madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
 #endif
+}
+
+/// `bytes` of memory (std::free releases it), never null (std::bad_alloc). From 2 MiB up: aligned
+/// to 2 MiB, rounded up to whole 2 MiB pages and advised as huge pages (advise_huge_pages).
+inline void* allocate_large(std::size_t bytes) {
+    void* p = nullptr;
+    if (bytes >= k_huge_page) {
+        const std::size_t rounded = (bytes + k_huge_page - 1) / k_huge_page * k_huge_page;
+        p = std::aligned_alloc(k_huge_page, rounded);
+        advise_huge_pages(p, rounded);
     } else {
         p = std::malloc(bytes > 0 ? bytes : 1);
     }
@@ -136,20 +146,12 @@ private:
 };
 
 /// v.reserve(n) for an empty std::vector of another allocator (the formats' model vectors): the
-/// new block is advised as huge pages (those 2 MiB pages that lie wholly inside it) before the
-/// caller fills it.
+/// new block is advised as huge pages (advise_huge_pages) before the caller fills it.
 template <class T, class A>
 void reserve_on_huge_pages(std::vector<T, A>& v, std::size_t n) {
     const bool fresh = v.capacity() < n;
     v.reserve(n);
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-    constexpr std::uintptr_t k_huge = std::uintptr_t{2} << 20;
-    const auto begin = reinterpret_cast<std::uintptr_t>(v.data());
-    const std::uintptr_t first = (begin + k_huge - 1) / k_huge * k_huge;
-    const std::uintptr_t last = (begin + v.capacity() * sizeof(T)) / k_huge * k_huge;
-    if (fresh && v.empty() && last > first)  // advice only: failure is harmless
-        madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-#endif
+    if (fresh && v.empty()) advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
 
 /// v.resize(n) after reserve_on_huge_pages (resize zeroes the elements on the calling thread).

@@ -225,15 +225,15 @@ void gather_ball(const InfluenceIndex& index, const PointSet& ps, const double q
 // ---- radii of influence: k nearest neighbours (thesis 3.1, as prt-radii) ----------------------
 
 /// Distance from every point to its k-th nearest other point (exact: the shared kd-tree in double).
-std::vector<double> knn_distances(const std::vector<double>& pos, std::uint32_t k, unsigned threads,
-                                  const Progress& progress) {
+pre::LargeVector<double> knn_distances(const std::vector<double>& pos, std::uint32_t k, unsigned threads,
+                                       const Progress& progress) {
     const std::size_t n = pos.size() / 3;
     if (n <= k)
         throw Error("the k-NN radius needs more than k = " + std::to_string(k) + " points, the model has " +
                     std::to_string(n));
     const pre::KdTree<double> tree(
         n, [&](std::size_t i, double c[3]) { std::copy_n(&pos[3 * i], 3, c); }, threads);
-    std::vector<double> result(n);
+    pre::LargeVector<double> result(n);
     tree.for_each(
         k, threads,
         [&](std::uint32_t i, const std::uint32_t*, const double* distance2, std::uint32_t) {
@@ -1237,8 +1237,7 @@ Influence radii_of_influence(const BuildInput& in, RadiusSource source, const Bu
             const pool::Float3 p = in.positions[inf.keep[j]];
             pos[3 * j] = p.x, pos[3 * j + 1] = p.y, pos[3 * j + 2] = p.z;
         }
-        const std::vector<double> knn = knn_distances(pos, o.knn, threads, progress);
-        inf.radius.assign(knn.begin(), knn.end());
+        inf.radius = knn_distances(pos, o.knn, threads, progress);
         // prt-radii's outlier rule: radii above clamp x median become clamp x median.
         const double limit = o.knn_clamp > 0 ? o.knn_clamp * median_of(inf.radius) : 0.0;
         for (double& r : inf.radius)

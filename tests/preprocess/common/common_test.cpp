@@ -269,8 +269,6 @@ TEST(KdTree, FewPointsAndExclusion) {
     EXPECT_EQ(empty.size(), 0u);
 }
 
-}  // namespace
-
 // buffer.h: large blocks on 2 MiB boundaries (huge pages), small ones from malloc; a LargeVector
 // keeps its elements across growth; resize_on_huge_pages zeroes as resize does.
 TEST(LargeMemory, LargeBlocksAre2MiBAlignedAndHoldTheirContents) {
@@ -301,3 +299,5 @@ TEST(LargeMemory, LargeBlocksAre2MiBAlignedAndHoldTheirContents) {
     EXPECT_EQ(r[2], 3);
     EXPECT_GE(r.capacity(), 2'000'000u);
 }
+
+}  // namespace
