@@ -298,7 +298,7 @@ public:
                 end - begin, threads, [&](std::size_t k) { return splits(nodes[begin + k]); },
                 [&](std::size_t rank, std::size_t k) { parents[rank] = static_cast<std::uint32_t>(begin + k); }));
             check_size(8 * parents.size());
-            nodes.resize(end + 8 * parents.size());
+            pre::resize_prefaulted(nodes, end + 8 * parents.size(), threads);
             parallel_chunks(parents.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
                 for (std::size_t r = b; r < e; ++r) make_children(parents[r], static_cast<std::uint32_t>(end + 8 * r));
             });
@@ -465,6 +465,8 @@ public:
     /// serial order, so the tree is the one a serial pass builds.
     std::uint64_t balance(unsigned threads, const Progress& progress) {
         std::uint64_t splits = 0;
+        // Room for the splits below (one at a time, serial order) without a copy on this thread.
+        pre::reserve_prefaulted(nodes, nodes.size() + nodes.size() / 2, threads);
         std::uint32_t deepest = 0;
         for (const Node& n : nodes) deepest = std::max<std::uint32_t>(deepest, n.level);
         // Filled leaves by level in node order; each level's splits add their filled leaves.
@@ -1487,7 +1489,10 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
                              const BlockEvaluation& blocks, unsigned threads, const Progress& progress,
                              BuildStats& st) {
     CornerTable table;
-    table.leaf_slot.assign(nodes.size(), UINT32_MAX);
+    // The tables' pages are touched in parallel first (buffer.h, prefault); the closure (step 5b)
+    // grows them a leaf at a time, into the room reserved here.
+    pre::resize_prefaulted(table.leaf_slot, nodes.size(), threads, nodes.size() + nodes.size() / 4);
+    std::fill(table.leaf_slot.begin(), table.leaf_slot.end(), UINT32_MAX);
     for (std::size_t f = 0; f < filled.size(); ++f)
         table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
     pre::Buffer<KeyIndex> slots(8 * filled.size());  // first touched by the parallel fill
@@ -1511,8 +1516,8 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
     });
     for (std::size_t c = 0; c < chunks; ++c) before[c + 1] += before[c];
     pre::LargeVector<std::uint64_t>& corner_keys = table.keys;
-    corner_keys.resize(before[chunks]);
-    table.slot_corner.resize(m);
+    pre::resize_prefaulted(corner_keys, before[chunks], threads);
+    pre::resize_prefaulted(table.slot_corner, m, threads, m + m / 4);
     parallel_chunks(m, k_chunk, threads, [&](std::size_t b, std::size_t e, unsigned) {
         std::size_t rank = before[b / k_chunk];  // corners started before slot i (i included, below)
         for (std::size_t i = b; i < e; ++i) {
@@ -1521,7 +1526,7 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
         }
     });
     pre::Buffer<KeyIndex>().swap(slots);
-    table.values.resize(corner_keys.size());
+    pre::resize_prefaulted(table.values, corner_keys.size(), threads, corner_keys.size() + corner_keys.size() / 4);
     const CornerCounts n = blocks.run(corner_keys, table.values.data(), threads, progress);
     st.far_corners = n.far;
     st.unsupported_corners = n.unsupported;
@@ -1538,6 +1543,7 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
     const CornerEvaluator& evaluator = blocks.evaluator;
     const Frame& frame = blocks.frame;
     pre::LargeVector<Node>& nodes = tree.nodes;
+    pre::reserve_prefaulted(nodes, nodes.size() + nodes.size() / 4, threads);  // its splits: no copy here
     SurfaceClosure closure(tree, o.max_level,
                            [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
                                std::vector<std::uint32_t>& near_ids) {
@@ -1648,8 +1654,8 @@ void encode_leaves(const pre::LargeVector<Node>& nodes, const std::vector<std::u
                    unsigned threads, IsoModel& model) {
     const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
     // IsoModel's vectors zero their elements on this thread: on huge pages, a fault per 2 MiB.
-    if (q8) pre::resize_on_huge_pages(model.leaves_q8, dfs_leaves.size());
-    if (f32) pre::resize_on_huge_pages(model.leaves_f32, dfs_leaves.size());
+    if (q8) pre::resize_on_huge_pages(model.leaves_q8, dfs_leaves.size(), threads);
+    if (f32) pre::resize_on_huge_pages(model.leaves_f32, dfs_leaves.size(), threads);
     parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t li = b; li < e; ++li) {
             const Node& nd = nodes[dfs_leaves[li]];

@@ -398,9 +398,10 @@ private:
         }
 
         // -- leaf ranges and leaf-contiguous splats (depth-first leaf order) ---------------------
-        // SplatOctree's vectors zero their elements on this thread: on huge pages, a fault per 2 MiB.
-        pre::resize_on_huge_pages(octree.leaf_info, filled + 1);
-        pre::resize_on_huge_pages(octree.splats, stored);
+        // SplatOctree's vectors zero their elements on this thread, on huge pages the workers
+        // touched first (buffer.h, prefault).
+        pre::resize_on_huge_pages(octree.leaf_info, filled + 1, threads);
+        pre::resize_on_huge_pages(octree.splats, stored, threads);
         parallel_chunks(task_count, 1, threads, [&](std::size_t tb, std::size_t te, unsigned) {
             for (std::size_t t = tb; t < te; ++t) {
                 LocalTree& tree = m_tasks[t].tree;
@@ -537,22 +538,34 @@ void check_params(const OctreeParams& params, std::size_t points) {
 /// The usable points as build records (point = index in the arrays), skipped ones counted.
 pre::LargeVector<BuildSplat> build_splats(std::span<const pool::Float3> positions,
                                      std::span<const pool::Float3> normals, std::span<const float> radii,
-                                     OctreeStats& stats, RootBounds* bounds) {
+                                     OctreeStats& stats, RootBounds* bounds, unsigned threads) {
     if (normals.size() != positions.size() || radii.size() != positions.size())
         throw Error("octree build: " + std::to_string(positions.size()) + " positions but " +
                     std::to_string(normals.size()) + " normals and " + std::to_string(radii.size()) +
                     " radii");
-    pre::LargeVector<BuildSplat> splats;
-    splats.reserve(positions.size());
-    for (std::size_t i = 0; i < positions.size(); ++i) {
+    // In parallel, in input order (parallel_select): the usable points' records, then the root
+    // cube's bounds per worker, merged (min and max: the same whatever the split).
+    const std::size_t n = positions.size();
+    auto usable = [&](std::size_t i) {
         double len;
-        if (!usable_splat(positions[i], normals[i], radii[i], len)) {
-            ++stats.skipped_splats;
-            continue;
-        }
-        if (bounds) bounds->add(positions[i], normals[i], radii[i]);
-        splats.push_back(
-            make_build_splat(positions[i], normals[i], radii[i], len, static_cast<std::uint32_t>(i)));
+        return usable_splat(positions[i], normals[i], radii[i], len);
+    };
+    pre::LargeVector<BuildSplat> splats;
+    pre::resize_prefaulted(splats, n, threads);
+    const std::size_t kept = parallel_select(n, threads, usable, [&](std::size_t rank, std::size_t i) {
+        double len;
+        usable_splat(positions[i], normals[i], radii[i], len);
+        splats[rank] = make_build_splat(positions[i], normals[i], radii[i], len, static_cast<std::uint32_t>(i));
+    });
+    splats.resize(kept);
+    stats.skipped_splats += n - kept;
+    if (bounds) {
+        std::vector<RootBounds> part(std::max(threads, 1u));
+        parallel_chunks(n, 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+            for (std::size_t i = b; i < e; ++i)
+                if (usable(i)) part[worker].add(positions[i], normals[i], radii[i]);
+        });
+        for (const RootBounds& p : part) bounds->merge(p);
     }
     if (splats.empty())
         throw Error("octree build: no point has a finite positive radius and a normal (" +
@@ -582,7 +595,8 @@ void sort_by_morton(pre::LargeVector<BuildSplat>& splats, const pool::OctreeInfo
     });
     // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
     pre::radix_sort_by(keys, 63, threads, [](const MortonKey& k) { return k.key; });
-    pre::LargeVector<BuildSplat> sorted(splats.size());
+    pre::LargeVector<BuildSplat> sorted;
+    pre::resize_prefaulted(sorted, splats.size(), threads);
     parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t i = b; i < e; ++i) sorted[i] = splats[keys[i].index];
     });
@@ -654,7 +668,7 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
     const unsigned threads = resolve_threads(params.threads);
     OctreeStats stats;
     RootBounds bounds;
-    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds);  // thesis 3.1
+    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds, threads);  // thesis 3.1
     const pool::OctreeInfo info = bounds.root();
     sort_by_morton(splats, info, threads);
     Builder builder(std::move(splats), info, params);
@@ -673,7 +687,7 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
         throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
     const unsigned threads = resolve_threads(params.threads);
     OctreeStats stats;
-    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr);
+    pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr, threads);
     sort_by_morton(splats, root, threads);
     Builder builder(std::move(splats), root, params, cell);
     SplatOctree octree = builder.run(threads, stats);

@@ -300,4 +300,47 @@ TEST(LargeMemory, LargeBlocksAre2MiBAlignedAndHoldTheirContents) {
     EXPECT_GE(r.capacity(), 2'000'000u);
 }
 
+// buffer.h: the prefaulting growths give what resize and reserve give (new elements zero, old ones
+// kept, across several growths and thread counts), with the capacity hint kept as room.
+TEST(LargeMemory, PrefaultedGrowthKeepsElementsAndZeroesNewOnes) {
+    for (const unsigned threads : {1u, 3u, 8u}) {
+        pre::LargeVector<std::uint64_t> v;
+        pre::resize_prefaulted(v, 10, threads, 1'000'000);  // from empty: the hint is the capacity
+        EXPECT_GE(v.capacity(), 1'000'000u);
+        std::size_t filled = 0;
+        for (const std::size_t n : {std::size_t{10}, std::size_t{900'000}, std::size_t{1'000'000},
+                                    std::size_t{1'000'001}, std::size_t{5'000'003}}) {
+            pre::resize_prefaulted(v, n, threads);
+            ASSERT_EQ(v.size(), n);
+            for (std::size_t i = 0; i < filled; ++i) ASSERT_EQ(v[i], i * 3 + 1) << threads << " threads";
+            for (std::size_t i = filled; i < n; ++i) {
+                ASSERT_EQ(v[i], 0u) << "element " << i << " of " << n << ", " << threads << " threads";
+                v[i] = i * 3 + 1;
+            }
+            filled = n;
+        }
+        pre::resize_prefaulted(v, 7, threads);  // shrinking is resize
+        EXPECT_EQ(v.size(), 7u);
+        EXPECT_EQ(v[6], 19u);
+
+        pre::LargeVector<std::uint32_t> w{4, 5, 6};
+        pre::reserve_prefaulted(w, 3'000'000, threads);
+        EXPECT_GE(w.capacity(), 3'000'000u);
+        EXPECT_EQ(w, (pre::LargeVector<std::uint32_t>{4, 5, 6}));
+        const std::uint32_t* before = w.data();
+        pre::reserve_prefaulted(w, 10, threads);  // smaller than the capacity: nothing
+        EXPECT_EQ(w.data(), before);
+
+        std::vector<float> z{1.5f};
+        pre::resize_on_huge_pages(z, 3'000'000, threads);
+        EXPECT_EQ(z[0], 1.5f);
+        EXPECT_TRUE(std::all_of(z.begin() + 1, z.end(), [](float x) { return x == 0.0f; }));
+    }
+    std::vector<unsigned char> block(5 * 4096 + 17, 0xab);  // prefault writes zeros to a byte per page
+    pre::prefault(block.data(), block.size(), 4);
+    EXPECT_EQ(block[1], 0xab);
+    EXPECT_EQ(std::count(block.begin(), block.end(), 0), 7);  // 6 page starts and the last byte
+    pre::prefault(nullptr, 100, 4);  // nothing to touch
+}
+
 }  // namespace
