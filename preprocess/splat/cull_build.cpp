@@ -52,6 +52,7 @@
 #include "prt/tool_util.h"
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/cull_cuda.h"
+#include "prt/cuda/device.h"
 #endif
 
 namespace prt::pre {
@@ -246,6 +247,19 @@ std::string resolve_cull_backend(const std::string& name, std::string* why) {
     if (name == "cuda") throw Error("--backend cuda: " + reason + " (use --backend cpu)");
     if (why) *why = reason;
     return "cpu";
+}
+
+std::future<void> warm_up_cull_backend(const std::string& name) {
+#ifdef PRT_HAVE_CUDA
+    if (name == "cuda" || name == "auto")
+        return std::async(std::launch::async, [] {
+            if (cuda::cull_device_available(nullptr)) cuda::warm_up_device();
+        });
+#endif
+    (void)name;
+    std::promise<void> ready;
+    ready.set_value();
+    return ready.get_future();
 }
 
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,

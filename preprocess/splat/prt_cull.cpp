@@ -130,6 +130,7 @@ void cull_step(prt::tool::PoolStep& step, prt::pre::CullParams params, prt::pre:
     params.policy = policy == "thesis"  ? pre::CullPolicy::thesis
                     : policy == "votes" ? pre::CullPolicy::votes
                                         : pre::CullPolicy::greedy;
+    std::future<void> device = pre::warm_up_cull_backend(params.backend);  // while the input is read
     const pre::OctreeSections sections = read_octree(step);
     std::string why;
     const std::string backend = pre::resolve_cull_backend(params.backend, &why);
