@@ -1,11 +1,16 @@
 #include "point_cloud.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <numeric>
+
+#include "buffer.h"
+#include "prt/parallel.h"
+#include "radix_sort.h"
 
 namespace prt::pre {
 
@@ -43,53 +48,64 @@ std::size_t keep_points(PointCloud& cloud, const std::vector<std::uint8_t>& keep
     return out;
 }
 
+std::uint64_t position_hash(const std::array<double, 3>& p) {
+    std::uint64_t h = 0x9E3779B97F4A7C15ull;
+    for (int a = 0; a < 3; ++a) {
+        const double v = p[a] == 0.0 ? 0.0 : p[a];  // -0 == +0
+        std::uint64_t bits;
+        std::memcpy(&bits, &v, sizeof bits);
+        h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
+        h ^= h >> 31;
+    }
+    return h;
+}
+
 CleanReport clean(PointCloud& cloud, bool drop_duplicates, std::vector<std::size_t>* kept) {
     CleanReport report;
     const std::size_t n = cloud.size();
     report.input = n;
+    const unsigned threads = resolve_threads(0);
     std::vector<std::uint8_t> keep(n, 1);
-    for (std::size_t i = 0; i < n; ++i) {
-        const auto& p = cloud.positions[i];
-        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-            keep[i] = 0;
-            ++report.non_finite;
-            continue;
-        }
-        if (cloud.has_normals()) {
-            auto& nn = cloud.normals[i];
-            const double len = std::sqrt(double(nn.x) * nn.x + double(nn.y) * nn.y + double(nn.z) * nn.z);
-            if (!std::isfinite(len) || len < 1e-20) {
+    std::vector<std::array<std::uint64_t, 2>> dropped(threads, {0, 0});  // per worker: non-finite, zero normal
+    parallel_chunks(n, 1 << 15, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+        for (std::size_t i = b; i < e; ++i) {
+            const auto& p = cloud.positions[i];
+            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
                 keep[i] = 0;
-                ++report.zero_normal;
+                ++dropped[worker][0];
                 continue;
             }
-            nn = {float(nn.x / len), float(nn.y / len), float(nn.z / len)};
+            if (cloud.has_normals()) {
+                auto& nn = cloud.normals[i];
+                const double len = std::sqrt(double(nn.x) * nn.x + double(nn.y) * nn.y + double(nn.z) * nn.z);
+                if (!std::isfinite(len) || len < 1e-20) {
+                    keep[i] = 0;
+                    ++dropped[worker][1];
+                    continue;
+                }
+                nn = {float(nn.x / len), float(nn.y / len), float(nn.z / len)};
+            }
         }
-    }
+    });
+    for (const auto& d : dropped) report.non_finite += d[0], report.zero_normal += d[1];
     if (drop_duplicates && n > 1) {
         // Exact duplicates: sort (hash of the coordinate bits, index) pairs, then compare real
-        // coordinates inside runs of equal hashes. Keeps the first occurrence in input order.
+        // coordinates inside runs of equal hashes. Keeps the first occurrence in input order. The
+        // pairs are made in index order and the radix sort is stable: sorted by (hash, index).
         struct Key {
             std::uint64_t hash;
             std::uint32_t index;
         };
-        std::vector<Key> keys;
-        keys.reserve(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            if (!keep[i]) continue;
-            std::uint64_t h = 0x9E3779B97F4A7C15ull;
-            for (int a = 0; a < 3; ++a) {
-                const double v = cloud.positions[i][a] == 0.0 ? 0.0 : cloud.positions[i][a];  // -0 == +0
-                std::uint64_t bits;
-                std::memcpy(&bits, &v, sizeof bits);
-                h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
-                h ^= h >> 31;
-            }
-            keys.push_back({h, static_cast<std::uint32_t>(i)});
-        }
-        std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-            return a.hash != b.hash ? a.hash < b.hash : a.index < b.index;
+        std::atomic<std::size_t> count{0};
+        parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            count += static_cast<std::size_t>(std::count(keep.begin() + b, keep.begin() + e, 1));
         });
+        Buffer<Key> keys(count.load());  // first touched by the parallel fill
+        parallel_select(n, threads, [&](std::size_t i) { return keep[i] != 0; },
+                        [&](std::size_t rank, std::size_t i) {
+                            keys[rank] = {position_hash(cloud.positions[i]), static_cast<std::uint32_t>(i)};
+                        });
+        radix_sort_by(keys, 64, threads, [](const Key& k) { return k.hash; });
         for (std::size_t run = 0; run < keys.size();) {
             std::size_t end = run + 1;
             while (end < keys.size() && keys[end].hash == keys[run].hash) ++end;

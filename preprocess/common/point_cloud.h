@@ -41,8 +41,13 @@ struct CleanReport {
     std::string summary() const;  ///< one line for stderr
 };
 
+/// The hash clean() sorts positions by to find exact duplicates (-0 as +0; equal positions, equal
+/// hashes): shared with the out-of-core import's duplicate buckets.
+std::uint64_t position_hash(const std::array<double, 3>& p);
+
 /// Drops non-finite points, points whose normal is zero or non-finite (when normals are present;
-/// other normals are renormalised) and exact duplicates (keeping the first). Keeps attributes aligned.
+/// other normals are renormalised) and exact duplicates (keeping the first), on every core the
+/// process may use. Keeps attributes aligned.
 /// `kept`, when not null, receives the original index of every point kept, in order.
 CleanReport clean(PointCloud& cloud, bool drop_duplicates = true, std::vector<std::size_t>* kept = nullptr);
 

@@ -103,19 +103,6 @@ std::array<double, 3> box_centre(std::span<const std::array<double, 3>> position
     return {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
 }
 
-/// clean()'s hash of a position (-0 as +0).
-std::uint64_t position_hash(const std::array<double, 3>& p) {
-    std::uint64_t h = 0x9E3779B97F4A7C15ull;
-    for (int a = 0; a < 3; ++a) {
-        const double v = p[a] == 0.0 ? 0.0 : p[a];
-        std::uint64_t bits;
-        std::memcpy(&bits, &v, sizeof bits);
-        h = (h ^ bits) * 0xBF58476D1CE4E5B9ull;
-        h ^= h >> 31;
-    }
-    return h;
-}
-
 /// clean()'s exact duplicate removal out of core: the (hash, index) keys go to buckets by hash
 /// (a spill file sorted by bucket, each bucket within the memory); each bucket is sorted as clean()
 /// sorts all keys and its runs of equal hashes compared the same way. Equal positions have equal

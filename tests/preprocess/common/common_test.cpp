@@ -11,6 +11,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <set>
 #include <stdexcept>
 #include <vector>
 
@@ -18,6 +19,7 @@
 #include "float_round.h"
 #include "kd_tree.h"
 #include "morton.h"
+#include "point_cloud.h"
 #include "prt/parallel.h"
 #include "radix_sort.h"
 
@@ -341,6 +343,59 @@ TEST(LargeMemory, PrefaultedGrowthKeepsElementsAndZeroesNewOnes) {
     EXPECT_EQ(block[1], 0xab);
     EXPECT_EQ(std::count(block.begin(), block.end(), 0), 7);  // 6 page starts and the last byte
     pre::prefault(nullptr, 100, 4);  // nothing to touch
+}
+
+// point_cloud.h: clean() in parallel (chunks of 32k points, a radix sort of the hashes) against a
+// serial reference written here: first occurrences kept in input order, -0 equal to +0, non-finite
+// points and zero normals dropped before duplicates are looked for, the kept normals unit.
+TEST(Clean, ParallelCleanKeepsTheFirstOccurrencesASerialPassKeeps) {
+    std::mt19937 rng(7);
+    std::uniform_int_distribution<int> cell(-30, 29);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    pre::PointCloud cloud;
+    for (std::size_t i = 0; i < 300'000; ++i) {  // 216k cells: about a quarter are repeats
+        std::array<double, 3> p{cell(rng) * 0.25, cell(rng) * 0.25, cell(rng) * 0.25};
+        for (double& c : p)
+            if (c == 0.0 && (i & 1)) c = -0.0;  // -0 and +0: the same position
+        if (i % 9973 == 0) p[i % 3] = std::numeric_limits<double>::quiet_NaN();
+        cloud.positions.push_back(p);
+        pool::Float3 n{unit(rng), unit(rng), unit(rng)};
+        if (i % 7919 == 0) n = {0.0f, 0.0f, 0.0f};
+        cloud.normals.push_back(n);
+    }
+    const pre::PointCloud input = cloud;
+    std::vector<std::size_t> expected;
+    std::uint64_t non_finite = 0, zero_normal = 0, duplicates = 0;
+    std::set<std::array<double, 3>> seen;  // operator< sees -0 and +0 as equivalent
+    for (std::size_t i = 0; i < input.size(); ++i) {
+        const auto& p = input.positions[i];
+        const auto& n = input.normals[i];
+        if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+            ++non_finite;
+        } else if (n.x == 0.0f && n.y == 0.0f && n.z == 0.0f) {
+            ++zero_normal;
+        } else if (!seen.insert(p).second) {
+            ++duplicates;
+        } else {
+            expected.push_back(i);
+        }
+    }
+    ASSERT_GT(duplicates, 10'000u);
+    std::vector<std::size_t> kept;
+    const pre::CleanReport r = pre::clean(cloud, true, &kept);
+    EXPECT_EQ(r.input, input.size());
+    EXPECT_EQ(r.non_finite, non_finite);
+    EXPECT_EQ(r.zero_normal, zero_normal);
+    EXPECT_EQ(r.duplicates, duplicates);
+    EXPECT_EQ(r.kept, expected.size());
+    ASSERT_EQ(kept, expected);
+    ASSERT_EQ(cloud.size(), expected.size());
+    for (std::size_t j = 0; j < kept.size(); ++j) {
+        ASSERT_EQ(cloud.positions[j], input.positions[kept[j]]);
+        const pool::Float3& n = cloud.normals[j];
+        ASSERT_NEAR(std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z), 1.0, 1e-6);
+    }
+    EXPECT_EQ(pre::position_hash({0.0, -0.0, 1.0}), pre::position_hash({-0.0, 0.0, 1.0}));
 }
 
 }  // namespace
