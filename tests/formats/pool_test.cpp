@@ -196,6 +196,49 @@ TEST(PoolValidation, BadPayloadChecksum) {
     expect_error(b, "section positions: bad checksum");
 }
 
+// A mapped file's sections are checked in 64 MiB steps, each mapped in by every core first
+// (pool_reader.cpp): a section of more than one step reads back, and a byte flipped in its last
+// step (or in its first) is found.
+TEST(PoolValidation, LargeMappedSectionIsCheckedInEveryStep) {
+    const std::size_t n = 5'800'000;  // positions: 69.6 MB, more than one 64 MiB step
+    const fs::path path = temp_dir() / "large.pool";
+    {
+        PoolWriter w;
+        prt::pre::write_point_sections(make_cloud(n), w);
+        w.write(path);
+    }
+    SectionEntry e{};
+    {
+        const PoolFile pool = PoolFile::open(path);
+        ASSERT_EQ(pool.array<Float3>(SectionType::positions).size(), n);
+        for (const SectionEntry& s : pool.sections())
+            if (s.type == static_cast<std::uint32_t>(SectionType::positions)) e = s;
+    }
+    ASSERT_GT(e.size, std::uint64_t{64} << 20);
+    for (const std::uint64_t at : {e.offset + e.size - 3, e.offset + 4096 + 1}) {
+        auto flip = [&] {
+            std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+            f.seekg(static_cast<std::streamoff>(at));
+            char c = 0;
+            f.read(&c, 1);
+            c = static_cast<char>(c ^ 0x10);
+            f.seekp(static_cast<std::streamoff>(at));
+            f.write(&c, 1);
+        };
+        flip();
+        try {
+            (void)PoolFile::open(path);
+            ADD_FAILURE() << "a flipped byte at " << at << " was not found";
+        } catch (const prt::Error& err) {
+            EXPECT_NE(std::string(err.what()).find("section positions: bad checksum"), std::string::npos)
+                << err.what();
+        }
+        flip();  // back: the file is valid again
+        EXPECT_NO_THROW((void)PoolFile::open(path));
+    }
+    fs::remove(path);
+}
+
 TEST(PoolValidation, BadHeaderChecksum) {
     auto b = make_pool_bytes();
     reinterpret_cast<PoolHeader*>(b.data())->flags = 7;
