@@ -1466,9 +1466,12 @@ struct BlockEvaluation {
         });
         // Far corners cost one growing ball search each (tens of times a block's corner) and gather
         // in a few blocks, mostly the closure's: one at a time they leave the other workers idle.
-        // A far corner's value depends on its position alone, so the order does not matter.
-        parallel_chunks(far_keys.size(), 4, threads, [&](std::size_t b, std::size_t e, unsigned) {
-            EvaluatorScratch scratch;
+        // A far corner's value depends on its position alone, so the order does not matter. One
+        // corner a chunk: their costs differ by orders of magnitude (the ball grows until it meets
+        // a point), so larger chunks left a worker with the expensive ones while the others waited.
+        std::vector<EvaluatorScratch> per_worker(std::max(threads, 1u));
+        parallel_chunks(far_keys.size(), 1, threads, [&](std::size_t b, std::size_t e, unsigned worker) {
+            EvaluatorScratch& scratch = per_worker[worker];
             for (std::size_t i = b; i < e; ++i) {
                 const std::uint64_t key = keys[far_keys[i]];
                 const double q[3] = {frame.lo[0] + corner_step * pre::compact_bits21(key),
