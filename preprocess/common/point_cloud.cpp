@@ -1,7 +1,6 @@
 #include "point_cloud.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -96,11 +95,8 @@ CleanReport clean(PointCloud& cloud, bool drop_duplicates, std::vector<std::size
             std::uint64_t hash;
             std::uint32_t index;
         };
-        std::atomic<std::size_t> count{0};
-        parallel_chunks(n, 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-            count += static_cast<std::size_t>(std::count(keep.begin() + b, keep.begin() + e, 1));
-        });
-        Buffer<Key> keys(count.load());  // first touched by the parallel fill
+        // The points still kept: those the checks above did not drop.
+        Buffer<Key> keys(n - report.non_finite - report.zero_normal);  // first touched by the parallel fill
         parallel_select(n, threads, [&](std::size_t i) { return keep[i] != 0; },
                         [&](std::size_t rank, std::size_t i) {
                             keys[rank] = {position_hash(cloud.positions[i]), static_cast<std::uint32_t>(i)};

@@ -1656,7 +1656,8 @@ void encode_leaves(const pre::LargeVector<Node>& nodes, const std::vector<std::u
                    const CornerTable& table, const Frame& frame, const BuildOptions& o, bool colors,
                    unsigned threads, IsoModel& model) {
     const bool q8 = o.storage != Storage::f32, f32 = o.storage != Storage::q8;
-    // IsoModel's vectors zero their elements on this thread: on huge pages, a fault per 2 MiB.
+    // IsoModel's vectors zero their elements on this thread, on huge pages the workers touched
+    // first (buffer.h, prefault).
     if (q8) pre::resize_on_huge_pages(model.leaves_q8, dfs_leaves.size(), threads);
     if (f32) pre::resize_on_huge_pages(model.leaves_f32, dfs_leaves.size(), threads);
     parallel_chunks(dfs_leaves.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
