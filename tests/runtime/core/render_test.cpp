@@ -214,6 +214,70 @@ TEST(Reflections, MirrorRoomCornersShowReflectionsNotBackground) {
     EXPECT_GT(blue, 50);
 }
 
+TEST(Reflections, FramesWithoutSecondaryRaysTraceTheSameWithoutTheirCode) {
+    // trace_ray without k_mask_secondary (the CUDA backend's kernels for frames that spawn no
+    // reflected or refracted ray) must give those frames the full code's image and counters, and
+    // spawns_secondary must say which frames those are.
+    const TestModel model = make_model(room_points(-1, 1, 40, -1), {0, 0, 0});
+    scene::Scene sc = basic_scene({0.5, 0.3, 0.6}, {-1, -1, -1}, 24, 24);
+    sc.materials[0].reflectivity = 0.5f;
+    sc.render.max_bounces = 4;
+    scene::PointLight pl;
+    pl.position = {0.2, 0.4, 0.1};
+    sc.point_lights.push_back(pl);
+    rt::RenderScene rs = rt::RenderScene::from_pools(sc, {make_pool(model)});
+    core::SceneView view = rs.view();
+    const core::SecondaryMaterials mats = core::secondary_materials(view.materials, view.material_count);
+    EXPECT_TRUE(mats.reflective);
+    EXPECT_FALSE(mats.transmissive);
+    constexpr std::uint32_t k_direct = core::k_mask_all & ~std::uint32_t{core::k_mask_secondary};
+    // {max_bounces, reflections, refractions, shadows} -> spawns secondary rays
+    struct Case {
+        std::uint32_t bounces, reflections, refractions, shadows;
+        bool spawns;
+    };
+    for (const Case& k : {Case{4, 1, 1, 1, true}, Case{0, 1, 1, 1, false}, Case{4, 0, 1, 1, false},
+                          Case{4, 0, 1, 0, false}, Case{2, 1, 0, 0, true}}) {
+        view.params.max_bounces = k.bounces;
+        view.params.reflections = k.reflections;
+        view.params.refractions = k.refractions;
+        view.params.shadows = k.shadows;
+        EXPECT_EQ(core::spawns_secondary(view.params, mats), k.spawns) << k.bounces << k.reflections;
+        int differ = 0;
+        core::RayCounters full_c, direct_c;
+        for (std::uint32_t y = 0; y < 24; ++y)
+            for (std::uint32_t x = 0; x < 24; ++x) {
+                const core::Ray r = core::primary_ray(rs.camera(), x, y, 24, 24);
+                const core::Vec3 a = core::trace_ray(view, r, full_c);
+                const core::Vec3 b = core::trace_ray<k_direct>(view, r, direct_c);
+                differ += a.x != b.x || a.y != b.y || a.z != b.z;
+            }
+        if (k.spawns) {
+            EXPECT_GT(differ, 100) << "the reflections should show: the check could not fail";
+            EXPECT_GT(full_c.secondary, 0u);
+        } else {
+            EXPECT_EQ(differ, 0) << k.bounces << " bounces, reflections " << k.reflections;
+            EXPECT_EQ(full_c.shadow, direct_c.shadow);
+            EXPECT_EQ(full_c.leaves, direct_c.leaves);
+            EXPECT_EQ(full_c.splat_tests, direct_c.splat_tests);
+        }
+        EXPECT_EQ(direct_c.secondary, 0u);
+        EXPECT_EQ(full_c.primary, direct_c.primary);
+    }
+    // A transmissive material spawns refracted rays with refractions on, reflections off.
+    core::Material glass = view.materials[0];
+    glass.reflectivity = 0;
+    glass.transmissivity = 1;
+    const core::SecondaryMaterials g = core::secondary_materials(&glass, 1);
+    EXPECT_FALSE(g.reflective);
+    EXPECT_TRUE(g.transmissive);
+    view.params.max_bounces = 1;
+    view.params.reflections = 0;
+    view.params.refractions = 1;
+    EXPECT_TRUE(core::spawns_secondary(view.params, g));
+    EXPECT_FALSE(core::spawns_secondary(view.params, core::secondary_materials(nullptr, 0)));
+}
+
 struct GlassSphere {
     rt::RenderScene rs;
     double r_over_R;

@@ -153,10 +153,36 @@ enum KernelMask : std::uint32_t {
     /// Splats of bricked pools (bricks.h; issue 17): their own bit, so a kernel for float splats
     /// does not carry the brick walk's registers.
     k_mask_bricks = k_mask_sampling << 1,
-    k_mask_all = (k_mask_bricks << 1) - 1,
+    /// Reflected and refracted rays (trace_ray): a kernel without this bit traces the primary ray
+    /// and its shadow rays only, with no stack of pending rays (frames that spawn none: needs_secondary()).
+    k_mask_secondary = k_mask_bricks << 1,
+    k_mask_all = (k_mask_secondary << 1) - 1,
 };
 
-/// The mask a scene needs.
+/// Which materials of a scene could spawn secondary rays (spawn_secondary): the frame's parameters
+/// decide whether they do (spawns_secondary).
+struct SecondaryMaterials {
+    bool reflective = false;    ///< some material's reflectivity is above 0
+    bool transmissive = false;  ///< some material's transmissivity is above 0
+};
+
+inline SecondaryMaterials secondary_materials(const Material* materials, std::uint32_t count) {
+    SecondaryMaterials m;
+    for (std::uint32_t i = 0; i < count; ++i) {
+        m.reflective = m.reflective || materials[i].reflectivity > 0.0f;
+        m.transmissive = m.transmissive || materials[i].transmissivity > 0.0f;
+    }
+    return m;
+}
+
+/// Whether a frame can spawn a reflected or refracted ray: spawn_secondary() returns none when the
+/// bounce limit is 0 or no material reflects (refracts) with reflections (refractions) on. Frames
+/// that cannot run kernels without k_mask_secondary; their images are the same.
+inline bool spawns_secondary(const RenderParams& p, SecondaryMaterials m) {
+    return p.max_bounces > 0 && ((p.reflections != 0 && m.reflective) || (p.refractions != 0 && m.transmissive));
+}
+
+/// The mask a scene needs (k_mask_secondary aside: that bit depends on the frame, spawns_secondary).
 PRT_HD inline std::uint32_t scene_mask(const SceneView& s) {
     std::uint32_t m = (s.params.spp > 1 || s.params.path_tracing != 0) ? k_mask_sampling : 0u;
     for (std::uint32_t i = 0; i < s.model_count; ++i) {
@@ -535,11 +561,21 @@ struct SceneTracer {
 template <std::uint32_t K = k_mask_all, class Tracer = SceneTracer<K>>
 PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters& c,
                              const Tracer& tracer = Tracer{}) {
+    ++c.primary;
+    if constexpr ((K & k_mask_secondary) == 0) {
+        // A frame that spawns no secondary ray (spawns_secondary): the loop below would end after
+        // its first ray; without the stack of pending rays the kernel keeps fewer registers and a
+        // fifth of the local memory (splat kernel, sm_90: 328 B stack and 440 B of spills against
+        // 1648 B and 708 B).
+        const PendingRay only{primary, Vec3{1, 1, 1}, 0};
+        SurfaceHit h;
+        if (!tracer.closest(s, only, h, c)) return background(s.environment, primary.dir);
+        return tracer.shade(s, only, h, c);
+    }
     PendingRay stack[k_max_bounces + 1];
     std::uint32_t top = 0;
     PendingRay cur{primary, Vec3{1, 1, 1}, 0};
     Vec3 color{0, 0, 0};
-    ++c.primary;
     // Bounded: each iteration traces one ray; a ray spawns at most two, only below the bounce
     // limit, so at most 2^(k_max_bounces+1) rays; the weight cut-off keeps real counts small.
     for (;;) {
