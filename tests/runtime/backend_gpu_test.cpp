@@ -111,8 +111,11 @@ std::vector<GpuScene> scenes() {
     return out;
 }
 
+/// `bounces`: the frame's bounce limit when not ~0u (0: a frame with no secondary rays, which the
+/// CUDA backend renders with its kernels that lack them).
 rt::Image render(rt::Backend& b, const rt::RenderScene& rs, std::uint32_t w, std::uint32_t h,
-                 rt::FrameStats* stats, std::uint32_t leaf_culling = core::k_cull_slabs) {
+                 rt::FrameStats* stats, std::uint32_t leaf_culling = core::k_cull_slabs,
+                 std::uint32_t bounces = ~0u) {
     b.set_scene(rs.view());
     rt::FrameRequest req;
     scene::Camera c = rs.scene().camera;
@@ -121,6 +124,7 @@ rt::Image render(rt::Backend& b, const rt::RenderScene& rs, std::uint32_t w, std
     req.camera = rs.camera(c);
     req.params = rs.params();
     req.params.leaf_culling = leaf_culling;
+    if (bounces != ~0u) req.params.max_bounces = bounces;
     req.width = w;
     req.height = h;
     rt::Image img;
@@ -172,6 +176,14 @@ TEST_P(GpuAgreement, CudaMatchesCpu) {
         const rt::Image ref = render(*cpu, s.rs, 160, 120, &sc);
         const rt::Image img = render(*gpu, s.rs, 160, 120, &sg);
         compare(ref, img, sc, sg);
+        EXPECT_GT(sg.secondary, 0u);
+        // The same frame without bounces: the kernels without secondary rays (core::spawns_secondary).
+        rt::FrameStats dc, dg;
+        const rt::Image dref = render(*cpu, s.rs, 160, 120, &dc, core::k_cull_slabs, 0);
+        const rt::Image dimg = render(*gpu, s.rs, 160, 120, &dg, core::k_cull_slabs, 0);
+        compare(dref, dimg, dc, dg);
+        EXPECT_EQ(dg.secondary, 0u);
+        EXPECT_GT(dg.shadow, 0u);
     }
 }
 
@@ -239,6 +251,20 @@ TEST(GpuSurfaces, IsoMlsAndPatchesMatchTheCpu) {
         const rt::Image img = render(*gpu, rs, 160, 120, &sgpu);
         EXPECT_GT(scpu.secondary, 1000u);  // the mirror is in view
         compare(ref, img, scpu, sgpu);
+        // The sphere alone (a reflective material): its kind's kernels with and without secondary
+        // rays where the backend has them (cuda_backend.cu's kernel_mask), else the general one.
+        sc.models = {ball};
+        sc.materials = {mirror};
+        const rt::RenderScene alone = rt::RenderScene::load(sc);
+        for (const std::uint32_t bounces : {0u, 4u}) {
+            SCOPED_TRACE("the sphere alone, bounces " + std::to_string(bounces));
+            rt::FrameStats acpu, agpu;
+            const rt::Image aref = render(*cpu, alone, 160, 120, &acpu, core::k_cull_slabs, bounces);
+            const rt::Image aimg = render(*gpu, alone, 160, 120, &agpu, core::k_cull_slabs, bounces);
+            EXPECT_EQ(agpu.secondary > 0, bounces > 0);
+            EXPECT_GT(agpu.shadow, 1000u);
+            compare(aref, aimg, acpu, agpu);
+        }
     }
 }
 

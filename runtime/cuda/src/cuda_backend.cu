@@ -150,64 +150,105 @@ Megakernel megakernel() {
     return {K, k_min_blocks, render_kernel<true, k_min_blocks, K>, render_kernel<false, k_min_blocks, K>};
 }
 
+constexpr std::uint32_t k_secondary = core::k_mask_secondary;
+
 /// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
-/// launch: splats at 4 blocks per SM, patches at 2, the general kernel at 4, bricked splats (issue 17:
-/// their own kernel, so the float splat kernel does not carry the brick walk) at 3 (H100, culled 1M
-/// sphere, Grays/s primary / shadow / reflect4: 1.297 / 1.774 / 1.757 at 3, 1.177 / 1.658 / 1.479
-/// at 4, 1.193 / 1.619 / 1.605 at 2; preprocess/bench/results/h100-2026-11-25-issue17-onewalk). The
-/// bricked kernel carries the brick walk alone, not the float splat code too (a scene mixing float
+/// launch (kernel_mask() chooses). Splats, bricked splats and patches have their own kernels for
+/// frames with that surface kind alone (without the other surfaces' registers), each twice: with
+/// reflected and refracted rays (k_secondary) and without, for frames that spawn none
+/// (core::spawns_secondary: no bounces, or no reflective or transmissive material). ISO has its own
+/// kernel for those frames only; everything else (MLS, mixed surfaces, spp > 1, path tracing, ISO
+/// with secondary rays) runs the general kernel. sm_90 local memory (stack frame, spill stores):
+/// splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO 320 / 422 B against
+/// the general kernel's 4960 / 7542 B. On an H200 (1M room, 1024^2, Grays/s,
+/// preprocess/bench/results/h200-2026-12-02-issue19-kernels): splats primary / shadow 0.78 / 1.03 ->
+/// 0.90 / 1.15 (culled: 1.26 / 1.48 -> 1.58 / 1.66), bricked splats 1.18 / 1.10 -> 1.32 / 1.14, ISO
+/// 1.01 / 1.06 -> 1.37 / 1.40 (at 4 blocks per SM; 1.57 / 1.36 at 3, below), teapot 1.24 / 0.75 -> 1.42 / 0.82; an ISO kernel with secondary rays
+/// was slower than the general one on full4 (0.535 against 0.731) and MLS kernels slower on every
+/// frame (primary 0.034 against 0.037), so neither is compiled.
+/// Occupancy: splats and the general kernel at 4 blocks per SM, patches at 2, ISO at 3 (H200, the
+/// culled 1M room, primary / shadow at 2, 3, 4, 5 blocks: 1.43 / 1.21, 1.57 / 1.36, 1.36 / 1.39,
+/// 1.11 / 1.25 Grays/s; the splat kernel without secondary rays keeps 4: 0.88 / 1.37, 1.09 / 1.66,
+/// 1.16 / 1.78, 1.05 / 1.66 on prt-bench's room; gpu-k4.sh there), bricked
+/// splats (issue 17: their own kernel, so the float splat kernel does not carry the brick walk) at 3
+/// (H100, culled 1M sphere, Grays/s primary / shadow / reflect4: 1.297 / 1.774 / 1.757 at 3, 1.177 /
+/// 1.658 / 1.479 at 4, 1.193 / 1.619 / 1.605 at 2; preprocess/bench/results/h100-2026-11-25-issue17-onewalk).
+/// The bricked kernel carries the brick walk alone, not the float splat code too (a scene mixing float
 /// and bricked splat models takes the general kernel): 740 B of spills at 3 blocks against 824, and
 /// on an H200 shadow rays 5-7 % faster, full4 5-6 %, primary under 1 %; 4 blocks were 6-8 % slower on
 /// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
-/// --min-blocks (splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4: runtime/README.md) only with
-/// the CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 8 megakernels instead of 26.
+/// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4;
+/// without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the CMake
+/// option PRT_CUDA_TUNING_KERNELS, so a default build compiles 16 megakernels instead of 50.
 const Megakernel k_megakernels[] = {
-    megakernel<core::k_mask_splats, 4>(),   // splats only, the default occupancy
-    megakernel<core::k_mask_patches, 2>(),  // patches only, the default occupancy
-    megakernel<core::k_mask_all, 4>(),      // every surface, sampling
-    megakernel<core::k_mask_bricks, 3>(),   // bricked splats (issue 17)
-#if PRT_CUDA_TUNING_KERNELS
     // clang-format off
-    megakernel<core::k_mask_splats, 1>(),
+    megakernel<core::k_mask_splats, 4>(),  megakernel<core::k_mask_splats | k_secondary, 4>(),
+    megakernel<core::k_mask_bricks, 3>(),  megakernel<core::k_mask_bricks | k_secondary, 3>(),
+    megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
+    megakernel<core::k_mask_iso, 3>(),
+    megakernel<core::k_mask_all, 4>(),     // every surface, sampling, secondary rays
+#if PRT_CUDA_TUNING_KERNELS
+    megakernel<core::k_mask_splats | k_secondary, 1>(),
+    megakernel<core::k_mask_splats | k_secondary, 2>(),
+    megakernel<core::k_mask_splats | k_secondary, 3>(),
+    megakernel<core::k_mask_splats | k_secondary, 5>(),
+    megakernel<core::k_mask_splats | k_secondary, 6>(),
+    megakernel<core::k_mask_patches | k_secondary, 1>(),
+    megakernel<core::k_mask_patches | k_secondary, 4>(),
+    megakernel<core::k_mask_bricks | k_secondary, 2>(),
+    megakernel<core::k_mask_bricks | k_secondary, 4>(),
     megakernel<core::k_mask_splats, 2>(),
     megakernel<core::k_mask_splats, 3>(),
     megakernel<core::k_mask_splats, 5>(),
-    megakernel<core::k_mask_splats, 6>(),
-    megakernel<core::k_mask_patches, 1>(),
-    megakernel<core::k_mask_patches, 4>(),
     megakernel<core::k_mask_bricks, 2>(),
     megakernel<core::k_mask_bricks, 4>(),
-// clang-format on
+    megakernel<core::k_mask_iso, 2>(),
+    megakernel<core::k_mask_iso, 4>(),
+    megakernel<core::k_mask_iso, 5>(),
 #endif
+    // clang-format on
 };
 
-/// The megakernel a frame needs: patch-only and splat-only Whitted frames get their own kernels
-/// (without the other surfaces' registers), everything else (mixed surfaces, spp > 1, path tracing)
-/// the general one. The occupancy: --min-blocks `asked` (1-6; anything else: the kernel's default).
-/// Patch-only kernels: 2 by default (128 registers), 1 (all it needs, ~255) or 4 for 3-6 (64: heavy
-/// spilling). Measured on an H100 (issue #8), teapot primary / shadow / one reflection: 1.26 / 0.83
-/// / 0.83 Grays/s at 2, 1.27 / 0.82 / 0.76 at 1, 0.76 / 0.53 / 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27
-/// at 2, 0.86 / 0.61 / 0.26 at 1. The general kernel exists at the default occupancy only. Throws
-/// prt::Error (one line) when this build lacks the variant.
-const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, int asked) {
-    const std::uint32_t mask =
-        sampling || (surface_mask != core::k_mask_patches && surface_mask != core::k_mask_splats &&
-                     surface_mask != core::k_mask_bricks)
-            ? std::uint32_t{core::k_mask_all}
-            : surface_mask;
+/// The code a frame's kernel carries (k_megakernels): `surface_mask` is core::scene_mask() without
+/// k_mask_sampling; `sampling`: spp > 1 or path tracing; `secondary`: core::spawns_secondary().
+std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary) {
+    const std::uint32_t rays = secondary ? k_secondary : 0u;
+    if (sampling) return core::k_mask_all;
+    switch (surface_mask) {
+        case core::k_mask_splats:
+        case core::k_mask_bricks:
+        case core::k_mask_patches: return surface_mask | rays;
+        case core::k_mask_iso: return secondary ? std::uint32_t{core::k_mask_all} : surface_mask;
+        default: return core::k_mask_all;  // MLS, mixed surfaces
+    }
+}
+
+/// The megakernel a frame needs (kernel_mask()) at its occupancy: --min-blocks `asked` (1-6;
+/// anything else: the kernel's default). Patch-only kernels: 2 by default (128 registers), 1 (all it
+/// needs, ~255) or 4 for 3-6 (64: heavy spilling). Measured on an H100 (issue #8), teapot primary /
+/// shadow / one reflection: 1.26 / 0.83 / 0.83 Grays/s at 2, 1.27 / 0.82 / 0.76 at 1, 0.76 / 0.53 /
+/// 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27 at 2, 0.86 / 0.61 / 0.26 at 1. The general kernel exists
+/// at its default occupancy only; a tuning variant with secondary rays serves frames without them
+/// where the build has none without. Throws prt::Error (one line) when this build lacks the variant.
+const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, bool secondary, int asked) {
+    const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary);
+    const std::uint32_t kind = mask & ~k_secondary;
     if (asked < 1 || asked > 6) asked = 0;
-    int blocks = 4;  // the splat kernel's default, the general kernel's only occupancy
-    if (mask == core::k_mask_patches)
+    int blocks = 4;  // the splat kernel's default; the general kernel's only occupancy
+    if (kind == core::k_mask_patches)
         blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
-    else if (mask == core::k_mask_bricks)
+    else if (kind == core::k_mask_bricks)
         blocks = asked == 0 ? 3 : asked;  // variants 2, 3 and 4
-    else if (mask == core::k_mask_splats && asked != 0)
+    else if (kind == core::k_mask_iso)
+        blocks = asked == 0 ? 3 : asked;  // variants 2, 3, 4 and 5
+    else if (kind == core::k_mask_splats && asked != 0)
         blocks = asked;
-    for (const Megakernel& k : k_megakernels)
-        if (k.mask == mask && k.min_blocks == blocks) return k;
+    for (const std::uint32_t m : {mask, mask | k_secondary})
+        for (const Megakernel& k : k_megakernels)
+            if (k.mask == m && k.min_blocks == blocks) return k;
     throw Error(
         std::string("CUDA: --min-blocks ") + std::to_string(asked) + " selects the " +
-        (mask == core::k_mask_patches ? "patch" : "splat") + " kernel for " + std::to_string(blocks) +
+        (kind == core::k_mask_patches ? "patch" : kind == core::k_mask_iso ? "ISO" : "splat") + " kernel for " + std::to_string(blocks) +
         " blocks per SM, a tuning variant this build lacks (configure with -DPRT_CUDA_TUNING_KERNELS=ON)");
 }
 
@@ -358,9 +399,10 @@ public:
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
         const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
-        find_megakernel(mask, false, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
+        find_megakernel(mask, false, true, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
         const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
         m_surface_mask = mask;
+        m_secondary_materials = core::secondary_materials(host.materials, host.material_count);
         m_scene = m_device_scene.view();
         return stats;
     }
@@ -473,7 +515,9 @@ private:
                           y1, m_rgb.data(), rgba_target(req), m_counters.data(), queue, items, tiles_x);
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
-        const Megakernel& k = find_megakernel(m_surface_mask, sampling, m_options.cuda_min_blocks);
+        const Megakernel& k = find_megakernel(m_surface_mask, sampling,
+                                              core::spawns_secondary(scene.params, m_secondary_materials),
+                                              m_options.cuda_min_blocks);
         launch(z ? k.zorder : k.linear);
         PRT_CUDA_CHECK_LAUNCH();
     }
@@ -526,6 +570,7 @@ private:
     cudaEvent_t m_start = nullptr, m_stop = nullptr;
     DeviceScene m_device_scene;
     std::uint32_t m_surface_mask = core::k_mask_splats;  ///< surfaces of the scene (core::scene_mask)
+    core::SecondaryMaterials m_secondary_materials;      ///< whether its materials reflect, refract
     core::SceneView m_scene;                             ///< m_device_scene's view
     DeviceBuffer<unsigned long long> m_counters;
     DeviceBuffer<float> m_rgb;
