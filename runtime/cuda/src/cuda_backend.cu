@@ -159,13 +159,14 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// (core::spawns_secondary: no bounces, or no reflective or transmissive material). ISO has its own
 /// kernel for those frames only; everything else (MLS, mixed surfaces, spp > 1, path tracing, ISO
 /// with secondary rays) runs the general kernel. sm_90 local memory (stack frame, spill stores):
-/// splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO 320 / 422 B against
-/// the general kernel's 4960 / 7542 B. On an H200 (1M room, 1024^2, Grays/s,
-/// preprocess/bench/results/h200-2026-12-02-issue19-kernels): splats primary / shadow 0.78 / 1.03 ->
-/// 0.90 / 1.15 (culled: 1.26 / 1.48 -> 1.58 / 1.66), bricked splats 1.18 / 1.10 -> 1.32 / 1.14, ISO
-/// 1.01 / 1.06 -> 1.37 / 1.40 (at 4 blocks per SM; 1.57 / 1.36 at 3, below), teapot 1.24 / 0.75 -> 1.42 / 0.82; an ISO kernel with secondary rays
-/// was slower than the general one on full4 (0.535 against 0.731) and MLS kernels slower on every
-/// frame (primary 0.034 against 0.037), so neither is compiled.
+/// splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO (3 blocks per SM)
+/// 248 / 156 B against the general kernel's 4960 / 7542 B. On an H200 (1024^2, Grays/s,
+/// preprocess/bench/results/h200-2026-12-02-issue19-kernels), primary / shadow: prt-bench's room
+/// 1.00 / 1.56 -> 1.16 / 1.78, the culled 10M sphere 1.15 / 1.31 -> 1.37 / 1.49, bricked splats
+/// (culled room) 1.18 / 1.10 -> 1.32 / 1.14, ISO (culled room) 1.02 / 1.06 -> 1.57 / 1.36, teapot
+/// 1.24 / 0.75 -> 1.42 / 0.82. An ISO kernel with secondary rays was slower than the general one on
+/// full4 (0.535 against 0.731) and MLS kernels slower on every frame (primary 0.034 against 0.037),
+/// so neither is compiled.
 /// Occupancy: splats and the general kernel at 4 blocks per SM, patches at 2, ISO at 3 (H200, the
 /// culled 1M room, primary / shadow at 2, 3, 4, 5 blocks: 1.43 / 1.21, 1.57 / 1.36, 1.36 / 1.39,
 /// 1.11 / 1.25 Grays/s; the splat kernel without secondary rays keeps 4: 0.88 / 1.37, 1.09 / 1.66,

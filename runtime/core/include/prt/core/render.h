@@ -154,7 +154,8 @@ enum KernelMask : std::uint32_t {
     /// does not carry the brick walk's registers.
     k_mask_bricks = k_mask_sampling << 1,
     /// Reflected and refracted rays (trace_ray): a kernel without this bit traces the primary ray
-    /// and its shadow rays only, with no stack of pending rays (frames that spawn none: needs_secondary()).
+    /// and its shadow rays only, with no stack of pending rays (for frames that spawn none:
+    /// spawns_secondary()).
     k_mask_secondary = k_mask_bricks << 1,
     k_mask_all = (k_mask_secondary << 1) - 1,
 };
