@@ -213,12 +213,11 @@ const Megakernel k_megakernels[] = {
 /// The code a frame's kernel carries (k_megakernels): `surface_mask` is core::scene_mask() without
 /// k_mask_sampling; `sampling`: spp > 1 or path tracing; `secondary`: core::spawns_secondary().
 std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary) {
-    const std::uint32_t rays = secondary ? k_secondary : 0u;
     if (sampling) return core::k_mask_all;
     switch (surface_mask) {
         case core::k_mask_splats:
         case core::k_mask_bricks:
-        case core::k_mask_patches: return surface_mask | rays;
+        case core::k_mask_patches: return secondary ? surface_mask | k_secondary : surface_mask;
         case core::k_mask_iso: return secondary ? std::uint32_t{core::k_mask_all} : surface_mask;
         default: return core::k_mask_all;  // MLS, mixed surfaces
     }
@@ -249,7 +248,8 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, boo
             if (k.mask == m && k.min_blocks == blocks) return k;
     throw Error(
         std::string("CUDA: --min-blocks ") + std::to_string(asked) + " selects the " +
-        (kind == core::k_mask_patches ? "patch" : kind == core::k_mask_iso ? "ISO" : "splat") + " kernel for " + std::to_string(blocks) +
+        (kind == core::k_mask_patches ? "patch" : kind == core::k_mask_iso ? "ISO" : "splat") +
+        " kernel for " + std::to_string(blocks) +
         " blocks per SM, a tuning variant this build lacks (configure with -DPRT_CUDA_TUNING_KERNELS=ON)");
 }
 
