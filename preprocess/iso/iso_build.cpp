@@ -296,11 +296,14 @@ public:
             parents.resize(end - begin);
             parents.resize(parallel_select(
                 end - begin, threads, [&](std::size_t k) { return splits(nodes[begin + k]); },
-                [&](std::size_t rank, std::size_t k) { parents[rank] = static_cast<std::uint32_t>(begin + k); }));
+                [&](std::size_t rank, std::size_t k) {
+                    parents[rank] = static_cast<std::uint32_t>(begin + k);
+                }));
             check_size(8 * parents.size());
             pre::resize_prefaulted(nodes, end + 8 * parents.size(), threads);
             parallel_chunks(parents.size(), 256, threads, [&](std::size_t b, std::size_t e, unsigned) {
-                for (std::size_t r = b; r < e; ++r) make_children(parents[r], static_cast<std::uint32_t>(end + 8 * r));
+                for (std::size_t r = b; r < e; ++r)
+                    make_children(parents[r], static_cast<std::uint32_t>(end + 8 * r));
             });
         }
     }
@@ -595,8 +598,8 @@ public:
     /// only); the vector is the caller's scratch (calls run in parallel).
     using Near = std::function<bool(std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
                                     std::vector<std::uint32_t>& scratch)>;
-    SurfaceClosure(TreeBuilder& tree, std::uint32_t max_level, Near near)
-        : m_tree(tree), m_max_level(max_level), m_near(std::move(near)) {}
+    SurfaceClosure(TreeBuilder& tree, std::uint32_t max_level, Near near, bool serial_only = false)
+        : m_tree(tree), m_max_level(max_level), m_near(std::move(near)), m_serial_only(serial_only) {}
 
     /// Examines the faces of `frontier` (evaluated leaves); returns the leaves to evaluate next.
     /// `values(node, f)` fills the 8 corner values of an evaluated leaf; `sign_mask` and `values`
@@ -606,8 +609,14 @@ public:
     /// gets there (a split of that leaf gives filled children only); nor does one into an empty
     /// leaf (of its level or coarser) when no support reaches the cell beyond the face at the
     /// face's level (m_near, a function of the cell: then none reaches any cell inside it, which
-    /// is all the serial pass could fill there). Only the other faces go through beyond_face, in
-    /// the serial order, with m_near's answer where it was asked.
+    /// is all the serial pass could fill there); nor does one into finer leaves when no empty leaf
+    /// on the face has corners of both signs under the leaf's trilinear f (face_signs): the
+    /// serial pass only fills or splits leaves there, and a split leaf's face corners lie on its
+    /// face, where f (bilinear on the plane, so between its corner values) keeps their sign; faces
+    /// with a corner value near 0, where rounding could differ, stay open. Only the other faces go
+    /// through beyond_face, in the serial order, with m_near's answer where it was asked (on the
+    /// 1M room, 485k faces into finer leaves went through the serial pass and 4k of their empty
+    /// leaves had both signs).
     template <class SignMask, class Values>
     std::vector<std::uint32_t> close(const std::vector<std::uint32_t>& frontier,
                                      const pre::LargeVector<std::uint32_t>& leaf_slot, SignMask&& sign_mask,
@@ -648,10 +657,13 @@ public:
                         continue;
                     }
                     located[6 * k + f] = m_tree.locate(cell, l);
+                    if (m_serial_only) continue;  // BuildOptions::closure_serial_only (tests)
                     const std::uint32_t beyond = located[6 * k + f];
                     const Node& n = nodes[beyond];
-                    if (n.child != 0) {  // finer leaves beyond: the serial pass decides, if any is empty
-                        if (!empty_on_face(beyond, f / 2, f % 2 == 1 ? 0u : 1u, stack)) faces &= ~(1u << f);
+                    if (n.child != 0) {  // finer leaves beyond: the serial pass decides, if one may be filled
+                        double v[8];
+                        values(leaf, v);
+                        if (!mixed_empty_on_face(leaf, v, beyond, f / 2, f % 2, stack)) faces &= ~(1u << f);
                         continue;
                     }
                     if (n.kind != k_empty) {
@@ -775,29 +787,14 @@ private:
         double f[8];
         values(leaf, f);
         const std::uint32_t facing = side == 1 ? 0u : 1u;
-        const std::uint32_t leaf_cell[3] = {nodes[leaf].x, nodes[leaf].y, nodes[leaf].z};
         std::vector<std::uint32_t> stack{node};
         while (!stack.empty()) {  // bounded by the subtree
             const std::uint32_t i = stack.back();
             stack.pop_back();
             if (nodes[i].child == 0) {
                 if (nodes[i].kind != k_empty) continue;
-                const std::uint32_t e_cell[3] = {nodes[i].x, nodes[i].y, nodes[i].z};
-                const double scale = std::ldexp(1.0, -static_cast<int>(nodes[i].level - l));
-                bool pos = false, neg = false;
-                for (std::uint32_t c = 0; c < 4; ++c) {  // the 4 corners of i on the face
-                    double u[3];
-                    std::uint32_t k = 0;
-                    for (std::uint32_t b = 0; b < 3; ++b) {
-                        if (b == a) {
-                            u[b] = side;
-                            continue;
-                        }
-                        u[b] = (e_cell[b] + ((c >> k++) & 1u)) * scale - leaf_cell[b];
-                    }
-                    (trilinear(f, u) > 0 ? pos : neg) = true;
-                }
-                if (pos && neg) add_empty(i);
+                const FaceSigns signs = face_signs(leaf, f, i, a, side);
+                if (signs.pos && signs.neg) add_empty(i);
                 continue;
             }
             for (std::uint32_t c = 0; c < 8; ++c)
@@ -805,18 +802,57 @@ private:
         }
     }
 
-    /// Whether the subtree of node i has an empty leaf touching its face across axis a (its
-    /// children with bit a = `facing`). The serial pass adds no empty leaf there: it splits empty
-    /// leaves (their children on the face are empty where it was) and fills others. `stack`: scratch.
-    bool empty_on_face(std::uint32_t i, std::uint32_t a, std::uint32_t facing,
-                       std::vector<std::uint32_t>& stack) const {
+    /// The signs of `leaf`'s trilinear f (corner values `f`) at the 4 corners that leaf `i`, finer
+    /// and beyond the leaf's face (a, side), has on that face: pos (some > 0), neg (some <= 0) and
+    /// near_zero (some |value| within a rounding margin of 0: sum |f| x 2^-40).
+    struct FaceSigns {
+        bool pos = false, neg = false, near_zero = false;
+    };
+    FaceSigns face_signs(std::uint32_t leaf, const double f[8], std::uint32_t i, std::uint32_t a,
+                         std::uint32_t side) const {
         const pre::LargeVector<Node>& nodes = m_tree.nodes;
+        const std::uint32_t leaf_cell[3] = {nodes[leaf].x, nodes[leaf].y, nodes[leaf].z};
+        const std::uint32_t e_cell[3] = {nodes[i].x, nodes[i].y, nodes[i].z};
+        const double scale = std::ldexp(1.0, -static_cast<int>(nodes[i].level - nodes[leaf].level));
+        double magnitude = 0;
+        for (std::uint32_t c = 0; c < 8; ++c) magnitude += std::fabs(f[c]);
+        const double margin = std::ldexp(magnitude, -40);
+        FaceSigns out;
+        for (std::uint32_t c = 0; c < 4; ++c) {  // the 4 corners of i on the face
+            double u[3];
+            std::uint32_t k = 0;
+            for (std::uint32_t b = 0; b < 3; ++b) {
+                if (b == a) {
+                    u[b] = side;
+                    continue;
+                }
+                u[b] = (e_cell[b] + ((c >> k++) & 1u)) * scale - leaf_cell[b];
+            }
+            const double v = trilinear(f, u);
+            (v > 0 ? out.pos : out.neg) = true;
+            if (std::fabs(v) <= margin) out.near_zero = true;
+        }
+        return out;
+    }
+
+    /// Whether beyond_face could fill a leaf of the subtree of node i, finer and beyond `leaf`'s
+    /// face (a, side): some empty leaf touching that face (its children with bit a facing the leaf)
+    /// has corners of both signs there under `leaf`'s trilinear f (values `f`), or one near 0. The
+    /// serial pass adds no empty leaf there and splits only empty leaves, whose children's face
+    /// corners lie on the split leaf's face, where f keeps the sign it has at its corners. `stack`:
+    /// scratch.
+    bool mixed_empty_on_face(std::uint32_t leaf, const double f[8], std::uint32_t i, std::uint32_t a,
+                             std::uint32_t side, std::vector<std::uint32_t>& stack) const {
+        const pre::LargeVector<Node>& nodes = m_tree.nodes;
+        const std::uint32_t facing = side == 1 ? 0u : 1u;
         stack.assign(1, i);
         while (!stack.empty()) {  // bounded by the subtree
             const std::uint32_t k = stack.back();
             stack.pop_back();
             if (nodes[k].child == 0) {
-                if (nodes[k].kind == k_empty) return true;
+                if (nodes[k].kind != k_empty) continue;
+                const FaceSigns signs = face_signs(leaf, f, k, a, side);
+                if ((signs.pos && signs.neg) || signs.near_zero) return true;
                 continue;
             }
             for (std::uint32_t c = 0; c < 8; ++c)
@@ -892,6 +928,7 @@ private:
     TreeBuilder& m_tree;
     std::uint32_t m_max_level;
     Near m_near;
+    bool m_serial_only;
     std::vector<std::uint32_t> m_scratch;  ///< m_near's, on the serial path
     std::vector<std::uint32_t> m_added, m_work;
 };
@@ -1068,8 +1105,8 @@ struct EvaluatorScratch {
     std::vector<double> d2, arg, w;
     Candidates cand;
     std::vector<std::size_t> far_corners;  ///< evaluate()'s corners beyond every support (indices into out)
-    std::uint64_t counted = 0;           ///< points counted
-    std::uint64_t unsupported = 0;       ///< corners whose projection lies away from the data
+    std::uint64_t counted = 0;             ///< points counted
+    std::uint64_t unsupported = 0;         ///< corners whose projection lies away from the data
 };
 
 /// thesis 4.2-4.3: eq. 4.1-4.3 at corners, all inside one box, from one gather of the points whose
@@ -1163,7 +1200,8 @@ struct CornerEvaluator {
 
     /// The corner at q beyond every point's support (evaluate_far).
     CornerValue far(const double q[3], EvaluatorScratch& s) const {
-        return evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, s.far_ids, s.far_weights);
+        return evaluate_far(index, ps, q, support, sigma_max, start_radius, one_side, s.far_ids,
+                            s.far_weights);
     }
 };
 
@@ -1529,7 +1567,8 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
         }
     });
     pre::Buffer<KeyIndex>().swap(slots);
-    pre::resize_prefaulted(table.values, corner_keys.size(), threads, corner_keys.size() + corner_keys.size() / 4);
+    pre::resize_prefaulted(table.values, corner_keys.size(), threads,
+                           corner_keys.size() + corner_keys.size() / 4);
     const CornerCounts n = blocks.run(corner_keys, table.values.data(), threads, progress);
     st.far_corners = n.far;
     st.unsupported_corners = n.unsupported;
@@ -1547,16 +1586,17 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
     const Frame& frame = blocks.frame;
     pre::LargeVector<Node>& nodes = tree.nodes;
     pre::reserve_prefaulted(nodes, nodes.size() + nodes.size() / 4, threads);  // its splits: no copy here
-    SurfaceClosure closure(tree, o.max_level,
-                           [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
-                               std::vector<std::uint32_t>& near_ids) {
-                               double blo[3], bhi[3];
-                               frame.box(level, x, y, z, blo, bhi);
-                               near_ids.clear();
-                               gather_overlapping(evaluator.index, evaluator.ps, evaluator.ps.support, blo,
-                                                  bhi, near_ids);
-                               return !near_ids.empty();
-                           });
+    SurfaceClosure closure(
+        tree, o.max_level,
+        [&](std::uint32_t level, std::uint32_t x, std::uint32_t y, std::uint32_t z,
+            std::vector<std::uint32_t>& near_ids) {
+            double blo[3], bhi[3];
+            frame.box(level, x, y, z, blo, bhi);
+            near_ids.clear();
+            gather_overlapping(evaluator.index, evaluator.ps, evaluator.ps.support, blo, bhi, near_ids);
+            return !near_ids.empty();
+        },
+        o.closure_serial_only);
     for (std::uint32_t round = 0; round < 256 && !frontier.empty(); ++round) {  // every round adds leaves
         std::vector<std::uint32_t> added = closure.close(
             frontier, table.leaf_slot, [&](std::uint32_t node) { return table.sign_mask(node); },

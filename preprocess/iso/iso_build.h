@@ -86,7 +86,7 @@ struct BuildOptions {
     /// 15, prt-fidelity): 1 shrinks curved parts inward (holes along silhouettes: the armadillo 6 %,
     /// a single bunny scan 0.8 %); 0.5 halves that with no new false hits on the scans.
     float smoothing = 0.5f;
-    float support = 3.0f;    ///< a point counts at a corner within support x sigma_i (in sigmas)
+    float support = 3.0f;  ///< a point counts at a corner within support x sigma_i (in sigmas)
     RadiusSource radius = RadiusSource::automatic;
     std::uint32_t knn = 9;       ///< k of the k-NN radius (thesis 3.1: about 9 neighbours)
     float knn_clamp = 3.0f;      ///< k-NN radii above this x their median are clamped (0 = off)
@@ -107,6 +107,9 @@ struct BuildOptions {
     bool one_side = true;
     Storage storage = Storage::q8;
     unsigned threads = 0;  ///< worker threads; 0 = every hardware thread
+    /// Testing: the surface closure's parallel pass only locates the cells beyond crossed faces
+    /// and leaves every decision to its serial pass (the tree must be the same).
+    bool closure_serial_only = false;
 };
 
 /// Throws prt::Error naming the first invalid option.

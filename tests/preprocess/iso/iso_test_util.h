@@ -53,14 +53,15 @@ struct PointSet {
     }
 };
 
-/// prt-synth's sampling of a shape (R2 sequence, exact normals), optionally with noise along the
-/// normal and colors from the normals.
+/// prt-synth's sampling of a shape (R2 sequence unless `sampling`, exact normals), optionally with
+/// noise along the normal and colors from the normals.
 inline PointSet synth_points(const synth::Shape& shape, std::uint64_t count, double noise = 0.0,
-                             bool colors = false) {
+                             bool colors = false, synth::Sampling sampling = synth::Sampling::r2) {
     synth::SynthOptions o;
     o.shape = shape;
     o.count = count;
     o.noise = noise;
+    o.sampling = sampling;
     o.colors = colors ? synth::ColorMode::normal : synth::ColorMode::none;
     o.threads = 2;
     const synth::SynthResult r = synth::synthesize(o);
