@@ -143,7 +143,7 @@ struct InfluenceIndex {
     std::vector<ClassIndex> classes;
 };
 
-InfluenceIndex build_index(const PointSet& ps, const Frame& frame) {
+InfluenceIndex build_index(const PointSet& ps, const Frame& frame, unsigned threads) {
     InfluenceIndex index;
     index.frame = frame;
     if (ps.n == 0) return index;
@@ -152,20 +152,68 @@ InfluenceIndex build_index(const PointSet& ps, const Frame& frame) {
     const std::uint32_t median_level =
         detail::level_for_extent(frame, sorted[sorted.size() / 2], 1.0, k_code_level);
     const std::uint32_t finest = std::min(k_code_level, median_level + 2);
-    std::vector<int> slot(k_code_level + 1, -1);
-    for (std::size_t i = 0; i < ps.n; ++i) {
-        const std::uint32_t level =
-            std::min(finest, detail::level_for_extent(frame, ps.reach[i], 1.0, k_code_level));
-        if (slot[level] < 0) {
-            slot[level] = static_cast<int>(index.classes.size());
-            index.classes.push_back(ClassIndex{});
-            index.classes.back().level = level;
+    // Each point's class (the level of its reach, at most `finest`); classes in the order of their
+    // first point, each holding its points in point order. Per chunk in parallel: levels, counts,
+    // first points and largest reaches; then each chunk writes its points at its offsets.
+    constexpr std::size_t k_chunk = 1u << 15;
+    constexpr std::size_t k_levels = k_code_level + 1;
+    const std::size_t chunks = (ps.n + k_chunk - 1) / k_chunk;
+    std::vector<std::uint8_t> level_of(ps.n);
+    std::vector<std::array<std::size_t, k_levels>> count(chunks);
+    std::vector<std::array<std::size_t, k_levels>> first(chunks);
+    std::vector<std::array<double, k_levels>> reach(chunks);
+    parallel_chunks(ps.n, k_chunk, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        const std::size_t k = b / k_chunk;
+        count[k].fill(0);
+        first[k].fill(SIZE_MAX);
+        reach[k].fill(0.0);
+        for (std::size_t i = b; i < e; ++i) {
+            const std::uint32_t level =
+                std::min(finest, detail::level_for_extent(frame, ps.reach[i], 1.0, k_code_level));
+            level_of[i] = static_cast<std::uint8_t>(level);
+            if (count[k][level]++ == 0) first[k][level] = i;
+            reach[k][level] = std::max(reach[k][level], ps.reach[i]);
         }
-        ClassIndex& c = index.classes[slot[level]];
-        c.reach = std::max(c.reach, ps.reach[i]);
-        c.codes.push_back(ps.code[i]);
-        c.ids.push_back(static_cast<std::uint32_t>(i));
+    });
+    std::array<std::size_t, k_levels> level_first;
+    level_first.fill(SIZE_MAX);
+    std::array<std::size_t, k_levels> total{};
+    for (std::size_t k = 0; k < chunks; ++k)
+        for (std::size_t l = 0; l < k_levels; ++l) {
+            level_first[l] = std::min(level_first[l], first[k][l]);
+            total[l] += count[k][l];
+        }
+    std::vector<std::uint32_t> levels;  // in the order of their first point
+    for (std::uint32_t l = 0; l < k_levels; ++l)
+        if (total[l] > 0) levels.push_back(l);
+    std::sort(levels.begin(), levels.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return level_first[a] < level_first[b]; });
+    std::array<int, k_levels> slot;
+    slot.fill(-1);
+    index.classes.resize(levels.size());
+    for (std::size_t c = 0; c < levels.size(); ++c) {
+        const std::uint32_t l = levels[c];
+        slot[l] = static_cast<int>(c);
+        ClassIndex& ci = index.classes[c];
+        ci.level = l;
+        for (std::size_t k = 0; k < chunks; ++k) ci.reach = std::max(ci.reach, reach[k][l]);
+        ci.codes.resize(total[l]);
+        ci.ids.resize(total[l]);
     }
+    // offsets: count[k][l] becomes where chunk k's points of level l start in their class
+    for (std::size_t l = 0; l < k_levels; ++l) {
+        std::size_t at = 0;
+        for (std::size_t k = 0; k < chunks; ++k) std::swap(at, count[k][l]), at += count[k][l];
+    }
+    parallel_chunks(ps.n, k_chunk, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::array<std::size_t, k_levels>& at = count[b / k_chunk];
+        for (std::size_t i = b; i < e; ++i) {
+            ClassIndex& ci = index.classes[slot[level_of[i]]];
+            const std::size_t j = at[level_of[i]]++;
+            ci.codes[j] = ps.code[i];
+            ci.ids[j] = static_cast<std::uint32_t>(i);
+        }
+    });
     return index;
 }
 
@@ -448,6 +496,7 @@ public:
     /// Splits passive leaves above min_level down to it (their children tested against the disks).
     std::uint64_t enforce_min_level() {
         std::uint64_t splits = 0;
+        if (m_options.min_level == 0) return splits;      // no level is above it
         for (std::size_t i = 0; i < nodes.size(); ++i) {  // children appended behind are visited too
             if (nodes[i].child == 0 && nodes[i].kind == k_passive && nodes[i].level < m_options.min_level) {
                 split_by_points(static_cast<std::uint32_t>(i), DiskTest::now);
@@ -470,34 +519,61 @@ public:
         std::uint64_t splits = 0;
         // Room for the splits below (one at a time, serial order) without a copy on this thread.
         pre::reserve_prefaulted(nodes, nodes.size() + nodes.size() / 2, threads);
+        // Filled leaves by level in node order (per chunk in parallel, then joined in chunk order);
+        // each level's splits add their filled leaves.
+        constexpr std::size_t k_chunk = 1u << 16;
+        const std::size_t chunks = (nodes.size() + k_chunk - 1) / k_chunk;
+        std::vector<std::array<std::vector<std::uint32_t>, pool::k_max_iso_level + 1>> chunk_levels(chunks);
+        parallel_chunks(nodes.size(), k_chunk, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            auto& mine = chunk_levels[b / k_chunk];
+            for (std::size_t i = b; i < e; ++i)
+                if (nodes[i].child == 0 && is_filled(nodes[i].kind))
+                    mine[nodes[i].level].push_back(static_cast<std::uint32_t>(i));
+        });
         std::uint32_t deepest = 0;
         for (const Node& n : nodes) deepest = std::max<std::uint32_t>(deepest, n.level);
-        // Filled leaves by level in node order; each level's splits add their filled leaves.
         std::vector<std::vector<std::uint32_t>> by_level(deepest + 1);
-        for (std::size_t i = 0; i < nodes.size(); ++i)
-            if (nodes[i].child == 0 && is_filled(nodes[i].kind))
-                by_level[nodes[i].level].push_back(static_cast<std::uint32_t>(i));
+        for (std::uint32_t l = 0; l <= deepest; ++l)
+            for (const auto& c : chunk_levels)
+                by_level[l].insert(by_level[l].end(), c[l].begin(), c[l].end());
+        chunk_levels.clear();
         for (std::uint32_t l = deepest; l >= 2; --l) {
-            // Parents of filled leaves at level l, with the directions their filled children face.
-            std::vector<std::pair<std::uint32_t, std::uint32_t>> work;  // (parent, 27-bit direction mask)
-            for (const std::uint32_t i : by_level[l]) {
-                const Node& n = nodes[i];
-                if (n.child != 0) continue;  // split since
-                const std::uint32_t c = i - nodes[n.parent].child;
-                std::uint32_t mask = 0;
-                const int sx = (c & 1u) ? 1 : -1, sy = (c & 2u) ? 1 : -1, sz = (c & 4u) ? 1 : -1;
-                for (int dz = 0; dz < 2; ++dz)
-                    for (int dy = 0; dy < 2; ++dy)
-                        for (int dx = 0; dx < 2; ++dx) {
-                            if (dx == 0 && dy == 0 && dz == 0) continue;
-                            const int d = (dx * sx + 1) + 3 * (dy * sy + 1) + 9 * (dz * sz + 1);
-                            mask |= 1u << d;
-                        }
-                if (!work.empty() && work.back().first == n.parent)
-                    work.back().second |= mask;
-                else
-                    work.emplace_back(n.parent, mask);
-            }
+            // Parents of filled leaves at level l, with the directions their filled children face,
+            // one entry per run of leaves with the same parent (in by_level's order): each leaf's
+            // parent and mask in parallel, then the runs' starts, then each run's masks joined.
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> leaf_work(by_level[l].size());
+            leaf_work.resize(parallel_select(
+                by_level[l].size(), threads,
+                [&](std::size_t k) { return nodes[by_level[l][k]].child == 0; },  // else split since
+                [&](std::size_t rank, std::size_t k) {
+                    const std::uint32_t i = by_level[l][k];
+                    const Node& n = nodes[i];
+                    const std::uint32_t c = i - nodes[n.parent].child;
+                    std::uint32_t mask = 0;
+                    const int sx = (c & 1u) ? 1 : -1, sy = (c & 2u) ? 1 : -1, sz = (c & 4u) ? 1 : -1;
+                    for (int dz = 0; dz < 2; ++dz)
+                        for (int dy = 0; dy < 2; ++dy)
+                            for (int dx = 0; dx < 2; ++dx) {
+                                if (dx == 0 && dy == 0 && dz == 0) continue;
+                                const int d = (dx * sx + 1) + 3 * (dy * sy + 1) + 9 * (dz * sz + 1);
+                                mask |= 1u << d;
+                            }
+                    leaf_work[rank] = {n.parent, mask};
+                }));
+            std::vector<std::uint32_t> run_start(leaf_work.size() + 1);
+            run_start.resize(parallel_select(
+                leaf_work.size(), threads,
+                [&](std::size_t k) { return k == 0 || leaf_work[k].first != leaf_work[k - 1].first; },
+                [&](std::size_t rank, std::size_t k) { run_start[rank] = static_cast<std::uint32_t>(k); }));
+            run_start.push_back(static_cast<std::uint32_t>(leaf_work.size()));
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> work(run_start.size() - 1);
+            parallel_chunks(work.size(), 4096, threads, [&](std::size_t b, std::size_t e, unsigned) {
+                for (std::size_t r = b; r < e; ++r) {
+                    work[r] = {leaf_work[run_start[r]].first, 0u};
+                    for (std::uint32_t k = run_start[r]; k < run_start[r + 1]; ++k)
+                        work[r].second |= leaf_work[k].second;
+                }
+            });
             // The neighbour cell of `parent` in direction d, if inside the root.
             auto neighbour = [&](const Node& p, int d, std::uint32_t cell[3]) {
                 const std::int64_t top = std::int64_t{1} << p.level;
@@ -1426,13 +1502,20 @@ struct CornerTable {
 };
 
 /// The filled leaves (active and passive, counted in `st`), in node order.
-std::vector<std::uint32_t> filled_leaves(const pre::LargeVector<Node>& nodes, BuildStats& st) {
-    std::vector<std::uint32_t> filled;
-    for (std::size_t i = 0; i < nodes.size(); ++i)
-        if (nodes[i].child == 0 && is_filled(nodes[i].kind)) {
-            filled.push_back(static_cast<std::uint32_t>(i));
-            (nodes[i].kind == k_active ? st.active_leaves : st.passive_leaves)++;
-        }
+std::vector<std::uint32_t> filled_leaves(const pre::LargeVector<Node>& nodes, unsigned threads,
+                                         BuildStats& st) {
+    std::vector<std::uint32_t> filled(nodes.size());
+    filled.resize(parallel_select(
+        nodes.size(), threads, [&](std::size_t i) { return nodes[i].child == 0 && is_filled(nodes[i].kind); },
+        [&](std::size_t rank, std::size_t i) { filled[rank] = static_cast<std::uint32_t>(i); }));
+    std::atomic<std::uint64_t> active{0};
+    parallel_chunks(filled.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::uint64_t n = 0;
+        for (std::size_t k = b; k < e; ++k) n += nodes[filled[k]].kind == k_active;
+        active += n;
+    });
+    st.active_leaves += active.load();
+    st.passive_leaves += filled.size() - active.load();
     return filled;
 }
 
@@ -1638,10 +1721,36 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
     }
 }
 
+/// The tree cut for steps 6 and 7's passes over whole subtrees: `items`, in depth-first order, the
+/// nodes at level k_cut_level and the leaves above it; `above`, in pre-order, the internal nodes
+/// above that level. Each item's subtree is walked by one worker; `above` is small (at most 585
+/// nodes).
+struct TreeCut {
+    static constexpr std::uint32_t k_cut_level = 3;
+    std::vector<std::uint32_t> items, above;
+};
+
+TreeCut cut_tree(const pre::LargeVector<Node>& nodes) {
+    TreeCut cut;
+    std::vector<std::uint32_t> stack{0};
+    while (!stack.empty()) {  // bounded by the nodes above the cut
+        const std::uint32_t i = stack.back();
+        stack.pop_back();
+        if (nodes[i].child == 0 || nodes[i].level >= TreeCut::k_cut_level) {
+            cut.items.push_back(i);
+            continue;
+        }
+        cut.above.push_back(i);
+        for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
+    }
+    return cut;
+}
+
 /// Step 6: which nodes survive: filled leaves whose corners change sign (and, unless
 /// drop_uncrossed, those without a change that are not unsupported), and their ancestors.
-std::vector<std::uint8_t> crossed_leaves(const pre::LargeVector<Node>& nodes, const CornerTable& table,
-                                         const BuildOptions& o, unsigned threads, BuildStats& st) {
+std::vector<std::uint8_t> crossed_leaves(const pre::LargeVector<Node>& nodes, const TreeCut& cut,
+                                         const CornerTable& table, const BuildOptions& o, unsigned threads,
+                                         BuildStats& st) {
     std::vector<std::uint8_t> keep_node(nodes.size(), 0);
     std::atomic<std::uint64_t> slots{0}, unsupported{0}, uncrossed{0};
     parallel_chunks(nodes.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
@@ -1664,30 +1773,71 @@ std::vector<std::uint8_t> crossed_leaves(const pre::LargeVector<Node>& nodes, co
     st.corner_slots = slots.load();
     st.unsupported_leaves += unsupported.load();
     st.uncrossed_leaves += uncrossed.load();
-    for (std::size_t i = nodes.size(); i-- > 0;)  // children come after their parent
-        if (nodes[i].child != 0)
-            for (std::uint32_t c = 0; c < 8; ++c) keep_node[i] |= keep_node[nodes[i].child + c];
+    // An internal node survives when a child does: each cut subtree in parallel (children come
+    // after their parent, so its nodes in reverse pre-order), then the nodes above the cut.
+    parallel_chunks(cut.items.size(), 1, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::vector<std::uint32_t> order, stack;
+        for (std::size_t k = b; k < e; ++k) {
+            order.clear();
+            stack.assign(1, cut.items[k]);
+            while (!stack.empty()) {  // bounded by the subtree
+                const std::uint32_t i = stack.back();
+                stack.pop_back();
+                if (nodes[i].child == 0) continue;
+                order.push_back(i);
+                for (std::uint32_t c = 0; c < 8; ++c) stack.push_back(nodes[i].child + c);
+            }
+            for (std::size_t j = order.size(); j-- > 0;) {
+                const std::uint32_t i = order[j];
+                for (std::uint32_t c = 0; c < 8; ++c) keep_node[i] |= keep_node[nodes[i].child + c];
+            }
+        }
+    });
+    for (std::size_t j = cut.above.size(); j-- > 0;) {
+        const std::uint32_t i = cut.above[j];
+        for (std::uint32_t c = 0; c < 8; ++c) keep_node[i] |= keep_node[nodes[i].child + c];
+    }
     return keep_node;
 }
 
 /// The kept leaves in depth-first (Morton) order; leaf_of[node] is a leaf's index among them.
-std::vector<std::uint32_t> depth_first_leaves(const pre::LargeVector<Node>& nodes,
+/// Each cut item's leaves are listed by one worker, then placed after the items before it.
+std::vector<std::uint32_t> depth_first_leaves(const pre::LargeVector<Node>& nodes, const TreeCut& cut,
                                               const std::vector<std::uint8_t>& keep_node,
-                                              std::vector<std::uint32_t>& leaf_of) {
-    leaf_of.assign(nodes.size(), UINT32_MAX);
-    std::vector<std::uint32_t> dfs_leaves;
-    std::vector<std::uint32_t> stack{0};
-    while (!stack.empty()) {
-        const std::uint32_t i = stack.back();
-        stack.pop_back();
-        if (!keep_node[i]) continue;
-        if (nodes[i].child == 0) {
-            leaf_of[i] = static_cast<std::uint32_t>(dfs_leaves.size());
-            dfs_leaves.push_back(i);
-            continue;
+                                              std::vector<std::uint32_t>& leaf_of, unsigned threads) {
+    std::vector<std::vector<std::uint32_t>> item_leaves(cut.items.size());
+    parallel_chunks(cut.items.size(), 1, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::vector<std::uint32_t> stack;
+        for (std::size_t k = b; k < e; ++k) {
+            stack.assign(1, cut.items[k]);
+            while (!stack.empty()) {  // bounded by the subtree
+                const std::uint32_t i = stack.back();
+                stack.pop_back();
+                if (!keep_node[i]) continue;
+                if (nodes[i].child == 0) {
+                    item_leaves[k].push_back(i);
+                    continue;
+                }
+                for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
+            }
         }
-        for (std::uint32_t c = 8; c-- > 0;) stack.push_back(nodes[i].child + c);
-    }
+    });
+    std::vector<std::size_t> first(cut.items.size() + 1, 0);
+    for (std::size_t k = 0; k < cut.items.size(); ++k) first[k + 1] = first[k] + item_leaves[k].size();
+    std::vector<std::uint32_t> dfs_leaves(first.back());
+    leaf_of.resize(nodes.size());
+    parallel_chunks(nodes.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::fill(leaf_of.begin() + static_cast<std::ptrdiff_t>(b),
+                  leaf_of.begin() + static_cast<std::ptrdiff_t>(e), UINT32_MAX);
+    });
+    parallel_chunks(cut.items.size(), 1, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t k = b; k < e; ++k)
+            for (std::size_t j = 0; j < item_leaves[k].size(); ++j) {
+                const std::uint32_t leaf = static_cast<std::uint32_t>(first[k] + j);
+                dfs_leaves[leaf] = item_leaves[k][j];
+                leaf_of[item_leaves[k][j]] = leaf;
+            }
+    });
     return dfs_leaves;
 }
 
@@ -1729,26 +1879,56 @@ void encode_leaves(const pre::LargeVector<Node>& nodes, const std::vector<std::u
 
 /// Step 7: the node pool, breadth first; subtrees without a filled leaf become one empty leaf.
 void encode_nodes(const pre::LargeVector<Node>& nodes, const std::vector<std::uint8_t>& keep_node,
-                  const std::vector<std::uint32_t>& leaf_of, IsoModel& model) {
+                  const std::vector<std::uint32_t>& leaf_of, unsigned threads, IsoModel& model) {
+    // Level by level (a node's level is its depth): the words of one level in parallel, an internal
+    // node's children at the queue's end plus 8 x the internal nodes before it in its level (a
+    // prefix count, parallel_select), so the words are those of a serial breadth-first queue.
     BuildStats& st = model.stats;
-    std::vector<std::uint32_t> bfs{0};
     std::vector<std::uint32_t>& words = model.nodes;
-    for (std::size_t k = 0; k < bfs.size(); ++k) {
-        const std::uint32_t i = bfs[k];
-        const Node& nd = nodes[i];
-        if (nd.child != 0 && keep_node[i]) {
-            if (bfs.size() + 8 > pool::k_node_address_max)
-                throw Error("the ISO octree needs more than 2^30 nodes (lower --max-level)");
-            words.push_back(
-                pool::make_node(pool::NodeType::internal, static_cast<std::uint32_t>(bfs.size())));
-            for (std::uint32_t c = 0; c < 8; ++c) bfs.push_back(nd.child + c);
-        } else if (nd.child == 0 && keep_node[i]) {
-            words.push_back(pool::make_node(pool::NodeType::filled_leaf, leaf_of[i]));
-            st.depth = std::max<std::uint32_t>(st.depth, nd.level);
-            ++st.leaves_per_level[nd.level];
-        } else {
-            words.push_back(pool::make_node(pool::NodeType::empty_leaf, 0));
+    words.clear();
+    std::vector<std::uint32_t> level{0}, inner, next;
+    std::size_t queued = 1;   // entries of the queue so far: this level's and those before
+    while (!level.empty()) {  // bounded by the tree's depth
+        const std::size_t base = words.size();
+        words.resize(base + level.size());
+        inner.resize(level.size());
+        const std::size_t n_inner = parallel_select(
+            level.size(), threads,
+            [&](std::size_t k) { return nodes[level[k]].child != 0 && keep_node[level[k]]; },
+            [&](std::size_t rank, std::size_t k) {
+                inner[rank] = level[k];
+                words[base + k] =
+                    pool::make_node(pool::NodeType::internal, static_cast<std::uint32_t>(queued + 8 * rank));
+            });
+        if (n_inner > 0 && queued + 8 * n_inner > pool::k_node_address_max)
+            throw Error("the ISO octree needs more than 2^30 nodes (lower --max-level)");
+        std::atomic<std::uint64_t> leaves{0};
+        parallel_chunks(level.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            std::uint64_t n_leaves = 0;
+            for (std::size_t k = b; k < e; ++k) {
+                const std::uint32_t i = level[k];
+                if (nodes[i].child != 0 && keep_node[i]) continue;  // internal: written above
+                if (nodes[i].child == 0 && keep_node[i]) {
+                    words[base + k] = pool::make_node(pool::NodeType::filled_leaf, leaf_of[i]);
+                    ++n_leaves;
+                } else {
+                    words[base + k] = pool::make_node(pool::NodeType::empty_leaf, 0);
+                }
+            }
+            leaves += n_leaves;
+        });
+        if (leaves.load() > 0) {
+            const std::uint32_t l = nodes[level[0]].level;
+            st.depth = std::max<std::uint32_t>(st.depth, l);
+            st.leaves_per_level[l] += leaves.load();
         }
+        next.resize(8 * n_inner);
+        parallel_chunks(n_inner, 1 << 12, threads, [&](std::size_t b, std::size_t e, unsigned) {
+            for (std::size_t r = b; r < e; ++r)
+                for (std::uint32_t c = 0; c < 8; ++c) next[8 * r + c] = nodes[inner[r]].child + c;
+        });
+        queued += next.size();
+        level.swap(next);
     }
 }
 
@@ -1793,7 +1973,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     t0 = Clock::now();
     const RootCube cube = root_cube(in, influence, o);
     const PointSet ps = sorted_points(in, influence, cube.frame, o, threads);
-    const InfluenceIndex index = build_index(ps, cube.frame);
+    const InfluenceIndex index = build_index(ps, cube.frame, threads);
     TreeBuilder tree(ps, index, cube.frame, o);
     tree.build_from_points(threads);  // step 2
     st.seconds_tree = seconds_since(t0);
@@ -1813,7 +1993,7 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     const pre::LargeVector<Node>& nodes = tree.nodes;
     const double median_support = median_of({ps.support.begin(), ps.support.end()});
     const CornerEvaluator evaluator{index, ps, o.support, cube.sigma_max, 2 * median_support, o.one_side};
-    const std::vector<std::uint32_t> filled = filled_leaves(nodes, st);
+    const std::vector<std::uint32_t> filled = filled_leaves(nodes, threads, st);
     const BlockEvaluation blocks{evaluator, cube.frame, median_support};
     CornerTable table = evaluate_corners(nodes, filled, blocks, threads, progress, st);
     st.seconds_corners = seconds_since(t0);
@@ -1823,12 +2003,13 @@ IsoModel build_iso(const BuildInput& in, const BuildOptions& o, const Progress& 
     st.seconds_closure = seconds_since(t0);
 
     t0 = Clock::now();
-    const std::vector<std::uint8_t> keep_node = crossed_leaves(nodes, table, o, threads, st);  // step 6
+    const TreeCut cut = cut_tree(nodes);
+    const std::vector<std::uint8_t> keep_node = crossed_leaves(nodes, cut, table, o, threads, st);  // step 6
     std::vector<std::uint32_t> leaf_of;
-    const std::vector<std::uint32_t> dfs_leaves = depth_first_leaves(nodes, keep_node, leaf_of);
+    const std::vector<std::uint32_t> dfs_leaves = depth_first_leaves(nodes, cut, keep_node, leaf_of, threads);
     const bool colors = !in.colors.empty();
     encode_leaves(nodes, dfs_leaves, table, cube.frame, o, colors, threads, model);  // step 7
-    encode_nodes(nodes, keep_node, leaf_of, model);
+    encode_nodes(nodes, keep_node, leaf_of, threads, model);
     st.leaves = dfs_leaves.size();
     st.nodes = model.nodes.size();
     st.seconds_encode = seconds_since(t0);
