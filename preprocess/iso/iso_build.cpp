@@ -1549,9 +1549,11 @@ struct BlockEvaluation {
         if (keys.empty()) return {};
         const std::uint32_t block_level = detail::level_for_extent(frame, median_support, 1.0, k_code_level);
         const std::uint32_t block_shift = 3 * (k_code_level - block_level);
-        std::vector<std::size_t> blocks{0};
-        for (std::size_t i = 1; i < keys.size(); ++i)
-            if ((keys[i] >> block_shift) != (keys[i - 1] >> block_shift)) blocks.push_back(i);
+        std::vector<std::size_t> blocks(keys.size() + 1);  // where each block's keys start
+        blocks.resize(parallel_select(
+            keys.size(), threads,
+            [&](std::size_t i) { return i == 0 || (keys[i] >> block_shift) != (keys[i - 1] >> block_shift); },
+            [&](std::size_t rank, std::size_t i) { blocks[rank] = i; }));
         blocks.push_back(keys.size());
         std::atomic<std::uint64_t> corners_done{0}, counted{0}, unsupported{0};
         const double corner_step = frame.edge(k_code_level);
@@ -1616,9 +1618,13 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
     // The tables' pages are touched in parallel first (buffer.h, prefault); the closure (step 5b)
     // grows them a leaf at a time, into the room reserved here.
     pre::resize_prefaulted(table.leaf_slot, nodes.size(), threads, nodes.size() + nodes.size() / 4);
-    std::fill(table.leaf_slot.begin(), table.leaf_slot.end(), UINT32_MAX);
-    for (std::size_t f = 0; f < filled.size(); ++f)
-        table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
+    parallel_chunks(nodes.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::fill(table.leaf_slot.begin() + static_cast<std::ptrdiff_t>(b),
+                  table.leaf_slot.begin() + static_cast<std::ptrdiff_t>(e), UINT32_MAX);
+    });
+    parallel_chunks(filled.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t f = b; f < e; ++f) table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
+    });
     pre::Buffer<KeyIndex> slots(8 * filled.size());  // first touched by the parallel fill
     parallel_chunks(filled.size(), 1 << 14, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t f = b; f < e; ++f)
