@@ -1729,8 +1729,7 @@ void close_surface(TreeBuilder& tree, CornerTable& table, std::vector<std::uint3
 
 /// The tree cut for steps 6 and 7's passes over whole subtrees: `items`, in depth-first order, the
 /// nodes at level k_cut_level and the leaves above it; `above`, in pre-order, the internal nodes
-/// above that level. Each item's subtree is walked by one worker; `above` is small (at most 585
-/// nodes).
+/// above that level (levels 0-2: at most 73 nodes). Each item's subtree is walked by one worker.
 struct TreeCut {
     static constexpr std::uint32_t k_cut_level = 3;
     std::vector<std::uint32_t> items, above;
