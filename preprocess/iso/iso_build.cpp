@@ -112,6 +112,15 @@ bool is_filled(std::uint8_t kind) {
     return kind == k_active || kind == k_passive;
 }
 
+/// Sets every element of `v` to `value`, from `threads` workers (the large index tables).
+template <class Vector>
+void fill_parallel(Vector& v, typename Vector::value_type value, unsigned threads) {
+    parallel_chunks(v.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::fill(v.begin() + static_cast<std::ptrdiff_t>(b), v.begin() + static_cast<std::ptrdiff_t>(e),
+                  value);
+    });
+}
+
 /// The usable points, sorted by their level-K Morton code (structure of arrays). Buffers: the
 /// parallel fill of sorted_points touches their pages first, not a serial zeroing (120 MB at 1M points).
 struct PointSet {
@@ -1508,6 +1517,7 @@ std::vector<std::uint32_t> filled_leaves(const pre::LargeVector<Node>& nodes, un
     filled.resize(parallel_select(
         nodes.size(), threads, [&](std::size_t i) { return nodes[i].child == 0 && is_filled(nodes[i].kind); },
         [&](std::size_t rank, std::size_t i) { filled[rank] = static_cast<std::uint32_t>(i); }));
+    filled.shrink_to_fit();  // kept for the whole build: not the node count's room
     std::atomic<std::uint64_t> active{0};
     parallel_chunks(filled.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         std::uint64_t n = 0;
@@ -1618,10 +1628,7 @@ CornerTable evaluate_corners(const pre::LargeVector<Node>& nodes, const std::vec
     // The tables' pages are touched in parallel first (buffer.h, prefault); the closure (step 5b)
     // grows them a leaf at a time, into the room reserved here.
     pre::resize_prefaulted(table.leaf_slot, nodes.size(), threads, nodes.size() + nodes.size() / 4);
-    parallel_chunks(nodes.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        std::fill(table.leaf_slot.begin() + static_cast<std::ptrdiff_t>(b),
-                  table.leaf_slot.begin() + static_cast<std::ptrdiff_t>(e), UINT32_MAX);
-    });
+    fill_parallel(table.leaf_slot, UINT32_MAX, threads);
     parallel_chunks(filled.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t f = b; f < e; ++f) table.leaf_slot[filled[f]] = static_cast<std::uint32_t>(f);
     });
@@ -1831,10 +1838,7 @@ std::vector<std::uint32_t> depth_first_leaves(const pre::LargeVector<Node>& node
     for (std::size_t k = 0; k < cut.items.size(); ++k) first[k + 1] = first[k] + item_leaves[k].size();
     std::vector<std::uint32_t> dfs_leaves(first.back());
     leaf_of.resize(nodes.size());
-    parallel_chunks(nodes.size(), 1 << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        std::fill(leaf_of.begin() + static_cast<std::ptrdiff_t>(b),
-                  leaf_of.begin() + static_cast<std::ptrdiff_t>(e), UINT32_MAX);
-    });
+    fill_parallel(leaf_of, UINT32_MAX, threads);
     parallel_chunks(cut.items.size(), 1, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t k = b; k < e; ++k)
             for (std::size_t j = 0; j < item_leaves[k].size(); ++j) {
