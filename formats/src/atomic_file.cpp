@@ -1,5 +1,6 @@
-// PointRT: atomic file writes (prt/atomic_file.h): temporary file PATH.tmp.HOST.PID + fsync + rename,
-// then removal of the temporary files of this host's dead writers.
+// PointRT: atomic file writes (prt/atomic_file.h): temporary file PATH.tmp.HOST.PID (its write-back
+// started chunk by chunk as it is written) + fsync + rename, then removal of the temporary files of
+// this host's dead writers.
 #include "prt/atomic_file.h"
 
 #include <fcntl.h>
@@ -87,17 +88,43 @@ void AtomicFile::fail(const char* what, int err) {
     throw Error(m_path.string() + ": " + what + ": " + std::strerror(err));
 }
 
+namespace {
+/// Write-back starts once this many bytes wait: large enough for the disk to take efficient
+/// requests, small enough that the disk works while the rest is copied. On the H200 host's ext4
+/// (175 MB, 2026-12-03): write + fsync 0.126-0.151 s in one go, 0.080-0.086 s with 8 MB chunks.
+constexpr std::uint64_t k_writeback_chunk = 8u << 20;
+}  // namespace
+
+void AtomicFile::start_writeback(bool all) {
+#if defined(__linux__) && defined(SYNC_FILE_RANGE_WRITE)
+    const std::uint64_t pending = m_written - m_scheduled;
+    if (!m_writeback || pending == 0 || (!all && pending < k_writeback_chunk)) return;
+    // Starts the write-back only (no wait): commit()'s fsync still waits for every byte and reports
+    // any error. Advice: where the file system refuses it, writing goes on without it.
+    if (::sync_file_range(m_fd, static_cast<off_t>(m_scheduled), static_cast<off_t>(pending),
+                          SYNC_FILE_RANGE_WRITE) != 0)
+        m_writeback = false;
+    m_scheduled = m_written;
+#else
+    (void)all;
+#endif
+}
+
 void AtomicFile::write(const void* data, std::size_t n) {
     if (m_fd < 0) open();
     const auto* p = static_cast<const unsigned char*>(data);
     std::size_t done = 0;
     while (done < n) {
-        const ssize_t w = ::write(m_fd, p + done, std::min<std::size_t>(n - done, 1u << 30));
+        // At most one chunk per call, so a large array's write-back starts while it is copied.
+        const std::size_t piece = std::min<std::size_t>(n - done, k_writeback_chunk);
+        const ssize_t w = ::write(m_fd, p + done, piece);
         if (w < 0) {
             if (errno == EINTR) continue;
             fail("write failed", errno);
         }
         done += static_cast<std::size_t>(w);
+        m_written += static_cast<std::uint64_t>(w);
+        start_writeback(false);
     }
 }
 
@@ -107,6 +134,7 @@ void AtomicFile::commit() {
         m_fd = ::open(m_tmp.c_str(), O_WRONLY | O_CREAT | O_CLOEXEC, 0644);
         if (m_fd < 0) throw Error(m_path.string() + ": cannot create: " + std::strerror(errno));
     }
+    start_writeback(true);
     if (::fsync(m_fd) != 0) fail("fsync failed", errno);
     const int fd = m_fd;
     m_fd = -1;

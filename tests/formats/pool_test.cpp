@@ -1,4 +1,6 @@
 // Pool file: round trips and every validation error of formats/POOL.md.
+#include "prt/formats/pool.h"
+
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -8,9 +10,10 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <vector>
 
 #include "point_cloud.h"
-#include "prt/formats/pool.h"
+#include "prt/atomic_file.h"
 #include "prt/formats/section_table.h"
 
 namespace fs = std::filesystem;
@@ -50,8 +53,10 @@ void reseal(std::vector<std::byte>& bytes) {
     auto* table = reinterpret_cast<SectionEntry*>(bytes.data() + h->table_offset);
     for (std::uint32_t i = 0; i < h->section_count; ++i)
         if (table[i].offset + table[i].size <= bytes.size())
-            table[i].checksum = checksum({bytes.data() + table[i].offset, static_cast<std::size_t>(table[i].size)});
-    h->table_checksum = checksum({reinterpret_cast<const std::byte*>(table), h->section_count * sizeof(SectionEntry)});
+            table[i].checksum =
+                checksum({bytes.data() + table[i].offset, static_cast<std::size_t>(table[i].size)});
+    h->table_checksum =
+        checksum({reinterpret_cast<const std::byte*>(table), h->section_count * sizeof(SectionEntry)});
     h->header_checksum = checksum({bytes.data(), offsetof(PoolHeader, header_checksum)});
 }
 
@@ -137,7 +142,9 @@ TEST(Pool, SerializationIsDeterministicApartFromTime) {
     EXPECT_EQ(w.serialize(), w.serialize());
 }
 
-TEST(PoolValidation, ValidImageOpens) { EXPECT_EQ(open_error(make_pool_bytes()), ""); }
+TEST(PoolValidation, ValidImageOpens) {
+    EXPECT_EQ(open_error(make_pool_bytes()), "");
+}
 
 TEST(PoolValidation, WrongMagic) {
     auto b = make_pool_bytes();
@@ -341,7 +348,8 @@ TEST(PoolValidation, OctreeCrossReferences) {
 
     auto child_out = root_with_leaves();
     child_out[0] = make_node(NodeType::internal, 5);  // children 5..12 but only 9 nodes
-    expect_error(make_octree_pool(child_out, {0, 2}, {s, s}), "section octree_nodes: node 0: child address 5");
+    expect_error(make_octree_pool(child_out, {0, 2}, {s, s}),
+                 "section octree_nodes: node 0: child address 5");
 
     auto leaf_out = root_with_leaves();
     leaf_out[1] = make_node(NodeType::filled_leaf, 3);
@@ -351,7 +359,8 @@ TEST(PoolValidation, OctreeCrossReferences) {
 
     Splat bad = s;
     bad.point = 4;  // 4 points in the model
-    expect_error(make_octree_pool(root_with_leaves(), {0, 2}, {s, bad}), "splat 1: point index 4 out of range");
+    expect_error(make_octree_pool(root_with_leaves(), {0, 2}, {s, bad}),
+                 "splat 1: point index 4 out of range");
 
     auto type3 = root_with_leaves();
     type3[2] = 3u << 30;
@@ -388,7 +397,8 @@ TEST(PoolValidation, SensorsAndScanIds) {
     expect_error(make_scan_pool({bad_kind}, {}), "section sensors: sensor 0: unknown kind 7");
     Sensor not_unit = far;
     not_unit.position[2] = 2;
-    expect_error(make_scan_pool({at, not_unit}, {}), "section sensors: sensor 1: direction not of unit length");
+    expect_error(make_scan_pool({at, not_unit}, {}),
+                 "section sensors: sensor 1: direction not of unit length");
     Sensor nan = at;
     nan.position[0] = std::nan("");
     expect_error(make_scan_pool({nan}, {}), "section sensors: sensor 0: position not finite");
@@ -438,6 +448,35 @@ TEST(PoolWrite, FailedWriteLeavesPreviousFileIntact) {
         EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
 }
 
+TEST(AtomicFile, LargeFileInUnevenPiecesIsWrittenWhole) {
+    // The write-back is started every 8 MB while writing (sync_file_range): pieces below, across
+    // and far above that size, in order, must give the file byte for byte.
+    const fs::path dir = temp_dir();
+    const fs::path path = dir / "big.bin";
+    std::vector<unsigned char> bytes(27u << 20);
+    std::mt19937 rng(7);
+    for (auto& b : bytes) b = static_cast<unsigned char>(rng());
+    {
+        prt::AtomicFile f(path);
+        std::size_t at = 0;
+        for (std::size_t piece : {std::size_t{1}, std::size_t{(9u << 20) + 3}, std::size_t{4096},
+                                  std::size_t{(3u << 20) - 1}, std::size_t{0}}) {
+            f.write(bytes.data() + at, piece);
+            at += piece;
+        }
+        f.write(bytes.data() + at, bytes.size() - at);  // the rest: over 14 MB at once
+        EXPECT_FALSE(fs::exists(path)) << "visible before commit";
+        f.commit();
+    }
+    ASSERT_EQ(fs::file_size(path), bytes.size());
+    std::ifstream in(path, std::ios::binary);
+    std::vector<unsigned char> back(bytes.size());
+    in.read(reinterpret_cast<char*>(back.data()), static_cast<std::streamsize>(back.size()));
+    EXPECT_TRUE(back == bytes);
+    for (const auto& entry : fs::directory_iterator(dir))
+        EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << entry.path();
+}
+
 TEST(PoolWrite, KilledWriterLeavesPreviousPoolIntact) {
     // A writer killed with SIGKILL mid-write leaves the old pool valid and no file at the target
     // other than it (the temporary file is the only partial output).
@@ -470,7 +509,8 @@ TEST(PointCloud, CleanCountsWhatItDrops) {
     prt::pre::PointCloud c;
     const double nan = std::numeric_limits<double>::quiet_NaN();
     c.positions = {{0, 0, 0}, {nan, 0, 0}, {1, 1, 1}, {0, 0, 0}, {2, 2, 2}, {3, 3, 3}};
-    c.normals = {{0, 0, 2}, {0, 0, 1}, {0, 0, 0}, {0, 1, 0}, {1, 0, 0}, {0, 0, std::numeric_limits<float>::infinity()}};
+    c.normals = {{0, 0, 2}, {0, 0, 1}, {0, 0, 0},
+                 {0, 1, 0}, {1, 0, 0}, {0, 0, std::numeric_limits<float>::infinity()}};
     const auto r = prt::pre::clean(c);
     EXPECT_EQ(r.input, 6u);
     EXPECT_EQ(r.non_finite, 1u);
@@ -502,7 +542,8 @@ TEST(PrtInfo, PrintsSectionsAndFailsOnBadFiles) {
     EXPECT_NE(text.find("positions"), std::string::npos);
     EXPECT_NE(text.find("pool_test"), std::string::npos);
 
-    std::ofstream(dir / "junk.pool") << "this is not a pool file at all, but it is longer than a header......";
+    std::ofstream(dir / "junk.pool")
+        << "this is not a pool file at all, but it is longer than a header......";
     const int rc = std::system((bin + " " + (dir / "junk.pool").string() + " 2> " + out).c_str());
     EXPECT_EQ(WEXITSTATUS(rc), 1);
     std::ifstream err(out);

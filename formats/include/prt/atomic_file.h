@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -28,7 +29,10 @@ public:
     const std::filesystem::path& path() const { return m_path; }
     /// The temporary file's name (for writers that open it themselves).
     const std::string& temporary() const { return m_tmp; }
-    /// Appends n bytes (the temporary file is created on the first call).
+    /// Appends n bytes (the temporary file is created on the first call). On Linux, every
+    /// k_writeback_chunk bytes written start their write-back to the disk (sync_file_range), so
+    /// commit()'s fsync waits for the tail only and a large file's disk writes overlap its copy
+    /// into the page cache.
     void write(const void* data, std::size_t n);
     /// fsync, rename over path(), then removal of this host's dead writers' temporary files.
     void commit();
@@ -40,8 +44,13 @@ private:
     std::filesystem::path m_path;
     std::string m_host;
     std::string m_tmp;
+    void start_writeback(bool all);
+
     int m_fd = -1;
     bool m_committed = false;
+    std::uint64_t m_written = 0;    ///< bytes written so far
+    std::uint64_t m_scheduled = 0;  ///< bytes whose write-back was started
+    bool m_writeback = true;        ///< false once sync_file_range failed (not supported here)
 };
 
 /// Checks up front that AtomicFile(path) can be written and committed, so that a tool refuses an
