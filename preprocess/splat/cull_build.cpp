@@ -262,6 +262,16 @@ std::future<void> warm_up_cull_backend(const std::string& name) {
     return ready.get_future();
 }
 
+std::future<void> release_cull_backend(const std::string& backend) {
+#ifdef PRT_HAVE_CUDA
+    if (backend == "cuda") return std::async(std::launch::async, [] { cuda::release_device(); });
+#endif
+    (void)backend;
+    std::promise<void> done;
+    done.set_value();
+    return done.get_future();
+}
+
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,
                                           CullStats* stats_out, const OctreePart& part) {
     check_params(params);

@@ -151,6 +151,12 @@ std::string resolve_cull_backend(const std::string& name, std::string* why = nul
 /// share of prt-cull's time on 1M points); a ready future otherwise. Errors are left to the culling.
 std::future<void> warm_up_cull_backend(const std::string& name);
 
+/// When `backend` (resolved: "cpu" or "cuda") is "cuda": destroys the GPU's context on a thread of
+/// its own (prt::cuda::release_device), so that prt-cull writes its output meanwhile instead of
+/// paying the driver's teardown at exit; a ready future otherwise. Only after the last culling or
+/// hole measurement: no GPU work may follow until the future is ready.
+std::future<void> release_cull_backend(const std::string& backend);
+
 /// Runs the per-leaf culling and returns the final keep flags (one per stored splat). Throws
 /// prt::Error on invalid parameters or an octree that is not replicated.
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,

@@ -167,6 +167,8 @@ void cull_step(prt::tool::PoolStep& step, prt::pre::CullParams params, prt::pre:
         step.note("prt-cull: measuring holes with %llu rays", ull(holes.rays));
         hs = pre::measure_holes(sections, culled_view, holes);
     }
+    // The GPU is done: its context goes while the pool is written (joined before returning).
+    std::future<void> released = pre::release_cull_backend(backend);
     const nlohmann::json parameters = {{"directions", params.directions},
                                        {"grid", params.grid},
                                        {"probes_per_leaf", params.directions * params.grid * params.grid},
@@ -178,6 +180,7 @@ void cull_step(prt::tool::PoolStep& step, prt::pre::CullParams params, prt::pre:
     writer.add_array(pool::SectionType::leaf_info, std::move(culled.leaf_info));
     writer.add_array(pool::SectionType::splats, std::move(culled.splats));
     const std::uint64_t bytes = step.write(parameters);
+    released.get();
     const double total_seconds = step.seconds();
 
     report(step, stats, step.input().file_size(), bytes, total_seconds);

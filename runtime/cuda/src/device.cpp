@@ -45,4 +45,8 @@ void warm_up_device() {
     if (cudaSetDevice(0) != cudaSuccess || cudaFree(nullptr) != cudaSuccess) cudaGetLastError();
 }
 
+void release_device() {
+    if (cudaDeviceReset() != cudaSuccess) cudaGetLastError();
+}
+
 }  // namespace prt::cuda

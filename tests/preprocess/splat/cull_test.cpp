@@ -714,6 +714,43 @@ TEST(CullGpu, SameKeptSplatsAndHolesAsTheCpu) {
     }
 }
 
+class CullGpuTool : public prt::test::ToolTest {
+protected:
+    CullGpuTool() : ToolTest("prt-cull", "prt_cull_gpu_test_") {}
+};
+
+// prt-cull on the GPU releases the device (its context goes on a thread while the pool is written,
+// after the hole measurement's GPU rays): the pool is whole and holds the library's CUDA culling.
+TEST_F(CullGpuTool, WritesTheLibrarysCudaCullingAfterReleasingTheDevice) {
+    try {
+        pre::resolve_cull_backend("cuda");
+    } catch (const Error& e) {
+        GTEST_SKIP() << e.what();
+    }
+    const Model& m = sphere_model();
+    pool::PoolWriter w;
+    pre::write_point_sections(m.cloud, w);
+    pre::add_octree_sections(m.octree, w);
+    w.add_provenance("cull_test", "0", "{}");
+    w.write(path("in.pool"));
+    ASSERT_EQ(run(path("in.pool") + " -o " + path("out.pool") + " --backend cuda --measure-holes 20000 " +
+                  "--stats-json " + path("stats.json")),
+              0)
+        << m_stderr;
+    const pool::PoolFile out = pool::PoolFile::open(path("out.pool"));  // validates everything
+    pre::CullParams gpu;
+    gpu.backend = "cuda";
+    const pre::CulledOctree c = pre::cull_octree(m.sections(), gpu);
+    const auto splats = out.array<pool::Splat>(pool::SectionType::splats);
+    ASSERT_EQ(splats.size(), c.splats.size());
+    EXPECT_EQ(0, std::memcmp(splats.data(), c.splats.data(), splats.size_bytes()));
+    const nlohmann::json st = nlohmann::json::parse(std::ifstream(path("stats.json")));
+    EXPECT_EQ(st["device"].get<std::string>().rfind("cuda", 0), 0u) << st["device"];
+    EXPECT_EQ(st["holes"]["device"].get<std::string>().rfind("cuda", 0), 0u) << st["holes"]["device"];
+    EXPECT_EQ(st["holes"]["total"]["rays"], 20000);
+    EXPECT_LT(st["holes"]["total"]["hole_rate"].get<double>(), 0.001);
+}
+
 #endif
 
 }  // namespace
