@@ -80,6 +80,8 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(o.leaf_info, o.leaf_info ? (std::size_t{o.filled_leaves} + 1) * 4 : 0);
     f(o.splats, std::size_t{o.splat_count} * sizeof(pool::Splat));
     f(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds));
+    f(o.node_boxes, o.node_boxes ? (std::size_t{o.node_count} / 8 + 1) * sizeof(core::NodeBox) : 0);
+    f(o.node_box_mask, o.node_box_mask ? std::size_t{o.node_count} / 8 + 1 : 0);
     // Bricks (issue 17), in core: every brick uploaded, so the resident table and the request
     // flags are dropped (null: every brick at data + offset). Streamed bricks (a host resident
     // table: rt::BrickStream): only the top tree, table, LOD discs and prefixes here; brick data, leaf bounds

@@ -1,6 +1,9 @@
 #include "prt/runtime/leaf_bounds.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
 
 #include "prt/core/leaf_bounds.h"
 #include "prt/parallel.h"
@@ -21,6 +24,115 @@ std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsig
                             out[l].end = e;
                         }
                     });
+    return out;
+}
+
+NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
+    if (v.node_count == 0 || v.nodes == nullptr || v.leaf_info == nullptr || v.splats == nullptr) return {};
+    // The layout the walk's index assumes: children blocks of 8 after the root, each behind its
+    // parent (so one pass from the last slot back sees children before parents). Pools from
+    // prt-octree are laid out so; any other layout renders without node boxes.
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        const std::uint32_t node = v.nodes[i];
+        if (!core::node_is_internal(node)) continue;
+        const std::uint32_t addr = core::node_addr(node);
+        if (addr <= i || (addr - 1u) % 8u != 0u || addr >= v.node_count || v.node_count - addr < 8u)
+            return {};
+    }
+    constexpr float finf = std::numeric_limits<float>::infinity();
+    const core::NodeBox empty{{finf, finf, finf}, {-finf, -finf, -finf}};
+    const core::NodeBox open{{-finf, -finf, -finf}, {finf, finf, finf}};
+    std::vector<core::NodeBox> slot(v.node_count, empty);  // per slot, filled leaves first
+    const double root[3] = {v.root_min.x, v.root_min.y, v.root_min.z};
+    const double scale = v.inv_root_size;
+    parallel_chunks(
+        v.node_count, 4096, resolve_threads(threads), [&](std::size_t first, std::size_t last, unsigned) {
+            for (std::size_t i = first; i < last; ++i) {
+                const std::uint32_t node = v.nodes[i];
+                if (!core::node_is_filled(node)) continue;
+                const std::uint32_t leaf = core::node_addr(node);
+                if (leaf >= v.filled_leaves) {
+                    slot[i] = open;
+                    continue;
+                }
+                std::uint32_t b, e;
+                core::leaf_splats(v, node, b, e);
+                double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+                bool finite = true;
+                for (std::uint32_t k = b; k < e && finite; ++k) {
+                    const pool::Splat& sp = v.splats[k];
+                    const double c[3] = {sp.position.x, sp.position.y, sp.position.z};
+                    const double n[3] = {sp.normal.x, sp.normal.y, sp.normal.z};
+                    const double r = std::fabs(double(sp.radius));
+                    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                    if (!(sp.radius * sp.radius > 0.0f) || !(len > 0))
+                        continue;  // intersect_splat never hits it
+                    finite = std::isfinite(r) && std::isfinite(len) && std::isfinite(c[0]) &&
+                             std::isfinite(c[1]) && std::isfinite(c[2]);
+                    // A disk of radius r about unit normal u reaches r sqrt(1 - u_a^2) along axis a.
+                    for (int a = 0; a < 3 && finite; ++a) {
+                        const double u = n[a] / len;
+                        const double h = r * std::sqrt(std::max(0.0, 1.0 - u * u)) * (1.0 + 1e-6);
+                        lo[a] = std::min(lo[a], (c[a] - h - root[a]) * scale);
+                        hi[a] = std::max(hi[a], (c[a] + h - root[a]) * scale);
+                    }
+                }
+                if (!finite) {
+                    slot[i] = open;
+                    continue;
+                }
+                if (!(lo[0] <= hi[0])) continue;  // nothing hittable: empty
+                core::NodeBox& o = slot[i];
+                for (int a = 0; a < 3; ++a) {  // to float, outward
+                    o.lo[a] = std::nextafter(static_cast<float>(lo[a]), -finf);
+                    o.hi[a] = std::nextafter(static_cast<float>(hi[a]), finf);
+                }
+            }
+        });
+    // Internal nodes from the last slot back: the union of their children's (exact in float).
+    NodeBoxes out;
+    out.boxes.assign(v.node_count / 8 + 1, empty);
+    for (std::uint32_t i = v.node_count; i-- > 0;) {
+        const std::uint32_t node = v.nodes[i];
+        if (!core::node_is_internal(node)) continue;
+        const std::uint32_t addr = core::node_addr(node);
+        core::NodeBox u = empty;
+        for (std::uint32_t c = 0; c < 8; ++c)
+            for (int a = 0; a < 3; ++a) {
+                u.lo[a] = std::min(u.lo[a], slot[addr + c].lo[a]);
+                u.hi[a] = std::max(u.hi[a], slot[addr + c].hi[a]);
+            }
+        slot[i] = u;
+        out.boxes[(addr - 1u) >> 3] = u;
+    }
+    // The mask, from the root down (children lie behind their parents): child c of a node is
+    // tested when a line through its cell meets its box with a chance under k_node_box_test_below
+    // (Cauchy-Crofton: the surface area of the box inside the cell over the cell's).
+    out.mask.assign(v.node_count / 8 + 1, 0);
+    std::vector<std::uint8_t> level(v.node_count, 0);
+    std::vector<std::array<std::uint32_t, 3>> cell(v.node_count, {0u, 0u, 0u});
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        const std::uint32_t node = v.nodes[i];
+        if (!core::node_is_internal(node)) continue;
+        const std::uint32_t addr = core::node_addr(node);
+        std::uint8_t bits = 0;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            const std::uint32_t k = addr + c;
+            level[k] = static_cast<std::uint8_t>(std::min(level[i] + 1, 31));
+            for (int a = 0; a < 3; ++a) cell[k][a] = 2u * cell[i][a] + ((c >> a) & 1u);
+            if (!core::node_is_internal(v.nodes[k])) continue;
+            const double size = std::ldexp(1.0, -int(level[k]));
+            const core::NodeBox& b = slot[k];
+            double e[3];
+            for (int a = 0; a < 3; ++a) {
+                const double lo = cell[k][a] * size, hi = lo + size;
+                e[a] = std::max(0.0, std::min(hi, double(b.hi[a])) - std::max(lo, double(b.lo[a])));
+            }
+            const double area = e[0] * e[1] + e[1] * e[2] + e[0] * e[2];
+            if (area < k_node_box_test_below * 3.0 * size * size) bits |= static_cast<std::uint8_t>(1u << c);
+        }
+        out.mask[(addr - 1u) >> 3] = bits;
+    }
     return out;
 }
 

@@ -84,7 +84,8 @@ core::SurfaceKind choose_surface(const pool::PoolFile& pf, std::optional<core::S
     return k;
 }
 
-/// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds.
+/// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds and
+/// node boxes.
 /// PoolFile::open checked the octree (formats/POOL.md, "Validation"); what is left is the renderer's
 /// own limit of 32-bit counts.
 void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
@@ -95,8 +96,14 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
     o = core::make_octree_view(s.info, s.nodes.data(), s.leaf_info.data(), s.splats.data());
     lm.leaf_bounds = build_leaf_bounds(o);
     o.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves of LoadedModel
+    NodeBoxes nb = build_node_boxes(o);
+    lm.node_boxes = std::move(nb.boxes);
+    lm.node_box_mask = std::move(nb.mask);
+    o.node_boxes = lm.node_boxes.empty() ? nullptr : lm.node_boxes.data();
+    o.node_box_mask = lm.node_boxes.empty() ? nullptr : lm.node_box_mask.data();
     lm.bytes = s.nodes.size_bytes() + s.leaf_info.size_bytes() + s.splats.size_bytes() +
-               lm.leaf_bounds.size() * sizeof(core::LeafBounds);
+               lm.leaf_bounds.size() * sizeof(core::LeafBounds) +
+               lm.node_boxes.size() * sizeof(core::NodeBox);
 }
 
 /// The brick sections (issue 17, prt-bricks) of a pool into the model's brick view, every brick

@@ -84,6 +84,13 @@ static_assert(sizeof(BrickLeafBounds) == 16);
 inline constexpr float k_brick_axis_scale = 32767.0f;
 inline constexpr std::uint16_t k_brick_cone_never = 0xffffu;
 
+/// The axis-aligned box, in normalized root coordinates (the walk's), of every hittable disk stored
+/// in the leaves below one internal node (rt::build_node_boxes); lo > hi when there is none.
+struct alignas(8) NodeBox {
+    float lo[3], hi[3];
+};
+static_assert(sizeof(NodeBox) == 24);
+
 /// A non-owning view of a model's octree sections (pool section types 16-19).
 struct OctreeView {
     const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words
@@ -99,6 +106,13 @@ struct OctreeView {
     /// One LeafBounds per filled leaf (same index as leaf_info), or null: leaves are then never
     /// skipped without testing their splats.
     const LeafBounds* leaf_bounds = nullptr;
+    /// One NodeBox per internal node, indexed by its children block ((address - 1) / 8), or null:
+    /// walk_next then descends into every internal node the ray's cell path meets.
+    const NodeBox* node_boxes = nullptr;
+    /// Set whenever node_boxes is: per internal node (same index), bit c set when child c's box is
+    /// worth a test (rt::build_node_boxes: an internal child whose box a line through its cell
+    /// meets with a chance under k_node_box_test_below).
+    const std::uint8_t* node_box_mask = nullptr;
 };
 
 /// The view over splat-octree arrays (a pool's sections, checked when the pool was opened and read
@@ -175,6 +189,7 @@ struct OctreeWalk {
     Fixed3 p;     ///< current point (inside the next cell to visit)
     float t;      ///< ray parameter where the next cell is entered
     float t_end;  ///< min(t_max, the root's exit)
+    float t_max;  ///< the ray's own bound: ray_misses_box tests the node boxes up to it
     std::uint32_t steps_left;
     std::uint32_t restart;                 ///< level of the deepest node shared with the next cell
     std::uint32_t path[k_fixed_bits + 1];  ///< node indices from the root to the current leaf
@@ -247,6 +262,7 @@ PRT_HD inline bool walk_begin(const OctreeView& v, Vec3 o_local, Vec3 d_local, f
     }
     w.t = t_enter;
     w.t_end = t_exit;
+    w.t_max = t_max;
     w.steps_left = max_steps;
     w.restart = 0;
     w.path[0] = 0;
@@ -266,13 +282,52 @@ PRT_HD PRT_INLINE std::uint32_t load_node(const OctreeView& v, std::uint32_t ind
     return load_node_word(v.nodes, index);
 }
 
+/// Whether the walk's ray, t in [0, t_max], misses `box` widened by a margin of 1e-5 x (1 + the
+/// largest |origin| coordinate) in normalized root coordinates: the walk's float ray differs from
+/// the model-frame ray the splat tests use by rounding, about 1.2e-7 x (|origin| + t |d|) there.
+/// All of [0, t_max] and not just the rest of the walk: a culled tree's leaf may hold the only copy
+/// of a disk that the ray hits outside the leaf, even behind the walk (closest_hit_splats accepts
+/// such hits from t = 0).
+PRT_HD PRT_INLINE bool ray_misses_box(const OctreeWalk& w, const NodeBox* box) {
+#if PRT_DEVICE_CODE
+    const float2 b0 = __ldg(reinterpret_cast<const float2*>(box));
+    const float2 b1 = __ldg(reinterpret_cast<const float2*>(box) + 1);
+    const float2 b2 = __ldg(reinterpret_cast<const float2*>(box) + 2);
+    const NodeBox b{{b0.x, b0.y, b1.x}, {b1.y, b2.x, b2.y}};
+#else
+    const NodeBox& b = *box;
+#endif
+    if (!(b.lo[0] <= b.hi[0])) return true;  // no hittable disk below the node
+    const float m = 1e-5f * (1.0f + fmaxf(fmaxf(fabsf(w.o.x), fabsf(w.o.y)), fabsf(w.o.z)));
+    float t0 = 0.0f, t1 = w.t_max;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float d = component(w.d, a), o = component(w.o, a);
+        const float lo = b.lo[a] - m, hi = b.hi[a] + m;
+        if (d == 0.0f) {
+            if (o < lo || o > hi) return true;
+            continue;
+        }
+#if PRT_WALK_RCP
+        const float inv = component(w.inv_d, a);
+        const float ta = (lo - o) * inv, tb = (hi - o) * inv;
+#else
+        const float ta = (lo - o) / d, tb = (hi - o) / d;
+#endif
+        t0 = fmaxf(t0, fminf(ta, tb));
+        t1 = fminf(t1, fmaxf(ta, tb));
+    }
+    return t0 > t1;
+}
+
 /// thesis 2.2.2: descends top-down to the leaf holding fixed-point point `p`, starting at the
 /// node path[level] (path[0] = 0 is the root) and recording the nodes passed in `path`. Returns
 /// the leaf's node word and sets `level` to its level. Corrupt addresses and trees deeper than
 /// k_fixed_bits end in an empty leaf instead of reading out of bounds (the pool reader validates
-/// addresses already).
-PRT_HD PRT_INLINE std::uint32_t descend(const OctreeView& v, const Fixed3& p, std::uint32_t* path,
-                                        std::uint32_t& level) {
+/// addresses already). `Boxed`: with the view's node boxes and the walk `w` (descend_boxed).
+template <bool Boxed>
+PRT_HD PRT_INLINE std::uint32_t descend_path(const OctreeView& v, const Fixed3& p, const OctreeWalk* w,
+                                             std::uint32_t* path, std::uint32_t& level) {
     std::uint32_t l = level;
     std::uint32_t node = load_node(v, path[l]);
     while (node_is_internal(node)) {  // bounded: l < k_fixed_bits
@@ -285,10 +340,44 @@ PRT_HD PRT_INLINE std::uint32_t descend(const OctreeView& v, const Fixed3& p, st
         const std::uint32_t c =
             ((p.x >> shift) & 1u) | (((p.y >> shift) & 1u) << 1) | (((p.z >> shift) & 1u) << 2);
         path[++l] = addr + c;
-        node = load_node(v, addr + c);
+        if constexpr (Boxed) {
+            // The mask is read beside the child's word (both addresses are known here); only a
+            // child whose box is worth it costs the dependent read of its box.
+#if PRT_DEVICE_CODE
+            const std::uint32_t mask = __ldg(v.node_box_mask + ((addr - 1u) >> 3));
+#else
+            const std::uint32_t mask = v.node_box_mask[(addr - 1u) >> 3];
+#endif
+            node = load_node(v, addr + c);
+            if (((mask >> c) & 1u) != 0u && node_is_internal(node) &&
+                ray_misses_box(*w, v.node_boxes + ((node_addr(node) - 1u) >> 3))) {
+                node = k_empty_leaf_node;
+                break;
+            }
+        } else {
+            node = load_node(v, addr + c);
+        }
     }
     level = l;
     return node;
+}
+
+PRT_HD PRT_INLINE std::uint32_t descend(const OctreeView& v, const Fixed3& p, std::uint32_t* path,
+                                        std::uint32_t& level) {
+    return descend_path<false>(v, p, nullptr, path, level);
+}
+
+/// descend() with node boxes: an internal node whose disks the ray misses altogether (its
+/// NodeBox) is taken as an empty leaf, so the walk steps over its cell at once instead of visiting
+/// the leaves below it. Exact: a leaf under such a node holds no disk the ray can hit. Only the
+/// children the mask marks are tested: testing every internal child, the H200's splat kernel took
+/// the culled 1M room's primary rays from 19.9 to 15.3 leaves and 1.49 to 1.66 Grays/s (full4 0.94
+/// -> 1.18) but the culled 10M sphere's from 1.23 to 1.12, whose boxes most rays meet (a dependent
+/// read per level for little); with the mask 1.59-1.60 (full4 1.15) and 1.20-1.21
+/// (preprocess/bench/results/h200-2026-12-03-issue19-io-boxes).
+PRT_HD PRT_INLINE std::uint32_t descend_boxed(const OctreeView& v, const OctreeWalk& w, std::uint32_t* path,
+                                              std::uint32_t& level) {
+    return descend_path<true>(v, w.p, &w, path, level);
 }
 
 /// thesis 2.2.2: the leaf holding fixed-point point `p`, descending from the root.
@@ -407,8 +496,10 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
 /// root, passed t_max or used up its steps. Top-down descent (thesis 2.2.2), from the deepest node
 /// the previous leaf's path shares with this cell rather than from the root: the same leaf, found
 /// with fewer dependent reads. Always inlined: g++ once left it a call per step in the host's splat
-/// walks (63 % of a CPU frame's samples).
+/// walks (63 % of a CPU frame's samples). With the view's node boxes, descend_boxed.
 PRT_HD PRT_INLINE bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+    if (v.node_boxes != nullptr)
+        return walk_step(w, leaf, [&](std::uint32_t& level) { return descend_boxed(v, w, w.path, level); });
     return walk_step(w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); });
 }
 

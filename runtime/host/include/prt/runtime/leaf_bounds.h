@@ -19,6 +19,28 @@ namespace prt::rt {
 /// threads).
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads = 0);
 
+/// A line through a node's cell meets the node's box with a chance of (the surface area of the box
+/// inside the cell) / (the cell's); a child is tested (NodeBoxes::mask) below this chance. Set on
+/// the H200 (2026-12-03): walls' nodes in the culled 1M room have 0.33 (median), the culled
+/// spheres' 0.80-0.82, where testing every node cost 1-10 % (preprocess/bench/results/
+/// h200-2026-12-03-issue19-io-boxes).
+inline constexpr double k_node_box_test_below = 0.5;
+
+/// core::OctreeView::node_boxes and node_box_mask of an octree (both empty: none).
+struct NodeBoxes {
+    std::vector<core::NodeBox> boxes;
+    std::vector<std::uint8_t> mask;
+};
+
+/// The NodeBox of every internal node of `v` (core::OctreeView::node_boxes: indexed by the node's
+/// children block, (address - 1) / 8): the axis-aligned box, in normalized root coordinates, of
+/// every hittable disk stored in the node's leaves, rounded outward to float; and the mask of the
+/// children worth a test (k_node_box_test_below). A leaf with non-finite splats makes its
+/// ancestors' boxes infinite (never skipped). Empty when the node pool is not laid out as the
+/// walk's index assumes (children blocks of 8 after the root, each behind its parent): the scene
+/// then renders without node boxes. Uses up to `threads` threads (0: all).
+NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads = 0);
+
 /// The compact bounds (core::BrickLeafBounds, 16 bytes: the same cone and slab about an integer
 /// axis, no splat range) of every filled leaf of every brick of a bricked pool (issue 17), over each
 /// brick's decoded splats (the ones the core intersects); brick b's leaves start at `first[b]`

@@ -34,6 +34,8 @@ struct LoadedModel {
     core::ModelView view;  ///< pointers into the mapped pool (and leaf_bounds below)
     /// Per filled leaf: bounds that let rays pass it unread (derived at load, not in the pool).
     std::vector<core::LeafBounds> leaf_bounds;
+    std::vector<core::NodeBox> node_boxes;    ///< the octree's internal nodes' (view.octree.node_boxes)
+    std::vector<std::uint8_t> node_box_mask;  ///< view.octree.node_box_mask
     /// Bricked pools: per filled leaf of every brick, the compact bounds (core::BrickLeafBounds).
     std::vector<core::BrickLeafBounds> brick_leaf_bounds;
     /// Bricked pools: brick b's first leaf in brick_leaf_bounds (core::BrickView::leaf_bounds_first).
