@@ -249,6 +249,15 @@ std::string resolve_cull_backend(const std::string& name, std::string* why) {
     return "cpu";
 }
 
+namespace {
+/// A future that is ready at once (no GPU work to wait for).
+std::future<void> ready_future() {
+    std::promise<void> ready;
+    ready.set_value();
+    return ready.get_future();
+}
+}  // namespace
+
 std::future<void> warm_up_cull_backend(const std::string& name) {
 #ifdef PRT_HAVE_CUDA
     if (name == "cuda" || name == "auto")
@@ -257,9 +266,7 @@ std::future<void> warm_up_cull_backend(const std::string& name) {
         });
 #endif
     (void)name;
-    std::promise<void> ready;
-    ready.set_value();
-    return ready.get_future();
+    return ready_future();
 }
 
 std::future<void> release_cull_backend(const std::string& backend) {
@@ -267,9 +274,7 @@ std::future<void> release_cull_backend(const std::string& backend) {
     if (backend == "cuda") return std::async(std::launch::async, [] { cuda::release_device(); });
 #endif
     (void)backend;
-    std::promise<void> done;
-    done.set_value();
-    return done.get_future();
+    return ready_future();
 }
 
 std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullParams& params,
