@@ -157,16 +157,20 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// frames with that surface kind alone (without the other surfaces' registers), each twice: with
 /// reflected and refracted rays (k_secondary) and without, for frames that spawn none
 /// (core::spawns_secondary: no bounces, or no reflective or transmissive material). ISO has its own
-/// kernel for those frames only; everything else (MLS, mixed surfaces, spp > 1, path tracing, ISO
-/// with secondary rays) runs the general kernel. sm_90 local memory (stack frame, spill stores):
+/// kernel for those frames only; MLS has its own at 2 blocks per SM, with and without secondary
+/// rays; everything else (mixed surfaces, spp > 1, path tracing, ISO with secondary rays) runs the
+/// general kernel. sm_90 local memory (stack frame, spill stores):
 /// splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO (3 blocks per SM)
 /// 248 / 156 B against the general kernel's 4960 / 7542 B. On an H200 (1024^2, Grays/s,
 /// preprocess/bench/results/h200-2026-12-02-issue19-kernels), primary / shadow: prt-bench's room
 /// 1.00 / 1.56 -> 1.16 / 1.78, the culled 10M sphere 1.15 / 1.31 -> 1.37 / 1.49, bricked splats
 /// (culled room) 1.18 / 1.10 -> 1.32 / 1.14, ISO (culled room) 1.02 / 1.06 -> 1.57 / 1.36, teapot
 /// 1.24 / 0.75 -> 1.42 / 0.82. An ISO kernel with secondary rays was slower than the general one on
-/// full4 (0.535 against 0.731) and MLS kernels slower on every frame (primary 0.034 against 0.037),
-/// so neither is compiled.
+/// full4 (0.535 against 0.731), so it is not compiled. MLS kernels at 4 blocks per SM were slower
+/// than the general kernel (primary 0.034 against 0.037), but at 2 (128 registers: the four sample
+/// lanes' sums, no spills) much faster: the culled room's primary / shadow 0.036 / 0.033 -> 0.097 /
+/// 0.078 Grays/s (1 block: 0.077 / 0.060, 3: 0.064 / 0.051, 4: 0.034 / 0.030), and 0.129 / 0.096 with
+/// the while-while walk of core/mls.h (H200, preprocess/bench/results/h200-2026-12-03-issue19-mls).
 /// Occupancy: splats and the general kernel at 4 blocks per SM, patches at 2, ISO at 3 (H200, the
 /// culled 1M room, primary / shadow at 2, 3, 4, 5 blocks: 1.43 / 1.21, 1.57 / 1.36, 1.36 / 1.39,
 /// 1.11 / 1.25 Grays/s; the splat kernel without secondary rays keeps 4: 0.88 / 1.37, 1.09 / 1.66,
@@ -187,6 +191,7 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_bricks, 3>(),  megakernel<core::k_mask_bricks | k_secondary, 3>(),
     megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
     megakernel<core::k_mask_iso, 3>(),
+    megakernel<core::k_mask_mls, 2>(),     megakernel<core::k_mask_mls | k_secondary, 2>(),
     megakernel<core::k_mask_all, 4>(),     // every surface, sampling, secondary rays
 #if PRT_CUDA_TUNING_KERNELS
     megakernel<core::k_mask_splats | k_secondary, 1>(),
@@ -206,6 +211,9 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_iso, 2>(),
     megakernel<core::k_mask_iso, 4>(),
     megakernel<core::k_mask_iso, 5>(),
+    megakernel<core::k_mask_mls, 1>(),
+    megakernel<core::k_mask_mls, 3>(),
+    megakernel<core::k_mask_mls, 4>(),
 #endif
     // clang-format on
 };
@@ -217,9 +225,13 @@ std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool second
     switch (surface_mask) {
         case core::k_mask_splats:
         case core::k_mask_bricks:
-        case core::k_mask_patches: return secondary ? surface_mask | k_secondary : surface_mask;
-        case core::k_mask_iso: return secondary ? std::uint32_t{core::k_mask_all} : surface_mask;
-        default: return core::k_mask_all;  // MLS, mixed surfaces
+        case core::k_mask_patches:
+        case core::k_mask_mls:
+            return secondary ? surface_mask | k_secondary : surface_mask;
+        case core::k_mask_iso:
+            return secondary ? std::uint32_t{core::k_mask_all} : surface_mask;
+        default:
+            return core::k_mask_all;  // mixed surfaces
     }
 }
 
@@ -243,12 +255,17 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, boo
         blocks = asked == 0 ? 3 : asked;  // variants 2, 3, 4 and 5
     else if (kind == core::k_mask_splats && asked != 0)
         blocks = asked;
+    else if (kind == core::k_mask_mls)
+        blocks = asked == 0 ? 2 : asked;  // variants 1, 2, 3 and 4
     for (const std::uint32_t m : {mask, mask | k_secondary})
         for (const Megakernel& k : k_megakernels)
             if (k.mask == m && k.min_blocks == blocks) return k;
     throw Error(
         std::string("CUDA: --min-blocks ") + std::to_string(asked) + " selects the " +
-        (kind == core::k_mask_patches ? "patch" : kind == core::k_mask_iso ? "ISO" : "splat") +
+        (kind == core::k_mask_patches ? "patch"
+         : kind == core::k_mask_iso   ? "ISO"
+         : kind == core::k_mask_mls   ? "MLS"
+                                      : "splat") +
         " kernel for " + std::to_string(blocks) +
         " blocks per SM, a tuning variant this build lacks (configure with -DPRT_CUDA_TUNING_KERNELS=ON)");
 }
@@ -400,7 +417,8 @@ public:
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
         const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
-        find_megakernel(mask, false, true, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
+        find_megakernel(mask, false, true,
+                        m_options.cuda_min_blocks);  // a variant this build lacks: fail now
         const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
         m_surface_mask = mask;
         m_secondary_materials = core::secondary_materials(host.materials, host.material_count);

@@ -303,14 +303,25 @@ PRT_HD inline void mls_sums_lanes(const MlsView& v, std::uint32_t first, std::ui
     }
 }
 
+/// An accepted sign change of F between two neighbouring samples of one leaf (WS05 3.2.1), found by
+/// mls_bracket_leaf during the walk and turned into a root by mls_finish_root after it.
+template <class Real>
+struct MlsBracket {
+    float ta = 0.0f, tb = 0.0f;  ///< the bracketing samples' ray parameters (ta < tb)
+    Real fa = 0, fb = 0;         ///< F there: opposite signs, fa != 0
+    Vec3 n_sum{0, 0, 0};         ///< the sum of both samples' normal sums (fallback normal)
+    std::uint32_t first = 0;     ///< refs of the leaf holding the bracket
+    std::uint32_t count = 0;
+    bool entering = false;  ///< F went from + to - (a front face)
+};
+
 /// WS05 3.2.1 INTERSECT over one cell interval [t0, t1] of the ray, with the leaf's refs: k
-/// regular samples (both ends included), evaluated k_mls_lanes at a time; the first accepted sign
-/// change is interpolated (and refined). Returns true on a root with t < t_max (fills `hit`
-/// unless any_hit).
-template <class Real, bool any_hit>
-PRT_HD inline bool mls_intersect_leaf(const MlsView& v, std::uint32_t first, std::uint32_t count, Vec3 o,
-                                      Vec3 d, float t0, float t1, float t_max, bool inside,
-                                      const MlsParams& p, MlsHit* hit, MlsStats& st) {
+/// regular samples (both ends included), evaluated k_mls_lanes at a time, up to the first accepted
+/// sign change. Returns true and fills `br` there; the root is interpolated by mls_finish_root.
+template <class Real>
+PRT_HD inline bool mls_bracket_leaf(const MlsView& v, std::uint32_t first, std::uint32_t count, Vec3 o,
+                                    Vec3 d, float t0, float t1, bool inside, const MlsParams& p,
+                                    MlsBracket<Real>& br, MlsStats& st) {
     const std::uint32_t k = p.samples < 2u ? 2u : p.samples;
     const float inv_k = 1.0f / static_cast<float>(k - 1u);
     bool prev_valid = false;
@@ -348,58 +359,15 @@ PRT_HD inline bool mls_intersect_leaf(const MlsView& v, std::uint32_t first, std
                 const bool accept =
                     p.faces == k_mls_faces_by_ray ? (inside ? leaving : entering) : (entering || leaving);
                 if (accept) {
-                    // WS05 3.2.1: linear interpolation between the bracketing samples, optionally
-                    // refined by regula falsi (Illinois variant: the bracket always holds the root).
-                    float ta = prev_t, tb = t;
-                    Real fa = prev_f, fb = f;
-                    int kept = 0;  // > 0: a kept that many times in a row, < 0: b
-                    for (std::uint32_t r = 0; r < p.refine_steps; ++r) {
-                        const float tm = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
-                        if (!(tm > ta && tm < tb)) break;  // converged to float resolution
-                        const Vec3 xm = o + d * tm;
-                        const MlsSums<Real> sm =
-                            mls_sums<Real>(v, first, count, Real(xm.x), Real(xm.y), Real(xm.z));
-                        ++st.evaluations;
-                        if (!(sm.w > Real(0))) break;
-                        const Real fm = sm.f();
-                        if (fm == Real(0)) {
-                            ta = tb = tm;
-                            fa = Real(1);
-                            fb = Real(-1);
-                            break;
-                        }
-                        if ((fm > Real(0)) == (fa > Real(0))) {
-                            ta = tm;
-                            fa = fm;
-                            if (kept > 0) fb *= Real(0.5);
-                            kept = kept > 0 ? kept + 1 : 1;
-                        } else {
-                            tb = tm;
-                            fb = fm;
-                            if (kept < 0) fa *= Real(0.5);
-                            kept = kept < 0 ? kept - 1 : -1;
-                        }
-                    }
-                    float th = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
-                    th = fminf(fmaxf(th, ta), tb);
-                    if (th < t_max) {
-                        if constexpr (!any_hit) {
-                            // WS05 3.2.1: the normal from the same weighted sums, at the hit.
-                            const Vec3 xh = o + d * th;
-                            const MlsSums<Real> sh =
-                                mls_sums<Real, true>(v, first, count, Real(xh.x), Real(xh.y), Real(xh.z));
-                            ++st.evaluations;
-                            hit->t = th;
-                            hit->position = xh;
-                            hit->normal = normalize_or(vec3(float(sh.nx), float(sh.ny), float(sh.nz)),
-                                                       normalize_or(n_here + prev_n, -normalize(d)));
-                            hit->front = entering ? 1u : 0u;
-                            hit->point = sh.w > Real(0) ? sh.heaviest : 0u;
-                            hit->leaf_first = first;
-                            hit->leaf_count = count;
-                        }
-                        return true;
-                    }
+                    br.ta = prev_t;
+                    br.tb = t;
+                    br.fa = prev_f;
+                    br.fb = f;
+                    br.n_sum = n_here + prev_n;
+                    br.first = first;
+                    br.count = count;
+                    br.entering = entering;
+                    return true;
                 }
             }
             prev_valid = f != Real(0);
@@ -411,10 +379,71 @@ PRT_HD inline bool mls_intersect_leaf(const MlsView& v, std::uint32_t first, std
     return false;
 }
 
+/// WS05 3.2.1: the root in a bracket by linear interpolation between its samples, refined by
+/// MlsParams::refine_steps of regula falsi (Illinois variant: the bracket always holds the root).
+/// Returns true when the root lies before t_max (and fills `hit` unless any_hit). A root at or
+/// beyond t_max means a miss: every later accepted root along the ray lies beyond this bracket.
+template <class Real, bool any_hit>
+PRT_HD inline bool mls_finish_root(const MlsView& v, Vec3 o, Vec3 d, float t_max, const MlsParams& p,
+                                   const MlsBracket<Real>& br, MlsHit* hit, MlsStats& st) {
+    float ta = br.ta, tb = br.tb;
+    Real fa = br.fa, fb = br.fb;
+    int kept = 0;  // > 0: a kept that many times in a row, < 0: b
+    for (std::uint32_t r = 0; r < p.refine_steps; ++r) {
+        const float tm = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
+        if (!(tm > ta && tm < tb)) break;  // converged to float resolution
+        const Vec3 xm = o + d * tm;
+        const MlsSums<Real> sm = mls_sums<Real>(v, br.first, br.count, Real(xm.x), Real(xm.y), Real(xm.z));
+        ++st.evaluations;
+        if (!(sm.w > Real(0))) break;
+        const Real fm = sm.f();
+        if (fm == Real(0)) {
+            ta = tb = tm;
+            fa = Real(1);
+            fb = Real(-1);
+            break;
+        }
+        if ((fm > Real(0)) == (fa > Real(0))) {
+            ta = tm;
+            fa = fm;
+            if (kept > 0) fb *= Real(0.5);
+            kept = kept > 0 ? kept + 1 : 1;
+        } else {
+            tb = tm;
+            fb = fm;
+            if (kept < 0) fa *= Real(0.5);
+            kept = kept < 0 ? kept - 1 : -1;
+        }
+    }
+    float th = ta + (tb - ta) * static_cast<float>(fa / (fa - fb));
+    th = fminf(fmaxf(th, ta), tb);
+    if (!(th < t_max)) return false;
+    if constexpr (!any_hit) {
+        // WS05 3.2.1: the normal from the same weighted sums, at the hit.
+        const Vec3 xh = o + d * th;
+        const MlsSums<Real> sh =
+            mls_sums<Real, true>(v, br.first, br.count, Real(xh.x), Real(xh.y), Real(xh.z));
+        ++st.evaluations;
+        hit->t = th;
+        hit->position = xh;
+        hit->normal = normalize_or(vec3(float(sh.nx), float(sh.ny), float(sh.nz)),
+                                   normalize_or(br.n_sum, -normalize(d)));
+        hit->front = br.entering ? 1u : 0u;
+        hit->point = sh.w > Real(0) ? sh.heaviest : 0u;
+        hit->leaf_first = br.first;
+        hit->leaf_count = br.count;
+    }
+    return true;
+}
+
 /// Front-to-back kd-tree walk (WS05 3.2, [Wal04]): each leaf is intersected over the ray interval
 /// inside its cell, so the first accepted root is the closest. Split planes are crossed at
 /// t = (split - o) / d, computed once per node, so the two children's intervals meet exactly: no
 /// epsilon, and a ray lying in a plane or starting on it goes to the side it moves into.
+/// While-while form (Aila and Laine 2009, "Understanding the efficiency of ray traversal on GPUs",
+/// 3): each pass walks down to the next non-empty leaf (empty ones are popped on the way) and only
+/// then samples it, and the bracket found is refined after the walk, so the rays of a GPU warp
+/// sample their leaves and finish their roots together instead of one at a time.
 template <class Real, bool any_hit>
 PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
                             MlsHit* hit, MlsStats& st) {
@@ -457,58 +486,84 @@ PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool 
     std::uint32_t sp = 0;
     std::uint32_t node = 0;
     float tn = t0, tf = t1;
-    for (std::uint32_t step = 0;; ++step) {
-        if (step >= p.max_steps || node >= v.node_count) {
-            ++st.truncated;
-            return false;
-        }
-        ++st.traversal_steps;
-        const pool::MlsNode n = v.nodes[node];
-        if (!(tn < t_max)) return false;  // every later cell starts at or beyond t_max (also NaN)
-        if (pool::mls_node_is_leaf(n)) {
-            ++st.cells;
-            const std::uint32_t count = pool::mls_leaf_count(n);
-            if (count > 0u) {
-                ++st.intersections;
-                st.splats += count;
-                if (mls_intersect_leaf<Real, any_hit>(v, pool::mls_leaf_first(n), count, o, d, tn, tf, t_max,
-                                                      inside, p, hit, st))
-                    return true;
-            }
-            if (sp == 0) return false;
-            --sp;
-            node = stack[sp].node;
-            tn = tf;
-            tf = stack[sp].t_far;
-            continue;
-        }
-        const std::uint32_t axis = pool::mls_node_axis(n);
-        const std::uint32_t left = pool::mls_node_left(n);
-        const float split = mls_node_split(n);
-        const float oa = component(o, static_cast<int>(axis));
-        const float da = component(d, static_cast<int>(axis));
-        const bool left_first = oa < split || (oa == split && da <= 0.0f);
-        const std::uint32_t near_child = left_first ? left : left + 1u;
-        const std::uint32_t far_child = left_first ? left + 1u : left;
-        if (da == 0.0f) {  // parallel to the plane: one side only
-            node = near_child;
-            continue;
-        }
-        const float ts = (split - oa) * inv_d[axis];
-        if (ts >= tf || ts <= 0.0f) {
-            node = near_child;
-        } else if (ts <= tn) {
-            node = far_child;
-        } else {
-            if (sp > pool::k_max_mls_depth) {  // deeper than any valid tree: never for a valid view
+    std::uint32_t step = 0;
+    MlsBracket<Real> br;
+    bool found = false;  // one exit from both loops: the warp reconverges before mls_finish_root
+    for (bool walking = true; walking;) {  // one non-empty leaf a pass; bound: max_steps in all
+        // Down to the next non-empty leaf (or the end of the walk).
+        std::uint32_t first = 0, count = 0;
+        for (;; ++step) {
+            if (step >= p.max_steps || node >= v.node_count) {
                 ++st.truncated;
-                return false;
+                walking = false;
+                break;
             }
-            stack[sp++] = Entry{far_child, tf};
-            node = near_child;
-            tf = ts;
+            ++st.traversal_steps;
+            const pool::MlsNode n = v.nodes[node];
+            if (!(tn < t_max)) {  // every later cell starts at or beyond t_max (also NaN)
+                walking = false;
+                break;
+            }
+            if (pool::mls_node_is_leaf(n)) {
+                ++st.cells;
+                count = pool::mls_leaf_count(n);
+                if (count > 0u) {
+                    first = pool::mls_leaf_first(n);
+                    ++step;
+                    break;
+                }
+                if (sp == 0) {
+                    walking = false;
+                    break;
+                }
+                --sp;
+                node = stack[sp].node;
+                tn = tf;
+                tf = stack[sp].t_far;
+                continue;
+            }
+            const std::uint32_t axis = pool::mls_node_axis(n);
+            const std::uint32_t left = pool::mls_node_left(n);
+            const float split = mls_node_split(n);
+            const float oa = component(o, static_cast<int>(axis));
+            const float da = component(d, static_cast<int>(axis));
+            const bool left_first = oa < split || (oa == split && da <= 0.0f);
+            const std::uint32_t near_child = left_first ? left : left + 1u;
+            const std::uint32_t far_child = left_first ? left + 1u : left;
+            if (da == 0.0f) {  // parallel to the plane: one side only
+                node = near_child;
+                continue;
+            }
+            const float ts = (split - oa) * inv_d[axis];
+            if (ts >= tf || ts <= 0.0f) {
+                node = near_child;
+            } else if (ts <= tn) {
+                node = far_child;
+            } else {
+                if (sp > pool::k_max_mls_depth) {  // deeper than any valid tree: never for a valid view
+                    ++st.truncated;
+                    walking = false;
+                    break;
+                }
+                stack[sp++] = Entry{far_child, tf};
+                node = near_child;
+                tf = ts;
+            }
         }
+        if (!walking) break;
+        ++st.intersections;
+        st.splats += count;
+        if (mls_bracket_leaf<Real>(v, first, count, o, d, tn, tf, inside, p, br, st)) {
+            found = true;
+            break;
+        }
+        if (sp == 0) break;
+        --sp;
+        node = stack[sp].node;
+        tn = tf;
+        tf = stack[sp].t_far;
     }
+    return found && mls_finish_root<Real, any_hit>(v, o, d, t_max, p, br, hit, st);
 }
 
 }  // namespace detail

@@ -1,0 +1,51 @@
+#!/usr/bin/env bash
+# Issue 19, MLS on the GPU (H200), second call: the MLS-only kernel (2 blocks per SM) with the
+# while-while walk (new) against the landed general kernel (base) and the MLS-only kernel with the
+# landed walk (var, --min-blocks 2); then Nsight Compute on new's primary frame and the GPU tests.
+# build-ab/pack1.tar.xz: base tools and prt-bench, var prt-bench; build-ab/pack2.tar.xz: new.
+set -uo pipefail
+out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/m2.txt") 2>&1
+nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; t0=$SECONDS
+rm -rf /tmp/ab; mkdir -p /tmp/ab
+python3 -c "import tarfile; [tarfile.open('build-ab/pack%d.tar.xz' % i).extractall('/tmp/ab') for i in (1, 2)]"
+b=/tmp/ab/p1/base; v=/tmp/ab/p1/var; n=/tmp/ab/p2; w=/tmp/m2; rm -rf $w; mkdir -p $w; q=--quiet
+$b/prt-bench --save-pool $w/room.pool --frames 1 --warmup 0 --scenarios primary --backend cuda $q > /dev/null
+$b/prt-cull $w/room.pool -o $w/culled.pool $q && $b/prt-iso $w/culled.pool -o $w/surf.pool $q
+$b/prt-mls $w/surf.pool -o $w/mls.pool $q
+$b/prt-mls $w/surf.pool -o $w/mls-noenc.pool --no-encourage $q
+$b/prt-synth sphere -n 1000000 -o $w/sphere.pool $q && $b/prt-radii $w/sphere.pool -o $w/sphere.pool $q \
+  && $b/prt-mls $w/sphere.pool -o $w/sphere.pool $q
+echo "pools $((SECONDS - t0)) s"
+bench() {  # bench LABEL BIN ARGS...
+  local label=$1 bin=$2; shift 2
+  $bin/prt-bench --backend cuda --frames 20 --warmup 3 --surface mls --json $w/b.json "$@" > /dev/null 2> $w/err.txt \
+    || { echo "$label failed: $(tail -2 $w/err.txt)"; return; }
+  python3 - "$label" $w/b.json <<'PY'
+import json, sys
+j = json.load(open(sys.argv[2]))
+print(sys.argv[1].ljust(22), ' '.join('%s %.4f' % (x['name'], x['grays_per_s']) for x in j['scenarios']), flush=True)
+PY
+}
+S=primary,shadow,reflect4,full4
+for r in 1 2; do
+  bench "room base" $b $w/mls.pool --scenarios $S
+  bench "room var (2 blocks)" $v $w/mls.pool --scenarios $S --min-blocks 2
+  bench "room new" $n $w/mls.pool --scenarios $S
+done
+bench "room-noenc base" $b $w/mls-noenc.pool --scenarios $S
+bench "room-noenc new" $n $w/mls-noenc.pool --scenarios $S
+SPH="--eye 0,0,3 --look-at 0,0,0 --up 0,1,0 --fov 45"
+bench "sphere base" $b $w/sphere.pool --scenarios $S $SPH
+bench "sphere new" $n $w/sphere.pool --scenarios $S $SPH
+echo "bench $((SECONDS - t0)) s"
+NCU=/usr/local/cuda/bin/ncu
+$NCU --section SourceCounters --section LaunchStats --section Occupancy --section WarpStateStats --section SpeedOfLight --import-source yes -k regex:'render' --launch-skip 2 --launch-count 1 -f -o /tmp/src-new $n/prt-bench --backend cuda $w/mls.pool --surface mls --scenarios primary --frames 1 --warmup 2 -q > /tmp/ncu-new.log 2>&1
+echo "ncu rc $? $((SECONDS - t0)) s"
+$NCU -i /tmp/src-new.ncu-rep --page source --csv --print-source cuda,sass 2>/dev/null | gzip -c > $out/sass-new.csv.gz
+$NCU -i /tmp/src-new.ncu-rep --page details 2>/dev/null | grep -E "Duration|Registers Per|Achieved Occupancy|Warp Cycles Per Issued|Avg. Active Threads|Compute \(SM\) Throughput|Issued Ipc" | head -20
+[ -f build-ab/ncu_lines.py ] && python3 build-ab/ncu_lines.py $out/sass-new.csv.gz $out/sass-new.csv.gz 40 > $out/lines-new.txt 2>&1
+mkdir -p /work/main/build-cu && ln -sfn "$n" /work/main/build-cu/bin
+for t in prt_mls_gpu_tests prt_runtime_gpu_tests prt_iso_gpu_tests prt_stability_gpu_tests; do
+  PRT_BIN_DIR=$n $n/$t > $out/$t.log 2>&1; echo "$t rc $? $(grep -E '^\[  (PASSED|FAILED|SKIPPED)' $out/$t.log | tr '\n' ' ')"
+done
+echo "ALL_DONE $((SECONDS - t0)) s"
