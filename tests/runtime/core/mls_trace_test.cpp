@@ -1,14 +1,17 @@
 // Ray intersection with the MLS surface (WS05 3.2): roots against brute-force double precision,
 // the MLS sphere against the analytic sphere, shadow rays, the seamless face rule, degenerate
 // rays, per-ray statistics (WS05 4.3) and the multithreaded batch tracer.
+#include "mls_trace.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "analytic.h"
 #include "mls_test_util.h"
-#include "mls_trace.h"
 #include "synth.h"
 
 namespace {
@@ -238,6 +241,62 @@ TEST(MlsTrace, FlatFaceHasNoHolesAtAnyScale) {
                                  << ": rays through the face's interior missed it";
             EXPECT_EQ(far, 0) << "scale " << scale << ", height " << z << ": hits off the plane";
         }
+}
+
+TEST(MlsTrace, ThinWallsInDeepCellsAreNotPassedThrough) {
+    // A closed box of jittered planar walls, normals inward (prt-synth's room without its objects),
+    // seen from outside through its near wall (a back face: the seamless rule passes it) at the far
+    // wall. The far wall's band of supports is thin against its cells, so WS05's k = 4 samples over
+    // the whole cell can land before and behind it, never inside: the ray passes through the wall.
+    // Sampled over the supports' span only (MlsParams::clip_to_supports), every ray hits it.
+    constexpr int k_grid = 100;  // 60k points: the walls' leaves come out narrow and deep (at 40: not)
+    const double h = 2.0 / k_grid;
+    PointSet s;
+    for (int axis = 0; axis < 3; ++axis)
+        for (const double side : {-1.0, 1.0})
+            for (int j = 0; j < k_grid; ++j)
+                for (int i = 0; i < k_grid; ++i) {
+                    const double jx = 0.2 * std::sin(1.7 * i + 3.1 * j + axis),
+                                 jy = 0.2 * std::cos(2.3 * i + 1.3 * j);
+                    double p[3];
+                    p[axis] = side;
+                    p[(axis + 1) % 3] = -1.0 + (i + 0.5 + jx) * h;
+                    p[(axis + 2) % 3] = -1.0 + (j + 0.5 + jy) * h;
+                    float n[3] = {0, 0, 0};
+                    n[axis] = float(-side);
+                    s.positions.push_back(pool::Float3{float(p[0]), float(p[1]), float(p[2])});
+                    s.normals.push_back(pool::Float3{n[0], n[1], n[2]});
+                    s.radii.push_back(float(1.5 * h));
+                }
+    const mls::MlsModel m = build(s);
+    const core::MlsView view = mls::make_view(m);
+    const Vec3 eye{0.1f, 0.9f, 3.2f};
+    auto count_misses = [&](bool clip) {
+        core::MlsParams p;
+        p.faces = core::k_mls_faces_by_ray;
+        p.clip_to_supports = clip;
+        int misses = 0, off = 0;
+        constexpr int k_rays = 48;
+        for (int j = 0; j < k_rays; ++j)
+            for (int i = 0; i < k_rays; ++i) {
+                const Vec3 target{float(-0.85 + 1.7 * (i + 0.5) / k_rays),
+                                  float(-0.85 + 1.7 * (j + 0.5) / k_rays), -1.0f};
+                core::MlsHit hit;
+                core::MlsStats st;
+                if (!core::trace_mls(view, eye, target - eye, core::k_inf, false, p, hit, st))
+                    ++misses;
+                else if (std::abs(hit.position.z + 1.0f) > 0.02f)
+                    ++off;  // a hit on another wall (the floor, a side) would be off the line's target
+            }
+        std::printf("[ measured ] clip_to_supports %d: %d of %d rays missed the far wall, %d hit elsewhere\n",
+                    clip ? 1 : 0, misses, k_rays * k_rays, off);
+        return std::pair{misses, off};
+    };
+    const auto [clipped_misses, clipped_off] = count_misses(true);
+    EXPECT_EQ(clipped_misses, 0);
+    EXPECT_EQ(clipped_off, 0);
+    // The case is a hard one: WS05's whole-cell samples lose part of the wall.
+    EXPECT_GT(count_misses(false).first, 0);
 }
 
 TEST(MlsTrace, DegenerateRaysAreDefined) {

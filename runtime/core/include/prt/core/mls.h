@@ -1,6 +1,7 @@
 // PointRT core: ray tracing the exact MLS point-set surface of Wald & Seidel 2005 ("WS05"):
 // Adamson and Alexa's implicit surface F(x) = W^2(x) f(x) = 0 (WS05 3.1.1, eq. 1-2), found per
-// kd-tree cell by k regular samples and a sign change (WS05 3.2.1), with a kd-tree whose leaves
+// kd-tree cell by k regular samples (over the part of the cell's interval that the supports reach)
+// and a sign change (WS05 3.2.1), with a kd-tree whose leaves
 // reference every splat whose support overlaps them (WS05 3.4, built by prt-mls).
 // Host and device (PRT_HD): plain functions over an MlsView of the pool's sections; no allocation,
 // recursion, exceptions or virtual calls. Every loop is bounded: the traversal stack by the
@@ -84,6 +85,13 @@ struct MlsParams {
     /// about 10-20% of the time (bench-mls.sh measures 0, 1 and 2).
     std::uint32_t refine_steps = 1;
     std::uint32_t faces = k_mls_faces_both;  ///< MlsFaces
+    /// Sample only the part of a cell's interval where the ray meets the supports (the span from
+    /// the first ball |x - p_i| < R_i it enters to the last it leaves; F = 0 elsewhere, so no root is
+    /// lost), and skip the cell where it meets none. WS05 samples the whole cell: a thin sheet's
+    /// band of supports (2 R thick) in a deep cell then falls between its k samples and the ray
+    /// passes through the surface (a wall of prt-synth's room seen at a slant: half the rays).
+    /// false: WS05's samples over the whole cell.
+    bool clip_to_supports = true;
     /// Nodes one ray may visit before the walk stops (MlsStats::truncated): a bound on every walk
     /// even for a corrupted view (a valid tree visits each node at most once per ray).
     std::uint32_t max_steps = 1u << 20;
@@ -315,13 +323,57 @@ struct MlsBracket {
     bool entering = false;  ///< F went from + to - (a front face)
 };
 
+/// Whether F going from fa to fb (in the ray's direction) is a crossing the face rule accepts;
+/// `entering` tells which one (+ to -).
+template <class Real>
+PRT_HD PRT_INLINE bool mls_accepts(const MlsParams& p, bool inside, Real fa, Real fb, bool& entering) {
+    entering = fa > Real(0) && fb <= Real(0);
+    const bool leaving = fa < Real(0) && fb >= Real(0);
+    return p.faces == k_mls_faces_by_ray ? (inside ? leaving : entering) : (entering || leaving);
+}
+
+/// The span [ca, cb] of [t0, t1] where the ray o + t d meets the support balls of refs[first,
+/// first + count) (MlsParams::clip_to_supports), widened to the 64ths of [t0, t1] around it;
+/// false when it meets none there. The widening keeps the samples off the supports' edge, where W
+/// is a sliver and its sign, W > 0 or not, would rest on the last bits of the sums (which the CPU
+/// and the CUDA backend, built with --use_fast_math, round differently).
+PRT_HD inline bool mls_support_span(const MlsView& v, std::uint32_t first, std::uint32_t count, Vec3 o,
+                                    Vec3 d, float t0, float t1, float& ca, float& cb) {
+    const float inv_a = 1.0f / dot(d, d);
+    float lo = k_inf, hi = -k_inf;
+    const std::uint32_t end = first + count;
+    for (std::uint32_t k = first; k < end; ++k) {
+        const pool::MlsSplat sp = load_mls_splat(v.splats + v.refs[k]);
+        const Vec3 dx = o - vec3(sp.position);
+        const float tc = -dot(dx, d) * inv_a;  // closest approach to p_i
+        const Vec3 l = dx + d * tc;            // its offset from p_i, perpendicular to d
+        const float r = 1.0f / sp.inv_support;
+        const float h2 = (r * r - dot(l, l)) * inv_a;
+        if (!(h2 > 0.0f)) continue;
+        const float h = sqrtf(h2);
+        lo = fminf(lo, tc - h);
+        hi = fmaxf(hi, tc + h);
+    }
+    if (!(fmaxf(lo, t0) <= fminf(hi, t1))) return false;
+    const float g = (t1 - t0) * (1.0f / 64.0f);
+    ca = t0;
+    cb = t1;
+    if (g > 0.0f) {
+        ca = fmaxf(t0, t0 + g * floorf((lo - t0) / g - 0.5f));
+        cb = fminf(t1, t0 + g * ceilf((hi - t0) / g + 0.5f));
+    }
+    return true;
+}
+
 /// WS05 3.2.1 INTERSECT over one cell interval [t0, t1] of the ray, with the leaf's refs: k
-/// regular samples (both ends included), evaluated k_mls_lanes at a time, up to the first accepted
-/// sign change. Returns true and fills `br` there; the root is interpolated by mls_finish_root.
+/// regular samples (both ends included) over the part of it inside the supports
+/// (MlsParams::clip_to_supports), evaluated k_mls_lanes at a time, up to the first accepted sign
+/// change. Returns true and fills `br` there; the root is interpolated by mls_finish_root.
 template <class Real>
 PRT_HD inline bool mls_bracket_leaf(const MlsView& v, std::uint32_t first, std::uint32_t count, Vec3 o,
                                     Vec3 d, float t0, float t1, bool inside, const MlsParams& p,
                                     MlsBracket<Real>& br, MlsStats& st) {
+    if (p.clip_to_supports && !mls_support_span(v, first, count, o, d, t0, t1, t0, t1)) return false;
     const std::uint32_t k = p.samples < 2u ? 2u : p.samples;
     const float inv_k = 1.0f / static_cast<float>(k - 1u);
     bool prev_valid = false;
@@ -334,7 +386,8 @@ PRT_HD inline bool mls_bracket_leaf(const MlsView& v, std::uint32_t first, std::
         PRT_UNROLL
         for (std::uint32_t l = 0; l < k_mls_lanes; ++l) {
             const std::uint32_t i = base + l < k ? base + l : k - 1u;  // spare lanes repeat the last sample
-            // Both ends exactly (t1 is shared with the next cell: no root falls between cells).
+            // Both ends exactly (an unclipped t1 is shared with the next cell: no root falls
+            // between cells).
             ts[l] = i + 1u == k ? t1 : t0 + (t1 - t0) * (static_cast<float>(i) * inv_k);
             const Vec3 x = o + d * ts[l];
             xs[l] = Real(x.x);
@@ -354,11 +407,8 @@ PRT_HD inline bool mls_bracket_leaf(const MlsView& v, std::uint32_t first, std::
             const Real f = s.ax[l] * s.nx[l] + s.ay[l] * s.ny[l] + s.az[l] * s.nz[l];
             const Vec3 n_here = vec3(float(s.nx[l]), float(s.ny[l]), float(s.nz[l]));
             if (prev_valid) {
-                const bool entering = prev_f > Real(0) && f <= Real(0);
-                const bool leaving = prev_f < Real(0) && f >= Real(0);
-                const bool accept =
-                    p.faces == k_mls_faces_by_ray ? (inside ? leaving : entering) : (entering || leaving);
-                if (accept) {
+                bool entering = false;
+                if (mls_accepts(p, inside, prev_f, f, entering)) {
                     br.ta = prev_t;
                     br.tb = t;
                     br.fa = prev_f;
