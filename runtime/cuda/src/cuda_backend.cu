@@ -417,8 +417,7 @@ public:
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
         const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
-        find_megakernel(mask, false, true,
-                        m_options.cuda_min_blocks);  // a variant this build lacks: fail now
+        find_megakernel(mask, false, true, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
         const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
         m_surface_mask = mask;
         m_secondary_materials = core::secondary_materials(host.materials, host.material_count);

@@ -1,8 +1,6 @@
 // Ray intersection with the MLS surface (WS05 3.2): roots against brute-force double precision,
 // the MLS sphere against the analytic sphere, shadow rays, the seamless face rule, degenerate
 // rays, per-ray statistics (WS05 4.3) and the multithreaded batch tracer.
-#include "mls_trace.h"
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,6 +10,7 @@
 
 #include "analytic.h"
 #include "mls_test_util.h"
+#include "mls_trace.h"
 #include "synth.h"
 
 namespace {

@@ -1,8 +1,8 @@
 // PointRT core: ray tracing the exact MLS point-set surface of Wald & Seidel 2005 ("WS05"):
 // Adamson and Alexa's implicit surface F(x) = W^2(x) f(x) = 0 (WS05 3.1.1, eq. 1-2), found per
 // kd-tree cell by k regular samples (over the part of the cell's interval that the supports reach)
-// and a sign change (WS05 3.2.1), with a kd-tree whose leaves
-// reference every splat whose support overlaps them (WS05 3.4, built by prt-mls).
+// and a sign change (WS05 3.2.1), with a kd-tree whose leaves reference every splat whose support
+// overlaps them (WS05 3.4, built by prt-mls).
 // Host and device (PRT_HD): plain functions over an MlsView of the pool's sections; no allocation,
 // recursion, exceptions or virtual calls. Every loop is bounded: the traversal stack by the
 // validated tree depth (pool::k_max_mls_depth), the walk by MlsParams::max_steps, sampling by
@@ -536,6 +536,13 @@ PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool 
     std::uint32_t sp = 0;
     std::uint32_t node = 0;
     float tn = t0, tf = t1;
+    // The far child waiting on top of the stack, with its interval (the walk's one pop).
+    auto pop = [&] {
+        --sp;
+        node = stack[sp].node;
+        tn = tf;
+        tf = stack[sp].t_far;
+    };
     std::uint32_t step = 0;
     MlsBracket<Real> br;
     bool found = false;  // one exit from both loops: the warp reconverges before mls_finish_root
@@ -566,10 +573,7 @@ PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool 
                     walking = false;
                     break;
                 }
-                --sp;
-                node = stack[sp].node;
-                tn = tf;
-                tf = stack[sp].t_far;
+                pop();
                 continue;
             }
             const std::uint32_t axis = pool::mls_node_axis(n);
@@ -608,10 +612,7 @@ PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool 
             break;
         }
         if (sp == 0) break;
-        --sp;
-        node = stack[sp].node;
-        tn = tf;
-        tf = stack[sp].t_far;
+        pop();
     }
     return found && mls_finish_root<Real, any_hit>(v, o, d, t_max, p, br, hit, st);
 }
