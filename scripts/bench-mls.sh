@@ -42,17 +42,17 @@ echo "# machine: $(nproc) cores, $(uname -m), $(bench_cpu_model), load average $
 echo "# results (JSON): $work"
 echo
 
-opt_configs=(
-    "none|--no-shrink --no-encourage --no-collapse"
-    "shrink|--no-encourage --no-collapse"
-    "shrink+collapse|--no-encourage"
-    "encourage|--no-shrink --no-collapse"
-    "all|"
-    "all,E(n)=WS05|--encourage-limit 21"
-    "all,shrink-1-axis|--shrink-axes 1"
-    "all-but-shrink|--no-shrink"
-    "all-but-encourage|--no-encourage"
-    "all-but-collapse|--no-collapse"
+opt_configs=(  # prt-mls builds without E(n) (WS05 3.4.2) unless --encourage, since 2026-12-03
+    "none|--no-shrink --no-collapse"
+    "shrink|--no-collapse"
+    "shrink+collapse|"
+    "encourage|--no-shrink --no-collapse --encourage"
+    "all|--encourage"
+    "all,E(n)=WS05|--encourage --encourage-limit 21"
+    "until-2026-12-02|--encourage --slices 8 --cost-traversal 1"
+    "default,shrink-1-axis|--shrink-axes 1"
+    "default-but-shrink|--no-shrink"
+    "default-but-collapse|--no-collapse"
 )
 
 # TABLES_ONLY=1 with OUT=FOLDER: tabulate the JSON results of an earlier run, measure nothing.

@@ -58,6 +58,7 @@ SurfaceProbe::SurfaceProbe(std::shared_ptr<const pool::PoolFile> pool, const std
                                         pool::SectionType::mls_refs, pool::SectionType::mls_splats});
             m_mls_params.samples = s.mls_k;
             m_mls_params.refine_steps = s.mls_refine;
+            m_mls_params.samples_per_support = s.mls_support_samples;
             m_mls_params.faces = s.mls_both_faces ? core::k_mls_faces_both : core::k_mls_faces_by_ray;
             break;
         case scene::SurfaceKind::patches:
@@ -132,6 +133,7 @@ nlohmann::json SurfaceProbe::settings() const {
     if (m_kind == scene::SurfaceKind::mls)
         return {{"k", m_s.mls_k},
                 {"refine", m_s.mls_refine},
+                {"support_samples", m_s.mls_support_samples},
                 {"precision", m_s.mls_precision},
                 {"faces", m_s.mls_both_faces ? "both" : "by_ray"}};
     return {{"subpatch_depth", m_patches.subpatch_depth},
@@ -167,6 +169,9 @@ void add_surface_options(CLI::App& app, SurfaceSettings& s) {
         ->check(CLI::Range(2u, 256u));
     app.add_option("--mls-refine", s.mls_refine, "mls: Illinois refinement steps")
         ->check(CLI::Range(0u, 32u));
+    app.add_option("--mls-support-samples", s.mls_support_samples,
+                   "mls: at least this many samples per support radius of ray length in a cell (0: k alone)")
+        ->check(CLI::Range(0.0f, 64.0f));
     app.add_option("--mls-precision", s.mls_precision, "mls: float or double accumulation")
         ->check(CLI::IsMember({"float", "double"}));
     app.add_option("--patch-iterations", s.patch_iterations, "patches: Newton iteration cap")

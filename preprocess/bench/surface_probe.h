@@ -42,6 +42,7 @@ struct SurfaceSettings {
     float iso_samples = 4.0f;
     // mls
     std::uint32_t mls_k = 4, mls_refine = 1;
+    float mls_support_samples = core::MlsParams{}.samples_per_support;
     std::string mls_precision = "float";
     /// Both faces of the MLS surface count (prt-accuracy's measure), or the renderer's seamless
     /// rule: an outside ray accepts front faces only (thesis 3.6).

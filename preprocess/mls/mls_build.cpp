@@ -349,8 +349,8 @@ void validate(const BuildOptions& o) {
         fail("intersection cost must be > 0");
     if (!std::isfinite(o.encourage_limit) || !(o.encourage_limit >= 1.0f))
         fail("encourage limit must be >= 1");
-    if (o.shrink_slices < 2 || o.shrink_slices > 64)
-        fail("shrink slices " + std::to_string(o.shrink_slices) + " outside 2..64");
+    if (o.shrink_slices < 2 || o.shrink_slices > 256)
+        fail("shrink slices " + std::to_string(o.shrink_slices) + " outside 2..256");
     if (o.shrink_axes != 1 && o.shrink_axes != 3) fail("shrink axes must be 1 or 3");
     if (o.shrink_depth > 16) fail("shrink depth " + std::to_string(o.shrink_depth) + " above 16");
     if (o.max_depth < 1 || o.max_depth + k_max_shrink_splits > pool::k_max_mls_depth)

@@ -37,16 +37,24 @@ inline constexpr float k_default_support_factor = 0.8f;
 struct BuildOptions {
     float support_factor = k_default_support_factor;
     std::uint32_t samples = 4;       ///< WS05 3.2.2's k the tree is built for (recorded in MlsInfo)
-    float cost_traversal = 1.0f;     ///< C_trav of WS05 eq. 3
+    /// C_trav of WS05 eq. 3. 3 since 2026-12-03 (was 1): fewer, larger cells, which the finer
+    /// shrinking below makes as tight; the GPU walk pays per node (preprocess/mls/README.md).
+    float cost_traversal = 3.0f;
     float cost_intersection = 1.5f;  ///< C_isec of WS05 eq. 3, per referenced splat
-    bool encourage = true;           ///< WS05 3.4.2: C_cell(n) = C_isec n E(n), see encourage_factor()
+    /// WS05 3.4.2: C_cell(n) = C_isec n E(n), see encourage_factor(). Off since 2026-12-03: with
+    /// finer shrinking and the samples per support radius (core::MlsParams) the smaller cells it
+    /// makes no longer buy accuracy, and cost the GPU 1.6x on prt-synth's room.
+    bool encourage = false;
     /// WS05 3.4.2's E(n) reaches 1 at n = 21 refs, tuned for Wu-Kobbelt radii (little overlap);
     /// E(n) = min(1, (95 + 5 n 21 / limit) / 200) stretches it to cells of up to `limit` refs.
     /// Default 40: measured on the sampled bunny, 19% fewer splats per ray and 6% fewer cycles
     /// than 21 (kNN radii overlap more than WS05's, so cells rarely have fewer than 21 refs).
     float encourage_limit = 40.0f;
     bool shrink = true;               ///< WS05 3.4.1: shrink leaves to the surface
-    std::uint32_t shrink_slices = 8;  ///< K slices per axis (WS05 uses 7-13)
+    /// K slices per axis (WS05 uses 7-13; 8 until 2026-12-03): finer slices cut the cells closer
+    /// to the surface band, so fewer cells and splats meet a ray (prt-synth's room: 2.6x on the GPU
+    /// with the settings above, preprocess/mls/README.md).
+    std::uint32_t shrink_slices = 128;
     std::uint32_t shrink_axes = 3;  ///< 1: the dominant normal axis only (WS05); 3: all axes, dominant first
     /// Interval subdivision levels inside a slice: a slice is kept when a sub-box this many
     /// halvings down still cannot be proven free of the surface.

@@ -28,8 +28,10 @@ where p_i, n_i are the points and normals and R_i = --support-factor x the splat
 the distance to the k-th nearest neighbour). Points with no usable radius or normal are skipped.
 
 The kd-tree (WS05 3.4): SAH splits over each splat's support box, every cell referencing the splats
-whose support reaches it; encouraged splits for small cells (3.4.2: the SAH's cell cost C_isec n
-becomes C_isec n E(n), E(n) = min(1, (95 + 5 n 21 / L) / 200), L = --encourage-limit; L = 21 is WS05's);
+whose support reaches it; with --encourage, encouraged splits for small cells (3.4.2: the SAH's cell
+cost C_isec n becomes C_isec n E(n), E(n) = min(1, (95 + 5 n 21 / L) / 200), L = --encourage-limit;
+L = 21 is WS05's; off by default: the finer shrinking makes larger cells as tight, and the GPU walk
+pays per node);
 cell shrinking (3.4.1): each leaf is cut into --slices slices per axis and slices at both ends that
 provably hold no surface are cut off (interval arithmetic, so no surface is ever lost), a leaf with
 none left becomes empty; post-collapse (3.4.3) of splits whose two children are empty.
@@ -116,7 +118,7 @@ void mls_step(prt::tool::PoolStep& step, prt::mls::BuildOptions opt) {
 
 int main(int argc, char** argv) {
     prt::mls::BuildOptions opt;
-    bool no_shrink = false, no_encourage = false, no_collapse = false;
+    bool no_shrink = false, no_collapse = false;
     prt::tool::PoolStep step("prt-mls", k_description,
                              {.input = "Input pool (positions, normals, radii)",
                               .output = "Output pool (written atomically; may equal INPUT)",
@@ -140,10 +142,13 @@ int main(int argc, char** argv) {
                            "Encouraged splits: refs per cell where E(n) reaches 1 (WS05: 21)")
                 ->check(CLI::Range(1.0f, 1e6f));
             app.add_flag("--no-shrink", no_shrink, "Skip cell shrinking (WS05 3.4.1)");
-            app.add_flag("--no-encourage", no_encourage, "Plain SAH cost, no E(n) (WS05 3.4.2)");
+            app.add_flag("--encourage,!--no-encourage", opt.encourage,
+                         "Encouraged splits for small cells, E(n) (WS05 3.4.2); default: plain SAH cost");
             app.add_flag("--no-collapse", no_collapse, "Skip the post-collapse of empty splits (WS05 3.4.3)");
-            app.add_option("--slices", opt.shrink_slices, "Shrinking: slices per axis (WS05 uses 7-13)")
-                ->check(CLI::Range(2u, 64u));
+            app.add_option(
+                   "--slices", opt.shrink_slices,
+                   "Shrinking: slices per axis (WS05 uses 7-13; more cut cells closer to the surface)")
+                ->check(CLI::Range(2u, 256u));
             app.add_option(
                    "--shrink-axes", opt.shrink_axes,
                    "Shrinking: 1 = the dominant normal axis only (WS05), 3 = every axis, dominant first")
@@ -156,7 +161,6 @@ int main(int argc, char** argv) {
         },
         [&](prt::tool::PoolStep& s) {
             opt.shrink = !no_shrink;
-            opt.encourage = !no_encourage;
             opt.collapse = !no_collapse;
             prt::mls::validate(opt);
             mls_step(s, opt);

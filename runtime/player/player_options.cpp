@@ -74,6 +74,11 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
            "--mls-refine", o.mls_refine,
            "MLS: regula falsi steps after the sign change (-1: the default, 1; 0: WS05's interpolation)")
         ->check(CLI::Range(-1, 16));
+    app.add_option("--mls-support-samples", o.mls_support_samples,
+                   "MLS: at least this many samples per support radius of ray length in a cell (more than k "
+                   "where the ray's span through the supports is long: thin parts' two roots are not passed "
+                   "between samples; -1: the default, 3; 0: k alone)")
+        ->check(CLI::Range(-1.0f, 64.0f));
     app.add_option("--patch-iterations", o.patch_iterations,
                    "Patches: Newton iteration cap (seed 002, 3; 0: the default, 16)")
         ->check(CLI::Range(0u, 64u));
@@ -177,6 +182,7 @@ void apply(const RenderOverrides& o, core::RenderParams& p) {
     if (o.iso_refine >= 0) p.iso.refine_steps = static_cast<std::uint32_t>(o.iso_refine);
     if (o.mls_samples >= 2) p.mls.samples = o.mls_samples;
     if (o.mls_refine >= 0) p.mls.refine_steps = static_cast<std::uint32_t>(o.mls_refine);
+    if (o.mls_support_samples >= 0.0f) p.mls.samples_per_support = o.mls_support_samples;
     if (o.patch_iterations > 0) p.patch.max_iterations = o.patch_iterations;
     p.deep_blending = o.deep_blending ? 1u : 0u;
     p.blend_window = o.blend_window;

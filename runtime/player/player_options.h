@@ -43,6 +43,7 @@ struct RenderOverrides {
     int iso_refine = -1;                 ///< core::IsoParams::refine_steps
     std::uint32_t mls_samples = 0;       ///< core::MlsParams::samples (k)
     int mls_refine = -1;                 ///< core::MlsParams::refine_steps
+    float mls_support_samples = -1.0f;   ///< core::MlsParams::samples_per_support (< 0: its default)
     std::uint32_t patch_iterations = 0;  ///< core::PatchTraceParams::max_iterations
     // seed 002, 7: path tracing and samples per pixel; 0 keeps the scene's.
     bool path_tracing = false;
