@@ -368,6 +368,26 @@ TEST(MlsTrace, ThinPlatesSeenAtASlantLoseFewerRoots) {
     EXPECT_GT(with_k_alone, 0);  // the case is a hard one
     EXPECT_LT(with_default * 10, with_k_alone * 8)
         << "samples per support radius should find 20 % more roots";
+
+    // The bound on the added samples never lowers k: with max_samples below k the walk is k's alone.
+    core::MlsParams k8, capped;
+    k8.samples = capped.samples = 8;
+    k8.samples_per_support = 0.0f;
+    capped.max_samples = 4;
+    for (int j = 0; j < 200; ++j) {
+        const double slant = (60.0 + 0.1 * j) * 3.14159265358979 / 180.0, phi = 0.37 * j;
+        const Vec3 d{float(std::sin(slant) * std::cos(phi)), float(std::sin(slant) * std::sin(phi)),
+                     float(-std::cos(slant))};
+        const Vec3 o = Vec3{float(0.5 * std::cos(1.3 * j)), float(0.5 * std::sin(0.7 * j)), 0.0f} - d * 2.0f;
+        core::MlsHit a, b;
+        core::MlsStats sa, sb;
+        const bool ha = core::trace_mls(view, o, d, core::k_inf, false, k8, a, sa);
+        ASSERT_EQ(ha, core::trace_mls(view, o, d, core::k_inf, false, capped, b, sb)) << "ray " << j;
+        EXPECT_EQ(sa.evaluations, sb.evaluations) << "ray " << j;
+        if (ha) {
+            EXPECT_EQ(a.t, b.t) << "ray " << j;
+        }
+    }
 }
 
 TEST(MlsTrace, DegenerateRaysAreDefined) {

@@ -101,7 +101,7 @@ struct MlsParams {
     /// 2026-12-03) 5.41 % -> 2.97 %; it costs the GPU 7 % on prt-synth's room and 23 % on a 1M
     /// sphere, whose cells hug the surface (H200, preprocess/mls/README.md). 0: k alone.
     float samples_per_support = 3.0f;
-    std::uint32_t max_samples = 32;  ///< bound on the samples per cell that samples_per_support adds
+    std::uint32_t max_samples = 32;  ///< bound on the samples per cell samples_per_support asks (not on k)
     /// Nodes one ray may visit before the walk stops (MlsStats::truncated): a bound on every walk
     /// even for a corrupted view (a valid tree visits each node at most once per ray).
     std::uint32_t max_steps = 1u << 20;
@@ -393,7 +393,8 @@ PRT_HD inline bool mls_bracket_leaf(const MlsView& v, std::uint32_t first, std::
     if (p.samples_per_support > 0.0f && r_min < k_inf) {
         const float want = ceilf((t1 - t0) * sqrtf(dot(d, d)) * p.samples_per_support / r_min) + 1.0f;
         const float cap = static_cast<float>(p.max_samples);
-        if (want > static_cast<float>(k)) k = static_cast<std::uint32_t>(fminf(want, cap));
+        if (want > static_cast<float>(k) && cap > static_cast<float>(k))  // never fewer than k
+            k = static_cast<std::uint32_t>(fminf(want, cap));
     }
     const float inv_k = 1.0f / static_cast<float>(k - 1u);
     bool prev_valid = false;
