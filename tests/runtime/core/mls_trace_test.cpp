@@ -337,6 +337,13 @@ TEST(MlsTrace, ThinPlatesSeenAtASlantLoseFewerRoots) {
     ref.refine_steps = 12;
     ref.samples_per_support = 0.0f;
     ref.faces = core::k_mls_faces_by_ray;
+    // Ray j of a fan at `degrees` from the plate's normal, through a point of the plate (a shifts it).
+    auto slanted_ray = [](double degrees, int j, int a, Vec3& o, Vec3& d) {
+        const double slant = degrees * 3.14159265358979 / 180.0, phi = 0.37 * j;
+        d = Vec3{float(std::sin(slant) * std::cos(phi)), float(std::sin(slant) * std::sin(phi)),
+                 float(-std::cos(slant))};
+        o = Vec3{float(0.5 * std::cos(1.3 * j)), float(0.5 * std::sin(0.7 * j + a)), 0.0f} - d * 2.0f;
+    };
     auto count_misses = [&](float per_support) {
         core::MlsParams p;
         p.faces = core::k_mls_faces_by_ray;
@@ -345,12 +352,8 @@ TEST(MlsTrace, ThinPlatesSeenAtASlantLoseFewerRoots) {
         for (const double degrees : {60.0, 70.0, 78.0})
             for (int a = 0; a < 9; ++a)
                 for (int j = 0; j < 40; ++j) {
-                    const double slant = (degrees + 0.25 * a) * 3.14159265358979 / 180.0, phi = 0.37 * j;
-                    const Vec3 d{float(std::sin(slant) * std::cos(phi)),
-                                 float(std::sin(slant) * std::sin(phi)), float(-std::cos(slant))};
-                    const Vec3 target{float(0.5 * std::cos(1.3 * j)), float(0.5 * std::sin(0.7 * j + a)),
-                                      0.0f};
-                    const Vec3 o = target - d * 2.0f;
+                    Vec3 o, d;
+                    slanted_ray(degrees + 0.25 * a, j, a, o, d);
                     core::MlsHit want, got;
                     core::MlsStats st;
                     if (!core::trace_mls<double>(view, o, d, core::k_inf, false, ref, want, st)) continue;
@@ -375,10 +378,8 @@ TEST(MlsTrace, ThinPlatesSeenAtASlantLoseFewerRoots) {
     k8.samples_per_support = 0.0f;
     capped.max_samples = 4;
     for (int j = 0; j < 200; ++j) {
-        const double slant = (60.0 + 0.1 * j) * 3.14159265358979 / 180.0, phi = 0.37 * j;
-        const Vec3 d{float(std::sin(slant) * std::cos(phi)), float(std::sin(slant) * std::sin(phi)),
-                     float(-std::cos(slant))};
-        const Vec3 o = Vec3{float(0.5 * std::cos(1.3 * j)), float(0.5 * std::sin(0.7 * j)), 0.0f} - d * 2.0f;
+        Vec3 o, d;
+        slanted_ray(60.0 + 0.1 * j, j, 0, o, d);
         core::MlsHit a, b;
         core::MlsStats sa, sb;
         const bool ha = core::trace_mls(view, o, d, core::k_inf, false, k8, a, sa);
