@@ -55,7 +55,8 @@ SurfaceProbe::SurfaceProbe(std::shared_ptr<const pool::PoolFile> pool, const std
         case scene::SurfaceKind::mls:
             m_mls = rt::load_mls_view(p);
             m_bytes = section_bytes(p, {pool::SectionType::mls_info, pool::SectionType::mls_nodes,
-                                        pool::SectionType::mls_refs, pool::SectionType::mls_splats});
+                                        pool::SectionType::mls_refs, pool::SectionType::mls_splats,
+                                        pool::SectionType::mls_bvh_nodes, pool::SectionType::mls_bvh_leaves});
             m_mls_params.samples = s.mls_k;
             m_mls_params.refine_steps = s.mls_refine;
             m_mls_params.samples_per_support = s.mls_support_samples;

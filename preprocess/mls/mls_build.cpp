@@ -10,6 +10,7 @@
 #include <string>
 
 #include "float_round.h"
+#include "mls_bvh.h"
 #include "morton.h"
 #include "prt/error.h"
 #include "prt/parallel.h"
@@ -744,6 +745,7 @@ MlsModel build_mls(std::span<const pool::Float3> positions, std::span<const pool
     if (opt.collapse) post_collapse(nodes, st);  // pass 3
     flatten(nodes, model);                       // pass 4
     fill_info(model, root, opt);
+    if (opt.bvh) build_mls_bvh(model);  // pass 5
     st.seconds_total = tool::now_seconds() - t_start;
     return model;
 }

@@ -9,7 +9,8 @@
 //      instead of WS05's random sampling (the paper names it the better way): a slice is cut off
 //      only when F provably has no zero with W > 0 in it, so shrinking never loses surface;
 //   3. post-collapse (3.4.3) of splits whose two children are both empty;
-//   4. flattening into the pool layout (prt/formats/mls_layout.h).
+//   4. flattening into the pool layout (prt/formats/mls_layout.h);
+//   5. a BVH over the non-empty leaves for the ray walk (mls_bvh.h; BuildOptions::bvh).
 #pragma once
 
 #include <cstdint>
@@ -60,6 +61,9 @@ struct BuildOptions {
     /// halvings down still cannot be proven free of the surface.
     std::uint32_t shrink_depth = 6;
     bool collapse = true;          ///< WS05 3.4.3: merge splits whose two children are empty
+    /// Pass 5 (not in WS05): a BVH over the non-empty leaves for the ray walk (mls_bvh.h). false:
+    /// the pool holds the kd-tree alone and rays walk it (as before 2026-12-03).
+    bool bvh = true;
     std::uint32_t max_depth = 48;  ///< SAH levels; shrinking adds at most 6 (pool::k_max_mls_depth)
     unsigned threads = 0;          ///< 0 = every hardware thread
 };
@@ -85,7 +89,9 @@ struct BuildStats {
            volume_after = 0;           ///< total volume of non-empty leaves before / after shrinking
     std::uint64_t interval_boxes = 0;  ///< boxes classified by interval arithmetic
     std::uint64_t collapsed = 0;       ///< split nodes removed by post-collapse
-    double seconds_sah = 0, seconds_shrink = 0, seconds_total = 0;
+    std::uint64_t bvh_nodes = 0;       ///< pass 5: BVH nodes over the non-empty leaves (0: no BVH)
+    std::uint32_t bvh_depth = 0;
+    double seconds_sah = 0, seconds_shrink = 0, seconds_bvh = 0, seconds_total = 0;
     double mean_refs_per_leaf() const;  ///< over non-empty leaves
 };
 
@@ -95,6 +101,8 @@ struct MlsModel {
     std::vector<pool::MlsNode> nodes;
     std::vector<std::uint32_t> refs;
     std::vector<pool::MlsSplat> splats;
+    std::vector<pool::MlsBvhNode> bvh_nodes;  ///< pass 5 (BuildOptions::bvh); empty: none
+    std::vector<pool::MlsBvhLeaf> bvh_leaves;
     BuildStats stats;
 };
 

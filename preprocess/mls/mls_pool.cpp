@@ -12,6 +12,13 @@ void write_mls_sections(MlsModel&& model, pool::PoolWriter& writer) {
     writer.add_array(SectionType::mls_nodes, std::move(model.nodes));
     writer.add_array(SectionType::mls_refs, std::move(model.refs));
     writer.add_array(SectionType::mls_splats, std::move(model.splats));
+    if (model.bvh_nodes.empty()) {  // an earlier tree's BVH would not match this one
+        writer.remove(SectionType::mls_bvh_nodes);
+        writer.remove(SectionType::mls_bvh_leaves);
+    } else {
+        writer.add_array(SectionType::mls_bvh_nodes, std::move(model.bvh_nodes));
+        writer.add_array(SectionType::mls_bvh_leaves, std::move(model.bvh_leaves));
+    }
 }
 
 core::MlsView make_view(const MlsModel& model) {
@@ -19,7 +26,11 @@ core::MlsView make_view(const MlsModel& model) {
     info.node_count = static_cast<std::uint32_t>(model.nodes.size());
     info.ref_count = static_cast<std::uint32_t>(model.refs.size());
     info.splat_count = static_cast<std::uint32_t>(model.splats.size());
-    return core::make_mls_view(info, model.nodes.data(), model.refs.data(), model.splats.data());
+    core::MlsView v = core::make_mls_view(info, model.nodes.data(), model.refs.data(), model.splats.data());
+    core::attach_mls_bvh(v, model.bvh_nodes.data(), model.bvh_leaves.data(),
+                         static_cast<std::uint32_t>(model.bvh_nodes.size()),
+                         static_cast<std::uint32_t>(model.bvh_leaves.size()), info.bvh_depth);
+    return v;
 }
 
 }  // namespace prt::mls

@@ -12,7 +12,7 @@ namespace prt::mls {
 NLOHMANN_DEFINE_TYPE_NON_INTRUSIVE(BuildStats, points, skipped, splats, nodes, leaves, empty_leaves, refs,
                                    depth, sah_leaves, sah_cost, shrunk_leaves, culled_leaves, shrink_splits,
                                    refs_removed, volume_before, volume_after, interval_boxes, collapsed,
-                                   seconds_sah, seconds_shrink)
+                                   bvh_nodes, bvh_depth, seconds_sah, seconds_shrink, seconds_bvh)
 
 }  // namespace prt::mls
 
@@ -34,7 +34,10 @@ L = 21 is WS05's; off by default: the finer shrinking makes larger cells as tigh
 pays per node);
 cell shrinking (3.4.1): each leaf is cut into --slices slices per axis and slices at both ends that
 provably hold no surface are cut off (interval arithmetic, so no surface is ever lost), a leaf with
-none left becomes empty; post-collapse (3.4.3) of splits whose two children are empty.
+none left becomes empty; post-collapse (3.4.3) of splits whose two children are empty. Then (not in
+WS05) a BVH over the non-empty leaves, each boxed by its cell cut to its splats' supports: rays walk
+it instead of the kd-tree and skip the empty cells (same cells sampled, same hits; --no-bvh: the
+kd-tree alone, as before 2026-12-03).
 
 INPUT needs positions, normals and radii (prt-import, prt-radii); the other sections are carried
 over, an earlier MLS tree is replaced.)";
@@ -61,6 +64,9 @@ void report(const prt::tool::PoolStep& step, const prt::mls::BuildOptions& opt,
             st.volume_before > 0 ? 100.0 * st.volume_after / st.volume_before : 0.0, ull(st.interval_boxes),
             st.seconds_shrink);
     if (opt.collapse) step.note("prt-mls: post-collapse removed %llu splits", ull(st.collapsed));
+    if (opt.bvh)
+        step.note("prt-mls: BVH over the non-empty leaves: %llu nodes, depth %u, %.2f s", ull(st.bvh_nodes),
+                  st.bvh_depth, st.seconds_bvh);
 }
 
 nlohmann::json stats_json(const prt::mls::BuildStats& st) {
@@ -100,6 +106,7 @@ void mls_step(prt::tool::PoolStep& step, prt::mls::BuildOptions opt) {
                                        {"encourage", opt.encourage},
                                        {"encourage_limit", opt.encourage_limit},
                                        {"collapse", opt.collapse},
+                                       {"bvh", opt.bvh},
                                        {"max_depth", opt.max_depth}};
     mls::write_mls_sections(std::move(model), step.writer());
     const std::uint64_t bytes = step.write(parameters);
@@ -118,7 +125,7 @@ void mls_step(prt::tool::PoolStep& step, prt::mls::BuildOptions opt) {
 
 int main(int argc, char** argv) {
     prt::mls::BuildOptions opt;
-    bool no_shrink = false, no_collapse = false;
+    bool no_shrink = false, no_collapse = false, no_bvh = false;
     prt::tool::PoolStep step("prt-mls", k_description,
                              {.input = "Input pool (positions, normals, radii)",
                               .output = "Output pool (written atomically; may equal INPUT)",
@@ -145,6 +152,9 @@ int main(int argc, char** argv) {
             app.add_flag("--encourage,!--no-encourage", opt.encourage,
                          "Encouraged splits for small cells, E(n) (WS05 3.4.2); default: plain SAH cost");
             app.add_flag("--no-collapse", no_collapse, "Skip the post-collapse of empty splits (WS05 3.4.3)");
+            app.add_flag("--no-bvh", no_bvh,
+                         "Write no BVH over the non-empty leaves: rays walk the kd-tree and its empty cells "
+                         "(same hits, slower)");
             app.add_option(
                    "--slices", opt.shrink_slices,
                    "Shrinking: slices per axis (WS05 uses 7-13; more cut cells closer to the surface)")
@@ -162,6 +172,7 @@ int main(int argc, char** argv) {
         [&](prt::tool::PoolStep& s) {
             opt.shrink = !no_shrink;
             opt.collapse = !no_collapse;
+            opt.bvh = !no_bvh;
             prt::mls::validate(opt);
             mls_step(s, opt);
         });

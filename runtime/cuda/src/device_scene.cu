@@ -111,6 +111,8 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(mls.nodes, std::size_t{mls.node_count} * sizeof(pool::MlsNode));
     f(mls.refs, std::size_t{mls.ref_count} * 4);
     f(mls.splats, std::size_t{mls.splat_count} * sizeof(pool::MlsSplat));
+    f(mls.bvh_nodes, std::size_t{mls.bvh_node_count} * sizeof(pool::MlsBvhNode));
+    f(mls.bvh_leaves, std::size_t{mls.bvh_leaf_count} * sizeof(pool::MlsBvhLeaf));
     core::PatchView& pv = mv.patches;
     f(pv.nets, std::size_t{pv.patch_count} * sizeof(pool::PatchControlNet));
     f(pv.bvh, std::size_t{pv.bvh_node_count} * sizeof(pool::PatchBvhNode));

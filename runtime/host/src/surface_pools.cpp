@@ -13,7 +13,11 @@ core::IsoView load_iso_view(const pool::PoolFile& pool, bool prefer_q8) {
 
 core::MlsView load_mls_view(const pool::PoolFile& pool) {
     const pool::MlsSections s = pool::validate_mls(pool);
-    return core::make_mls_view(s.info, s.nodes.data(), s.refs.data(), s.splats.data());
+    core::MlsView v = core::make_mls_view(s.info, s.nodes.data(), s.refs.data(), s.splats.data());
+    core::attach_mls_bvh(v, s.bvh_nodes.data(), s.bvh_leaves.data(),
+                         static_cast<std::uint32_t>(s.bvh_nodes.size()),
+                         static_cast<std::uint32_t>(s.bvh_leaves.size()), s.info.bvh_depth);
+    return v;
 }
 
 core::PatchView load_patch_view(const pool::PoolFile& pool) {

@@ -1,8 +1,8 @@
 // The MLS core (prt/core/mls.h) in a CUDA kernel, one thread per ray, against the same function on
-// the CPU (one body, both backends). Device float arithmetic contracts a * b + c into FMAs, so hit
-// distances may differ in the last bits and a grazing ray may flip between hit and miss: t is
-// compared with a tolerance and a few flips are allowed. Also reports device rays per second.
-// Label gpu; skips with a message where no CUDA device is present.
+// the CPU (one body, both backends), through the BVH over the leaves and through the kd-tree. Device float
+// arithmetic contracts a * b + c into FMAs, so hit distances may differ in the last bits and a grazing ray
+// may flip between hit and miss: t is compared with a tolerance and a few flips are allowed. Also reports
+// device rays per second. Label gpu; skips with a message where no CUDA device is present.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -45,19 +45,8 @@ __global__ void occluded_kernel(core::MlsView view, const core::Ray* rays, std::
         core::mls_occluded<float>(view, r.origin, r.dir, r.t_max, core::ray_inside(r), params, st) ? 1u : 0u;
 }
 
-TEST(MlsGpu, KernelMatchesTheCpu) {
-    std::string why;
-    if (!have_device(why)) GTEST_SKIP() << why;
-    const mls_test::PointSet s = mls_test::fibonacci_sphere(100000);
-    const mls::MlsModel m = mls_test::build(s);
-    const core::MlsView host = mls::make_view(m);
-    DeviceBuffers d;
-    core::MlsView dev = host;
-    dev.nodes = d.upload(host.nodes, host.node_count);
-    dev.refs = d.upload(host.refs, host.ref_count);
-    dev.splats = d.upload(host.splats, host.splat_count);
-    ASSERT_TRUE(dev.nodes && dev.refs && dev.splats) << "upload failed";
-
+/// One walk's GPU rays against the CPU's: `view` the host view, `dev` the same on the device.
+void compare_walk(const char* walk, const core::MlsView& host, const core::MlsView& dev, DeviceBuffers& d) {
     // 512 x 512 primary rays of a pinhole camera at distance 4 looking at the sphere.
     const std::vector<core::Ray> rays = prt::test::pinhole_rays(core::Vec3{0.8f, 1.2f, 3.6f}, 512, 20.0f);
     const auto n = static_cast<std::uint32_t>(rays.size());
@@ -84,9 +73,10 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
     const mls::TraceResult cpu = mls::trace_rays(host, rays, params, 0);
     std::uint32_t flips = 0, both = 0;
     double worst = 0;
-    std::uint64_t splats = 0;
+    std::uint64_t splats = 0, steps = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
         splats += stats[i].splats;
+        steps += stats[i].traversal_steps;
         if ((found[i] != 0) != (cpu.found[i] != 0)) {
             ++flips;
             continue;
@@ -96,9 +86,10 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
         worst = std::max(worst, double(std::abs(hits[i].t - cpu.hits[i].t)));
     }
     std::printf(
-        "[ measured ] MLS on the GPU: %.1f Mrays/s (median of %zu, 512x512 primary, sphere 100k points); "
-        "%u hits, %u flips, max |dt| %.2e; %.1f splats per ray\n",
-        n / (ms[ms.size() / 2] * 1e3), ms.size(), both, flips, worst, double(splats) / n);
+        "[ measured ] MLS on the GPU, %s walk: %.1f Mrays/s (median of %zu, 512x512 primary, sphere 100k "
+        "points); %u hits, %u flips, max |dt| %.2e; %.1f splats, %.1f traversal steps per ray\n",
+        walk, n / (ms[ms.size() / 2] * 1e3), ms.size(), both, flips, worst, double(splats) / n,
+        double(steps) / n);
     EXPECT_GT(both, n / 4);
     EXPECT_LE(flips, n / 10000 + 5);
     EXPECT_LT(worst, 1e-3);  // distance ~3.6: relative 3e-4 (grazing rays take other roots, counted above)
@@ -112,6 +103,29 @@ TEST(MlsGpu, KernelMatchesTheCpu) {
     std::uint32_t disagree = 0;
     for (std::uint32_t i = 0; i < n; ++i) disagree += (occ[i] != 0) != (found[i] != 0);
     EXPECT_LE(disagree, n / 10000 + 5);
+}
+
+TEST(MlsGpu, KernelMatchesTheCpu) {
+    std::string why;
+    if (!have_device(why)) GTEST_SKIP() << why;
+    const mls_test::PointSet s = mls_test::fibonacci_sphere(100000);
+    const mls::MlsModel m = mls_test::build(s);
+    const core::MlsView host = mls::make_view(m);
+    ASSERT_NE(host.bvh_nodes, nullptr);
+    DeviceBuffers d;
+    core::MlsView dev = host;
+    dev.nodes = d.upload(host.nodes, host.node_count);
+    dev.refs = d.upload(host.refs, host.ref_count);
+    dev.splats = d.upload(host.splats, host.splat_count);
+    dev.bvh_nodes = d.upload(host.bvh_nodes, host.bvh_node_count);
+    dev.bvh_leaves = d.upload(host.bvh_leaves, host.bvh_leaf_count);
+    ASSERT_TRUE(dev.nodes && dev.refs && dev.splats && dev.bvh_nodes && dev.bvh_leaves) << "upload failed";
+    compare_walk("BVH", host, dev, d);
+    // The kd walk (pools without the BVH sections).
+    core::MlsView host_kd = host, dev_kd = dev;
+    host_kd.bvh_nodes = dev_kd.bvh_nodes = nullptr;
+    host_kd.bvh_leaves = dev_kd.bvh_leaves = nullptr;
+    compare_walk("kd", host_kd, dev_kd, d);
 }
 
 }  // namespace

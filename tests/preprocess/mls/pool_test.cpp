@@ -9,6 +9,7 @@
 #include <cstring>
 #include <functional>
 
+#include "mls_bvh.h"
 #include "mls_test_util.h"
 #include "point_cloud.h"
 #include "prt/error.h"
@@ -189,6 +190,130 @@ TEST(MlsPool, RejectsEveryBrokenCrossReference) {
     }
 }
 
+/// The BVH over the non-empty leaves (sections 52-53): every way it can disagree with the kd-tree
+/// or fail to bound what lies under it is refused with one line; a pool without it (prt-mls
+/// --no-bvh, or written before it) loads and traces the same surface through the kd walk.
+TEST(MlsPool, RejectsABrokenBvh) {
+    const Built b = built();
+    ASSERT_GE(b.model.bvh_leaves.size(), 4u);
+    auto leaf_child = [](const mls::MlsModel& m) {  // a node slot holding a leaf
+        for (std::size_t i = 0; i < m.bvh_nodes.size(); ++i)
+            for (int c = 0; c < 2; ++c)
+                if (m.bvh_nodes[i].child[c].ref & pool::k_mls_bvh_leaf_bit) return std::pair{i, c};
+        return std::pair{std::size_t(0), 0};
+    };
+    auto inner_child = [](const mls::MlsModel& m) {  // a node slot holding a node
+        for (std::size_t i = 0; i < m.bvh_nodes.size(); ++i)
+            for (int c = 0; c < 2; ++c)
+                if (!(m.bvh_nodes[i].child[c].ref & pool::k_mls_bvh_leaf_bit)) return std::pair{i, c};
+        return std::pair{std::size_t(0), 0};
+    };
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_nodes[0].child[inner_child(m).second].ref = 0; }, "mls_bvh_nodes",
+        "not after it");
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            const auto [i, c] = inner_child(m);
+            m.bvh_nodes[i].child[c].ref = std::uint32_t(m.bvh_nodes.size());
+        },
+        "mls_bvh_nodes", "out of range");
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            const auto [i, c] = leaf_child(m);
+            m.bvh_nodes[i].child[c].ref = pool::k_mls_bvh_leaf_bit | std::uint32_t(m.bvh_leaves.size());
+        },
+        "mls_bvh_nodes", "out of range");
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            const auto [i, c] = leaf_child(m);
+            // Point another slot at the same leaf.
+            for (std::size_t j = 0; j < m.bvh_nodes.size(); ++j)
+                for (int k = 0; k < 2; ++k)
+                    if ((j != i || k != c) && (m.bvh_nodes[j].child[k].ref & pool::k_mls_bvh_leaf_bit)) {
+                        m.bvh_nodes[j].child[k].ref = m.bvh_nodes[i].child[c].ref;
+                        return;
+                    }
+        },
+        "mls_bvh_nodes", "reached twice");
+    // Boxes: a leaf's box short of its supports, a node's short of its children's, NaN.
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            const auto [i, c] = leaf_child(m);
+            pool::MlsBvhChild& ch = m.bvh_nodes[i].child[c];
+            ch.hi[1] = ch.lo[1] + 0.25f * (ch.hi[1] - ch.lo[1]);
+        },
+        "mls_bvh_nodes", "does not hold its cell's supports");
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            const auto [i, c] = inner_child(m);
+            pool::MlsBvhChild& ch = m.bvh_nodes[i].child[c];
+            ch.lo[0] = ch.hi[0];
+        },
+        "mls_bvh_nodes", "does not hold its children");
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_nodes[0].child[1].lo[2] = std::numeric_limits<float>::quiet_NaN(); },
+        "mls_bvh_nodes", "not finite");
+    // Leaves: another cell, refs that are no kd leaf's, a count off by one.
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_leaves[1].lo[0] -= 0.01f; }, "mls_bvh_leaves", "cell differs");
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_leaves[1].first += 1; }, "mls_bvh_leaves", "no non-empty kd leaf");
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_leaves[1].count += 1; }, "mls_bvh_leaves", "no non-empty kd leaf");
+    // Counts and depth.
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.bvh_nodes.push_back(m.bvh_nodes.back()); }, "mls_bvh_nodes",
+        "BVH nodes");
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.info.bvh_depth += 1; }, "mls_bvh_nodes", "BVH depth");
+    expect_error(
+        b, [&](mls::MlsModel& m) { m.info.bvh_depth = 70; }, "mls_info", "exceeds");
+    expect_error(
+        b,
+        [&](mls::MlsModel& m) {
+            m.bvh_nodes.clear();
+            m.bvh_leaves.clear();
+        },
+        "mls_info", "without the BVH sections");
+    {  // one of the two sections alone
+        pool::PoolWriter w;
+        pre::write_point_sections(b.cloud, w);
+        mls::MlsModel m = b.model;
+        mls::write_mls_sections(std::move(m), w);
+        w.remove(pool::SectionType::mls_bvh_leaves);
+        const pool::PoolFile p = pool::PoolFile::from_bytes(w.serialize(), "test.pool");
+        EXPECT_THROW(mls::validate_mls(p), Error);
+    }
+    // Without the BVH: valid, and the kd walk finds the same roots.
+    const pool::PoolFile with = make_pool(b);
+    const pool::PoolFile without = make_pool(b, [](mls::MlsModel& m) {
+        m.bvh_nodes.clear();
+        m.bvh_leaves.clear();
+        m.info.bvh_depth = 0;
+    });
+    const core::MlsView vb = rt::load_mls_view(with), vk = rt::load_mls_view(without);
+    ASSERT_NE(vb.bvh_nodes, nullptr);
+    ASSERT_EQ(vk.bvh_nodes, nullptr);
+    int hits = 0;
+    for (float y = -0.95f; y < 0.95f; y += 0.05f) {
+        core::MlsHit h1, h2;
+        core::MlsStats s1, s2;
+        const bool a = core::trace_mls(vb, {-3, y, 0.05f}, {1, 0.01f, 0}, core::k_inf, false, {}, h1, s1);
+        const bool c = core::trace_mls(vk, {-3, y, 0.05f}, {1, 0.01f, 0}, core::k_inf, false, {}, h2, s2);
+        ASSERT_EQ(a, c);
+        if (a) {
+            ++hits;
+            EXPECT_EQ(h1.t, h2.t);
+        }
+    }
+    EXPECT_GT(hits, 30);
+}
+
 /// A deep chain of nodes (a valid tree) up to the depth limit traces without overflowing the
 /// fixed stack; one level more is refused by the validation.
 TEST(MlsPool, DepthLimitIsEnforced) {
@@ -217,6 +342,7 @@ TEST(MlsPool, DepthLimitIsEnforced) {
             m.info.ref_count = std::uint32_t(m.refs.size());
             m.info.depth = levels;
             m.info.leaf_count = levels + 1;
+            mls::build_mls_bvh(m);  // one non-empty leaf: no BVH
         };
     };
     const pool::PoolFile ok = make_pool(b, chain(pool::k_max_mls_depth));

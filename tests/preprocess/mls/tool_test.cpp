@@ -50,10 +50,13 @@ TEST_F(MlsTool, WritesAValidPoolWithStatistics) {
     EXPECT_NE(p.provenance_json().find("\"support_factor\""), std::string::npos);
     EXPECT_NE(m_stderr.find("kd-tree"), std::string::npos) << m_stderr;
     EXPECT_NE(m_stderr.find("shrinking"), std::string::npos) << m_stderr;
+    EXPECT_NE(m_stderr.find("BVH over the non-empty leaves"), std::string::npos) << m_stderr;
+    EXPECT_NE(v.bvh_nodes, nullptr);
+    EXPECT_TRUE(p.has(pool::SectionType::mls_bvh_nodes) && p.has(pool::SectionType::mls_bvh_leaves));
     EXPECT_EQ(m_stdout, "");
     const std::string stats = prt::test::slurp(path("stats.json"));
-    for (const char* key :
-         {"\"nodes\"", "\"refs_per_leaf\"", "\"culled_leaves\"", "\"collapsed\"", "\"seconds_total\""})
+    for (const char* key : {"\"nodes\"", "\"refs_per_leaf\"", "\"culled_leaves\"", "\"collapsed\"",
+                            "\"seconds_total\"", "\"bvh_nodes\"", "\"bvh_depth\""})
         EXPECT_NE(stats.find(key), std::string::npos) << key;
     // Rebuilding over the output replaces the tree; --quiet prints nothing.
     ASSERT_EQ(run(path("out.pool") + " -o " + path("out.pool") + " --quiet --no-shrink --support-factor 1.5"),
@@ -63,6 +66,12 @@ TEST_F(MlsTool, WritesAValidPoolWithStatistics) {
     const pool::PoolFile p2 = pool::PoolFile::open(path("out.pool"));
     EXPECT_EQ(p2.array<pool::MlsInfo>(pool::SectionType::mls_info)[0].support_factor, 1.5f);
     EXPECT_EQ(p2.array<pool::MlsInfo>(pool::SectionType::mls_info)[0].flags & pool::k_mls_shrunk, 0u);
+    // --no-bvh over a pool with a BVH drops it (it would not match the new tree): the kd walk.
+    ASSERT_EQ(run(path("out.pool") + " -o " + path("out.pool") + " --quiet --no-bvh"), 0) << m_stderr;
+    const pool::PoolFile p3 = pool::PoolFile::open(path("out.pool"));
+    EXPECT_FALSE(p3.has(pool::SectionType::mls_bvh_nodes));
+    EXPECT_FALSE(p3.has(pool::SectionType::mls_bvh_leaves));
+    EXPECT_EQ(rt::load_mls_view(p3).bvh_nodes, nullptr);
 }
 
 TEST_F(MlsTool, MissingRadiiIsAOneLineError) {

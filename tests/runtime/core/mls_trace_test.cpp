@@ -159,6 +159,97 @@ TEST(MlsTrace, ShadowRaysAgreeWithClosestHits) {
     }
 }
 
+// prt-mls's BVH over the non-empty leaves (mls_bvh.h) walks the kd walk's cells over the same
+// intervals: a room-like model (the inside of a sphere with five small spheres in it, mostly empty
+// space) gives bit-equal hits, normals, points and shadow answers through either walk, for random
+// rays inside and outside, short t_max, both face rules, axis-parallel rays and rays starting on the
+// root's split plane; and the BVH visits far fewer cells (the empty ones are not in it).
+TEST(MlsTrace, BvhWalkFindsTheKdWalksRoots) {
+    PointSet s = fibonacci_sphere(6000);
+    const double c[5][3] = {
+        {0.4, 0.1, -0.2}, {-0.5, -0.3, 0.1}, {0.0, 0.5, 0.4}, {-0.2, -0.6, -0.5}, {0.6, -0.4, 0.5}};
+    for (const auto& ci : c) {
+        const PointSet b = fibonacci_sphere(600, 0.12, D3{ci[0], ci[1], ci[2]});
+        s.positions.insert(s.positions.end(), b.positions.begin(), b.positions.end());
+        s.normals.insert(s.normals.end(), b.normals.begin(), b.normals.end());
+        s.radii.insert(s.radii.end(), b.radii.begin(), b.radii.end());
+    }
+    const mls::MlsModel m = build(s);
+    ASSERT_GT(m.bvh_leaves.size(), 100u);
+    ASSERT_EQ(m.bvh_nodes.size() + 1, m.bvh_leaves.size());
+    const core::MlsView bvh = mls::make_view(m);
+    ASSERT_NE(bvh.bvh_nodes, nullptr);
+    core::MlsView kd = bvh;
+    kd.bvh_nodes = nullptr;
+    kd.bvh_leaves = nullptr;
+
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    struct R {
+        Vec3 o, d;
+        float t_max;
+    };
+    std::vector<R> rays;
+    for (int i = 0; i < 3000; ++i) {  // inside, as a camera in a room; every third with a short t_max
+        const Vec3 o{0.8f * u(rng), 0.8f * u(rng), 0.8f * u(rng)};
+        const Vec3 d = core::normalize(Vec3{u(rng), u(rng), u(rng)});
+        rays.push_back({o, d, i % 3 == 0 ? 0.2f + 0.8f * (u(rng) + 1.0f) : core::k_inf});
+    }
+    for (const core::Ray& r : rays_at_sphere(1000, 3.0, 0.9, 22))
+        rays.push_back({r.origin, r.dir, core::k_inf});
+    const float split = core::mls_node_split(m.nodes[0]);
+    const int axis = int(pool::mls_node_axis(m.nodes[0]));
+    for (int i = 0; i < 200; ++i) {  // axis-parallel, some lying in the root's split plane
+        Vec3 o{0.7f * u(rng), 0.7f * u(rng), 0.7f * u(rng)}, d{0, 0, 0};
+        const int a = i % 3;
+        (a == 0 ? d.x : a == 1 ? d.y : d.z) = i % 2 ? 1.0f : -1.0f;
+        if (i % 4 == 0 && a != axis) (axis == 0 ? o.x : axis == 1 ? o.y : o.z) = split;
+        rays.push_back({o, d, core::k_inf});
+    }
+    for (int i = 0; i < 200; ++i) {  // starting on the root's split plane, crossing it either way
+        Vec3 o{0.7f * u(rng), 0.7f * u(rng), 0.7f * u(rng)};
+        (axis == 0 ? o.x : axis == 1 ? o.y : o.z) = split;
+        rays.push_back({o, core::normalize(Vec3{u(rng), u(rng), u(rng)}), core::k_inf});
+    }
+    std::uint64_t kd_cells = 0, bvh_cells = 0, hits = 0, occluded = 0;
+    for (const std::uint32_t faces : {core::k_mls_faces_both, core::k_mls_faces_by_ray}) {
+        core::MlsParams p;
+        p.faces = faces;
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const R& r = rays[i];
+            core::MlsHit hk, hb;
+            core::MlsStats sk, sb;
+            const bool fk = core::trace_mls(kd, r.o, r.d, r.t_max, false, p, hk, sk);
+            const bool fb = core::trace_mls(bvh, r.o, r.d, r.t_max, false, p, hb, sb);
+            ASSERT_EQ(fk, fb) << "ray " << i << " faces " << faces;
+            if (fk) {
+                ++hits;
+                ASSERT_EQ(hk.t, hb.t) << "ray " << i;
+                EXPECT_EQ(hk.normal.x, hb.normal.x);
+                EXPECT_EQ(hk.normal.y, hb.normal.y);
+                EXPECT_EQ(hk.normal.z, hb.normal.z);
+                EXPECT_EQ(hk.point, hb.point);
+                EXPECT_EQ(hk.leaf_first, hb.leaf_first);
+                EXPECT_EQ(hk.front, hb.front);
+            }
+            const float t_short = fk ? hk.t * 0.999f : r.t_max;
+            for (const float t_max : {r.t_max, t_short}) {
+                const bool ok = core::mls_occluded(kd, r.o, r.d, t_max, false, p, sk);
+                ASSERT_EQ(ok, core::mls_occluded(bvh, r.o, r.d, t_max, false, p, sb)) << "ray " << i;
+                occluded += ok ? 1 : 0;
+            }
+            EXPECT_EQ(sk.truncated + sb.truncated, 0u);
+            kd_cells += sk.cells;
+            bvh_cells += sb.cells;
+        }
+    }
+    EXPECT_GT(hits, rays.size());  // most rays hit, under both rules
+    EXPECT_GT(occluded, rays.size() / 2);
+    std::printf("[ measured ] %zu rays x 2 face rules: %.1f kd cells a query, %.2f BVH leaves\n", rays.size(),
+                double(kd_cells) / double(rays.size() * 6), double(bvh_cells) / double(rays.size() * 6));
+    EXPECT_LT(bvh_cells * 3, kd_cells);
+}
+
 TEST(MlsTrace, SeamlessFaceRule) {
     const PointSet s = fibonacci_sphere(3000);
     const mls::MlsModel m = build(s);

@@ -58,10 +58,12 @@ enum class SectionType : std::uint32_t {
     iso_leaves_q8 = 34,   ///< IsoLeafQ8 per filled leaf (56 B, thesis 4.4)
     iso_leaves_f32 = 35,  ///< IsoLeafF32 per filled leaf (160 B)
     // 48-63: exact MLS kd-tree (prt-mls, Wald-Seidel 2005); layouts in mls_layout.h
-    mls_info = 48,    ///< one MlsInfo
-    mls_nodes = 49,   ///< MlsNode per kd-tree node
-    mls_refs = 50,    ///< uint32 splat indices referenced by the kd-tree leaves
-    mls_splats = 51,  ///< MlsSplat per unique splat
+    mls_info = 48,        ///< one MlsInfo
+    mls_nodes = 49,       ///< MlsNode per kd-tree node
+    mls_refs = 50,        ///< uint32 splat indices referenced by the kd-tree leaves
+    mls_splats = 51,      ///< MlsSplat per unique splat
+    mls_bvh_nodes = 52,   ///< MlsBvhNode per BVH node over the non-empty kd leaves (optional)
+    mls_bvh_leaves = 53,  ///< MlsBvhLeaf per non-empty kd leaf (with mls_bvh_nodes)
     // 64-79: caustic octree (prt-photons, thesis 5.4); 80-95: light map (prt-lightmap, thesis 5.3);
     // layouts in gi_layout.h
     caustic_info = 64,      ///< one GiInfo

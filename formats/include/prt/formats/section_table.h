@@ -57,6 +57,8 @@ inline constexpr SectionTypeInfo k_section_types[] = {
     {SectionType::mls_nodes,  "mls_nodes",  1, sizeof(MlsNode),       false, "prt-mls"},
     {SectionType::mls_refs,   "mls_refs",   1, sizeof(std::uint32_t), false, "prt-mls"},
     {SectionType::mls_splats, "mls_splats", 1, sizeof(MlsSplat),      false, "prt-mls"},
+    {SectionType::mls_bvh_nodes,  "mls_bvh_nodes",  1, sizeof(MlsBvhNode), false, "prt-mls"},
+    {SectionType::mls_bvh_leaves, "mls_bvh_leaves", 1, sizeof(MlsBvhLeaf), false, "prt-mls"},
     // 64-79: caustic octree; 80-95: light map
     {SectionType::caustic_info,     "caustic_info",     1, sizeof(GiInfo),        false, "prt-photons"},
     {SectionType::caustic_nodes,    "caustic_nodes",    1, sizeof(std::uint32_t), false, "prt-photons"},

@@ -2,11 +2,12 @@
 // Adamson and Alexa's implicit surface F(x) = W^2(x) f(x) = 0 (WS05 3.1.1, eq. 1-2), found per
 // kd-tree cell by k regular samples (over the part of the cell's interval that the supports reach)
 // and a sign change (WS05 3.2.1), with a kd-tree whose leaves reference every splat whose support
-// overlaps them (WS05 3.4, built by prt-mls).
+// overlaps them (WS05 3.4, built by prt-mls); rays reach the non-empty cells through a BVH over them
+// where the pool has one (prt-mls since 2026-12-03; same cells, same hits: mls_walk_bvh).
 // Host and device (PRT_HD): plain functions over an MlsView of the pool's sections; no allocation,
 // recursion, exceptions or virtual calls. Every loop is bounded: the traversal stack by the
-// validated tree depth (pool::k_max_mls_depth), the walk by MlsParams::max_steps, sampling by
-// MlsParams::samples and refinement by MlsParams::refine_steps.
+// validated tree depths (pool::k_max_mls_depth, k_max_mls_bvh_depth), the walk by MlsParams::max_steps,
+// sampling by MlsParams::samples and refinement by MlsParams::refine_steps.
 //
 // Per ray, in the model's local frame (CPU loop or one CUDA thread per ray):
 //     MlsHit hit; MlsStats stats;
@@ -45,6 +46,13 @@ struct MlsView {
     std::uint32_t depth = 0;  ///< deepest level (<= pool::k_max_mls_depth): bounds the stack
     Vec3 root_lo{0, 0, 0};    ///< root cell, local frame
     Vec3 root_hi{0, 0, 0};
+    /// The BVH over the non-empty leaves (sections 52-53, optional): rays walk it instead of the
+    /// kd-tree (same cells, same intervals, same hits; mls_walk_bvh). nullptr: the kd walk.
+    const pool::MlsBvhNode* bvh_nodes = nullptr;
+    const pool::MlsBvhLeaf* bvh_leaves = nullptr;
+    std::uint32_t bvh_node_count = 0;
+    std::uint32_t bvh_leaf_count = 0;
+    std::uint32_t bvh_depth = 0;  ///< deepest BVH level (<= pool::k_max_mls_bvh_depth)
 };
 
 /// The view over MLS arrays (a pool's sections, validated by pool::validate_mls, or a model in
@@ -62,6 +70,18 @@ inline MlsView make_mls_view(const pool::MlsInfo& info, const pool::MlsNode* nod
     view.root_lo = Vec3{info.root_lo[0], info.root_lo[1], info.root_lo[2]};
     view.root_hi = Vec3{info.root_hi[0], info.root_hi[1], info.root_hi[2]};
     return view;
+}
+
+/// Adds the BVH over the non-empty leaves to `view` (validated by pool::validate_mls, or built in
+/// memory); nodes == nullptr or fewer than two leaves leaves the kd walk. Host only.
+inline void attach_mls_bvh(MlsView& view, const pool::MlsBvhNode* nodes, const pool::MlsBvhLeaf* leaves,
+                           std::uint32_t node_count, std::uint32_t leaf_count, std::uint32_t depth) {
+    const bool use = nodes != nullptr && leaves != nullptr && leaf_count >= 2;
+    view.bvh_nodes = use ? nodes : nullptr;
+    view.bvh_leaves = use ? leaves : nullptr;
+    view.bvh_node_count = use ? node_count : 0;
+    view.bvh_leaf_count = use ? leaf_count : 0;
+    view.bvh_depth = use ? depth : 0;
 }
 
 /// Which sign changes of F count as hits.
@@ -120,8 +140,8 @@ struct MlsHit {
 
 /// Work counters of one query, WS05 4.3's per-ray statistics (sum them over rays).
 struct MlsStats {
-    std::uint32_t traversal_steps = 0;  ///< kd-tree nodes visited, inner and leaf
-    std::uint32_t cells = 0;            ///< leaves visited, empty ones included
+    std::uint32_t traversal_steps = 0;  ///< nodes visited, inner and leaf (kd-tree or BVH)
+    std::uint32_t cells = 0;            ///< leaves visited (the kd walk's include empty ones)
     std::uint32_t intersections = 0;    ///< non-empty leaves whose interval was sampled
     std::uint32_t splats = 0;           ///< refs of those leaves ("splats visited")
     std::uint32_t evaluations = 0;      ///< evaluations of F (samples and refinement steps)
@@ -507,6 +527,49 @@ PRT_HD inline bool mls_finish_root(const MlsView& v, Vec3 o, Vec3 d, float t_max
     return true;
 }
 
+/// The ray's interval [t0, t1] in the box lo..hi with t >= 0, as the kd walk crosses planes:
+/// t = (plane - o) * inv_d per axis (inv_d[a] = 1 / d[a], 0 where d[a] = 0: that axis bounds nothing
+/// where o lies in its slab, ends included, and misses elsewhere). False on a miss.
+PRT_HD PRT_INLINE bool mls_slab_interval(const float* lo, const float* hi, Vec3 o, const float* inv_d,
+                                         float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = k_inf;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float oa = component(o, a);
+        if (inv_d[a] == 0.0f) {
+            if (!(oa >= lo[a] && oa <= hi[a])) return false;
+            continue;
+        }
+        float ta = (lo[a] - oa) * inv_d[a], tb = (hi[a] - oa) * inv_d[a];
+        if (ta > tb) {
+            const float s = ta;
+            ta = tb;
+            tb = s;
+        }
+        t0 = fmaxf(t0, ta);
+        t1 = fminf(t1, tb);
+    }
+    return t0 <= t1;
+}
+
+/// Clips the ray to the root cell and fills inv_d (mls_slab_interval's). Not to t_max: each cell
+/// is sampled over its whole interval, so a shadow ray (short t_max) takes the same samples as the
+/// closest-hit ray along the same line and agrees with it; hits at t >= t_max are rejected, and
+/// the walks never sample a cell starting at or beyond t_max. False on a miss, a NaN or a zero
+/// direction.
+PRT_HD PRT_INLINE bool mls_root_interval(const MlsView& v, Vec3 o, Vec3 d, float* inv_d, float& t0,
+                                         float& t1) {
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const float da = component(d, a);
+        inv_d[a] = da == 0.0f ? 0.0f : 1.0f / da;
+    }
+    const float lo[3] = {v.root_lo.x, v.root_lo.y, v.root_lo.z},
+                hi[3] = {v.root_hi.x, v.root_hi.y, v.root_hi.z};
+    return mls_slab_interval(lo, hi, o, inv_d, t0, t1) && t1 < k_inf;
+}
+
 /// Front-to-back kd-tree walk (WS05 3.2, [Wal04]): each leaf is intersected over the ray interval
 /// inside its cell, so the first accepted root is the closest. Split planes are crossed at
 /// t = (split - o) / d, computed once per node, so the two children's intervals meet exactly: no
@@ -516,35 +579,12 @@ PRT_HD inline bool mls_finish_root(const MlsView& v, Vec3 o, Vec3 d, float t_max
 /// then samples it, and the bracket found is refined after the walk, so the rays of a GPU warp
 /// sample their leaves and finish their roots together instead of one at a time.
 template <class Real, bool any_hit>
-PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
-                            MlsHit* hit, MlsStats& st) {
+PRT_HD inline bool mls_walk_kd(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
+                               MlsHit* hit, MlsStats& st) {
     if (v.node_count == 0 || !(t_max > 0.0f)) return false;
-    // Clip to the root cell (slab test; zero direction components test the slab directly). Not
-    // to t_max: each cell is sampled over its whole interval, so a shadow ray (short t_max) takes
-    // the same samples as the closest-hit ray along the same line and agrees with it; hits at
-    // t >= t_max are rejected, and the walk stops at the first cell starting beyond t_max.
     float t0 = 0.0f, t1 = k_inf;
     float inv_d[3];
-    PRT_UNROLL
-    for (int a = 0; a < 3; ++a) {
-        const float oa = component(o, a), da = component(d, a);
-        const float lo = component(v.root_lo, a), hi = component(v.root_hi, a);
-        if (da == 0.0f) {
-            inv_d[a] = 0.0f;
-            if (!(oa >= lo && oa <= hi)) return false;
-            continue;
-        }
-        inv_d[a] = 1.0f / da;
-        float ta = (lo - oa) * inv_d[a], tb = (hi - oa) * inv_d[a];
-        if (ta > tb) {
-            const float s = ta;
-            ta = tb;
-            tb = s;
-        }
-        t0 = fmaxf(t0, ta);
-        t1 = fminf(t1, tb);
-    }
-    if (!(t0 <= t1) || !(t1 < k_inf)) return false;  // a miss, NaN, or a zero direction
+    if (!mls_root_interval(v, o, d, inv_d, t0, t1)) return false;
 
     // A far child waiting: its interval starts where the near subtree's ends, which is the exit
     // of the last leaf visited before it is popped, so only t_far is stored (8 bytes an entry; one
@@ -636,6 +676,202 @@ PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool 
         pop();
     }
     return found && mls_finish_root<Real, any_hit>(v, o, d, t_max, p, br, hit, st);
+}
+
+/// Whether the ray meets a BVH child's box before t_hi, and where it enters (t_near >= 0). inv_d as
+/// mls_slab_interval's; `parallel`: some component of d is 0 (such an axis bounds nothing where o
+/// lies in the box's slab, faces included, and misses elsewhere). The exit is widened by 2^-21
+/// relative (about 8 float ulps: Ize 2013's robust slab test) so rounding never skips a box the ray
+/// grazes; the box only decides what is visited, never where a cell is sampled.
+PRT_HD PRT_INLINE bool mls_bvh_box(const pool::MlsBvhChild& c, Vec3 o, const float* inv_d, bool parallel,
+                                   float t_hi, float& t_near) {
+    float tn = 0.0f, tf = t_hi;
+    if (!parallel) {
+        const float x0 = (c.lo[0] - o.x) * inv_d[0], x1 = (c.hi[0] - o.x) * inv_d[0];
+        const float y0 = (c.lo[1] - o.y) * inv_d[1], y1 = (c.hi[1] - o.y) * inv_d[1];
+        const float z0 = (c.lo[2] - o.z) * inv_d[2], z1 = (c.hi[2] - o.z) * inv_d[2];
+        tn = fmaxf(fmaxf(fminf(x0, x1), fminf(y0, y1)), fmaxf(fminf(z0, z1), 0.0f));
+        tf = fminf(fminf(fmaxf(x0, x1), fmaxf(y0, y1)), fminf(fmaxf(z0, z1), t_hi));
+    } else {
+        PRT_UNROLL
+        for (int a = 0; a < 3; ++a) {
+            const float oa = component(o, a);
+            if (inv_d[a] == 0.0f) {
+                if (!(oa >= c.lo[a] && oa <= c.hi[a])) return false;
+                continue;
+            }
+            const float t0 = (c.lo[a] - oa) * inv_d[a], t1 = (c.hi[a] - oa) * inv_d[a];
+            tn = fmaxf(tn, fminf(t0, t1));
+            tf = fminf(tf, fmaxf(t0, t1));
+        }
+    }
+    t_near = tn;
+    return tn <= tf * (1.0f + 1.0f / 2097152.0f);
+}
+
+/// Whether a ray parallel to an axis lies in the plane of the cell's lower bound on it, a split
+/// plane: the kd walk sends such a ray to the lower cell (x[axis] <= split), so the BVH walk skips
+/// this one (the two cells' samples could differ in the last bits).
+PRT_HD PRT_INLINE bool mls_on_lower_split(const pool::MlsBvhLeaf& l, Vec3 o, const float* inv_d,
+                                          Vec3 root_lo) {
+    bool on = false;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a)
+        on = on || (inv_d[a] == 0.0f && component(o, a) == l.lo[a] && l.lo[a] != component(root_lo, a));
+    return on;
+}
+
+/// The threads of the warp running this code together (GPU), 0 on the host.
+PRT_HD PRT_INLINE unsigned mls_warp_mask() {
+#if PRT_DEVICE_CODE
+    return __activemask();
+#else
+    return 0u;
+#endif
+}
+
+/// Whether `v` holds for any thread of `mask` (every one of them must call it: a warp vote on the
+/// GPU); on the host the thread's own `v`.
+PRT_HD PRT_INLINE bool mls_warp_any(unsigned mask, bool v) {
+#if PRT_DEVICE_CODE
+    return __any_sync(mask, v);
+#else
+    (void)mask;
+    return v;
+#endif
+}
+
+/// The kd walk's cells through the BVH over the non-empty leaves (MlsView::bvh_nodes): the same
+/// leaves over the same intervals (each leaf's cell as the kd splits bound it, mls_slab_interval),
+/// so the same first accepted root. Nearer child first; a leaf is sampled only where its cell
+/// starts before t_max and before the best bracket found so far: cells are disjoint, so a cell
+/// starting after that bracket's end holds no nearer root, and once every box left starts after it
+/// the walk ends. Shadow rays (any_hit) stop at the first root before t_max in any order: the kd
+/// walk's answer, since its first bracket is the nearest of all. While-while form (down to the next
+/// leaf to sample, then sample it), and on the GPU the rays of a warp loop together until all are
+/// done (a warp vote a pass), so they sample together. Counters: traversal_steps = BVH nodes and
+/// leaves visited, cells = leaves visited.
+template <class Real, bool any_hit>
+PRT_HD inline bool mls_walk_bvh(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside,
+                                const MlsParams& p, MlsHit* hit, MlsStats& st) {
+    if (v.node_count == 0 || !(t_max > 0.0f)) return false;
+    float t0 = 0.0f, t1 = k_inf;
+    float inv_d[3];
+    if (!mls_root_interval(v, o, d, inv_d, t0, t1)) return false;  // the kd walk refuses the same rays
+    const bool parallel = inv_d[0] == 0.0f || inv_d[1] == 0.0f || inv_d[2] == 0.0f;
+
+    struct Entry {
+        std::uint32_t ref;
+        float t_near;
+    };
+    Entry stack[pool::k_max_mls_bvh_depth + 1];  // one waiting child per level
+    std::uint32_t sp = 0;
+    std::uint32_t ref = 0;  // node 0, the root
+    bool have = true;       // `ref` is the next to visit
+    float limit = t_max;    // boxes entered at or beyond it hold nothing to sample
+    std::uint32_t step = 0;
+    MlsBracket<Real> br, best;
+    bool found = false;
+    // The warp's rays that walk together (on the GPU): they sample together, one leaf each a pass,
+    // until all are done (mls_warp_any). Without it the warp fell apart into groups sampling at
+    // different times: 2.4-2.9 active threads a warp in the sums against the kd walk's 8.2, whose
+    // walk ends at its first bracket (Nsight Compute, prt_mls_gpu_tests, H200).
+    const unsigned warp = mls_warp_mask();
+    bool done = false, occluded = false;
+    for (;;) {
+        // Down to the next leaf to sample (or the end of the walk): one pop, node or leaf a step, and
+        // a leaf's cell checked here, so the rays of a GPU warp leave this loop only to sample.
+        pool::MlsBvhLeaf l{};
+        float c0 = 0.0f, c1 = 0.0f;
+        int state = done ? 2 : 0;  // 0: searching, 1: at a leaf to sample, 2: the walk is over
+        while (state == 0) {
+            if (!have) {
+                if (sp == 0) {
+                    state = 2;
+                } else {
+                    --sp;
+                    have = stack[sp].t_near <= limit;  // else it starts after the best bracket or t_max
+                    ref = stack[sp].ref;
+                }
+            } else if (step >= p.max_steps) {
+                ++st.truncated;
+                state = 2;
+            } else if (ref & pool::k_mls_bvh_leaf_bit) {
+                ++step;
+                ++st.traversal_steps;
+                have = false;
+                const std::uint32_t leaf = ref & ~pool::k_mls_bvh_leaf_bit;
+                if (leaf >= v.bvh_leaf_count) {
+                    ++st.truncated;
+                    state = 2;
+                } else {
+                    ++st.cells;
+                    l = load_32_bytes(v.bvh_leaves + leaf);
+                    if (mls_slab_interval(l.lo, l.hi, o, inv_d, c0, c1) && c0 < c1 && c0 < t_max &&
+                        (!found || c0 < best.tb) && !mls_on_lower_split(l, o, inv_d, v.root_lo))
+                        state = 1;
+                }
+            } else if (ref >= v.bvh_node_count) {
+                ++st.truncated;
+                state = 2;
+            } else {
+                ++step;
+                ++st.traversal_steps;
+                const pool::MlsBvhChild ch0 = load_32_bytes(&v.bvh_nodes[ref].child[0]);
+                const pool::MlsBvhChild ch1 = load_32_bytes(&v.bvh_nodes[ref].child[1]);
+                float n0 = 0.0f, n1 = 0.0f;
+                const bool h0 = mls_bvh_box(ch0, o, inv_d, parallel, limit, n0);
+                const bool h1 = mls_bvh_box(ch1, o, inv_d, parallel, limit, n1);
+                if (h0 && h1) {
+                    if (sp > pool::k_max_mls_bvh_depth) {  // deeper than any valid tree
+                        ++st.truncated;
+                        state = 2;
+                    } else {
+                        const bool near0 = n0 <= n1;
+                        stack[sp++] = Entry{near0 ? ch1.ref : ch0.ref, near0 ? n1 : n0};
+                        ref = near0 ? ch0.ref : ch1.ref;
+                    }
+                } else if (h0 || h1) {
+                    ref = h0 ? ch0.ref : ch1.ref;
+                } else {
+                    have = false;
+                }
+            }
+        }
+        if (state == 1) {
+            ++st.intersections;
+            st.splats += l.count;
+            if (mls_bracket_leaf<Real>(v, l.first, l.count, o, d, c0, c1, inside, p, br, st)) {
+                if constexpr (any_hit) {
+                    // The root lies in [ta, tb] (mls_finish_root clamps it there).
+                    if (br.tb < t_max || mls_finish_root<Real, true>(v, o, d, t_max, p, br, nullptr, st)) {
+                        occluded = true;
+                        done = true;
+                    }
+                } else if (!found || br.ta < best.ta) {
+                    best = br;
+                    found = true;
+                    limit = fminf(limit, br.tb);
+                }
+            }
+        } else {
+            done = true;
+        }
+        if (!mls_warp_any(warp, !done)) break;
+    }
+    if constexpr (any_hit) {
+        return occluded;
+    } else {
+        return found && mls_finish_root<Real, false>(v, o, d, t_max, p, best, hit, st);
+    }
+}
+
+/// The ray walk: through the BVH where the view has one, else the kd-tree (same hits).
+template <class Real, bool any_hit>
+PRT_HD inline bool mls_walk(const MlsView& v, Vec3 o, Vec3 d, float t_max, bool inside, const MlsParams& p,
+                            MlsHit* hit, MlsStats& st) {
+    if (v.bvh_nodes != nullptr) return mls_walk_bvh<Real, any_hit>(v, o, d, t_max, inside, p, hit, st);
+    return mls_walk_kd<Real, any_hit>(v, o, d, t_max, inside, p, hit, st);
 }
 
 }  // namespace detail
