@@ -15,7 +15,7 @@ namespace prt::scene {
 enum class SurfaceKind : std::uint32_t {
     splats = 0,   ///< thesis 3: splats in the octree (sections 16-19)
     iso = 1,      ///< thesis 4: the Implicit Surface Octree (sections 32-35)
-    mls = 2,      ///< WS05: the exact MLS surface over the kd-tree (sections 48-51)
+    mls = 2,      ///< WS05: the exact MLS surface over the kd-tree and its BVH (sections 48-53)
     patches = 3,  ///< seed 002: bicubic Bezier patches (sections 112-115)
 };
 

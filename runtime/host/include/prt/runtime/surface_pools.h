@@ -15,7 +15,7 @@
 
 namespace prt::rt {
 
-/// Whether the pool holds any of the ISO (32-35), MLS (48-51), patch (112-115) sections.
+/// Whether the pool holds any of the ISO (32-35), MLS (48-53), patch (112-115) sections.
 using pool::has_iso;
 using pool::has_mls;
 using pool::has_patches;
