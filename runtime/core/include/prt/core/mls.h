@@ -527,13 +527,12 @@ PRT_HD inline bool mls_finish_root(const MlsView& v, Vec3 o, Vec3 d, float t_max
     return true;
 }
 
-/// The ray's interval [t0, t1] in the box lo..hi with t >= 0, as the kd walk crosses planes:
+/// The slabs' bounds on the ray's interval in the box lo..hi, starting from [t0, t1] as given:
 /// t = (plane - o) * inv_d per axis (inv_d[a] = 1 / d[a], 0 where d[a] = 0: that axis bounds nothing
-/// where o lies in its slab, ends included, and misses elsewhere). False on a miss.
-PRT_HD PRT_INLINE bool mls_slab_interval(const float* lo, const float* hi, Vec3 o, const float* inv_d,
-                                         float& t0, float& t1) {
-    t0 = 0.0f;
-    t1 = k_inf;
+/// where o lies in its slab, ends included, and misses elsewhere). False only for such a miss; the
+/// caller compares t0 with t1.
+PRT_HD PRT_INLINE bool mls_slab_range(const float* lo, const float* hi, Vec3 o, const float* inv_d, float& t0,
+                                      float& t1) {
     PRT_UNROLL
     for (int a = 0; a < 3; ++a) {
         const float oa = component(o, a);
@@ -550,7 +549,16 @@ PRT_HD PRT_INLINE bool mls_slab_interval(const float* lo, const float* hi, Vec3 
         t0 = fmaxf(t0, ta);
         t1 = fminf(t1, tb);
     }
-    return t0 <= t1;
+    return true;
+}
+
+/// The ray's interval [t0, t1] in the box lo..hi with t >= 0, as the kd walk crosses planes
+/// (mls_slab_range). False on a miss.
+PRT_HD PRT_INLINE bool mls_slab_interval(const float* lo, const float* hi, Vec3 o, const float* inv_d,
+                                         float& t0, float& t1) {
+    t0 = 0.0f;
+    t1 = k_inf;
+    return mls_slab_range(lo, hi, o, inv_d, t0, t1) && t0 <= t1;
 }
 
 /// Clips the ray to the root cell and fills inv_d (mls_slab_interval's). Not to t_max: each cell
@@ -679,7 +687,7 @@ PRT_HD inline bool mls_walk_kd(const MlsView& v, Vec3 o, Vec3 d, float t_max, bo
 }
 
 /// Whether the ray meets a BVH child's box before t_hi, and where it enters (t_near >= 0). inv_d as
-/// mls_slab_interval's; `parallel`: some component of d is 0 (such an axis bounds nothing where o
+/// mls_slab_range's; `parallel`: some component of d is 0 (such an axis bounds nothing where o
 /// lies in the box's slab, faces included, and misses elsewhere). The exit is widened by 2^-21
 /// relative (about 8 float ulps: Ize 2013's robust slab test) so rounding never skips a box the ray
 /// grazes; the box only decides what is visited, never where a cell is sampled.
@@ -692,18 +700,8 @@ PRT_HD PRT_INLINE bool mls_bvh_box(const pool::MlsBvhChild& c, Vec3 o, const flo
         const float z0 = (c.lo[2] - o.z) * inv_d[2], z1 = (c.hi[2] - o.z) * inv_d[2];
         tn = fmaxf(fmaxf(fminf(x0, x1), fminf(y0, y1)), fmaxf(fminf(z0, z1), 0.0f));
         tf = fminf(fminf(fmaxf(x0, x1), fmaxf(y0, y1)), fminf(fmaxf(z0, z1), t_hi));
-    } else {
-        PRT_UNROLL
-        for (int a = 0; a < 3; ++a) {
-            const float oa = component(o, a);
-            if (inv_d[a] == 0.0f) {
-                if (!(oa >= c.lo[a] && oa <= c.hi[a])) return false;
-                continue;
-            }
-            const float t0 = (c.lo[a] - oa) * inv_d[a], t1 = (c.hi[a] - oa) * inv_d[a];
-            tn = fmaxf(tn, fminf(t0, t1));
-            tf = fminf(tf, fmaxf(t0, t1));
-        }
+    } else if (!mls_slab_range(c.lo, c.hi, o, inv_d, tn, tf)) {
+        return false;
     }
     t_near = tn;
     return tn <= tf * (1.0f + 1.0f / 2097152.0f);
