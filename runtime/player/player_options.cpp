@@ -115,9 +115,10 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
         ->check(CLI::IsMember({"cpu", "cuda", "hybrid", "auto"}));
     app.add_option("--kernel", b.kernel,
                    "CUDA kernel structure: mega (one kernel, its warps taking 32-pixel items from a queue "
-                   "until the frame is done), mega-static (one kernel, one item per warp) or wavefront "
-                   "(several kernels, thesis 2.4)")
-        ->check(CLI::IsMember({"mega", "mega-static", "wavefront"}));
+                   "until the frame is done, first the items that were slowest in the previous frame of "
+                   "the same size), mega-fifo (the same queue in image order only), mega-static (one kernel, "
+                   "one item per warp) or wavefront (several kernels, thesis 2.4)")
+        ->check(CLI::IsMember({"mega", "mega-fifo", "mega-static", "wavefront"}));
     app.add_option("--mapping", b.mapping, "CUDA ray-to-thread mapping: zorder (thesis 2.3) or linear")
         ->check(CLI::IsMember({"zorder", "linear"}));
     app.add_option("--threads", b.threads, "CPU backend threads (0: every core the process may use)");
@@ -196,6 +197,7 @@ rt::BackendOptions backend_options(const BackendChoice& b) {
     o.cpu_threads = b.threads;
     o.cuda_wavefront = b.kernel == "wavefront";
     o.cuda_persistent = b.kernel != "mega-static";
+    o.cuda_heavy_first = b.kernel == "mega";
     o.cuda_linear_mapping = b.mapping == "linear";
     o.cuda_min_blocks = b.min_blocks;
     o.cuda_max_l1 = !b.default_carveout;

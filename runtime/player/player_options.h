@@ -71,7 +71,7 @@ public:
 /// Backend choice.
 struct BackendChoice {
     std::string name = "auto";
-    std::string kernel = "mega";     ///< cuda: "mega", "mega-static" or "wavefront"
+    std::string kernel = "mega";     ///< cuda: "mega", "mega-fifo", "mega-static" or "wavefront"
     std::string mapping = "zorder";  ///< cuda: "zorder" or "linear"
     unsigned threads = 0;
     int min_blocks = 0;             ///< cuda megakernel occupancy hint (0: default)

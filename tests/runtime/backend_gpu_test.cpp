@@ -298,6 +298,49 @@ TEST(GpuMemory, AScenePastFreeGpuMemoryFailsWithTheFigures) {
     }
 }
 
+TEST(GpuItemOrder, HeavyItemsFirstChangeNoPixel) {
+    // The persistent megakernel hands out first the items that were heavy in the previous frame of
+    // the same size (cuda_backend.cu, ItemOrder). Frames in that order equal the image-order queue's
+    // bit for bit; a frame of another size starts over (its first frame unordered); the order is in
+    // use (items handed out first) from the second frame of a size on.
+    const rt::BackendAvailability a = rt::backend_availability();
+    if (!a.cuda_device) GTEST_SKIP() << "no CUDA device: " << a.cuda_why;
+    rt::BackendOptions fifo;
+    fifo.cuda_heavy_first = false;
+    auto ordered = rt::make_backend("cuda");
+    auto plain = rt::make_backend("cuda", fifo);
+    std::uint64_t first_total = 0;
+    for (GpuScene& s : scenes()) {
+        SCOPED_TRACE(s.name + " on " + ordered->device());
+        for (const auto& [w, h] : {std::pair{160u, 120u},
+                                   {160u, 120u},
+                                   {160u, 120u},
+                                   {96u, 64u},
+                                   {96u, 64u},
+                                   {160u, 120u},
+                                   {160u, 120u}}) {
+            rt::FrameStats so, sp;
+            const rt::Image img = render(*ordered, s.rs, w, h, &so);
+            const rt::Image ref = render(*plain, s.rs, w, h, &sp);
+            ASSERT_EQ(img.rgb.size(), ref.rgb.size());
+            EXPECT_EQ(img.rgb, ref.rgb) << w << "x" << h;
+            EXPECT_EQ(img.rgba8, ref.rgba8) << w << "x" << h;
+            EXPECT_EQ(so.primary, sp.primary);
+            EXPECT_EQ(so.shadow, sp.shadow);
+            EXPECT_EQ(so.secondary, sp.secondary);
+            EXPECT_EQ(sp.heavy_first, 0u);
+            first_total += so.heavy_first;
+        }
+        // the first frame after a size change has no previous frame to order by
+        rt::FrameStats s1, s2;
+        render(*ordered, s.rs, 64, 48, &s1);
+        EXPECT_EQ(s1.heavy_first, 0u);
+        render(*ordered, s.rs, 64, 48, &s2);
+        EXPECT_LE(s2.heavy_first, std::uint64_t{4 * 3 * 8});  // at most every item of 64x48
+    }
+    EXPECT_GT(first_total, 0u) << "no frame of any scene handed out heavy items first";
+}
+
 rt::BackendOptions opts(bool wavefront, bool linear, bool persistent = true) {
     rt::BackendOptions o;
     o.cuda_wavefront = wavefront;

@@ -11,6 +11,7 @@
 #include <cuda_runtime.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstring>
 #include <utility>
@@ -94,6 +95,73 @@ __device__ __forceinline__ void item_pixel(std::uint32_t item, std::uint32_t lan
     }
 }
 
+/// Heavy items first (the persistent megakernel's queue order). A frame's 32-pixel items differ in
+/// cost by two orders of magnitude (H200, the teapot's primary frame at 1024^2: median 10.6k cycles,
+/// the slowest 678k, at the gap between lid and body, where rays pass down many leaves), and an item
+/// cannot be split: a heavy one taken late in the frame ends it alone (its SMs' finish spread from
+/// 340 to 555 us). So every frame records each item's cycles and sorts the items that took more than
+/// ItemOrder::factor times the frame's mean into k_heavy_classes lists by powers of two (over 16x
+/// the factor, 8x, 4x, 2x, 1x); the next frame of the same shape (width and rows) hands out those
+/// lists first, heaviest first, then the other items in image order: longest processing time first
+/// (Graham 1969) with the previous frame as the estimate, since consecutive frames of one view, or
+/// of a moving camera, cost nearly the same per item. The order changes no pixel. Measured on an
+/// H200 (preprocess/bench/results/h200-2026-12-03-issue19-heavy-first), 1024^2 primary rays against
+/// image order alone: teapot 1.79 -> 2.14 Grays/s, Bigguy 0.76 -> 0.83, prt-bench's room 1.03 -> 1.15,
+/// the culled 10M-point sphere 1.21 -> 1.60 (ISO 1.49 -> 2.05); one list at factor 4 or 8 gained as
+/// much on the teapot but nothing on the room, one at factor 2 the reverse; five classes at factor
+/// 1.5 / 2 / 3: teapot 2.09 / 2.12 / 2.14, room 1.22 / 1.15 / 1.06.
+inline constexpr std::uint32_t k_heavy_classes = 5;
+struct OrderSlot {
+    unsigned long long cycles;                  ///< the frame's item cycles, summed
+    unsigned long long heavy[k_heavy_classes];  ///< items in each class's list, the heaviest first
+};
+struct ItemOrder {
+    /// The previous frame's heavy items: k_heavy_classes lists of `items` entries, the heaviest first.
+    const std::uint32_t* heavy = nullptr;
+    std::uint32_t* next_heavy = nullptr;  ///< this frame's, for the next frame
+    /// Per item: the last frame whose heavy lists hold it. An item stamped >= frame was handed out
+    /// from a list (or was found heavy after its image-order turn), so its image-order turn skips it.
+    std::uint32_t* stamp = nullptr;
+    const OrderSlot* prev = nullptr;  ///< the previous frame's sums
+    OrderSlot* next = nullptr;        ///< this frame's (zeroed before it starts)
+    std::uint32_t frame = 0;          ///< this frame's number (0: no ordering, image order only)
+    float factor = 2.0f;              ///< heavy: more cycles than factor x the mean item
+};
+static_assert(sizeof(OrderSlot) == (1 + k_heavy_classes) * sizeof(unsigned long long));
+/// Words of the counter buffer before the counters: one OrderSlot (the other follows the queue).
+constexpr std::size_t k_slot_words = sizeof(OrderSlot) / sizeof(unsigned long long);
+constexpr std::size_t k_counters_at = k_slot_words;
+
+/// The next item of the persistent queue (lane 0): the previous frame's heavy items, heaviest class
+/// first, then every other item in image order; `items` when none are left.
+__device__ std::uint32_t next_item(unsigned int* queue, const ItemOrder& order, std::uint32_t items) {
+    for (;;) {  // bounded: every pass moves the queue on
+        std::uint32_t q = atomicAdd(queue, 1u);
+        if (order.frame == 0) return q < items ? q : items;
+        for (std::uint32_t c = 0; c < k_heavy_classes; ++c) {
+            const auto n = static_cast<std::uint32_t>(order.prev->heavy[c]);
+            if (q < n) return order.heavy[static_cast<std::size_t>(c) * items + q];
+            q -= n;
+        }
+        if (q >= items) return items;
+        if (order.stamp[q] < order.frame) return q;
+    }
+}
+
+/// After item `item` took `cycles` (lane 0): adds them to the frame's sum and lists the item for the
+/// next frame when it took more than factor x `mean` cycles (the previous frame's mean item).
+__device__ void record_item(const ItemOrder& order, std::uint32_t item, std::uint32_t items,
+                            unsigned long long cycles, unsigned long long mean) {
+    atomicAdd(&order.next->cycles, cycles);
+    auto limit = static_cast<unsigned long long>(order.factor * static_cast<float>(mean));
+    if (mean == 0 || cycles <= limit) return;
+    std::uint32_t c = k_heavy_classes - 1;
+    for (limit *= 2; c > 0 && cycles > limit; limit *= 2) --c;
+    order.stamp[item] = order.frame + 1u;
+    const auto slot = static_cast<std::uint32_t>(atomicAdd(&order.next->heavy[c], 1ull));
+    order.next_heavy[static_cast<std::size_t>(c) * items + slot] = item;
+}
+
 /// Megakernel: one thread traces one pixel's whole ray tree (render_pixel). k_min_blocks is the
 /// occupancy hint (resident 256-thread blocks per SM) that bounds the registers per thread; K the
 /// code it carries (core::KernelMask): splats-only Whitted frames get a kernel without the other
@@ -103,23 +171,26 @@ __device__ __forceinline__ void item_pixel(std::uint32_t item, std::uint32_t lan
 /// 3): with `queue`, the grid holds only as many blocks as fit on the GPU at once and each warp
 /// takes its next 32 pixels (`items` in all) from the queue until none are left, so a block whose
 /// warps finish early does not wait on its slowest warp before the SM gets new work; without it,
-/// one 32-pixel item per warp from the block index.
+/// one 32-pixel item per warp from the block index. `order`: the queue's heavy items first (ItemOrder).
 template <bool k_zorder, int k_min_blocks, std::uint32_t K = core::k_mask_splats>
 __global__ void __launch_bounds__(k_block, k_min_blocks)
     render_kernel(const core::SceneView scene, const core::PinholeCamera cam, std::uint32_t width,
                   std::uint32_t height, std::uint32_t row_begin, std::uint32_t row_end,
                   float* __restrict__ rgb, std::uint32_t* __restrict__ rgba, unsigned long long* counters,
-                  unsigned int* queue, std::uint32_t items, std::uint32_t tiles_x) {
+                  unsigned int* queue, std::uint32_t items, std::uint32_t tiles_x, const ItemOrder order) {
     const std::uint32_t lane = threadIdx.x & 31u;
     core::RayCounters c;
     std::uint32_t item = (blockIdx.y * gridDim.x + blockIdx.x) * (k_block / 32u) + threadIdx.x / 32u;
+    const bool ordered = queue != nullptr && order.frame != 0;
+    const unsigned long long mean = ordered ? order.prev->cycles / items : 0;  // 0: nothing is heavy yet
     for (;;) {  // bounded: every pass takes a new item from the queue, or ends
         if (queue != nullptr) {
-            unsigned int next = 0;
-            if (lane == 0) next = atomicAdd(queue, 1u);
+            std::uint32_t next = 0;
+            if (lane == 0) next = next_item(queue, order, items);
             item = __shfl_sync(0xffffffffu, next, 0);
         }
         if (item >= items) break;
+        const long long t0 = clock64();
         std::uint32_t x, y;
         item_pixel<k_zorder>(item, lane, width, tiles_x, row_begin, x, y);
         if (x < width && y < row_end) {
@@ -127,6 +198,11 @@ __global__ void __launch_bounds__(k_block, k_min_blocks)
             store_pixel(scene.params, static_cast<std::size_t>(y) * width + x, color, rgb, rgba);
         }
         if (queue == nullptr) break;
+        if (ordered) {
+            __syncwarp();
+            if (lane == 0)
+                record_item(order, item, items, static_cast<unsigned long long>(clock64() - t0), mean);
+        }
     }
     flush_counters(c, counters);
 }
@@ -135,7 +211,7 @@ __global__ void __launch_bounds__(k_block, k_min_blocks)
 
 using RenderKernel = void (*)(core::SceneView, core::PinholeCamera, std::uint32_t, std::uint32_t,
                               std::uint32_t, std::uint32_t, float*, std::uint32_t*, unsigned long long*,
-                              unsigned int*, std::uint32_t, std::uint32_t);
+                              unsigned int*, std::uint32_t, std::uint32_t, ItemOrder);
 
 /// One megakernel variant: the code it carries (core::KernelMask: splats only, patches only, or
 /// everything with sampling), its occupancy hint (--min-blocks) and its two ray mappings.
@@ -395,7 +471,8 @@ public:
         PRT_CUDA_CHECK(cudaStreamCreateWithFlags(&m_stream, cudaStreamNonBlocking));
         PRT_CUDA_CHECK(cudaEventCreate(&m_start));
         PRT_CUDA_CHECK(cudaEventCreate(&m_stop));
-        m_counters.resize(k_counter_count + 1);  // + the persistent megakernel's work queue
+        // [order slot 0, the counters, the persistent megakernel's work queue, order slot 1]
+        m_counters.resize(k_counters_at + k_counter_count + 1 + k_slot_words);
         m_sm_count = static_cast<std::uint32_t>(prop.multiProcessorCount);
     }
     ~CudaBackend() override {
@@ -440,7 +517,10 @@ public:
         core::SceneView scene = m_scene;
         scene.params = req.params;
         core::set_lod_cone(scene.params, req.camera, req.height);
-        PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
+        zero_counters(
+            w, y0, y1,
+            m_options.cuda_heavy_first && m_options.cuda_persistent &&
+                !(m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0));
         PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
         // Sampled frames (spp > 1, path tracing: seed 002, 7) run in the megakernel only.
         if (m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0) {
@@ -450,7 +530,13 @@ public:
         }
         PRT_CUDA_CHECK(cudaEventRecord(m_stop, m_stream));
         unsigned long long counters[k_counter_count];
-        m_counters.download(counters, k_counter_count, 0, m_stream);
+        m_counters.download(counters, k_counter_count, k_counters_at, m_stream);
+        OrderSlot used{};  // the sums this frame's order came from
+        if (m_order_frame_now != 0) {
+            const std::size_t at =
+                reinterpret_cast<unsigned long long*>(order_slot(m_order_frame_now)) - m_counters.data();
+            m_counters.download(reinterpret_cast<unsigned long long*>(&used), k_slot_words, at, m_stream);
+        }
         if (req.download) {
             const std::size_t first = static_cast<std::size_t>(y0) * w,
                               count = static_cast<std::size_t>(y1 - y0) * w;
@@ -471,6 +557,7 @@ public:
         stats.dropped = counters[k_c_dropped];
         stats.culled = counters[k_c_culled];
         stats.fallbacks = counters[k_c_fallbacks];
+        for (const unsigned long long n : used.heavy) stats.heavy_first += n;
         stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         return stats;
     }
@@ -509,28 +596,83 @@ private:
         return m_resident_blocks.back().second;
     }
 
+    /// The megakernel's 32-pixel work items for rows [y0, y1): 8 per 16x16 tile (Z-order) or 32
+    /// pixels row by row.
+    std::uint32_t item_count(std::uint32_t w, std::uint32_t y0, std::uint32_t y1) const {
+        if (m_options.cuda_linear_mapping)
+            return static_cast<std::uint32_t>((static_cast<unsigned long long>(w) * (y1 - y0) + 31u) / 32u);
+        return (w + k_tile - 1) / k_tile * ((y1 - y0 + k_tile - 1) / k_tile) * (k_block / 32u);
+    }
+
+    /// Zeroes the frame's counters and work queue before it starts, and with `ordered` moves the
+    /// item order (ItemOrder) to this frame: the same shape as the last ordered frame continues
+    /// from its heavy list and sums (its slot kept, the other zeroed with the counters, one memset);
+    /// a new shape starts without (both slots zeroed, and the frame number moved past every stamp).
+    void zero_counters(std::uint32_t w, std::uint32_t y0, std::uint32_t y1, bool ordered) {
+        if (!ordered) {
+            m_order_frame_now = 0;
+            PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data() + k_counters_at, 0,
+                                           (k_counter_count + 1) * sizeof(unsigned long long), m_stream));
+            return;
+        }
+        const std::uint32_t items = item_count(w, y0, y1);
+        const std::array<std::uint32_t, 4> shape{w, y0, y1, items};
+        if (shape != m_order_shape || m_order_frame == 0) {
+            m_order_shape = shape;
+            for (auto& list : m_order_heavy) list.reserve(std::size_t{k_heavy_classes} * items);
+            if (m_order_stamp.size() < items) {
+                m_order_stamp.resize(items);
+                PRT_CUDA_CHECK(cudaMemsetAsync(m_order_stamp.data(), 0, m_order_stamp.bytes(), m_stream));
+            }
+            m_order_frame += 2;  // past every stamp (<= the last frame + 1)
+            PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data(), 0, m_counters.bytes(), m_stream));
+        } else {
+            m_order_frame += 1;
+            // the next slot and the counters lie side by side: slot 0 before them, slot 1 after
+            const std::size_t first = (m_order_frame + 1) % 2 == 0 ? 0 : k_counters_at;
+            PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data() + first, 0,
+                                           (k_slot_words + k_counter_count + 1) * sizeof(unsigned long long),
+                                           m_stream));
+        }
+        m_order_frame_now = m_order_frame;
+    }
+
+    /// The order slot (OrderSlot) of frame `frame`'s sums.
+    OrderSlot* order_slot(std::uint32_t frame) {
+        return reinterpret_cast<OrderSlot*>(m_counters.data() +
+                                            (frame % 2 == 0 ? 0 : k_counters_at + k_counter_count + 1));
+    }
+
     void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
                            std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
         const bool z = !m_options.cuda_linear_mapping;
-        const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
-        // 32-pixel work items: 8 per 16x16 tile (Z-order) or 32 pixels row by row.
         const std::uint32_t tiles_x = (w + k_tile - 1) / k_tile;
-        const std::uint32_t items = z ? tiles_x * ((y1 - y0 + k_tile - 1) / k_tile) * (k_block / 32u)
-                                      : static_cast<std::uint32_t>((n + 31u) / 32u);
+        const std::uint32_t items = item_count(w, y0, y1);
         const std::uint32_t item_blocks = (items + k_block / 32u - 1) / (k_block / 32u);
         auto launch = [&](RenderKernel kernel) {
             unsigned int* queue = nullptr;
             std::uint32_t blocks = item_blocks;
+            ItemOrder order;
             if (m_options.cuda_persistent) {
                 // As many blocks as the GPU holds at once; the queue counter sits after the counters
                 // (zeroed with them every frame).
                 blocks = std::min<std::uint32_t>(item_blocks, resident_blocks(kernel) * m_sm_count);
-                queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counter_count);
+                queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count);
+                if (m_order_frame_now != 0) {
+                    const std::uint32_t f = m_order_frame_now;
+                    order.heavy = m_order_heavy[f % 2].data();
+                    order.next_heavy = m_order_heavy[(f + 1) % 2].data();
+                    order.stamp = m_order_stamp.data();
+                    order.prev = order_slot(f);
+                    order.next = order_slot(f + 1);
+                    order.frame = f;
+                }
             } else {
                 resident_blocks(kernel);  // sets the kernel's L1 preference
             }
             launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, scene, req.camera, w, h, y0,
-                          y1, m_rgb.data(), rgba_target(req), m_counters.data(), queue, items, tiles_x);
+                          y1, m_rgb.data(), rgba_target(req), m_counters.data() + k_counters_at, queue, items,
+                          tiles_x, order);
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
         const Megakernel& k = find_megakernel(m_surface_mask, sampling,
@@ -559,7 +701,7 @@ private:
         m_queue_count.reserve(2);
         launch_kernel(launch_grid(grid, k_block, m_stream),
                       m_options.cuda_linear_mapping ? wave_primary<false> : wave_primary<true>, req.camera, w,
-                      h, y0, y1, m_queue[0].data(), m_accum.data(), m_counters.data());
+                      h, y0, y1, m_queue[0].data(), m_accum.data(), m_counters.data() + k_counters_at);
         const std::uint32_t limit = std::min(req.params.max_bounces, core::k_max_bounces);
         std::uint32_t upper = slots;  // upper bound of the current queue's length
         int cur = 0;
@@ -569,15 +711,16 @@ private:
             PRT_CUDA_CHECK(cudaMemsetAsync(next_count, 0, sizeof(std::uint32_t), m_stream));
             const LaunchShape queue = launch_1d(upper, k_block, m_stream);
             launch_kernel(queue, wave_trace, scene, m_queue[cur].data(), count, slots, m_hits.data(),
-                          m_counters.data());
+                          m_counters.data() + k_counters_at);
             launch_kernel(queue, wave_shade, scene, m_queue[cur].data(), count, slots, m_hits.data(),
-                          m_queue[cur ^ 1].data(), next_count, capacity, m_accum.data(), m_counters.data());
+                          m_queue[cur ^ 1].data(), next_count, capacity, m_accum.data(),
+                          m_counters.data() + k_counters_at);
             upper = depth < limit ? std::min<std::uint64_t>(capacity, 2ull * upper) : 0;
             cur ^= 1;
         }
         const unsigned long long n = static_cast<unsigned long long>(w) * (y1 - y0);
         launch_kernel(launch_1d(n, k_block, m_stream), wave_finish, req.params, w, y0, y1, m_accum.data(),
-                      m_rgb.data(), rgba_target(req), m_counters.data());
+                      m_rgb.data(), rgba_target(req), m_counters.data() + k_counters_at);
     }
 
     rt::BackendOptions m_options;
@@ -590,7 +733,12 @@ private:
     std::uint32_t m_surface_mask = core::k_mask_splats;  ///< surfaces of the scene (core::scene_mask)
     core::SecondaryMaterials m_secondary_materials;      ///< whether its materials reflect, refract
     core::SceneView m_scene;                             ///< m_device_scene's view
-    DeviceBuffer<unsigned long long> m_counters;
+    DeviceBuffer<unsigned long long> m_counters;         ///< [order slot 0, counters, queue, order slot 1]
+    DeviceBuffer<std::uint32_t> m_order_heavy[2];        ///< ItemOrder's heavy lists, by frame parity
+    DeviceBuffer<std::uint32_t> m_order_stamp;           ///< ItemOrder::stamp
+    std::array<std::uint32_t, 4> m_order_shape{};        ///< width, rows, items of the last ordered frame
+    std::uint32_t m_order_frame = 0;                     ///< the last ordered frame's number
+    std::uint32_t m_order_frame_now = 0;                 ///< this frame's (0: not ordered)
     DeviceBuffer<float> m_rgb;
     DeviceBuffer<std::uint32_t> m_rgba;
     DeviceBuffer<WaveRay> m_queue[2];

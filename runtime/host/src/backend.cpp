@@ -10,6 +10,7 @@ FrameStats& FrameStats::operator+=(const FrameStats& o) {
     seconds += o.seconds;
     device_ms += o.device_ms;
     pixels += o.pixels;
+    heavy_first += o.heavy_first;
     core::add_ray_counters(*this, o);
     return *this;
 }

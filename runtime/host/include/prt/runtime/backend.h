@@ -33,6 +33,9 @@ struct FrameStats {
     std::uint64_t culled = 0;     ///< filled leaves passed unread by their bounds (core LeafBounds)
     std::uint64_t fallbacks = 0;  ///< rays that fell back to a brick's LOD disc (core bricks.h, render.h)
     double gpu_share = 0;         ///< hybrid: fraction of rows the GPU rendered
+    /// CUDA megakernel: 32-pixel items handed out first, as the previous frame's heavy ones
+    /// (BackendOptions::cuda_heavy_first)
+    std::uint64_t heavy_first = 0;
 
     std::uint64_t rays() const { return primary + secondary + shadow; }
     FrameStats& operator+=(const FrameStats& o);
@@ -125,6 +128,9 @@ struct BackendOptions {
     /// megakernel: persistent warps taking 32-pixel items from a queue (Aila-Laine) instead of one
     /// item per warp from the block index
     bool cuda_persistent = true;
+    /// persistent megakernel: hand out first the items that were heavy in the previous frame of the
+    /// same shape (cuda_backend.cu, ItemOrder), instead of image order alone
+    bool cuda_heavy_first = true;
     bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
     int cuda_min_blocks =
         0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
