@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "bench_scene.h"
+#include "camera_path.h"
 #include "player_options.h"
 #include "prt/atomic_file.h"
 #include "prt/runtime/backend.h"
@@ -42,6 +43,7 @@ struct Options {
     std::string json;
     std::string scenarios = "primary,shadow,reflect4";
     bool profile = false;
+    double orbit = 0;  ///< degrees the camera turns a frame (0: a still camera)
     player::BackendChoice backend;
     player::RenderOverrides render;
     player::CameraOverrides camera;
@@ -138,11 +140,19 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
     image.resize(o.scene.width, o.scene.height);
     nlohmann::json streaming;
     if (stream.streaming()) streaming = refine(common, backend, stream, req, image, sc.name);
-    for (std::uint32_t i = 0; i < o.warmup; ++i) stream.after_frame(backend.render(req, image));
+    // --orbit: every frame (warm-up ones too) turns the camera on from the last.
+    auto turn = [&](std::uint32_t frame) {
+        if (o.orbit != 0.0) req.camera = rs.camera(player::orbit_camera(rs.scene().camera, frame, o.orbit));
+    };
+    for (std::uint32_t i = 0; i < o.warmup; ++i) {
+        turn(i);
+        stream.after_frame(backend.render(req, image));
+    }
     std::vector<double> ms, wall_ms;
     rt::FrameStats last;
     tool::Progress progress("prt-bench: " + sc.name, o.frames, common.quiet);
     for (std::uint32_t i = 0; i < o.frames; ++i) {
+        turn(o.warmup + i);
         last = backend.render(req, image);
         stream.after_frame(last);  // streamed bricks: uploads between frames are not timed
         // CUDA: kernel time from events; CPU and hybrid: the frame's wall time.
@@ -173,6 +183,7 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
                       {"primary_grays_per_s", last.primary / (med * 1e-3) * 1e-9},
                       {"shadow_grays_per_s", last.shadow / (med * 1e-3) * 1e-9},
                       {"secondary_grays_per_s", last.secondary / (med * 1e-3) * 1e-9},
+                      {"heavy_first_items", last.heavy_first},
                       {"leaves_per_ray", last.rays() ? double(last.leaves) / last.rays() : 0.0},
                       {"culled_leaves_per_ray", last.rays() ? double(last.culled) / last.rays() : 0.0},
                       {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},
@@ -258,6 +269,7 @@ void run(Options o, const tool::CommonOptions& common) {
     report["device"] = backend->device();
     report["backend"] = backend->name();
     report["kernel"] = o.backend.kernel;
+    report["orbit_degrees_per_frame"] = o.orbit;
     report["mapping"] = o.backend.mapping;
     report["min_blocks"] = o.backend.min_blocks;
     report["leaf_culling"] = base.leaf_culling;
@@ -333,6 +345,9 @@ int main(int argc, char** argv) {
                            "Comma-separated subset of primary, shadow, reflect4 and full4 (shadows + 4 "
                            "bounces; not in the default)");
             app.add_option("--json", o.json, "Write the results as JSON to this file");
+            app.add_option("--orbit", o.orbit,
+                           "Turn the camera about its up direction through its look-at point by this many "
+                           "degrees every frame, warm-up frames included (a moving camera; 0: still)");
             app.add_flag("--profile", o.profile,
                          "Also trace the shadow and reflect4 frames on the host, recording each ray's work: "
                          "leaves, leaves passed by their bounds and splat tests per ray by bounce depth, and "
