@@ -64,8 +64,8 @@ nlohmann::json derived_kind(const rt::FrameStats& with, const rt::FrameStats& ba
 }
 
 /// Streamed bricks (--gpu-budget): renders the view until no ray falls back to a brick's coarse
-/// level or nothing more can be uploaded (at most 100000 passes), one stderr line per pass; returns
-/// the refinement's numbers as JSON and prints them on one stdout line.
+/// level or no pass brings fewer fallbacks (rt::Refinement; at most 100000 passes), one stderr line per pass;
+/// returns the refinement's numbers as JSON and prints them on one stdout line.
 nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, rt::BrickStream& stream,
                       const rt::FrameRequest& req, rt::Image& image, const std::string& name) {
     nlohmann::json passes = nlohmann::json::array();
@@ -73,6 +73,7 @@ nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, r
     double upload_s = 0;
     const double t0 = tool::now_seconds();
     rt::StreamFrame f;
+    rt::Refinement refinement;
     for (std::uint32_t pass = 0; pass < 100000; ++pass) {
         const rt::FrameStats s = backend.render(req, image);
         f = stream.after_frame(s);
@@ -91,7 +92,7 @@ nlohmann::json refine(const tool::CommonOptions& common, rt::Backend& backend, r
                           {"evicted", f.evicted},
                           {"fallback_rays", f.fallback_rays},
                           {"frame_ms", s.seconds * 1e3}});
-        if (f.converged() || f.uploaded == 0) break;
+        if (!refinement.more(f)) break;
     }
     const double secs = tool::now_seconds() - t0;
     const double gbs = upload_s > 0 ? bytes / upload_s * 1e-9 : 0.0;

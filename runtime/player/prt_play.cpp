@@ -190,6 +190,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
         // again until no ray falls back to a brick's coarse level (then the image equals the in-core
         // render), or until nothing more can be uploaded.
         rt::FrameStats s;
+        rt::Refinement refinement;
         for (std::uint32_t pass = 0;; ++pass) {
             const double t0 = tool::now_seconds();
             s = backend->render(req, image);
@@ -201,7 +202,7 @@ void run(const Options& o, const prt::tool::CommonOptions& common) {
                            1e3 * (tool::now_seconds() - t0), 1e3 * s.seconds, rt::describe(sf).c_str());
             last_fallbacks = s.fallbacks;
             if (!o.converge || !sf.streaming || sf.converged()) break;
-            if (sf.uploaded == 0) {
+            if (!refinement.more(sf)) {
                 stalled = true;
                 tool::note(
                     common.quiet,
@@ -314,8 +315,9 @@ int main(int argc, char** argv) {
             app.add_flag("--converge", o.converge,
                          "Headless, streamed bricks (--gpu-budget): render each frame's view again until no "
                          "ray falls back to a brick's coarse level of detail (the image then equals the "
-                         "in-core one), or until the budget can take no more of the bricks it needs (said "
-                         "in one line); off: one pass per frame, refining over the frames");
+                         "in-core one), or until the budget can take no more of the bricks it needs or 32 "
+                         "passes in a row bring no fewer fallbacks (said in one line); off: one pass per "
+                         "frame, refining over the frames");
             app.add_option("--camera-path", o.camera_path,
                            "Headless: camera path file, one frame per line 'px py pz lx ly lz [fov]' (world "
                            "frame; frames cycle)")

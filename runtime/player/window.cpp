@@ -522,7 +522,7 @@ void run_window(rt::RenderScene& rs, std::unique_ptr<rt::Backend>& backend,
         }
         // Streaming: the bricks this frame asked for are there for the next one (progressive).
         const rt::StreamFrame sf = stream->after_frame(s);
-        if (sf.streaming && sf.uploaded > 0)
+        if (sf.streaming && sf.progressed())
             tool::note(options.quiet, "prt-play: frame %u: %s", shown, rt::describe(sf).c_str());
         if (sf.streaming && sf.fallback_rays > 0) acc.reset();  // the image is still refining
         if (ctx.screenshot) {

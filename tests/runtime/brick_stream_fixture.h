@@ -87,6 +87,11 @@ protected:
     struct Terms {
         std::uint64_t fixed = 0, largest = 0, all = 0;
         std::uint32_t bricks = 0;
+        /// LOD prefixes: all of them (16 bytes a node), the largest one's block (rounded up to 64)
+        /// and the two per-brick tables of streamed prefixes.
+        std::uint64_t prefixes = 0, largest_prefix = 0, prefix_tables = 0;
+        /// The least budget: prefixes streamed, the largest brick's and prefix's blocks.
+        std::uint64_t minimum() const { return fixed - prefixes + prefix_tables + largest + largest_prefix; }
     };
     static Terms budget_terms() {
         const pool::PoolFile pf = pool::PoolFile::from_bytes(s_bytes, "sphere");
@@ -102,6 +107,11 @@ protected:
         t.fixed = s.top_nodes.size_bytes() + s.table.size_bytes() + s.lod.size_bytes() +
                   s.lod_table.size_bytes() + s.lod_nodes.size_bytes() + s.lod_discs.size_bytes() +
                   std::uint64_t{t.bricks} * (sizeof(void*) + 12);
+        t.prefixes = s.lod_nodes.size() * 16;
+        for (const pool::BrickLod& l : s.lod_table)
+            t.largest_prefix =
+                std::max<std::uint64_t>(t.largest_prefix, (l.node_count * 16ull + 63) / 64 * 64);
+        t.prefix_tables = s.lod_table.empty() ? 0 : std::uint64_t{t.bricks} * 8;
         return t;
     }
 
@@ -159,7 +169,7 @@ struct Converged {
     rt::Image image;
     std::uint32_t passes = 0;
     std::uint64_t first_fallbacks = 0;
-    std::uint32_t evicted = 0, uploaded = 0;
+    std::uint32_t evicted = 0, uploaded = 0, prefix_evictions = 0;
     bool converged = false;
     rt::StreamFrame last;
     rt::FrameStats stats;  ///< the last frame's
@@ -167,6 +177,7 @@ struct Converged {
 inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickStream& stream,
                           std::uint32_t max_passes = 400, float lod_pixels = 0.0f) {
     Converged c;
+    rt::Refinement refinement;
     for (; c.passes < max_passes;) {
         rt::FrameRequest request{
             .camera = rs.camera(), .params = rs.params(), .width = k_size, .height = k_size};
@@ -178,13 +189,14 @@ inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickSt
         if (c.passes++ == 0) c.first_fallbacks = s.fallbacks;
         c.evicted += f.evicted;
         c.uploaded += f.uploaded;
+        c.prefix_evictions += f.prefixes_evicted;
         c.last = f;
         EXPECT_LE(f.resident_bytes, stream.fixed_bytes() + stream.arena_bytes());
         if (f.converged()) {
             c.converged = true;
             break;
         }
-        if (f.uploaded == 0) break;
+        if (!refinement.more(f)) break;
     }
     return c;
 }

@@ -57,8 +57,8 @@ TEST_F(BrickStreamTest, ConvergesToTheInCoreImage) {
     ASSERT_TRUE(stream.streaming());
     EXPECT_EQ(stream.arena_bytes(), arena);
     EXPECT_EQ(stream.brick_count(), t.bricks);
-    EXPECT_EQ(stream.minimum_bytes(), t.fixed + t.largest);
-    EXPECT_EQ(stream.fixed_bytes(), t.fixed);
+    EXPECT_EQ(stream.minimum_bytes(), t.minimum()) << "prefixes streamed, the least budget";
+    EXPECT_EQ(stream.fixed_bytes(), t.fixed) << "the prefixes fit: resident";
     const Converged c = converge(rs, *backend, stream);
     ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
                              << c.last.needed;
@@ -165,6 +165,45 @@ TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
                 without.last.needed, c.passes, c.uploaded, t.bricks);
 }
 
+/// Streamed LOD prefixes: under a budget that cannot hold every prefix with the top tree, the
+/// prefixes stream into the arena with the payloads (a ray reaching a brick whose prefix is missing
+/// meets its top-node disc and asks for the prefix, then, if its stop lies deeper, for the payload);
+/// the view converges to the in-core image with the same stop, byte for byte, and turning the
+/// camera evicts prefixes (with their payloads) least recently used first.
+TEST_F(BrickStreamTest, LodPrefixesStreamWhenTheBudgetCannotHoldThem) {
+    const Terms t = budget_terms();
+    ASSERT_GT(t.prefixes, 0u) << "the fixture's pool has LOD prefixes";
+    // Resident, the prefixes would take more than a quarter of the arena and prefixes (tested:
+    // fixed_bytes() holds none).
+    const std::uint64_t budget = t.minimum() + t.all * 3 / 10;
+    auto backend = cpu::make_cpu_backend(2);
+    rt::RenderScene rs = deferred();
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = budget, .upload_per_frame = 1});
+    ASSERT_TRUE(stream.streaming());
+    EXPECT_EQ(stream.minimum_bytes(), t.minimum());
+    EXPECT_EQ(stream.fixed_bytes(), t.fixed - t.prefixes + t.prefix_tables) << "no prefix resident";
+    EXPECT_EQ(stream.arena_bytes(), t.largest + (budget - stream.fixed_bytes() - t.largest) / 64 * 64)
+        << "the arena: the rest of the budget, payloads and prefixes alike";
+    std::uint32_t prefix_evictions = 0;
+    for (const double angle : {-1.0, 0.3, 1.9}) {
+        SCOPED_TRACE(::testing::Message() << "view " << angle);
+        if (angle >= 0) close_view(rs, angle);
+        const Converged c = converge(rs, *backend, stream, 400, 4.0f);
+        ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
+                                 << c.last.needed;
+        EXPECT_TRUE(c.last.streamed_prefixes);
+        EXPECT_GT(c.first_fallbacks, 0u);
+        EXPECT_TRUE(c.image.rgba8 == in_core(angle, nullptr, "cpu", 4.0f).rgba8)
+            << "converged: the in-core image with the same stop";
+        EXPECT_GT(c.last.resident_prefixes, 0u);
+        prefix_evictions += c.prefix_evictions;
+        std::printf(
+            "  view %.1f: converged in %u passes, %u uploads, %u prefixes resident, %u prefix evictions\n",
+            angle, c.passes, c.uploaded, c.last.resident_prefixes, c.prefix_evictions);
+    }
+    EXPECT_GT(prefix_evictions, 0u) << "three views under a quarter of the bricks evict prefixes";
+}
+
 /// Level of detail through bounces (render.h lod_cone): a ray leaving a hit starts with the footprint
 /// its camera ray had there, so shadow and reflected rays ask for no finer bricks than the camera
 /// rays they come from. The whole
@@ -212,10 +251,11 @@ TEST_F(BrickStreamTest, RaysLeavingAHitNeedNoFinerBricksThanTheirCameraRays) {
     EXPECT_TRUE(img.rgba8 == ref.rgba8) << "converged: the in-core image with the same stops";
 }
 
-/// Below the always-resident part and the largest brick: one line with the minimum.
+/// Below the always-resident part (LOD prefixes streamed) and the largest brick and prefix: one
+/// line with the minimum.
 TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
     const Terms t = budget_terms();
-    for (const std::uint64_t budget : {std::uint64_t{1}, t.fixed + t.largest - 1}) {
+    for (const std::uint64_t budget : {std::uint64_t{1}, t.minimum() - 1}) {
         rt::RenderScene rs = deferred();
         auto backend = cpu::make_cpu_backend(2);
         try {
@@ -225,7 +265,7 @@ TEST_F(BrickStreamTest, ATooSmallBudgetIsRefusedWithTheMinimum) {
             const std::string what = e.what();
             EXPECT_EQ(what.find('\n'), std::string::npos) << what;
             EXPECT_NE(what.find("too small"), std::string::npos) << what;
-            EXPECT_NE(what.find(tool::format_bytes(t.fixed + t.largest)), std::string::npos) << what;
+            EXPECT_NE(what.find(tool::format_bytes(t.minimum())), std::string::npos) << what;
         }
     }
 }
@@ -355,8 +395,10 @@ TEST_F(BrickStreamTest, ARayAsksForTheFirstMissingBrickItsInCoreWalkNeeds) {
     rt::RenderScene full = rt::RenderScene::from_pool(s_pool);  // every brick resident
     rt::RenderScene rs = deferred();
     auto backend = cpu::make_cpu_backend(2);
-    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 4});
+    // An arena of a quarter of the bricks and three times the prefixes: the prefixes resident.
+    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = t.fixed + t.all / 4 + 3 * t.prefixes});
     ASSERT_TRUE(stream.streaming());
+    ASSERT_EQ(stream.fixed_bytes(), t.fixed) << "the prefixes resident";
     const core::SceneView in_core = full.view(), missing = rs.view();  // nothing resident yet
     std::vector<std::uint32_t> used(t.bricks), requested(t.bricks);
     core::BrickView with_all = in_core.models[0].bricks, with_none = missing.models[0].bricks;
@@ -367,7 +409,7 @@ TEST_F(BrickStreamTest, ARayAsksForTheFirstMissingBrickItsInCoreWalkNeeds) {
     ASSERT_EQ(with_all.resident, nullptr);
     const core::PinholeCamera cam = full.camera();
     const core::BlendOptions blend{full.params().blend_window, full.params().deep_blending != 0};
-    const float spread = 8.0f * core::pixel_angle(cam, k_size);
+    const float spread = 2.0f * core::pixel_angle(cam, k_size);
     std::uint32_t rays_needing = 0, rays_with_several = 0, rays_in_prefixes = 0;
     for (std::uint32_t y = 0; y < k_size; ++y)
         for (std::uint32_t x = 0; x < k_size; ++x) {

@@ -27,7 +27,9 @@ public:
         m_arena = DeviceBuffer<unsigned char>(static_cast<std::size_t>(std::max<std::uint64_t>(a.bytes, 64)));
         m_resident = DeviceBuffer<unsigned long long>(std::max<std::size_t>(m_bricks, 1));
         m_first = DeviceBuffer<std::uint32_t>(std::size_t{m_bricks} + 1);
-        m_flags = DeviceBuffer<std::uint32_t>(std::max<std::size_t>(2 * std::size_t{m_bricks}, 1));
+        m_prefixes = a.streams_prefixes;
+        m_flags =
+            DeviceBuffer<std::uint32_t>(std::max<std::size_t>(flag_arrays() * std::size_t{m_bricks}, 1));
         PRT_CUDA_CHECK(cudaMemset(m_resident.data(), 0, m_resident.size() * sizeof(unsigned long long)));
         PRT_CUDA_CHECK(cudaMemset(m_first.data(), 0, m_first.size() * 4));
         PRT_CUDA_CHECK(cudaMemset(m_flags.data(), 0, m_flags.size() * 4));
@@ -36,6 +38,14 @@ public:
         m_host_flags = PinnedBuffer(m_flags.size() * 4);
         std::memset(m_host_resident.data(), 0, m_resident.size() * sizeof(unsigned long long));
         std::memset(m_host_first.data(), 0, m_first.size() * 4);
+        if (m_prefixes) {  // every prefix missing at first
+            m_prefix_first = DeviceBuffer<std::uint32_t>(std::max<std::size_t>(m_bricks, 1));
+            m_host_prefix_first = PinnedBuffer(m_prefix_first.size() * 4);
+            std::fill_n(static_cast<std::uint32_t*>(m_host_prefix_first.data()), m_prefix_first.size(),
+                        core::k_prefix_missing);
+            PRT_CUDA_CHECK(cudaMemcpy(m_prefix_first.data(), m_host_prefix_first.data(),
+                                      m_prefix_first.size() * 4, cudaMemcpyHostToDevice));
+        }
         m_staging = PinnedBuffer(k_slots * k_slot);
         for (cudaEvent_t& e : m_slot_done)
             PRT_CUDA_CHECK(cudaEventCreateWithFlags(&e, cudaEventDisableTiming));
@@ -79,6 +89,17 @@ public:
         first[brick] = offset == k_not_resident ? 0u : first_bound;
         m_dirty = true;
     }
+    void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
+                       std::span<const pool::CompressedSplat> discs) override {
+        stage(m_arena.data() + offset, reinterpret_cast<const unsigned char*>(nodes.data()),
+              nodes.size_bytes());
+        stage(m_arena.data() + offset + nodes.size_bytes(),
+              reinterpret_cast<const unsigned char*>(discs.data()), discs.size_bytes());
+    }
+    void set_prefix(std::uint32_t brick, std::uint64_t offset) override {
+        static_cast<std::uint32_t*>(m_host_prefix_first.data())[brick] = prefix_first(offset);
+        m_dirty = true;
+    }
     void commit() override {
         if (!m_jobs.empty()) {
             if (m_job_capacity < m_jobs.size()) {  // the copy stream is idle here (commit waits for it)
@@ -101,12 +122,16 @@ public:
                                            cudaMemcpyHostToDevice, m_copy));
             PRT_CUDA_CHECK(cudaMemcpyAsync(m_first.data(), m_host_first.data(), m_first.size() * 4,
                                            cudaMemcpyHostToDevice, m_copy));
+            if (m_prefixes)
+                PRT_CUDA_CHECK(cudaMemcpyAsync(m_prefix_first.data(), m_host_prefix_first.data(),
+                                               m_prefix_first.size() * 4, cudaMemcpyHostToDevice, m_copy));
             m_dirty = false;
         }
         PRT_CUDA_CHECK(cudaStreamSynchronize(m_copy));  // the next frame reads what was copied
         m_slot_used = 0;                                // every slot's copies are done
     }
-    void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) override {
+    void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested,
+                    std::vector<std::uint32_t>& prefix_used) override {
         // The frame's kernels finished (the backend's render() waits for its stream).
         PRT_CUDA_CHECK(cudaMemcpyAsync(m_host_flags.data(), m_flags.data(), m_flags.size() * 4,
                                        cudaMemcpyDeviceToHost, m_copy));
@@ -115,6 +140,10 @@ public:
         const auto* flags = static_cast<const std::uint32_t*>(m_host_flags.data());
         used.assign(flags, flags + m_bricks);
         requested.assign(flags + m_bricks, flags + 2 * std::size_t{m_bricks});
+        if (m_prefixes)
+            prefix_used.assign(flags + 2 * std::size_t{m_bricks}, flags + 3 * std::size_t{m_bricks});
+        else
+            prefix_used.assign(m_bricks, 0u);
     }
 
     /// Points the device model's brick view at this storage: the scene's device top tree, table
@@ -128,11 +157,20 @@ public:
         v.leaf_bounds_first = m_first.data();
         v.used = m_flags.data();
         v.requests = m_flags.data() + m_bricks;
+        if (m_prefixes) {  // streamed prefixes: blocks of the arena, words from its start
+            v.lod_nodes = reinterpret_cast<const std::uint32_t*>(m_arena.data());
+            v.lod_discs = nullptr;
+            v.lod_node_count = 0;
+            v.prefix_first = m_prefix_first.data();
+            v.prefix_used = m_flags.data() + 2 * std::size_t{m_bricks};
+        }
         m_scene.set_model_bricks(m_model, v);
     }
 
 private:
     static constexpr std::size_t k_slots = 4, k_slot = 16u << 20;
+    /// Flag arrays of brick_count words: used, requested and, with streamed prefixes, prefix_used.
+    std::size_t flag_arrays() const { return m_prefixes ? 3 : 2; }
 
     /// Copies host bytes to the device through the staging ring: each piece is copied into the
     /// current slot and its asynchronous copy queued at once; a full slot is closed with an event,
@@ -162,8 +200,10 @@ private:
     DeviceBuffer<unsigned char> m_arena;
     DeviceBuffer<unsigned long long> m_resident;  ///< const unsigned char* per brick
     DeviceBuffer<std::uint32_t> m_first;
-    DeviceBuffer<std::uint32_t> m_flags;  ///< used, then requested: brick_count each
-    PinnedBuffer m_host_resident, m_host_first, m_host_flags, m_staging;
+    DeviceBuffer<std::uint32_t> m_flags;  ///< used, requested (then prefix_used): brick_count each
+    bool m_prefixes = false;              ///< LOD prefixes stream into the arena
+    DeviceBuffer<std::uint32_t> m_prefix_first;
+    PinnedBuffer m_host_resident, m_host_first, m_host_flags, m_staging, m_host_prefix_first;
     cudaEvent_t m_slot_done[k_slots] = {};
     std::size_t m_slot = 0, m_slot_used = 0;
     std::vector<BrickBoundsJob> m_jobs;  ///< this frame's uploads whose bounds the device derives

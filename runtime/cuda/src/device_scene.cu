@@ -103,6 +103,8 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(b.resident, 0);
     f(b.requests, 0);
     f(b.used, 0);
+    f(b.prefix_first, 0);  // streamed prefixes: the brick storage's
+    f(b.prefix_used, 0);
     core::IsoView& iso = mv.iso;
     f(iso.tree.nodes, std::size_t{iso.tree.node_count} * 4);
     f(iso.leaves_q8, std::size_t{iso.leaf_count} * sizeof(pool::IsoLeafQ8));

@@ -24,6 +24,20 @@ constexpr std::uint64_t k_max_arena_bytes = (std::uint64_t{1} << 32) * sizeof(co
 /// Per-brick tables always resident: the resident table (a pointer), the first leaf bound, the
 /// use and request flags.
 constexpr std::uint64_t k_table_bytes_per_brick = sizeof(void*) + 3 * sizeof(std::uint32_t);
+/// A LOD prefix node: its word (lod_nodes) and its disc (lod_discs).
+constexpr std::uint64_t k_prefix_node_bytes = sizeof(std::uint32_t) + sizeof(pool::CompressedSplat);
+/// Per-brick tables of streamed prefixes: where each starts, its use flag.
+constexpr std::uint64_t k_prefix_table_bytes_per_brick = 2 * sizeof(std::uint32_t);
+/// The largest arena of a model whose prefixes stream: BrickView::prefix_first indexes its words
+/// with 32 bits.
+constexpr std::uint64_t k_max_prefix_arena_bytes = (std::uint64_t{1} << 32) * sizeof(std::uint32_t) - 64;
+
+/// BrickView::prefix_first of a prefix block at `offset` of the arena (k_not_resident: missing).
+std::uint32_t prefix_first_word(std::uint64_t offset) {
+    return offset == BrickStorage::k_not_resident
+               ? core::k_prefix_missing
+               : static_cast<std::uint32_t>(offset / sizeof(std::uint32_t));
+}
 
 std::uint64_t round_up_64(std::uint64_t n) {
     return (n + 63) / 64 * 64;
@@ -45,6 +59,15 @@ public:
         v.leaf_bounds_first = m_first.data();
         v.used = m_used.data();
         v.requests = m_requested.data();
+        if (a.streams_prefixes) {
+            m_prefix_first.assign(a.brick_count, core::k_prefix_missing);
+            m_prefix_used.assign(a.brick_count, 0);
+            v.lod_nodes = reinterpret_cast<const std::uint32_t*>(m_arena.get());
+            v.lod_discs = nullptr;
+            v.lod_node_count = 0;
+            v.prefix_first = m_prefix_first.data();
+            v.prefix_used = m_prefix_used.data();
+        }
         scene.set_brick_view(model, v);
     }
 
@@ -57,12 +80,24 @@ public:
         m_resident[brick] = offset == k_not_resident ? nullptr : m_arena.get() + offset;
         m_first[brick] = offset == k_not_resident ? 0 : first_bound;
     }
+    void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
+                       std::span<const pool::CompressedSplat> discs) override {
+        std::memcpy(m_arena.get() + offset, nodes.data(), nodes.size_bytes());
+        std::memcpy(m_arena.get() + offset + nodes.size_bytes(), discs.data(), discs.size_bytes());
+    }
+    void set_prefix(std::uint32_t brick, std::uint64_t offset) override {
+        m_prefix_first[brick] = prefix_first_word(offset);
+    }
     void commit() override {}
-    void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) override {
+    void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested,
+                    std::vector<std::uint32_t>& prefix_used) override {
         used = m_used;
         requested = m_requested;
+        prefix_used = m_prefix_used;
+        prefix_used.resize(m_used.size(), 0u);
         std::fill(m_used.begin(), m_used.end(), 0u);
         std::fill(m_requested.begin(), m_requested.end(), 0u);
+        std::fill(m_prefix_used.begin(), m_prefix_used.end(), 0u);
     }
 
 private:
@@ -72,6 +107,7 @@ private:
     std::unique_ptr<unsigned char, AlignedDelete> m_arena;
     std::vector<const unsigned char*> m_resident;
     std::vector<std::uint32_t> m_first, m_used, m_requested;
+    std::vector<std::uint32_t> m_prefix_first, m_prefix_used;
 };
 
 /// First-fit allocation of 64-byte multiples in [0, size), free blocks merged with their neighbours.
@@ -124,7 +160,12 @@ std::uint64_t block_bytes(const pool::BrickEntry& e) {
 }  // namespace
 
 std::uint64_t BrickArena::total_bytes() const {
-    return bytes + std::uint64_t{brick_count} * k_table_bytes_per_brick;
+    return bytes + std::uint64_t{brick_count} * k_table_bytes_per_brick +
+           (streams_prefixes ? std::uint64_t{brick_count} * k_prefix_table_bytes_per_brick : 0);
+}
+
+std::uint32_t BrickStorage::prefix_first(std::uint64_t offset) {
+    return prefix_first_word(offset);
 }
 
 std::unique_ptr<BrickStorage> make_host_brick_storage(RenderScene& scene, std::size_t model,
@@ -141,6 +182,10 @@ std::string describe(const StreamFrame& f) {
                   tool::format_bytes(f.uploaded_bytes).c_str(), f.gb_per_s(), f.prepare_seconds * 1e3,
                   f.copy_seconds * 1e3, f.evicted, static_cast<unsigned long long>(f.fallback_rays));
     std::string out = buf;
+    if (f.streamed_prefixes)
+        out += "; LOD prefixes: " + std::to_string(f.resident_prefixes) + " resident, " +
+               std::to_string(f.prefixes_uploaded) + " uploaded, " + std::to_string(f.prefixes_evicted) +
+               " evicted";
     if (f.timed_out)
         out += "; " + std::to_string(f.missing) + " requested bricks wait for the next frames (--frame-time)";
     return out;
@@ -154,6 +199,7 @@ struct BrickStream::Model {
     std::uint64_t data_bytes = 0;
     std::uint64_t largest_block = 0;
     std::vector<const unsigned char*> placeholder;  ///< resident table before the storage exists
+    std::vector<std::uint32_t> placeholder_prefix;  ///< and prefix table, with streamed prefixes
     std::unique_ptr<BrickStorage> storage;
     std::unique_ptr<ArenaAllocator> allocator;
     std::vector<std::uint64_t> block_of;   ///< per brick: its block's offset or k_not_resident
@@ -161,7 +207,22 @@ struct BrickStream::Model {
     std::vector<std::uint32_t> used, requested;
     std::uint32_t resident = 0;
     std::uint64_t resident_bytes = 0;  ///< the resident bricks' blocks
+    // LOD prefixes: their nodes in all, the largest one's; streamed (arena.streams_prefixes) in
+    // blocks of the arena: each brick's prefix block (k_not_resident: none) and the last frame
+    // that used it.
+    std::uint64_t prefix_total = 0;
+    std::uint32_t largest_prefix = 0;
+    std::vector<std::uint64_t> prefix_of;
+    std::vector<std::uint64_t> prefix_last_used;
+    std::vector<std::uint32_t> prefix_used;
+    std::uint32_t resident_prefixes = 0;
+    std::uint64_t resident_prefix_bytes = 0;
 
+    bool streams_prefixes() const { return arena.streams_prefixes; }
+    std::uint32_t prefix_size(std::uint32_t b) const { return sections.lod_table[b].node_count; }
+    std::uint64_t prefix_block(std::uint32_t b) const {
+        return round_up_64(prefix_size(b) * k_prefix_node_bytes);
+    }
     void evict(std::uint32_t b) {
         const std::uint64_t bytes = block_bytes(sections.table[b]);
         allocator->release(block_of[b], bytes);
@@ -169,6 +230,18 @@ struct BrickStream::Model {
         block_of[b] = BrickStorage::k_not_resident;
         resident_bytes -= bytes;
         --resident;
+    }
+    /// Evicts brick b's streamed prefix, and its payload with it (a resident payload needs its
+    /// prefix's discs); true when the payload was resident.
+    bool evict_prefix(std::uint32_t b) {
+        const bool payload = block_of[b] != BrickStorage::k_not_resident;
+        if (payload) evict(b);
+        allocator->release(prefix_of[b], prefix_block(b));
+        storage->set_prefix(b, BrickStorage::k_not_resident);
+        prefix_of[b] = BrickStorage::k_not_resident;
+        resident_prefix_bytes -= prefix_block(b);
+        --resident_prefixes;
+        return payload;
     }
 };
 
@@ -199,6 +272,16 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
             m->data_bytes + leaves * sizeof(core::BrickLeafBounds) + (std::uint64_t{bricks} + 1) * 4;
         m_fixed_bytes += std::uint64_t{bricks} * k_table_bytes_per_brick;
         block_minimum += m->largest_block;
+        if (!m->sections.lod_table.empty()) {
+            // Prefixes may stream: the least budget counts the largest one and the prefix tables,
+            // not every prefix (the scene's bytes count them all: taken back out here).
+            m->prefix_total = m->sections.lod_nodes.size();
+            for (const pool::BrickLod& l : m->sections.lod_table)
+                m->largest_prefix = std::max(m->largest_prefix, l.node_count);
+            m_fixed_bytes -= m->prefix_total * k_prefix_node_bytes;
+            block_minimum += round_up_64(std::uint64_t{m->largest_prefix} * k_prefix_node_bytes) +
+                             std::uint64_t{bricks} * k_prefix_table_bytes_per_brick;
+        }
         models.push_back(std::move(m));
     }
     m_minimum_bytes = m_fixed_bytes + block_minimum;
@@ -213,18 +296,51 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         throw Error("memory budget " + tool::format_bytes(options.budget) +
                     " is too small: the bricked scene needs at least " + tool::format_bytes(m_minimum_bytes) +
                     " (top tree, brick table, LOD discs, per-brick tables and other models " +
-                    tool::format_bytes(m_fixed_bytes) + ", plus the largest brick of each bricked model; " +
+                    tool::format_bytes(m_fixed_bytes) +
+                    ", plus the largest brick and LOD prefix of each bricked model; " +
                     tool::format_bytes(m_in_core_bytes) + " holds it all in core)");
+    // The LOD prefixes stay resident (with the top tree) when the budget holds them and, for each
+    // model, they would take at most a quarter of what its arena and prefixes get; else every
+    // model's prefixes stream too, into the same arena as its payloads (a block each), so a far
+    // view's bricks need their prefixes only and the view's demand shares the arena between
+    // prefixes and payloads.
+    std::uint64_t prefix_bytes = 0, tables = 0, largest_blocks = 0, data_total = 0;
+    for (const auto& m : models) {
+        prefix_bytes += m->prefix_total * k_prefix_node_bytes;
+        if (m->prefix_total > 0)
+            tables += std::uint64_t{m->arena.brick_count} * k_prefix_table_bytes_per_brick;
+        largest_blocks += m->largest_block;
+        data_total += m->data_bytes;
+    }
+    const auto share = [&](const Model& m, std::uint64_t spare) {  // of the spare budget, 64-byte steps
+        const double part = data_total > 0 ? static_cast<double>(m.data_bytes) / data_total : 1.0;
+        return static_cast<std::uint64_t>(part * static_cast<double>(spare)) / 64 * 64;
+    };
+    const std::uint64_t resident_fixed = m_fixed_bytes + prefix_bytes;
+    bool stream_prefixes = prefix_bytes > 0 && options.budget < resident_fixed + largest_blocks;
+    for (const auto& m : models)
+        if (!stream_prefixes && m->prefix_total > 0) {
+            const std::uint64_t mine = m->prefix_total * k_prefix_node_bytes;
+            const std::uint64_t arena =
+                m->largest_block + share(*m, options.budget - resident_fixed - largest_blocks);
+            stream_prefixes = mine > (arena + mine) / 4;
+        }
+    m_fixed_bytes += stream_prefixes ? tables : prefix_bytes;
     // The arenas: the budget left after the always-resident part, shared in proportion to the
-    // models' brick data, each at least its largest brick.
-    const std::uint64_t spare = options.budget - m_minimum_bytes;
-    std::uint64_t data_total = 0;
-    for (const auto& m : models) data_total += m->data_bytes;
+    // models' brick data, each at least its largest brick (and, streamed, its largest prefix).
+    const std::uint64_t spare = options.budget - m_fixed_bytes - largest_blocks;
     for (auto& m : models) {
-        const double share = data_total > 0 ? static_cast<double>(m->data_bytes) / data_total : 1.0;
-        const std::uint64_t extra = static_cast<std::uint64_t>(share * static_cast<double>(spare)) / 64 * 64;
-        // At most 64 GiB a model (k_max_arena_bytes): the rest of a larger budget stays unused.
-        m->arena.bytes = std::min<std::uint64_t>(m->largest_block + extra, k_max_arena_bytes);
+        std::uint64_t bytes = m->largest_block + share(*m, spare);
+        std::uint64_t max_arena = k_max_arena_bytes;
+        if (stream_prefixes && m->prefix_total > 0) {
+            m->arena.streams_prefixes = true;
+            max_arena = k_max_prefix_arena_bytes;
+            m->prefix_of.assign(m->arena.brick_count, BrickStorage::k_not_resident);
+            m->prefix_last_used.assign(m->arena.brick_count, 0);
+        }
+        // At most 64 GiB a model (k_max_arena_bytes; 16 GiB with streamed prefixes): the rest of a
+        // larger budget stays unused.
+        m->arena.bytes = std::min<std::uint64_t>(bytes, max_arena);
         m->allocator = std::make_unique<ArenaAllocator>(m->arena.bytes);
         m->block_of.assign(m->arena.brick_count, BrickStorage::k_not_resident);
         m->last_used.assign(m->arena.brick_count, 0);
@@ -235,6 +351,13 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         v.resident = m->placeholder.data();
         v.leaf_bounds = nullptr;
         v.leaf_bounds_first = nullptr;
+        if (m->streams_prefixes()) {  // no prefix in the scene: the storage's arenas hold them
+            m->placeholder_prefix.assign(m->arena.brick_count, core::k_prefix_missing);
+            v.lod_nodes = nullptr;
+            v.lod_discs = nullptr;
+            v.lod_node_count = 0;
+            v.prefix_first = m->placeholder_prefix.data();
+        }
         scene.set_brick_view(m->index, v);
     }
     m_upload = backend.set_scene(scene.view());
@@ -286,33 +409,78 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
     std::vector<Upload> uploads;
     for (auto& mp : m_models) {
         Model& m = *mp;
-        m.storage->take_flags(m.used, m.requested);
-        std::vector<std::uint32_t> missing;
+        m.storage->take_flags(m.used, m.requested, m.prefix_used);
+        const bool prefixes = m.streams_prefixes();
+        // Wanted: streamed prefixes first (with one, a brick's rays may stop in it and need no
+        // payload), then payloads (a brick whose prefix is resident).
+        struct Want {
+            std::uint32_t brick;
+            bool prefix;
+        };
+        std::vector<Want> wanted, payloads;
         for (std::uint32_t b = 0; b < m.arena.brick_count; ++b) {
             if (m.used[b] != 0) {
                 m.last_used[b] = m_frame;
                 ++f.needed;
             }
-            if (m.requested[b] != 0 && m.block_of[b] == BrickStorage::k_not_resident) {
-                missing.push_back(b);
+            if (prefixes && (m.prefix_used[b] != 0 || m.used[b] != 0)) m.prefix_last_used[b] = m_frame;
+            if (m.requested[b] == 0) continue;
+            if (prefixes && m.prefix_of[b] == BrickStorage::k_not_resident) {
+                wanted.push_back(Want{b, true});
+            } else if (m.block_of[b] == BrickStorage::k_not_resident) {
+                payloads.push_back(Want{b, false});
                 ++f.needed;
             }
         }
-        // Eviction candidates: the resident bricks this frame did not use, least recently used first.
-        std::vector<std::uint32_t> victims;
-        for (std::uint32_t b = 0; b < m.arena.brick_count; ++b)
-            if (m.block_of[b] != BrickStorage::k_not_resident && m.last_used[b] < m_frame)
-                victims.push_back(b);
-        std::sort(victims.begin(), victims.end(), [&](std::uint32_t a, std::uint32_t b) {
-            return m.last_used[a] != m.last_used[b] ? m.last_used[a] < m.last_used[b] : a < b;
-        });
+        wanted.insert(wanted.end(), payloads.begin(), payloads.end());
+        if (prefixes) f.streamed_prefixes = true;
+        // Eviction candidates: the blocks this frame did not use, least recently used first, a
+        // payload before its brick's prefix (evicting a prefix evicts its payload with it).
+        struct Victim {
+            std::uint64_t last_used;
+            std::uint32_t brick;
+            bool prefix;
+        };
+        std::vector<Victim> victims;
         std::uint64_t victim_bytes = 0;  // what evicting every candidate left would free
-        for (const std::uint32_t v : victims) victim_bytes += block_bytes(m.sections.table[v]);
+        for (std::uint32_t b = 0; b < m.arena.brick_count; ++b) {
+            if (m.block_of[b] != BrickStorage::k_not_resident && m.last_used[b] < m_frame) {
+                victims.push_back(Victim{m.last_used[b], b, false});
+                victim_bytes += block_bytes(m.sections.table[b]);
+            }
+            if (prefixes && m.prefix_of[b] != BrickStorage::k_not_resident &&
+                m.prefix_last_used[b] < m_frame) {
+                victims.push_back(Victim{m.prefix_last_used[b], b, true});
+                victim_bytes += m.prefix_block(b);
+            }
+        }
+        std::sort(victims.begin(), victims.end(), [](const Victim& a, const Victim& b) {
+            if (a.last_used != b.last_used) return a.last_used < b.last_used;
+            if (a.brick != b.brick) return a.brick < b.brick;
+            return !a.prefix && b.prefix;
+        });
         std::size_t next_victim = 0, taken = 0;
-        for (const std::uint32_t b : missing) {
-            const std::uint64_t size = m.sections.table[b].size;
-            if (!uploads.empty() && size > allowance) break;  // the rest wait for the next frames
-            const std::uint64_t bytes = block_bytes(m.sections.table[b]);
+        const auto evict_next = [&] {  // the next candidate still resident
+            const Victim v = victims[next_victim++];
+            if (!v.prefix) {
+                if (m.block_of[v.brick] == BrickStorage::k_not_resident) return;  // gone with its prefix
+                victim_bytes -= block_bytes(m.sections.table[v.brick]);
+                m.evict(v.brick);
+                ++f.evicted;
+                return;
+            }
+            victim_bytes -= m.prefix_block(v.brick);
+            if (m.block_of[v.brick] != BrickStorage::k_not_resident)  // unused too: counted as a candidate
+                victim_bytes -= block_bytes(m.sections.table[v.brick]);
+            if (m.evict_prefix(v.brick)) ++f.evicted;
+            ++f.prefixes_evicted;
+        };
+        for (const Want& w : wanted) {
+            const std::uint32_t b = w.brick;
+            const std::uint64_t size =
+                w.prefix ? std::uint64_t{m.prefix_size(b)} * k_prefix_node_bytes : m.sections.table[b].size;
+            if ((!uploads.empty() || f.prefixes_uploaded > 0) && size > allowance) break;  // the rest wait
+            const std::uint64_t bytes = w.prefix ? m.prefix_block(b) : block_bytes(m.sections.table[b]);
             std::optional<std::uint64_t> at = m.allocator->allocate(bytes);
             // Evict only when it can make room (fragmentation aside): never for nothing.
             if (!at && m.allocator->free_bytes() + victim_bytes < bytes) {
@@ -320,22 +488,34 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
                 break;
             }
             while (!at && next_victim < victims.size()) {
-                victim_bytes -= block_bytes(m.sections.table[victims[next_victim]]);
-                m.evict(victims[next_victim++]);
-                ++f.evicted;
+                evict_next();
                 at = m.allocator->allocate(bytes);
             }
             if (!at) {
-                f.stalled = true;  // the arena holds only bricks this frame used
+                f.stalled = true;  // the arena holds only blocks this frame used
                 break;
+            }
+            allowance -= std::min(allowance, size);
+            ++taken;
+            if (w.prefix) {  // copied at once: its nodes and discs were checked with the pool's index
+                const pool::BrickLod& l = m.sections.lod_table[b];
+                const auto first = static_cast<std::size_t>(l.first);
+                m.storage->upload_prefix(*at, m.sections.lod_nodes.subspan(first, m.prefix_size(b)),
+                                         m.sections.lod_discs.subspan(first, m.prefix_size(b)));
+                m.storage->set_prefix(b, *at);
+                m.prefix_of[b] = *at;
+                m.prefix_last_used[b] = m_frame;
+                m.resident_prefix_bytes += bytes;
+                ++m.resident_prefixes;
+                ++f.prefixes_uploaded;
+                f.uploaded_bytes += size;
+                continue;
             }
             m.block_of[b] = *at;  // taken now, so a later request of this frame cannot evict it
             m.last_used[b] = m_frame;
-            allowance -= std::min(allowance, size);
             uploads.push_back(Upload{&m, b, *at, {}});
-            ++taken;
         }
-        f.missing += static_cast<std::uint32_t>(missing.size() - taken);
+        f.missing += static_cast<std::uint32_t>(wanted.size() - taken);
     }
     // Each brick checked by its own checksum and its leaf bounds computed from it alone (in
     // parallel; on the device by the CUDA storage), then copied into its block. In rounds of 1, 2,
@@ -404,7 +584,7 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
     }
     const auto commit_start = std::chrono::steady_clock::now();
     for (auto& m : m_models) m->storage->commit();
-    if (!uploads.empty()) {
+    if (!uploads.empty() || f.prefixes_uploaded > 0) {
         const auto end = std::chrono::steady_clock::now();
         f.upload_seconds = std::chrono::duration<double>(end - start).count();
         f.prepare_seconds = prepare;
@@ -415,6 +595,9 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         f.resident_bytes += m->resident_bytes;
         f.resident_bricks += m->resident;
         f.brick_count += m->arena.brick_count;
+        if (!m->streams_prefixes()) continue;
+        f.resident_prefixes += m->resident_prefixes;
+        f.resident_bytes += m->resident_prefix_bytes;
     }
     return f;
 }

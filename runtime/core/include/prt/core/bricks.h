@@ -54,6 +54,15 @@ struct BrickView {
     const std::uint32_t* lod_nodes = nullptr;
     const pool::CompressedSplat* lod_discs = nullptr;
     std::uint32_t lod_node_count = 0;
+    /// Streamed prefixes (rt::BrickStream, when the prefixes do not all fit the budget), or null:
+    /// per brick, where its prefix starts in lod_nodes (then the storage's arena, as words): its
+    /// node_count node words, then as many discs; k_prefix_missing when it is not resident (lod_discs
+    /// unused). Null: every prefix resident at lod_table[b].first of lod_nodes and lod_discs. A
+    /// brick whose payload is resident has its prefix resident too.
+    const std::uint32_t* prefix_first = nullptr;
+    /// Per brick, or null (with prefix_first): set to 1 when a ray's walk entered the brick's
+    /// resident prefix (up to the first missing brick on its way), so it is not evicted.
+    std::uint32_t* prefix_used = nullptr;
     /// Per brick: its payload's address, or null when it is not resident. A null table: every
     /// brick is resident at data + table[b].offset.
     const unsigned char* const* resident = nullptr;
@@ -101,6 +110,9 @@ inline BrickView make_brick_view(const pool::BrickInfo& info, const std::uint32_
                      .inv_root_size = 1.0f / info.root_size,
                      .flags = info.flags};
 }
+
+/// BrickView::prefix_first of a brick whose prefix is not resident.
+inline constexpr std::uint32_t k_prefix_missing = 0xffffffffu;
 
 /// A brick node of the top tree: node type 3, address = brick index.
 PRT_HD PRT_INLINE bool node_is_brick(std::uint32_t node) {
@@ -295,15 +307,31 @@ PRT_HD PRT_INLINE const std::uint32_t* brick_cursor_nodes(const BrickView& v, co
                : v.lod_nodes + cur.lod_first;
 }
 
+/// enter_brick with streamed prefixes (BrickView::prefix_first): the cursor's prefix, flagged used,
+/// or false when it is missing. Out of line: the in-core walk's registers are not spent on it.
+PRT_HD PRT_NOINLINE inline bool enter_streamed_prefix(const BrickView& v, std::uint32_t b, BrickCursor& cur) {
+    const std::uint32_t first = v.prefix_first[b];
+    if (first == k_prefix_missing) return false;
+    cur.lod_first = first;
+    cur.lod_count = v.lod_table[b].node_count;
+    if (v.prefix_used != nullptr && !cur.fell_back) flag_brick(v.prefix_used, b);
+    return true;
+}
+
 /// The walk enters brick b (brick node at `level`): the cursor's brick state, read once. False
-/// when the brick is not resident and has no prefix (the walk then stops at its top-node disc).
+/// when the brick is not resident and has no prefix, or its streamed prefix is missing (the walk
+/// then stops at its top-node disc and requests it).
 PRT_HD PRT_INLINE bool enter_brick(const BrickView& v, std::uint32_t b, std::uint32_t level,
                                    BrickCursor& cur) {
     cur.brick = b;
     cur.lod_first = cur.lod_count = 0;
     if (v.lod_table != nullptr) {
-        cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
-        cur.lod_count = v.lod_table[b].node_count;
+        if (v.prefix_first == nullptr) {
+            cur.lod_first = static_cast<std::uint32_t>(v.lod_table[b].first);
+            cur.lod_count = v.lod_table[b].node_count;
+        } else if (!enter_streamed_prefix(v, b, cur)) {
+            return false;  // its prefix is missing, so is its payload: the brick's top-node disc
+        }
     }
     const unsigned char* payload = brick_payload(v, b);
     cur.payload = payload;
@@ -365,12 +393,16 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     std::uint32_t node = load_node_word(nodes, index);
     // bounded: each pass goes one level down (l < k_fixed_bits) or enters a brick (then its nodes) once
     for (;;) {
+        // The level-of-detail stop: the first node no wider than the footprint that has a disc and
+        // is not empty (an inner node, a brick node of the top tree, a filled leaf of a prefix: a
+        // streamed view then needs no payload where the prefix reaches the footprint's level).
+        if (l >= stop_level && index < with_disc &&
+            (node >> pool::k_node_address_bits) != static_cast<std::uint32_t>(pool::NodeType::empty_leaf)) {
+            cur.stop = in_brick ? BrickCursor::k_prefix_disc : BrickCursor::k_top_disc;
+            cur.stop_node = lod_base + index;
+            break;
+        }
         if (node_is_internal(node)) {
-            if (l >= stop_level && index < with_disc) {
-                cur.stop = in_brick ? BrickCursor::k_prefix_disc : BrickCursor::k_top_disc;
-                cur.stop_node = lod_base + index;
-                break;
-            }
             const std::uint32_t addr = node_addr(node);
             if (l >= k_fixed_bits) return level = l, k_empty_leaf_node;
             if (addr >= count || count - addr < 8u) {
@@ -391,11 +423,6 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
         if (!in_brick && node_is_brick(node)) {
             const std::uint32_t b = node_addr(node);
             if (b >= v.brick_count) return level = l, k_empty_leaf_node;
-            if (l >= stop_level && v.lod != nullptr) {
-                cur.stop = BrickCursor::k_top_disc;
-                cur.stop_node = index;
-                break;
-            }
             if (!enter_brick(v, b, l, cur)) {  // not resident, no prefix: the brick's top-node disc
                 cur.request = true;
                 cur.stop = BrickCursor::k_top_disc;
@@ -422,6 +449,14 @@ PRT_HD PRT_INLINE std::uint32_t descend_bricked(const BrickView& v, const Fixed3
     return node;
 }
 
+/// The prefix disc a descent stopped at in a streamed prefix (its discs follow its node words). Out
+/// of line, as enter_streamed_prefix.
+PRT_HD PRT_NOINLINE inline pool::CompressedSplat streamed_prefix_disc(const BrickView& v,
+                                                                      const BrickCursor& cur) {
+    return reinterpret_cast<const pool::CompressedSplat*>(v.lod_nodes + cur.lod_first +
+                                                          cur.lod_count)[cur.stop_node - cur.lod_first];
+}
+
 /// The disc a descent stopped at (cur.stop) as a one-splat source (its colour rounded to RGB565, as
 /// a brick's); false for an empty node's disc.
 PRT_HD PRT_INLINE bool stop_disc(const BrickView& v, const BrickCursor& cur, LodSplats& out) {
@@ -432,8 +467,13 @@ PRT_HD PRT_INLINE bool stop_disc(const BrickView& v, const BrickCursor& cur, Lod
         out.disc = pool::Splat{l.position, l.radius, l.normal, pool::encode_rgb565(l.color)};
         return true;
     }
-    if (cur.stop_node >= v.lod_node_count) return false;
-    const pool::CompressedSplat c = v.lod_discs[cur.stop_node];
+    pool::CompressedSplat c;
+    if (v.prefix_first == nullptr) {
+        if (cur.stop_node >= v.lod_node_count) return false;
+        c = v.lod_discs[cur.stop_node];
+    } else {
+        c = streamed_prefix_disc(v, cur);
+    }
     if ((c.nr >> 20) == 0u) return false;
     const pool::DecodedSplat d = pool::decode_lod_disc(c, v.lod_table[cur.brick]);
     out.disc = pool::Splat{d.position, d.radius, d.normal, c.color};

@@ -2,18 +2,22 @@
 // level of detail") under a memory budget, the same policy for every backend.
 //
 // Always resident: the top tree, the brick table, the LOD discs and four per-brick tables (the
-// resident table, each brick's first leaf bound, the use and request flags). The rest of the budget
-// is an arena of 64-byte granules; a resident brick takes one block of it: its payload (copied as
-// opaque bytes: table[b].offset, table[b].size) and its leaf bounds (computed at upload from that
-// brick alone). A ray that reaches a brick that is not resident uses its LOD disc and flags it
-// (core bricks.h stopped_at_disc: the first such brick on its way only); rays that need a resident
-// one's payload flag it used (not past a missing one). After each frame: the flags
-// are read, the requested bricks are checked by their own checksum (pool::validate_brick) and
-// uploaded, at most StreamOptions::upload_per_frame bytes per frame and until the frame has taken
-// StreamOptions::frame_seconds, each into the first free block that fits (first fit, free blocks
-// merged), evicting bricks the frame did not use, least recently used first, until one fits; then
-// the resident table is updated for the next frame. When the whole scene fits the budget, every
-// brick is loaded as without streaming (in core).
+// resident table, each brick's first leaf bound, the use and request flags), and the bricks' LOD
+// prefixes when the budget holds them (at most a quarter of each model's arena and prefixes; else
+// they stream, with two more per-brick tables: where each prefix is, its use flag). The rest of the
+// budget is an arena of 64-byte granules; a resident brick takes one block of it: its payload (copied
+// as opaque bytes: table[b].offset, table[b].size) and its leaf bounds (computed at upload from that
+// brick alone); a streamed prefix another (its node words, then its discs), resident whenever its
+// payload is. A ray reaching a brick whose prefix is missing meets the brick's top-node disc and asks
+// for it (the prefix is uploaded first, then, if the ray's stop lies below it, the payload). A ray that
+// reaches a brick that is not resident uses its LOD disc and flags it (core bricks.h stopped_at_disc: the
+// first such brick on its way only); rays that need a resident one's payload flag it used (not past a missing
+// one). After each frame: the flags are read, the requested bricks are checked by their own checksum
+// (pool::validate_brick) and uploaded, at most StreamOptions::upload_per_frame bytes per frame and until the
+// frame has taken StreamOptions::frame_seconds, each into the first free block that fits (first fit, free
+// blocks merged), evicting bricks the frame did not use, least recently used first, until one fits; then the
+// resident table is updated for the next frame. When the whole scene fits the budget, every brick is loaded
+// as without streaming (in core).
 #pragma once
 
 #include <cstdint>
@@ -32,6 +36,9 @@ namespace prt::rt {
 struct BrickArena {
     std::uint32_t brick_count = 0;
     std::uint64_t bytes = 0;  ///< the arena (payloads and their leaf bounds), a multiple of 64
+    /// LOD prefixes streamed into the arena too (a block each: its node words, then its discs),
+    /// with the prefix_first and prefix_used tables; false: every prefix resident in the scene.
+    bool streams_prefixes = false;
     /// Bytes the arena and the per-brick tables take.
     std::uint64_t total_bytes() const;
 };
@@ -53,11 +60,20 @@ public:
     /// Brick b's payload is now at `offset` (k_not_resident: not resident) and its first leaf bound
     /// at index `first_bound`; applied at commit().
     virtual void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) = 0;
+    /// Streamed prefixes (BrickArena::streams_prefixes): copies a brick's LOD prefix (its lod_nodes,
+    /// then its lod_discs) to `offset` (a multiple of 64); set_prefix says brick b's prefix is at
+    /// `offset` (k_not_resident: not resident). Applied at commit().
+    virtual void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
+                               std::span<const pool::CompressedSplat> discs) = 0;
+    virtual void set_prefix(std::uint32_t brick, std::uint64_t offset) = 0;
+    /// core::BrickView::prefix_first of a prefix at `offset` (k_not_resident: core::k_prefix_missing).
+    static std::uint32_t prefix_first(std::uint64_t offset);
     /// Makes the uploads and resident changes visible to the next frame (waits for the copies).
     virtual void commit() = 0;
-    /// After a frame: sets used[b] / requested[b] (brick_count entries each) to the frame's use and
-    /// request flags, and clears the flags for the next frame.
-    virtual void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested) = 0;
+    /// After a frame: sets used[b] / requested[b] / prefix_used[b] (brick_count entries each; the
+    /// last all 0 without streamed prefixes) to the frame's flags, and clears them for the next frame.
+    virtual void take_flags(std::vector<std::uint32_t>& used, std::vector<std::uint32_t>& requested,
+                            std::vector<std::uint32_t>& prefix_used) = 0;
     /// After the backend's set_scene() ran again (BrickStream::set_scene): points the backend's
     /// copy of the model at this storage again. Host storage: nothing to do.
     virtual void reattach() {}
@@ -92,16 +108,47 @@ struct StreamFrame {
     double prepare_seconds = 0;  ///< of which checksums and leaf bounds (host threads)
     double copy_seconds = 0;     ///< of which copies into the storage (and its commit)
     std::uint32_t evicted = 0;
+    /// Streamed LOD prefixes (StreamFrame::streamed_prefixes): resident, uploaded and evicted
+    /// after the frame (a brick's prefix is uploaded before its payload, evicted with it).
+    bool streamed_prefixes = false;
+    std::uint32_t resident_prefixes = 0, prefixes_uploaded = 0, prefixes_evicted = 0;
     std::uint32_t missing = 0;        ///< bricks requested and still not resident after the uploads
     std::uint64_t fallback_rays = 0;  ///< the frame's rays that used a LOD disc (FrameStats::fallbacks)
     /// The frame used no LOD disc: its image equals the in-core render.
     bool converged() const { return fallback_rays == 0; }
+    /// Something was uploaded (bricks or LOD prefixes): the next frame may fall back less.
+    bool progressed() const { return uploaded > 0 || prefixes_uploaded > 0; }
     /// Requests remain and no room could be freed: the arena holds only bricks the frame used (the
     /// budget holds fewer bricks than the view needs).
     bool stalled = false;
     /// Uploads stopped at StreamOptions::frame_seconds, bricks left for the next frames.
     bool timed_out = false;
     double gb_per_s() const { return upload_seconds > 0 ? uploaded_bytes / upload_seconds * 1e-9 : 0.0; }
+};
+
+/// Passes over one still view (prt-play --converge, prt-bench's refinement): more() says whether
+/// another pass may still lower the fallbacks. False once a pass has none (converged), uploaded
+/// nothing (stalled), or k_patience passes in a row went no lower than the fewest so far: the
+/// uploads then only evict blocks the view needs elsewhere (a ray that falls back earlier flags
+/// nothing past that point, so such blocks look unused), the budget holding less than the view
+/// needs.
+class Refinement {
+public:
+    static constexpr std::uint32_t k_patience = 32;
+    bool more(const StreamFrame& f) {
+        if (f.converged()) return false;
+        if (!f.progressed()) return false;
+        if (f.fallback_rays < m_best) {
+            m_best = f.fallback_rays;
+            m_flat = 0;
+            return true;
+        }
+        return ++m_flat < k_patience;
+    }
+
+private:
+    std::uint64_t m_best = ~std::uint64_t{0};
+    std::uint32_t m_flat = 0;
 };
 
 /// The per-frame line: "resident 1.2 MiB (12 of 300 bricks), uploaded 4 bricks (40 KiB, 0.8 GB/s:
@@ -132,7 +179,7 @@ public:
     std::uint64_t minimum_bytes() const { return m_minimum_bytes; }
     /// The always-resident bytes (top trees, tables, LOD discs, per-brick tables, other models).
     std::uint64_t fixed_bytes() const { return m_fixed_bytes; }
-    /// Arena bytes over all bricked models, and bricks.
+    /// Arena bytes over all bricked models (payloads and, where they stream, LOD prefixes), and bricks.
     std::uint64_t arena_bytes() const;
     std::uint32_t brick_count() const;
     /// After a frame rendered with `stats`: reads the flags, uploads requested bricks (evicting
