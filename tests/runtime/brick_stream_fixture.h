@@ -87,8 +87,9 @@ protected:
     struct Terms {
         std::uint64_t fixed = 0, largest = 0, all = 0;
         std::uint32_t bricks = 0;
-        /// LOD prefixes: all of them (16 bytes a node), the largest one's block (rounded up to 64)
-        /// and the two per-brick tables of streamed prefixes.
+        /// LOD prefixes: all of them (16 bytes a node), the largest one's block (its node count in a
+        /// word, then 16 bytes a node, rounded up to 64) and the two per-brick tables of streamed
+        /// prefixes.
         std::uint64_t prefixes = 0, largest_prefix = 0, prefix_tables = 0;
         /// The least budget: prefixes streamed, the largest brick's and prefix's blocks.
         std::uint64_t minimum() const { return fixed - prefixes + prefix_tables + largest + largest_prefix; }
@@ -110,7 +111,7 @@ protected:
         t.prefixes = s.lod_nodes.size() * 16;
         for (const pool::BrickLod& l : s.lod_table)
             t.largest_prefix =
-                std::max<std::uint64_t>(t.largest_prefix, (l.node_count * 16ull + 63) / 64 * 64);
+                std::max<std::uint64_t>(t.largest_prefix, (4 + l.node_count * 16ull + 63) / 64 * 64);
         t.prefix_tables = s.lod_table.empty() ? 0 : std::uint64_t{t.bricks} * 8;
         return t;
     }
@@ -170,6 +171,7 @@ struct Converged {
     std::uint32_t passes = 0;
     std::uint64_t first_fallbacks = 0;
     std::uint32_t evicted = 0, uploaded = 0, prefix_evictions = 0;
+    std::uint32_t prefix_uploads = 0, prefixes_deepened = 0;  ///< coarse parts and whole prefixes
     bool converged = false;
     rt::StreamFrame last;
     rt::FrameStats stats;  ///< the last frame's
@@ -190,6 +192,8 @@ inline Converged converge(rt::RenderScene& rs, rt::Backend& backend, rt::BrickSt
         c.evicted += f.evicted;
         c.uploaded += f.uploaded;
         c.prefix_evictions += f.prefixes_evicted;
+        c.prefix_uploads += f.prefixes_uploaded;
+        c.prefixes_deepened += f.prefixes_deepened;
         c.last = f;
         EXPECT_LE(f.resident_bytes, stream.fixed_bytes() + stream.arena_bytes());
         if (f.converged()) {

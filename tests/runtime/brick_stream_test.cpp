@@ -167,8 +167,9 @@ TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
 
 /// Streamed LOD prefixes: under a budget that cannot hold every prefix with the top tree, the
 /// prefixes stream into the arena with the payloads (a ray reaching a brick whose prefix is missing
-/// meets its top-node disc and asks for the prefix, then, if its stop lies deeper, for the payload);
-/// the view converges to the in-core image with the same stop, byte for byte, and turning the
+/// meets its top-node disc and asks for the prefix's coarse part, then, if its stop lies deeper, for
+/// the whole prefix, then for the payload); the view converges to the in-core image with the same
+/// stop, byte for byte, the far view with coarse parts where its rays stop in them, and turning the
 /// camera evicts prefixes (with their payloads) least recently used first.
 TEST_F(BrickStreamTest, LodPrefixesStreamWhenTheBudgetCannotHoldThem) {
     const Terms t = budget_terms();
@@ -184,11 +185,11 @@ TEST_F(BrickStreamTest, LodPrefixesStreamWhenTheBudgetCannotHoldThem) {
     EXPECT_EQ(stream.fixed_bytes(), t.fixed - t.prefixes + t.prefix_tables) << "no prefix resident";
     EXPECT_EQ(stream.arena_bytes(), t.largest + (budget - stream.fixed_bytes() - t.largest) / 64 * 64)
         << "the arena: the rest of the budget, payloads and prefixes alike";
-    std::uint32_t prefix_evictions = 0;
+    std::uint32_t prefix_evictions = 0, deepened = 0;
     for (const double angle : {-1.0, 0.3, 1.9}) {
         SCOPED_TRACE(::testing::Message() << "view " << angle);
         if (angle >= 0) close_view(rs, angle);
-        const Converged c = converge(rs, *backend, stream, 400, 4.0f);
+        const Converged c = converge(rs, *backend, stream, 800, 4.0f);  // one upload a pass
         ASSERT_TRUE(c.converged) << "after " << c.passes << " passes: " << rt::describe(c.last) << ", needed "
                                  << c.last.needed;
         EXPECT_TRUE(c.last.streamed_prefixes);
@@ -196,12 +197,19 @@ TEST_F(BrickStreamTest, LodPrefixesStreamWhenTheBudgetCannotHoldThem) {
         EXPECT_TRUE(c.image.rgba8 == in_core(angle, nullptr, "cpu", 4.0f).rgba8)
             << "converged: the in-core image with the same stop";
         EXPECT_GT(c.last.resident_prefixes, 0u);
+        if (angle < 0)
+            EXPECT_LT(c.prefixes_deepened, c.prefix_uploads - c.prefixes_deepened)
+                << "the whole sphere: some bricks' rays all stop in their prefix's coarse part";
         prefix_evictions += c.prefix_evictions;
+        deepened += c.prefixes_deepened;
         std::printf(
-            "  view %.1f: converged in %u passes, %u uploads, %u prefixes resident, %u prefix evictions\n",
-            angle, c.passes, c.uploaded, c.last.resident_prefixes, c.prefix_evictions);
+            "  view %.1f: converged in %u passes, %u uploads, %u prefixes resident (%u uploads, %u "
+            "deepened), %u prefix evictions\n",
+            angle, c.passes, c.uploaded, c.last.resident_prefixes, c.prefix_uploads, c.prefixes_deepened,
+            c.prefix_evictions);
     }
     EXPECT_GT(prefix_evictions, 0u) << "three views under a quarter of the bricks evict prefixes";
+    EXPECT_GT(deepened, 0u) << "the close views' rays go below the coarse parts";
 }
 
 /// Level of detail through bounces (render.h lod_cone): a ray leaving a hit starts with the footprint

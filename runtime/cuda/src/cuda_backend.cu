@@ -517,24 +517,24 @@ public:
         core::SceneView scene = m_scene;
         scene.params = req.params;
         core::set_lod_cone(scene.params, req.camera, req.height);
-        zero_counters(
-            w, y0, y1,
-            m_options.cuda_heavy_first && m_options.cuda_persistent &&
-                !(m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0));
-        PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
         // Sampled frames (spp > 1, path tracing: seed 002, 7) run in the megakernel only.
-        if (m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0) {
+        const bool wavefront =
+            m_options.cuda_wavefront && scene.params.spp <= 1 && scene.params.path_tracing == 0;
+        const std::uint32_t order_frame =
+            zero_counters(w, y0, y1, m_options.cuda_heavy_first && m_options.cuda_persistent && !wavefront);
+        PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
+        if (wavefront) {
             render_wavefront(scene, req, w, h, y0, y1);
         } else {
-            render_megakernel(scene, req, w, h, y0, y1);
+            render_megakernel(scene, req, w, h, y0, y1, order_frame);
         }
         PRT_CUDA_CHECK(cudaEventRecord(m_stop, m_stream));
         unsigned long long counters[k_counter_count];
         m_counters.download(counters, k_counter_count, k_counters_at, m_stream);
         OrderSlot used{};  // the sums this frame's order came from
-        if (m_order_frame_now != 0) {
+        if (order_frame != 0) {
             const std::size_t at =
-                reinterpret_cast<unsigned long long*>(order_slot(m_order_frame_now)) - m_counters.data();
+                reinterpret_cast<unsigned long long*>(order_slot(order_frame)) - m_counters.data();
             m_counters.download(reinterpret_cast<unsigned long long*>(&used), k_slot_words, at, m_stream);
         }
         if (req.download) {
@@ -608,12 +608,12 @@ private:
     /// item order (ItemOrder) to this frame: the same shape as the last ordered frame continues
     /// from its heavy list and sums (its slot kept, the other zeroed with the counters, one memset);
     /// a new shape starts without (both slots zeroed, and the frame number moved past every stamp).
-    void zero_counters(std::uint32_t w, std::uint32_t y0, std::uint32_t y1, bool ordered) {
+    /// Returns the frame's order number (0: not ordered).
+    std::uint32_t zero_counters(std::uint32_t w, std::uint32_t y0, std::uint32_t y1, bool ordered) {
         if (!ordered) {
-            m_order_frame_now = 0;
             PRT_CUDA_CHECK(cudaMemsetAsync(m_counters.data() + k_counters_at, 0,
                                            (k_counter_count + 1) * sizeof(unsigned long long), m_stream));
-            return;
+            return 0;
         }
         const std::uint32_t items = item_count(w, y0, y1);
         const std::array<std::uint32_t, 4> shape{w, y0, y1, items};
@@ -634,7 +634,7 @@ private:
                                            (k_slot_words + k_counter_count + 1) * sizeof(unsigned long long),
                                            m_stream));
         }
-        m_order_frame_now = m_order_frame;
+        return m_order_frame;
     }
 
     /// The order slot (OrderSlot) of frame `frame`'s sums.
@@ -643,8 +643,9 @@ private:
                                             (frame % 2 == 0 ? 0 : k_counters_at + k_counter_count + 1));
     }
 
+    /// The megakernel over rows [y0, y1); `order_frame`: zero_counters()'s frame number.
     void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
-                           std::uint32_t h, std::uint32_t y0, std::uint32_t y1) {
+                           std::uint32_t h, std::uint32_t y0, std::uint32_t y1, std::uint32_t order_frame) {
         const bool z = !m_options.cuda_linear_mapping;
         const std::uint32_t tiles_x = (w + k_tile - 1) / k_tile;
         const std::uint32_t items = item_count(w, y0, y1);
@@ -658,8 +659,8 @@ private:
                 // (zeroed with them every frame).
                 blocks = std::min<std::uint32_t>(item_blocks, resident_blocks(kernel) * m_sm_count);
                 queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count);
-                if (m_order_frame_now != 0) {
-                    const std::uint32_t f = m_order_frame_now;
+                if (order_frame != 0) {
+                    const std::uint32_t f = order_frame;
                     order.heavy = m_order_heavy[f % 2].data();
                     order.next_heavy = m_order_heavy[(f + 1) % 2].data();
                     order.stamp = m_order_stamp.data();
@@ -738,7 +739,6 @@ private:
     DeviceBuffer<std::uint32_t> m_order_stamp;           ///< ItemOrder::stamp
     std::array<std::uint32_t, 4> m_order_shape{};        ///< width, rows, items of the last ordered frame
     std::uint32_t m_order_frame = 0;                     ///< the last ordered frame's number
-    std::uint32_t m_order_frame_now = 0;                 ///< this frame's (0: not ordered)
     DeviceBuffer<float> m_rgb;
     DeviceBuffer<std::uint32_t> m_rgba;
     DeviceBuffer<WaveRay> m_queue[2];

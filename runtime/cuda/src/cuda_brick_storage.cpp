@@ -91,9 +91,11 @@ public:
     }
     void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
                        std::span<const pool::CompressedSplat> discs) override {
-        stage(m_arena.data() + offset, reinterpret_cast<const unsigned char*>(nodes.data()),
+        const auto count = static_cast<std::uint32_t>(nodes.size());  // staged (copied) at once
+        stage(m_arena.data() + offset, reinterpret_cast<const unsigned char*>(&count), sizeof(count));
+        stage(m_arena.data() + offset + sizeof(count), reinterpret_cast<const unsigned char*>(nodes.data()),
               nodes.size_bytes());
-        stage(m_arena.data() + offset + nodes.size_bytes(),
+        stage(m_arena.data() + offset + sizeof(count) + nodes.size_bytes(),
               reinterpret_cast<const unsigned char*>(discs.data()), discs.size_bytes());
     }
     void set_prefix(std::uint32_t brick, std::uint64_t offset) override {

@@ -32,15 +32,39 @@ constexpr std::uint64_t k_prefix_table_bytes_per_brick = 2 * sizeof(std::uint32_
 /// with 32 bits.
 constexpr std::uint64_t k_max_prefix_arena_bytes = (std::uint64_t{1} << 32) * sizeof(std::uint32_t) - 64;
 
-/// BrickView::prefix_first of a prefix block at `offset` of the arena (k_not_resident: missing).
+/// BrickView::prefix_first of a prefix block at `offset` of the arena (k_not_resident: missing):
+/// its node words, after its node count.
 std::uint32_t prefix_first_word(std::uint64_t offset) {
     return offset == BrickStorage::k_not_resident
                ? core::k_prefix_missing
-               : static_cast<std::uint32_t>(offset / sizeof(std::uint32_t));
+               : static_cast<std::uint32_t>(offset / sizeof(std::uint32_t) + 1);
 }
 
 std::uint64_t round_up_64(std::uint64_t n) {
     return (n + 63) / 64 * 64;
+}
+
+/// The block of a streamed prefix of `nodes` nodes: its node count, node words and discs.
+std::uint64_t prefix_block_bytes(std::uint32_t nodes) {
+    return round_up_64(sizeof(std::uint32_t) + std::uint64_t{nodes} * k_prefix_node_bytes);
+}
+
+/// The coarse part of a brick's LOD prefix (its node words, breadth first): the nodes above its
+/// deepest level, or all of them when it has one level. A breadth-first prefix of the brick again,
+/// so the walk needs nothing else to use it: an inner node of its last level addresses children
+/// past its end, where a ray that must go deeper falls back and asks for the whole prefix.
+std::uint32_t coarse_prefix_nodes(std::span<const std::uint32_t> nodes) {
+    const auto count = static_cast<std::uint32_t>(nodes.size());
+    std::uint32_t begin = 0, end = std::min<std::uint32_t>(count, 1);  // the level [begin, end)
+    while (end < count) {
+        std::uint64_t next = end;
+        for (std::uint32_t i = begin; i < end; ++i)
+            if (core::node_is_internal(nodes[i])) next += 8;
+        if (next <= end) break;  // no inner node: nothing deeper (a corrupt count)
+        begin = end;
+        end = static_cast<std::uint32_t>(std::min<std::uint64_t>(next, count));
+    }
+    return begin > 0 ? begin : count;
 }
 
 /// Host storage: one 64-byte aligned arena in host memory.
@@ -82,8 +106,11 @@ public:
     }
     void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
                        std::span<const pool::CompressedSplat> discs) override {
-        std::memcpy(m_arena.get() + offset, nodes.data(), nodes.size_bytes());
-        std::memcpy(m_arena.get() + offset + nodes.size_bytes(), discs.data(), discs.size_bytes());
+        const auto count = static_cast<std::uint32_t>(nodes.size());
+        unsigned char* at = m_arena.get() + offset;
+        std::memcpy(at, &count, sizeof(count));
+        std::memcpy(at + sizeof(count), nodes.data(), nodes.size_bytes());
+        std::memcpy(at + sizeof(count) + nodes.size_bytes(), discs.data(), discs.size_bytes());
     }
     void set_prefix(std::uint32_t brick, std::uint64_t offset) override {
         m_prefix_first[brick] = prefix_first_word(offset);
@@ -168,6 +195,10 @@ std::uint32_t BrickStorage::prefix_first(std::uint64_t offset) {
     return prefix_first_word(offset);
 }
 
+std::uint64_t BrickStorage::prefix_bytes(std::uint32_t nodes) {
+    return sizeof(std::uint32_t) + std::uint64_t{nodes} * k_prefix_node_bytes;
+}
+
 std::unique_ptr<BrickStorage> make_host_brick_storage(RenderScene& scene, std::size_t model,
                                                       const BrickArena& arena) {
     return std::make_unique<HostBrickStorage>(scene, model, arena);
@@ -184,8 +215,8 @@ std::string describe(const StreamFrame& f) {
     std::string out = buf;
     if (f.streamed_prefixes)
         out += "; LOD prefixes: " + std::to_string(f.resident_prefixes) + " resident, " +
-               std::to_string(f.prefixes_uploaded) + " uploaded, " + std::to_string(f.prefixes_evicted) +
-               " evicted";
+               std::to_string(f.prefixes_uploaded) + " uploaded (" + std::to_string(f.prefixes_deepened) +
+               " deepened), " + std::to_string(f.prefixes_evicted) + " evicted";
     if (f.timed_out)
         out += "; " + std::to_string(f.missing) + " requested bricks wait for the next frames (--frame-time)";
     return out;
@@ -208,11 +239,12 @@ struct BrickStream::Model {
     std::uint32_t resident = 0;
     std::uint64_t resident_bytes = 0;  ///< the resident bricks' blocks
     // LOD prefixes: their nodes in all, the largest one's; streamed (arena.streams_prefixes) in
-    // blocks of the arena: each brick's prefix block (k_not_resident: none) and the last frame
-    // that used it.
+    // blocks of the arena: each brick's prefix block (k_not_resident: none), how many of its nodes
+    // it holds (its coarse part or all), the coarse part's size, and the last frame that used it.
     std::uint64_t prefix_total = 0;
     std::uint32_t largest_prefix = 0;
     std::vector<std::uint64_t> prefix_of;
+    std::vector<std::uint32_t> prefix_nodes, coarse_nodes;
     std::vector<std::uint64_t> prefix_last_used;
     std::vector<std::uint32_t> prefix_used;
     std::uint32_t resident_prefixes = 0;
@@ -220,9 +252,8 @@ struct BrickStream::Model {
 
     bool streams_prefixes() const { return arena.streams_prefixes; }
     std::uint32_t prefix_size(std::uint32_t b) const { return sections.lod_table[b].node_count; }
-    std::uint64_t prefix_block(std::uint32_t b) const {
-        return round_up_64(prefix_size(b) * k_prefix_node_bytes);
-    }
+    /// Brick b's resident prefix block.
+    std::uint64_t prefix_block(std::uint32_t b) const { return prefix_block_bytes(prefix_nodes[b]); }
     void evict(std::uint32_t b) {
         const std::uint64_t bytes = block_bytes(sections.table[b]);
         allocator->release(block_of[b], bytes);
@@ -240,6 +271,7 @@ struct BrickStream::Model {
         storage->set_prefix(b, BrickStorage::k_not_resident);
         prefix_of[b] = BrickStorage::k_not_resident;
         resident_prefix_bytes -= prefix_block(b);
+        prefix_nodes[b] = 0;
         --resident_prefixes;
         return payload;
     }
@@ -279,7 +311,7 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
             for (const pool::BrickLod& l : m->sections.lod_table)
                 m->largest_prefix = std::max(m->largest_prefix, l.node_count);
             m_fixed_bytes -= m->prefix_total * k_prefix_node_bytes;
-            block_minimum += round_up_64(std::uint64_t{m->largest_prefix} * k_prefix_node_bytes) +
+            block_minimum += prefix_block_bytes(m->largest_prefix) +
                              std::uint64_t{bricks} * k_prefix_table_bytes_per_brick;
         }
         models.push_back(std::move(m));
@@ -336,6 +368,13 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
             m->arena.streams_prefixes = true;
             max_arena = k_max_prefix_arena_bytes;
             m->prefix_of.assign(m->arena.brick_count, BrickStorage::k_not_resident);
+            m->prefix_nodes.assign(m->arena.brick_count, 0);
+            m->coarse_nodes.resize(m->arena.brick_count);
+            for (std::uint32_t b = 0; b < m->arena.brick_count; ++b) {
+                const pool::BrickLod& l = m->sections.lod_table[b];
+                m->coarse_nodes[b] = coarse_prefix_nodes(
+                    m->sections.lod_nodes.subspan(static_cast<std::size_t>(l.first), l.node_count));
+            }
             m->prefix_last_used.assign(m->arena.brick_count, 0);
         }
         // At most 64 GiB a model (k_max_arena_bytes; 16 GiB with streamed prefixes): the rest of a
@@ -412,12 +451,15 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         m.storage->take_flags(m.used, m.requested, m.prefix_used);
         const bool prefixes = m.streams_prefixes();
         // Wanted: streamed prefixes first (with one, a brick's rays may stop in it and need no
-        // payload), then payloads (a brick whose prefix is resident).
+        // payload): missing ones' coarse parts (so a view whose demand exceeds the arena fits
+        // more of it: only bricks whose rays go deeper take their whole prefix, a pass later),
+        // then whole prefixes where rays went below a coarse part; then payloads (a brick whose
+        // whole prefix is resident).
         struct Want {
             std::uint32_t brick;
-            bool prefix;
+            std::uint32_t prefix_nodes;  // the prefix nodes to upload; 0: the payload
         };
-        std::vector<Want> wanted, payloads;
+        std::vector<Want> wanted, deeper, payloads;
         for (std::uint32_t b = 0; b < m.arena.brick_count; ++b) {
             if (m.used[b] != 0) {
                 m.last_used[b] = m_frame;
@@ -426,12 +468,15 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             if (prefixes && (m.prefix_used[b] != 0 || m.used[b] != 0)) m.prefix_last_used[b] = m_frame;
             if (m.requested[b] == 0) continue;
             if (prefixes && m.prefix_of[b] == BrickStorage::k_not_resident) {
-                wanted.push_back(Want{b, true});
+                wanted.push_back(Want{b, m.coarse_nodes[b]});
+            } else if (prefixes && m.prefix_nodes[b] < m.prefix_size(b)) {
+                deeper.push_back(Want{b, m.prefix_size(b)});
             } else if (m.block_of[b] == BrickStorage::k_not_resident) {
-                payloads.push_back(Want{b, false});
+                payloads.push_back(Want{b, 0});
                 ++f.needed;
             }
         }
+        wanted.insert(wanted.end(), deeper.begin(), deeper.end());
         wanted.insert(wanted.end(), payloads.begin(), payloads.end());
         if (prefixes) f.streamed_prefixes = true;
         // Eviction candidates: the blocks this frame did not use, least recently used first, a
@@ -460,8 +505,9 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             return !a.prefix && b.prefix;
         });
         std::size_t next_victim = 0, taken = 0;
-        const auto evict_next = [&] {  // the next candidate still resident
+        const auto evict_next = [&](std::uint32_t keep) {  // the next candidate still resident
             const Victim v = victims[next_victim++];
+            if (v.prefix && v.brick == keep) return;  // the prefix being deepened (used: never a candidate)
             if (!v.prefix) {
                 if (m.block_of[v.brick] == BrickStorage::k_not_resident) return;  // gone with its prefix
                 victim_bytes -= block_bytes(m.sections.table[v.brick]);
@@ -477,18 +523,29 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
         };
         for (const Want& w : wanted) {
             const std::uint32_t b = w.brick;
+            const bool prefix = w.prefix_nodes > 0;
             const std::uint64_t size =
-                w.prefix ? std::uint64_t{m.prefix_size(b)} * k_prefix_node_bytes : m.sections.table[b].size;
+                prefix ? BrickStorage::prefix_bytes(w.prefix_nodes) : m.sections.table[b].size;
             if ((!uploads.empty() || f.prefixes_uploaded > 0) && size > allowance) break;  // the rest wait
-            const std::uint64_t bytes = w.prefix ? m.prefix_block(b) : block_bytes(m.sections.table[b]);
+            const std::uint64_t bytes =
+                prefix ? prefix_block_bytes(w.prefix_nodes) : block_bytes(m.sections.table[b]);
             std::optional<std::uint64_t> at = m.allocator->allocate(bytes);
+            // A prefix deepened gives its coarse block back if nothing else makes room (a budget
+            // near the least one holds the largest prefix, not it and its coarse part).
+            const std::uint64_t own =
+                prefix && m.prefix_of[b] != BrickStorage::k_not_resident ? m.prefix_block(b) : 0;
             // Evict only when it can make room (fragmentation aside): never for nothing.
-            if (!at && m.allocator->free_bytes() + victim_bytes < bytes) {
+            if (!at && m.allocator->free_bytes() + victim_bytes + own < bytes) {
                 f.stalled = true;
                 break;
             }
             while (!at && next_victim < victims.size()) {
-                evict_next();
+                evict_next(b);
+                at = m.allocator->allocate(bytes);
+            }
+            if (!at && own > 0) {
+                m.evict_prefix(b);
+                ++f.prefixes_evicted;
                 at = m.allocator->allocate(bytes);
             }
             if (!at) {
@@ -497,16 +554,22 @@ StreamFrame BrickStream::after_frame(const FrameStats& stats) {
             }
             allowance -= std::min(allowance, size);
             ++taken;
-            if (w.prefix) {  // copied at once: its nodes and discs were checked with the pool's index
-                const pool::BrickLod& l = m.sections.lod_table[b];
-                const auto first = static_cast<std::size_t>(l.first);
-                m.storage->upload_prefix(*at, m.sections.lod_nodes.subspan(first, m.prefix_size(b)),
-                                         m.sections.lod_discs.subspan(first, m.prefix_size(b)));
+            if (prefix) {  // copied at once: its nodes and discs were checked with the pool's index
+                const auto first = static_cast<std::size_t>(m.sections.lod_table[b].first);
+                m.storage->upload_prefix(*at, m.sections.lod_nodes.subspan(first, w.prefix_nodes),
+                                         m.sections.lod_discs.subspan(first, w.prefix_nodes));
                 m.storage->set_prefix(b, *at);
+                if (m.prefix_of[b] != BrickStorage::k_not_resident) {  // deepened: the coarse block goes
+                    m.allocator->release(m.prefix_of[b], m.prefix_block(b));
+                    m.resident_prefix_bytes -= m.prefix_block(b);
+                    ++f.prefixes_deepened;
+                } else {
+                    ++m.resident_prefixes;
+                }
                 m.prefix_of[b] = *at;
+                m.prefix_nodes[b] = w.prefix_nodes;
                 m.prefix_last_used[b] = m_frame;
                 m.resident_prefix_bytes += bytes;
-                ++m.resident_prefixes;
                 ++f.prefixes_uploaded;
                 f.uploaded_bytes += size;
                 continue;

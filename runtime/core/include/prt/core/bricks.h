@@ -55,10 +55,12 @@ struct BrickView {
     const pool::CompressedSplat* lod_discs = nullptr;
     std::uint32_t lod_node_count = 0;
     /// Streamed prefixes (rt::BrickStream, when the prefixes do not all fit the budget), or null:
-    /// per brick, where its prefix starts in lod_nodes (then the storage's arena, as words): its
-    /// node_count node words, then as many discs; k_prefix_missing when it is not resident (lod_discs
-    /// unused). Null: every prefix resident at lod_table[b].first of lod_nodes and lod_discs. A
-    /// brick whose payload is resident has its prefix resident too.
+    /// per brick, where its resident prefix's node words start in lod_nodes (then the storage's
+    /// arena, as words): the word before holds how many (K: the whole prefix, lod_table[b].node_count,
+    /// or its coarse part, the breadth-first levels above its deepest), then K node words, then K
+    /// discs; k_prefix_missing when it is not resident (lod_discs unused). Null: every prefix
+    /// resident at lod_table[b].first of lod_nodes and lod_discs. A brick whose payload is resident
+    /// has its whole prefix resident too (so where a ray stops never depends on residency).
     const std::uint32_t* prefix_first = nullptr;
     /// Per brick, or null (with prefix_first): set to 1 when a ray's walk entered the brick's
     /// resident prefix (up to the first missing brick on its way), so it is not evicted.
@@ -313,7 +315,7 @@ PRT_HD PRT_NOINLINE inline bool enter_streamed_prefix(const BrickView& v, std::u
     const std::uint32_t first = v.prefix_first[b];
     if (first == k_prefix_missing) return false;
     cur.lod_first = first;
-    cur.lod_count = v.lod_table[b].node_count;
+    cur.lod_count = v.lod_nodes[first - 1];  // the whole prefix or its coarse part
     if (v.prefix_used != nullptr && !cur.fell_back) flag_brick(v.prefix_used, b);
     return true;
 }

@@ -60,14 +60,18 @@ public:
     /// Brick b's payload is now at `offset` (k_not_resident: not resident) and its first leaf bound
     /// at index `first_bound`; applied at commit().
     virtual void set_resident(std::uint32_t brick, std::uint64_t offset, std::uint32_t first_bound) = 0;
-    /// Streamed prefixes (BrickArena::streams_prefixes): copies a brick's LOD prefix (its lod_nodes,
-    /// then its lod_discs) to `offset` (a multiple of 64); set_prefix says brick b's prefix is at
-    /// `offset` (k_not_resident: not resident). Applied at commit().
+    /// Streamed prefixes (BrickArena::streams_prefixes): copies the first K = nodes.size() nodes of
+    /// a brick's LOD prefix to `offset` (a multiple of 64) as core::BrickView::prefix_first reads
+    /// them: K as a word, the K node words, then their K discs (prefix_block_bytes(K) in all);
+    /// set_prefix says brick b's prefix is at `offset` (k_not_resident: not resident). Applied at
+    /// commit().
     virtual void upload_prefix(std::uint64_t offset, std::span<const std::uint32_t> nodes,
                                std::span<const pool::CompressedSplat> discs) = 0;
     virtual void set_prefix(std::uint32_t brick, std::uint64_t offset) = 0;
     /// core::BrickView::prefix_first of a prefix at `offset` (k_not_resident: core::k_prefix_missing).
     static std::uint32_t prefix_first(std::uint64_t offset);
+    /// The bytes upload_prefix writes for K prefix nodes.
+    static std::uint64_t prefix_bytes(std::uint32_t nodes);
     /// Makes the uploads and resident changes visible to the next frame (waits for the copies).
     virtual void commit() = 0;
     /// After a frame: sets used[b] / requested[b] / prefix_used[b] (brick_count entries each; the
@@ -109,9 +113,12 @@ struct StreamFrame {
     double copy_seconds = 0;     ///< of which copies into the storage (and its commit)
     std::uint32_t evicted = 0;
     /// Streamed LOD prefixes (StreamFrame::streamed_prefixes): resident, uploaded and evicted
-    /// after the frame (a brick's prefix is uploaded before its payload, evicted with it).
+    /// after the frame (a brick's prefix is uploaded before its payload, evicted with it). A
+    /// prefix first streams its coarse part (its levels above the deepest); a ray that needs more
+    /// has it deepened (prefixes_deepened, counted in prefixes_uploaded too: the whole prefix in a
+    /// new block), and only a brick whose whole prefix is resident has its payload uploaded.
     bool streamed_prefixes = false;
-    std::uint32_t resident_prefixes = 0, prefixes_uploaded = 0, prefixes_evicted = 0;
+    std::uint32_t resident_prefixes = 0, prefixes_uploaded = 0, prefixes_deepened = 0, prefixes_evicted = 0;
     std::uint32_t missing = 0;        ///< bricks requested and still not resident after the uploads
     std::uint64_t fallback_rays = 0;  ///< the frame's rays that used a LOD disc (FrameStats::fallbacks)
     /// The frame used no LOD disc: its image equals the in-core render.
