@@ -170,16 +170,27 @@ TEST_F(BrickStreamTest, LevelOfDetailConvergesUnderABudgetThatStallsWithoutIt) {
 /// meets its top-node disc and asks for the prefix's coarse part, then, if its stop lies deeper, for
 /// the whole prefix, then for the payload); the view converges to the in-core image with the same
 /// stop, byte for byte, the far view with coarse parts where its rays stop in them, and turning the
-/// camera evicts prefixes (with their payloads) least recently used first.
+/// camera evicts prefixes (with their payloads) least recently used first. They stream by default
+/// where they would take more than half of the arena and prefixes, else on request
+/// (StreamOptions::stream_prefixes: this fixture's views need an arena larger than its prefixes).
 TEST_F(BrickStreamTest, LodPrefixesStreamWhenTheBudgetCannotHoldThem) {
     const Terms t = budget_terms();
     ASSERT_GT(t.prefixes, 0u) << "the fixture's pool has LOD prefixes";
-    // Resident, the prefixes would take more than a quarter of the arena and prefixes (tested:
-    // fixed_bytes() holds none).
-    const std::uint64_t budget = t.minimum() + t.all * 3 / 10;
     auto backend = cpu::make_cpu_backend(2);
+    {  // the default: resident when they take at most half of the arena and prefixes
+        rt::RenderScene small = deferred(), ample = deferred();
+        const rt::BrickStream streams(small, *backend,
+                                      rt::StreamOptions{.budget = t.fixed + t.largest + t.prefixes / 2});
+        EXPECT_EQ(streams.fixed_bytes(), t.fixed - t.prefixes + t.prefix_tables)
+            << "more than half: streamed";
+        const rt::BrickStream resident(ample, *backend,
+                                       rt::StreamOptions{.budget = t.fixed + t.largest + t.prefixes});
+        EXPECT_EQ(resident.fixed_bytes(), t.fixed) << "half: resident";
+    }
+    const std::uint64_t budget = t.minimum() + t.all * 3 / 10;
     rt::RenderScene rs = deferred();
-    rt::BrickStream stream(rs, *backend, rt::StreamOptions{.budget = budget, .upload_per_frame = 1});
+    rt::BrickStream stream(
+        rs, *backend, rt::StreamOptions{.budget = budget, .upload_per_frame = 1, .stream_prefixes = true});
     ASSERT_TRUE(stream.streaming());
     EXPECT_EQ(stream.minimum_bytes(), t.minimum());
     EXPECT_EQ(stream.fixed_bytes(), t.fixed - t.prefixes + t.prefix_tables) << "no prefix resident";

@@ -332,7 +332,9 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
                     ", plus the largest brick and LOD prefix of each bricked model; " +
                     tool::format_bytes(m_in_core_bytes) + " holds it all in core)");
     // The LOD prefixes stay resident (with the top tree) when the budget holds them and, for each
-    // model, they would take at most a quarter of what its arena and prefixes get; else every
+    // model, they would take at most half of what its arena and prefixes get (a quarter until
+    // 2026-12-04: the 500M room under an eighth of its pool then streamed its 313 MiB of prefixes,
+    // and its orbit took 17 passes a frame against 6); else every
     // model's prefixes stream too, into the same arena as its payloads (a block each), so a far
     // view's bricks need their prefixes only and the view's demand shares the arena between
     // prefixes and payloads.
@@ -349,13 +351,14 @@ BrickStream::BrickStream(RenderScene& scene, Backend& backend, const StreamOptio
         return static_cast<std::uint64_t>(part * static_cast<double>(spare)) / 64 * 64;
     };
     const std::uint64_t resident_fixed = m_fixed_bytes + prefix_bytes;
-    bool stream_prefixes = prefix_bytes > 0 && options.budget < resident_fixed + largest_blocks;
+    bool stream_prefixes =
+        prefix_bytes > 0 && (options.stream_prefixes || options.budget < resident_fixed + largest_blocks);
     for (const auto& m : models)
         if (!stream_prefixes && m->prefix_total > 0) {
             const std::uint64_t mine = m->prefix_total * k_prefix_node_bytes;
             const std::uint64_t arena =
                 m->largest_block + share(*m, options.budget - resident_fixed - largest_blocks);
-            stream_prefixes = mine > (arena + mine) / 4;
+            stream_prefixes = mine > arena;  // more than half
         }
     m_fixed_bytes += stream_prefixes ? tables : prefix_bytes;
     // The arenas: the budget left after the always-resident part, shared in proportion to the

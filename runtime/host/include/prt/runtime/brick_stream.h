@@ -3,7 +3,7 @@
 //
 // Always resident: the top tree, the brick table, the LOD discs and four per-brick tables (the
 // resident table, each brick's first leaf bound, the use and request flags), and the bricks' LOD
-// prefixes when the budget holds them (at most a quarter of each model's arena and prefixes; else
+// prefixes when the budget holds them (at most half of each model's arena and prefixes; else
 // they stream, with two more per-brick tables: where each prefix is, its use flag). The rest of the
 // budget is an arena of 64-byte granules; a resident brick takes one block of it: its payload (copied
 // as opaque bytes: table[b].offset, table[b].size) and its leaf bounds (computed at upload from that
@@ -98,6 +98,11 @@ struct StreamOptions {
     /// has taken this long, or a quarter of the render's time after the render where that is later
     /// (at least one brick is uploaded); 0: no time limit.
     double frame_seconds = 0;
+    /// Stream the LOD prefixes even where the budget would keep them resident (the default keeps
+    /// them resident when they fit and take at most half of a model's arena and prefixes): for a
+    /// scene whose views are far, so their rays stop in prefixes and want the room for payloads
+    /// nearer.
+    bool stream_prefixes = false;
 };
 
 /// What streaming did after one frame.
