@@ -499,6 +499,7 @@ public:
         m_surface_mask = mask;
         m_secondary_materials = core::secondary_materials(host.materials, host.material_count);
         m_scene = m_device_scene.view();
+        warm_megakernels();
         return stats;
     }
 
@@ -641,6 +642,30 @@ private:
     OrderSlot* order_slot(std::uint32_t frame) {
         return reinterpret_cast<OrderSlot*>(m_counters.data() +
                                             (frame % 2 == 0 ? 0 : k_counters_at + k_counter_count + 1));
+    }
+
+    /// Launches the scene's Whitted megakernels (with and without secondary rays) once with no
+    /// items, so that the first frame does not pay for their first launch: CUDA loads a kernel's
+    /// code when it first runs (lazy module loading, the default since CUDA 12.2) and sizes the
+    /// local memory its stack frame needs then. Measured on an H200 (the 500M room under an eighth
+    /// of its pool, preprocess/bench/results/h200-2026-12-04-issue19-timed-order, u2.txt): the
+    /// orbit's first pass rendered in 14 ms with this, 44-72 ms without (the next pass: 3-4 ms).
+    void warm_megakernels() {
+        if (m_options.cuda_wavefront) return;
+        for (const bool secondary : {false, true}) {
+            const Megakernel& k =
+                find_megakernel(m_surface_mask, false, secondary, m_options.cuda_min_blocks);
+            const RenderKernel kernel = m_options.cuda_linear_mapping ? k.linear : k.zorder;
+            const std::uint32_t blocks = m_options.cuda_persistent ? resident_blocks(kernel) * m_sm_count : 1;
+            unsigned int* queue =
+                m_options.cuda_persistent
+                    ? reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count)
+                    : nullptr;
+            launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, m_scene,
+                          core::PinholeCamera{}, 1u, 1u, 0u, 0u, m_rgb.data(), m_rgba.data(),
+                          m_counters.data() + k_counters_at, queue, 0u, 1u, ItemOrder{});
+        }
+        PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream));
     }
 
     /// The megakernel over rows [y0, y1); `order_frame`: zero_counters()'s frame number.
