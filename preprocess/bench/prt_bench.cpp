@@ -151,11 +151,13 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
     }
     std::vector<double> ms, wall_ms;
     rt::FrameStats last;
+    std::vector<std::uint64_t> heavy_items;  // per timed frame: items the queue handed out first
     tool::Progress progress("prt-bench: " + sc.name, o.frames, common.quiet);
     for (std::uint32_t i = 0; i < o.frames; ++i) {
         turn(o.warmup + i);
         last = backend.render(req, image);
         stream.after_frame(last);  // streamed bricks: uploads between frames are not timed
+        heavy_items.push_back(last.heavy_first);
         // CUDA: kernel time from events; CPU and hybrid: the frame's wall time.
         ms.push_back(backend.name() == "cuda" ? last.device_ms : last.seconds * 1e3);
         wall_ms.push_back(last.seconds * 1e3);  // every backend: to compare cuda with hybrid
@@ -185,6 +187,10 @@ rt::FrameStats time_scenario(const Options& o, const tool::CommonOptions& common
                       {"shadow_grays_per_s", last.shadow / (med * 1e-3) * 1e-9},
                       {"secondary_grays_per_s", last.secondary / (med * 1e-3) * 1e-9},
                       {"heavy_first_items", last.heavy_first},
+                      {"heavy_first_frames", std::count_if(heavy_items.begin(), heavy_items.end(),
+                                                           [](std::uint64_t n) { return n != 0; })},
+                      {"frames_ms", ms},
+                      {"frames_heavy_first_items", heavy_items},
                       {"leaves_per_ray", last.rays() ? double(last.leaves) / last.rays() : 0.0},
                       {"culled_leaves_per_ray", last.rays() ? double(last.culled) / last.rays() : 0.0},
                       {"splat_tests_per_ray", last.rays() ? double(last.splat_tests) / last.rays() : 0.0},

@@ -3,11 +3,13 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <initializer_list>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "prt/runtime/backend.h"
 #include "prt/runtime/image.h"
@@ -302,6 +304,13 @@ TEST_F(PlayerTest, BenchWritesJsonWithEveryScenario) {
     for (const auto& s : j["scenarios"]) {
         EXPECT_GT(s["median_ms"].get<double>(), 0.0);
         EXPECT_EQ(s["primary"].get<std::uint64_t>(), 24u * 24u);  // the camera is inside the room
+        // every timed frame's milliseconds, whose median is median_ms; no CUDA queue on the CPU
+        std::vector<double> ms = s["frames_ms"].get<std::vector<double>>();
+        ASSERT_EQ(ms.size(), 3u);
+        std::sort(ms.begin(), ms.end());
+        EXPECT_DOUBLE_EQ(ms[1], s["median_ms"].get<double>());
+        EXPECT_EQ(s["frames_heavy_first_items"].size(), 3u);
+        EXPECT_EQ(s["heavy_first_frames"].get<std::uint64_t>(), 0u);
     }
     EXPECT_GT(j["scenarios"][1]["shadow"].get<std::uint64_t>(), 0u);
     // 4 bounces in a closed room: nearly every reflected ray hits again (a sparse 3000-point
