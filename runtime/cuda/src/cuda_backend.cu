@@ -638,6 +638,12 @@ private:
         return m_order_frame;
     }
 
+    /// The persistent megakernel's work-queue counter: the word after the frame counters (zeroed
+    /// with them before every frame).
+    unsigned int* queue_counter() {
+        return reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count);
+    }
+
     /// The order slot (OrderSlot) of frame `frame`'s sums.
     OrderSlot* order_slot(std::uint32_t frame) {
         return reinterpret_cast<OrderSlot*>(m_counters.data() +
@@ -657,13 +663,10 @@ private:
                 find_megakernel(m_surface_mask, false, secondary, m_options.cuda_min_blocks);
             const RenderKernel kernel = m_options.cuda_linear_mapping ? k.linear : k.zorder;
             const std::uint32_t blocks = m_options.cuda_persistent ? resident_blocks(kernel) * m_sm_count : 1;
-            unsigned int* queue =
-                m_options.cuda_persistent
-                    ? reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count)
-                    : nullptr;
             launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, m_scene,
                           core::PinholeCamera{}, 1u, 1u, 0u, 0u, m_rgb.data(), m_rgba.data(),
-                          m_counters.data() + k_counters_at, queue, 0u, 1u, ItemOrder{});
+                          m_counters.data() + k_counters_at,
+                          m_options.cuda_persistent ? queue_counter() : nullptr, 0u, 1u, ItemOrder{});
         }
         PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream));
     }
@@ -683,7 +686,7 @@ private:
                 // As many blocks as the GPU holds at once; the queue counter sits after the counters
                 // (zeroed with them every frame).
                 blocks = std::min<std::uint32_t>(item_blocks, resident_blocks(kernel) * m_sm_count);
-                queue = reinterpret_cast<unsigned int*>(m_counters.data() + k_counters_at + k_counter_count);
+                queue = queue_counter();
                 if (order_frame != 0) {
                     const std::uint32_t f = order_frame;
                     order.heavy = m_order_heavy[f % 2].data();
