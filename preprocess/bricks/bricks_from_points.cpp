@@ -215,7 +215,8 @@ public:
           m_colors(colors),
           m_has_colors(!colors.empty()),
           m_params(params),
-          m_threads(resolve_threads(params.threads)) {}
+          m_threads(resolve_threads(params.threads)),
+          m_octree_backend(resolve_octree_backend(params.octree.backend)) {}
 
     /// Steps 1-5: the partition and the records of each cell, in a temporary spill file or, with
     /// `records_file`, in that named file (the staged build).
@@ -771,6 +772,7 @@ private:
         OctreeParams op = m_params.octree;
         op.threads = threads;
         op.progress = nullptr;
+        op.backend = m_octree_backend;
         SplatOctree octree = build_octree_cell(positions, normals, radii, m_root, at, op);
         std::vector<pool::Float3>().swap(positions);
         std::vector<pool::Float3>().swap(normals);
@@ -935,6 +937,7 @@ private:
     bool m_has_colors;
     const PointBrickParams& m_params;
     unsigned m_threads;
+    std::string m_octree_backend;  // the cells' octrees: "cpu" or "cuda" (resolved once)
     pool::OctreeInfo m_root{};
     std::size_t m_chunks = 0;
     std::vector<PartNode> m_nodes;

@@ -188,10 +188,11 @@ void report_to(prt::pre::PointBrickParams& p, prt::tool::StagedProgress& progres
     };
 }
 
-/// --no-cull and --policy into the build's parameters.
+/// --no-cull, --policy and --backend into the build's parameters.
 void set_culling(PointOptions& opt) {
     using prt::pre::CullPolicy;
     opt.params.cull = !opt.no_cull;
+    opt.params.octree.backend = opt.params.culling.backend;  // the cells' octrees where they are culled
     opt.params.culling.policy = opt.policy == "votes"    ? CullPolicy::votes
                                 : opt.policy == "thesis" ? CullPolicy::thesis
                                                          : CullPolicy::greedy;
@@ -574,8 +575,10 @@ int main(int argc, char** argv) {
                 ->check(CLI::IsMember({"greedy", "votes", "thesis"}))
                 ->capture_default_str()
                 ->group(from_points);
-            app.add_option("--backend", pp.culling.backend,
-                           "Culling backend: auto (CUDA when a device is usable, else CPU), cpu or cuda")
+            app.add_option(
+                   "--backend", pp.culling.backend,
+                   "Where the cells' octrees are built and culled: auto (CUDA when a device is usable, else "
+                   "CPU), cpu or cuda (the same bricks either way)")
                 ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
                 ->capture_default_str()
                 ->group(from_points);

@@ -44,6 +44,7 @@
 #include <limits>
 #include <random>
 
+#include "backend_choice.h"
 #include "cull_probe_hits.h"
 #include "octree_build.h"
 #include "prt/core/scene_view.h"
@@ -234,19 +235,12 @@ std::vector<std::uint8_t> centre_flags(const OctreeSections& s, std::span<const 
 }
 
 std::string resolve_cull_backend(const std::string& name, std::string* why) {
-    if (name == "cpu") return "cpu";
-    if (name != "cuda" && name != "auto")
-        throw Error("unknown backend '" + name + "' (expected auto, cpu or cuda)");
 #ifdef PRT_HAVE_CUDA
-    std::string reason;
-    if (cuda::cull_device_available(&reason)) return "cuda";
+    return choose_backend(
+        name, [](std::string* reason) { return cuda::cull_device_available(reason); }, why);
 #else
-    const std::string reason =
-        "this build has no CUDA backend (configured without nvcc or with PRT_WITH_CUDA=OFF)";
+    return choose_backend(name, no_cuda_build, why);
 #endif
-    if (name == "cuda") throw Error("--backend cuda: " + reason + " (use --backend cpu)");
-    if (why) *why = reason;
-    return "cpu";
 }
 
 namespace {

@@ -1,118 +1,14 @@
-// PointRT preprocess: the exact overlap test between a splat (an oriented disk) and an axis-aligned
-// box, used to replicate splats into every octree leaf they touch (thesis 3.4, after [LMR07]).
-//
-// Derivation. The disk is D = {x : n.(x - c) = 0, |x - c| <= r} with |n| = 1; the box is
-// B = [lo, hi]. D and B intersect iff the plane P = {n.(x - c) = 0} cuts B and the part of B in P
-// (a convex polygon) comes within r of c, that is iff the convex problem
-//
-//     d^2 = min |x - c|^2   subject to   x in B,  n.(x - c) = 0
-//
-// is feasible with d <= r. Relax the one equality with a multiplier: for fixed lambda,
-// min_{x in B} |x - c|^2 + 2 lambda n.(x - c) separates per axis and is solved by
-//
-//     x(lambda) = clamp(c - lambda n, lo, hi).
-//
-// The dual derivative is proportional to g(lambda) = n.(x(lambda) - c) = sum_i n_i (x_i(lambda) - c_i).
-// Each term is continuous, piecewise linear and non-increasing in lambda (slope -n_i^2 while
-// unclamped, 0 while clamped), so g is too, with at most 6 breakpoints lambda = (c_i - lo_i)/n_i and
-// (c_i - hi_i)/n_i. g(-inf) = max_{x in B} n.(x - c) and g(+inf) = min_{x in B} n.(x - c): the plane
-// cuts the box iff g(+inf) <= 0 <= g(-inf). Then g has a root lambda* (found exactly on the linear
-// piece between two sorted breakpoints), and since the problem is convex with linear constraints
-// (strong duality, strictly convex objective), x(lambda*) is the closest point of P n B to c.
-// Overlap iff |x(lambda*) - c| <= r. Everything is evaluated in double precision.
-//
-// Closed sets on both sides: a disk that only touches a box face, edge or corner overlaps it.
+// PointRT preprocess: the exact disk/box overlap test (thesis 3.4), shared with the CUDA octree
+// builder and so defined in the core (prt/core/disk_box.h, with its derivation); these names are
+// the preprocessors' (prt-iso, the splat octree builder).
 #pragma once
 
-#include <algorithm>
-#include <cmath>
-#include <utility>
+#include "prt/core/disk_box.h"
 
 namespace prt::pre {
 
-/// Squared distance from `c` to the closest point of (plane through c with unit normal n) n (box
-/// [lo, hi]), or a negative value when the plane misses the box. See the derivation above.
-inline double plane_box_distance_sq(const double c[3], const double n[3], const double lo[3],
-                                    const double hi[3]) {
-    // g(+inf) and g(-inf): the plane must separate the box's extreme corners along n.
-    double g_max = 0, g_min = 0;
-    for (int i = 0; i < 3; ++i) {
-        const double a = n[i] * (lo[i] - c[i]), b = n[i] * (hi[i] - c[i]);
-        g_max += std::max(a, b);
-        g_min += std::min(a, b);
-    }
-    if (g_min > 0 || g_max < 0) return -1.0;
-    // Sweep lambda upwards over the breakpoints. Axis i is unclamped on [enter_i, leave_i], where
-    // its term of g has slope -n_i^2; elsewhere the term is constant. Left of every breakpoint
-    // g = g_max >= 0; the root lies on the first piece where g reaches 0.
-    struct Event {
-        double at;
-        double slope_change;
-    };
-    Event events[6];
-    int count = 0;
-    for (int i = 0; i < 3; ++i) {
-        if (n[i] == 0) continue;
-        const double t0 = (c[i] - lo[i]) / n[i], t1 = (c[i] - hi[i]) / n[i];
-        const double n2 = n[i] * n[i];
-        events[count++] = {std::min(t0, t1), -n2};
-        events[count++] = {std::max(t0, t1), +n2};
-    }
-    for (int k = 1; k < count; ++k)  // insertion sort of at most 6 events
-        for (int j = k; j > 0 && events[j - 1].at > events[j].at; --j) std::swap(events[j - 1], events[j]);
-    double lambda = count > 0 ? events[count - 1].at : 0.0;
-    if (count > 0) {
-        double g = g_max, slope = 0;
-        lambda = events[0].at;
-        for (int k = 0; k < count && g > 0; ++k) {
-            slope += events[k].slope_change;
-            const double next = k + 1 < count ? events[k + 1].at : events[k].at;
-            const double g_next = g + slope * (next - events[k].at);
-            if (g_next <= 0 || k + 1 == count) {
-                // root on [events[k].at, next]; slope < 0 here since g decreases to <= 0
-                lambda = slope < 0 ? events[k].at + g / -slope : next;
-                if (k + 1 < count) lambda = std::min(lambda, next);
-                break;
-            }
-            g = g_next;
-            lambda = next;
-        }
-    }
-    double d2 = 0;
-    for (int i = 0; i < 3; ++i) {
-        const double x = std::clamp(c[i] - lambda * n[i], lo[i], hi[i]);
-        d2 += (x - c[i]) * (x - c[i]);
-    }
-    return d2;
-}
-
-/// True iff the closed disk {centre c, unit normal n, radius r} and the closed box [lo, hi] share a point.
-/// Cheap decisions first, the exact closest-point problem only for the remaining cases:
-///   centre in the box -> overlap;  plane misses the box -> none;
-///   box farther than r from c (ball/box) -> none;  whole box within r of c and cut by the plane -> overlap.
-inline bool disk_overlaps_box(const double c[3], const double n[3], double r, const double lo[3],
-                              const double hi[3]) {
-    if (c[0] >= lo[0] && c[0] <= hi[0] && c[1] >= lo[1] && c[1] <= hi[1] && c[2] >= lo[2] && c[2] <= hi[2])
-        return true;
-    double g_max = 0, g_min = 0, near2 = 0, far2 = 0;
-    for (int i = 0; i < 3; ++i) {
-        const double a = lo[i] - c[i], b = hi[i] - c[i];
-        g_max += std::max(n[i] * a, n[i] * b);
-        g_min += std::min(n[i] * a, n[i] * b);
-        const double near = a > 0 ? a : (b < 0 ? b : 0.0);
-        near2 += near * near;
-        far2 += std::max(a * a, b * b);
-    }
-    const double r2 = r * r;
-    if (g_min > 0 || g_max < 0 || near2 > r2) return false;
-    if (far2 <= r2) return true;
-    const double d2 = plane_box_distance_sq(c, n, lo, hi);
-    return d2 >= 0 && d2 <= r2;
-}
-
-/// Half-extent of a disk's axis-aligned bounding box along axis i: r * sqrt(1 - n_i^2) (|n| = 1).
-inline double disk_half_extent(double r, double n_i) {
-    return r * std::sqrt(std::max(0.0, 1.0 - n_i * n_i));
-}
+using core::disk_half_extent;
+using core::disk_overlaps_box;
+using core::plane_box_distance_sq;
 
 }  // namespace prt::pre

@@ -9,6 +9,8 @@
 //  4. Lay the nodes out breadth first (thesis 2.2.3: level by level, so the first levels share the
 //     cache), the 8 children of a node together in Morton order; number filled leaves and store
 //     their splats in depth-first order (spatially adjacent leaves get adjacent data).
+// With OctreeParams::backend "cuda", steps 2-4 run level by level on the GPU instead
+// (runtime/cuda/src/octree_build.cu), with the same decisions (core/disk_box.h) and the same sections.
 #include "octree_build.h"
 
 #include <algorithm>
@@ -19,6 +21,7 @@
 #include <numeric>
 #include <string>
 
+#include "backend_choice.h"
 #include "buffer.h"
 #include "disk_box.h"
 #include "float_round.h"
@@ -26,6 +29,11 @@
 #include "prt/parallel.h"
 #include "prt/tool_util.h"
 #include "radix_sort.h"
+
+#ifdef PRT_HAVE_CUDA
+#include "prt/cuda/device.h"
+#include "prt/cuda/octree_cuda.h"
+#endif
 
 namespace prt::pre {
 
@@ -37,43 +45,11 @@ using pool::NodeType;
 constexpr std::uint32_t k_max_supported_depth = 30;  // cell coordinates fit 30 bits
 constexpr std::uint32_t k_local_task_ref = 3;        // top-tree node type: "subtree built by task"
 
-// BuildSplat (octree_build.h): the disk plus its axis-aligned bounding box, rounded outward to
-// float so that rejecting a child by the box is always safe.
-
-/// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell):
-/// replication mode: the disk overlaps the child's closed box (thesis 3.4); otherwise the child
-/// holding the centre (half-open cells: a centre on a mid-plane goes to the upper child).
+/// Bit c of the result is set when splat `s` belongs to child c of the node (level, cell)
+/// (core/disk_box.h, disk_child_mask: the CUDA builder runs the same function).
 std::uint8_t classify_splat(const BuildSplat& s, bool replicate, const double mid[3],
                             const double child_lo[8][3], const double child_hi[8][3]) {
-    if (!replicate) {
-        return static_cast<std::uint8_t>(1u << ((double(s.c[0]) >= mid[0] ? 1 : 0) |
-                                                (double(s.c[1]) >= mid[1] ? 2 : 0) |
-                                                (double(s.c[2]) >= mid[2] ? 4 : 0)));
-    }
-    // Per axis, which halves the disk's bounding box reaches (closed halves share the mid-plane).
-    unsigned lower = 0, upper = 0;
-    for (int a = 0; a < 3; ++a) {
-        if (double(s.box_lo[a]) <= mid[a]) lower |= 1u << a;
-        if (double(s.box_hi[a]) >= mid[a]) upper |= 1u << a;
-    }
-    const unsigned both = lower & upper;
-    if (both == 0) {
-        // One candidate child: the disk overlaps this node (invariant) and the node is the union
-        // of its children, so the disk overlaps that child without an exact test.
-        return static_cast<std::uint8_t>(1u << upper);
-    }
-    const double c[3] = {s.c[0], s.c[1], s.c[2]};
-    const double n[3] = {s.n[0], s.n[1], s.n[2]};
-    std::uint8_t mask = 0;
-    for (unsigned child = 0; child < 8; ++child) {
-        // candidate iff on every axis the child's half is reached by the bounding box
-        bool candidate = true;
-        for (int a = 0; a < 3 && candidate; ++a)
-            candidate = (child >> a & 1u) ? (upper >> a & 1u) : (lower >> a & 1u);
-        if (candidate && disk_overlaps_box(c, n, double(s.r), child_lo[child], child_hi[child]))
-            mask |= static_cast<std::uint8_t>(1u << child);
-    }
-    return mask;
+    return core::disk_child_mask(s, replicate, mid, child_lo, child_hi);
 }
 
 /// The boxes of the 8 children of node (level, cell) (node_box()) and the node's mid-planes.
@@ -483,11 +459,7 @@ void check_octree_limits(std::uint64_t nodes, std::uint64_t filled_leaves, std::
 
 void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint32_t cell[3], double lo[3],
               double hi[3]) {
-    const double scale = double(info.root_size) / double(std::uint64_t(1) << level);
-    for (int a = 0; a < 3; ++a) {
-        lo[a] = double(info.root_min[a]) + scale * double(cell[a]);
-        hi[a] = double(info.root_min[a]) + scale * double(std::uint64_t(cell[a]) + 1);
-    }
+    core::octree_node_box(info.root_min, info.root_size, level, cell, lo, hi);
 }
 
 namespace {
@@ -603,7 +575,62 @@ void sort_by_morton(pre::LargeVector<BuildSplat>& splats, const pool::OctreeInfo
     splats = std::move(sorted);
 }
 
+/// The tree below `cell` over Morton-sorted build records, on the CPU (Builder) or on the GPU
+/// (prt/cuda/octree_cuda.h), which gives the same sections.
+SplatOctree build_sorted(pre::LargeVector<BuildSplat> splats, const pool::OctreeInfo& info, NodeCell cell,
+                         const OctreeParams& params, unsigned threads, OctreeStats& stats) {
+    if (resolve_octree_backend(params.backend) == "cpu") {
+        Builder builder(std::move(splats), info, params, cell);
+        return builder.run(threads, stats);
+    }
+#ifdef PRT_HAVE_CUDA
+    cuda::OctreeCudaParams cp;
+    cp.max_leaf_splats = params.max_leaf_splats;
+    cp.max_depth = params.max_depth;
+    cp.replicate = params.replicate;
+    cp.min_cell_ratio = params.min_cell_ratio;
+    cp.split_by_centres = params.split_by_centres;
+    cuda::OctreeCudaResult r;
+    cuda::build_octree_cuda(std::span<const BuildSplat>(splats.data(), splats.size()), info.root_min,
+                            info.root_size, cell.level, cell.cell, cp, check_octree_limits, r);
+    SplatOctree octree;
+    octree.nodes = std::move(r.nodes);
+    octree.leaf_info = std::move(r.leaf_info);
+    octree.splats = std::move(r.splats);
+    octree.info = info;
+    octree.info.depth = r.depth;
+    octree.info.max_leaf_splats = params.max_leaf_splats;
+    octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
+    octree.info.filled_leaves = static_cast<std::uint32_t>(octree.leaf_info.size() - 1);
+    octree.info.splat_count = octree.splats.size();
+    octree.info.unique_splats = splats.size();
+    octree.info.flags = params.replicate ? pool::k_octree_replicated : 0u;
+    stats.nodes = octree.info.node_count;
+    stats.depth = r.depth;
+    stats.filled_leaves = octree.info.filled_leaves;
+    stats.empty_leaves = static_cast<std::uint32_t>(r.empty_leaves);
+    stats.unique_splats = splats.size();
+    stats.stored_splats = octree.splats.size();
+    stats.replication_factor = splats.empty() ? 0.0 : double(stats.stored_splats) / double(splats.size());
+    stats.max_leaf_count = r.max_leaf;
+    stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
+                  octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+    return octree;
+#else
+    throw Error("octree build: this build has no CUDA backend");
+#endif
+}
+
 }  // namespace
+
+std::string resolve_octree_backend(const std::string& name, std::string* why) {
+#ifdef PRT_HAVE_CUDA
+    return choose_backend(
+        name, [](std::string* reason) { return cuda::device_available(reason); }, why);
+#else
+    return choose_backend(name, no_cuda_build, why);
+#endif
+}
 
 bool octree_uses_point(const pool::Float3& position, const pool::Float3& normal, float radius) {
     double len;
@@ -671,8 +698,7 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
     pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, &bounds, threads);  // thesis 3.1
     const pool::OctreeInfo info = bounds.root();
     sort_by_morton(splats, info, threads);
-    Builder builder(std::move(splats), info, params);
-    SplatOctree octree = builder.run(threads, stats);
+    SplatOctree octree = build_sorted(std::move(splats), info, NodeCell{}, params, threads, stats);
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
     return octree;
@@ -689,8 +715,7 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
     OctreeStats stats;
     pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr, threads);
     sort_by_morton(splats, root, threads);
-    Builder builder(std::move(splats), root, params, cell);
-    SplatOctree octree = builder.run(threads, stats);
+    SplatOctree octree = build_sorted(std::move(splats), root, cell, params, threads, stats);
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
     return octree;

@@ -6,8 +6,10 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <string>
 #include <vector>
 
+#include "prt/core/disk_box.h"
 #include "prt/formats/pool.h"
 
 namespace prt::pre {
@@ -40,6 +42,11 @@ struct OctreeParams {
     /// Progress of the subtree phase, called from one thread with (splats done, splats in all
     /// subtrees); may be empty.
     std::function<void(std::uint64_t, std::uint64_t)> progress;
+    /// Where the tree is built (issue 17): "cpu", "cuda" (level by level on device 0,
+    /// prt/cuda/octree_cuda.h; throws when no device is usable) or "auto" (CUDA when a device is
+    /// usable). The sections are the same byte for byte; the points' build records are made and
+    /// Morton-sorted on the CPU either way.
+    std::string backend = "cpu";
 };
 
 struct OctreeStats {
@@ -113,14 +120,7 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
 /// A point as build_octree classifies it: the disk (centre, radius, unit normal rounded to float)
 /// and its bounding box rounded outward. Prepared once (prepare_build_splat), it is classified at
 /// any number of nodes (the out-of-core brick build walks each point down its partition twice).
-struct BuildSplat {
-    float c[3];
-    float r;
-    float n[3];  ///< unit (normalised in double, then rounded)
-    std::uint32_t point;
-    float box_lo[3];
-    float box_hi[3];
-};
+using BuildSplat = core::BuildSplat;
 
 /// The point's build record; false for a point build_octree skips (octree_uses_point()).
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
@@ -144,6 +144,11 @@ std::uint8_t child_overlap_mask(const BuildSplat& splat, const ChildBoxes& boxes
 /// only with split_by_centres).
 bool octree_splits_node(const OctreeParams& params, const pool::OctreeInfo& root, NodeCell node,
                         std::uint64_t count, double radius_sum, std::uint64_t centres);
+
+/// The backend build_octree would use for `name` ("cpu", "cuda", "auto"). Throws prt::Error when
+/// `name` is "cuda" and no CUDA device is usable (or the build has no CUDA), or `name` is unknown.
+/// `why` gets a note when "auto" falls back to the CPU.
+std::string resolve_octree_backend(const std::string& name, std::string* why = nullptr);
 
 /// Adds (replacing) the four octree sections to a writer.
 void add_octree_sections(SplatOctree octree, pool::PoolWriter& writer);

@@ -53,9 +53,10 @@ void octree_step(prt::tool::PoolStep& step, prt::pre::OctreeParams params, bool 
     const auto normals = in.array<pool::Float3>(pool::SectionType::normals);
     const auto radii = in.array<float>(pool::SectionType::radii);
 
-    step.note("prt-octree: %zu splats (X = %u %s, max depth %u, %s)", positions.size(),
+    params.backend = pre::resolve_octree_backend(params.backend);
+    step.note("prt-octree: %zu splats (X = %u %s, max depth %u, %s, %s)", positions.size(),
               params.max_leaf_splats, split_by.c_str(), params.max_depth,
-              params.replicate ? "replicated" : "not replicated");
+              params.replicate ? "replicated" : "not replicated", params.backend.c_str());
     pre::OctreeStats stats;
     pre::SplatOctree octree;
     {
@@ -125,6 +126,12 @@ int main(int argc, char** argv) {
             app.add_flag(
                 "--no-replicate", no_replicate,
                 "Store each splat once, in the leaf holding its centre (counts centres, not overlaps)");
+            app.add_option(
+                   "--backend", params.backend,
+                   "Where the tree is built: cpu, cuda (level by level on the GPU) or auto (CUDA when "
+                   "a device is usable); the same octree either way")
+                ->check(CLI::IsMember({"auto", "cpu", "cuda"}))
+                ->capture_default_str();
             prt::tool::PoolStep::add_threads(app, params.threads);
         },
         [&](prt::tool::PoolStep& s) { octree_step(s, params, no_replicate, split_by); });

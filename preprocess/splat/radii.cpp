@@ -7,6 +7,7 @@
 #include <cstring>
 #include <string>
 
+#include "backend_choice.h"
 #include "kd_tree.h"
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/knn_cuda.h"
@@ -173,24 +174,17 @@ bool radii_gpu_pays(std::uint64_t n, unsigned threads) {
 
 std::string resolve_radii_backend(const std::string& name, std::uint64_t n, std::uint32_t k, unsigned threads,
                                   std::string* why) {
-    if (name == "cpu") return "cpu";
-    if (name != "cuda" && name != "auto")
-        throw Error("unknown backend '" + name + "' (expected auto, cpu or cuda)");
     if (name == "auto" && !radii_gpu_pays(n, threads)) {
         if (why) *why = "under 100k points per CPU thread the CPU is as fast";
         return "cpu";
     }
 #ifdef PRT_HAVE_CUDA
-    std::string reason;
-    if (cuda::knn_radii_usable(n, k, &reason)) return "cuda";
+    return choose_backend(
+        name, [&](std::string* reason) { return cuda::knn_radii_usable(n, k, reason); }, why);
 #else
-    (void)n, (void)k, (void)threads;
-    const std::string reason =
-        "this build has no CUDA backend (configured without nvcc or with PRT_WITH_CUDA=OFF)";
+    (void)k;
+    return choose_backend(name, no_cuda_build, why);
 #endif
-    if (name == "cuda") throw Error("--backend cuda: " + reason + " (use --backend cpu)");
-    if (why) *why = reason;
-    return "cpu";
 }
 
 RadiiPlan plan_radii(std::uint64_t n, const RadiiParams& params, std::uint64_t memory, bool force_tiles,

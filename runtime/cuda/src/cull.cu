@@ -90,34 +90,49 @@ core::CullCounters cull_leaves_cuda(const core::CullView& host, std::span<std::u
     PRT_CUDA_CHECK(cudaSetDevice(0));
     if (keep.size() != host.octree.splat_count)
         throw Error("cull_leaves_cuda: one keep flag per splat expected");
+    // A stream and stream-ordered memory of its own: the out-of-core brick build culls its cells
+    // from several threads while others build octrees on the GPU (prt/cuda/octree_cuda.h), and a
+    // device-wide synchronization or cudaFree here would wait for all of their work.
+    keep_pool_memory();
+    OwnedStream stream;
+    const cudaStream_t st = stream.get();
     const std::uint32_t leaves = host.octree.filled_leaves;
-    DeviceOctree octree(host.octree);
-    DeviceBuffer<core::CullLeaf> d_leaves = upload(host.leaves, leaves);
-    DeviceBuffer<core::ProbeDirection> d_dirs =
-        upload(host.directions, std::size_t(host.direction_sets) * host.directions_per_set);
-    DeviceBuffer<std::uint8_t> d_keep = upload(keep.data(), keep.size());
-    DeviceBuffer<std::uint32_t> d_votes;
+    AsyncBuffer<std::uint32_t> d_nodes(st), d_leaf_info(st);
+    AsyncBuffer<pool::Splat> d_splats(st);
+    d_nodes.upload(host.octree.nodes, host.octree.node_count);
+    d_leaf_info.upload(host.octree.leaf_info, std::size_t(leaves) + 1);
+    d_splats.upload(host.octree.splats, host.octree.splat_count);
+    AsyncBuffer<core::CullLeaf> d_leaves(st);
+    d_leaves.upload(host.leaves, leaves);
+    AsyncBuffer<core::ProbeDirection> d_dirs(st);
+    d_dirs.upload(host.directions, std::size_t(host.direction_sets) * host.directions_per_set);
+    AsyncBuffer<std::uint8_t> d_keep(st);
+    d_keep.upload(keep.data(), keep.size());
+    AsyncBuffer<std::uint32_t> d_votes(st);
     if (host.policy == core::CullPolicy::votes && !keep.empty()) {
         d_votes.resize(keep.size());
-        PRT_CUDA_CHECK(cudaMemset(d_votes.data(), 0, d_votes.bytes()));
+        PRT_CUDA_CHECK(cudaMemsetAsync(d_votes.data(), 0, d_votes.bytes(), st));
     }
-    DeviceBuffer<unsigned long long> d_counters(k_c_count);
-    PRT_CUDA_CHECK(cudaMemset(d_counters.data(), 0, d_counters.bytes()));
+    AsyncBuffer<unsigned long long> d_counters(st);
+    d_counters.resize(k_c_count);
+    PRT_CUDA_CHECK(cudaMemsetAsync(d_counters.data(), 0, d_counters.bytes(), st));
     core::CullView view = host;
-    view.octree = octree.view;
+    view.octree.nodes = d_nodes.data();
+    view.octree.leaf_info = d_leaf_info.data();
+    view.octree.splats = d_splats.data();
     view.leaves = d_leaves.data();
     view.directions = d_dirs.data();
     for (std::uint32_t first = 0; first < leaves; first += k_leaves_per_launch) {
         const std::uint32_t count = std::min(k_leaves_per_launch, leaves - first);
-        launch_kernel(launch_1d(count, k_block), cull_kernel, view, first, count, d_keep.data(),
+        launch_kernel(launch_1d(count, k_block, st), cull_kernel, view, first, count, d_keep.data(),
                       d_votes.data(), d_counters.data());
-        PRT_CUDA_CHECK(cudaDeviceSynchronize());
+        PRT_CUDA_CHECK(cudaStreamSynchronize(st));
         if (progress) progress(first + count, leaves);
     }
     d_keep.download(keep.data(), keep.size());
     unsigned long long c[k_c_count];
     d_counters.download(c, k_c_count);
-    PRT_CUDA_CHECK(cudaDeviceSynchronize());
+    PRT_CUDA_CHECK(cudaStreamSynchronize(st));
     core::CullCounters out;
     out.probes = c[k_c_probes];
     out.probes_hit = c[k_c_hit];

@@ -1,0 +1,506 @@
+// PointRT CUDA: the splat octree built level by level on the GPU (thesis 2.2, 3.2, 3.4; the CPU
+// builder is preprocess/splat/octree_build.cpp, and this one gives its sections byte for byte).
+//
+// The CPU builder splits nodes depth first, each node's splat list split into its 8 children's
+// lists in list order. Here every node of one level is split at once:
+//   1. per node, whether it splits (thesis 3.2: more than X splats, above the maximum depth, the
+//      cell-size rule against the mean radius of its list, computed in list order as the CPU does
+//      where the node's smallest and largest radius do not decide it);
+//   2. per list entry of a splitting node, the children its disk overlaps (core::disk_child_mask,
+//      the CPU's function, compiled here without FMA contraction: same doubles, same decisions);
+//   3. per child bit, an exclusive scan of the entries with that bit gives each entry its place in
+//      the child's list, in list order: the next level's lists are the CPU's.
+// The level order of the nodes (parents in order, then children 0..7) is the CPU's breadth-first
+// node array; filled leaves are numbered depth first (subtree sizes summed bottom-up, offsets
+// handed top-down), and each leaf's splats are written as emit_leaf writes them (centres in the
+// leaf's closed box first, then the replicas, each group in list order).
+#include <cuda_runtime.h>
+
+#include <cstring>
+#include <cub/device/device_scan.cuh>
+#include <vector>
+
+#include "cuda_check.h"
+#include "device_buffer.h"
+#include "prt/cuda/octree_cuda.h"
+
+namespace prt::cuda {
+
+namespace {
+
+constexpr unsigned k_block = 256;
+constexpr std::uint32_t k_no_node = 0xffffffffu;
+
+struct RootCube {
+    float min[3];
+    float size;
+};
+
+/// A splitting node's children's closed boxes and mid-planes (octree_build.cpp, child_cell_boxes).
+struct ChildBoxes {
+    double mid[3];
+    double lo[8][3];
+    double hi[8][3];
+};
+
+/// One level's nodes and list entries.
+struct Level {
+    explicit Level(cudaStream_t s)
+        : cell(s),
+          begin(s),
+          count(s),
+          split(s),
+          split_rank(s),
+          ids(s),
+          seg(s),
+          sub_leaves(s),
+          sub_splats(s),
+          leaf_off(s),
+          splat_off(s) {}
+    std::uint32_t nodes = 0;
+    std::uint64_t entries = 0;
+    std::uint32_t splits = 0;
+    AsyncBuffer<std::uint32_t> cell;        // 3 per node
+    AsyncBuffer<std::uint32_t> begin;       // per node: its first entry
+    AsyncBuffer<std::uint32_t> count;       // per node: its entries
+    AsyncBuffer<std::uint8_t> split;        // per node
+    AsyncBuffer<std::uint32_t> split_rank;  // per node: splitting nodes before it
+    AsyncBuffer<std::uint32_t> ids;         // per entry: the splat
+    AsyncBuffer<std::uint32_t> seg;         // per entry: its node
+    AsyncBuffer<unsigned long long> sub_leaves, sub_splats, leaf_off, splat_off;  // per node
+};
+
+__device__ inline std::uint64_t thread_index() {
+    return std::uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+}
+
+/// pool::make_node in device code (constexpr host functions are not callable there).
+__device__ inline std::uint32_t node_word(pool::NodeType type, std::uint64_t address) {
+    return (static_cast<std::uint32_t>(type) << pool::k_node_address_bits) |
+           (static_cast<std::uint32_t>(address) & pool::k_node_address_max);
+}
+
+/// Per node: the smallest and largest radius of its list (float bits: radii are positive), and the
+/// centres in its half-open cell (split_by_centres). A warp whose entries share one node adds once.
+__global__ void node_stats_kernel(std::uint64_t entries, const std::uint32_t* ids, const std::uint32_t* seg,
+                                  const core::BuildSplat* splats, unsigned* rmin, unsigned* rmax,
+                                  unsigned* centres, RootCube root, std::uint32_t level,
+                                  const std::uint32_t* cells, bool need_centres) {
+    const std::uint64_t k = thread_index();
+    const bool active = k < entries;
+    const std::uint32_t n = active ? seg[k] : k_no_node;
+    unsigned bits_lo = 0xffffffffu, bits_hi = 0u, inside = 0u;
+    if (active) {
+        const core::BuildSplat& s = splats[ids[k]];
+        bits_lo = bits_hi = __float_as_uint(s.r);
+        if (need_centres) {
+            double lo[3], hi[3];
+            core::octree_node_box(root.min, root.size, level, cells + 3 * std::size_t(n), lo, hi);
+            bool in = true;
+            for (int a = 0; a < 3; ++a) in = in && double(s.c[a]) >= lo[a] && double(s.c[a]) < hi[a];
+            inside = in ? 1u : 0u;
+        }
+    }
+    const unsigned full = 0xffffffffu;
+    const std::uint32_t n0 = __shfl_sync(full, n, 0);
+    if (__all_sync(full, n == n0 || n == k_no_node)) {
+        const unsigned lo = __reduce_min_sync(full, bits_lo), hi = __reduce_max_sync(full, bits_hi);
+        const unsigned c = __reduce_add_sync(full, inside);
+        if ((threadIdx.x & 31u) == 0 && n0 != k_no_node) {
+            atomicMin(&rmin[n0], lo);
+            atomicMax(&rmax[n0], hi);
+            if (c) atomicAdd(&centres[n0], c);
+        }
+    } else if (active) {
+        atomicMin(&rmin[n], bits_lo);
+        atomicMax(&rmax[n], bits_hi);
+        if (inside) atomicAdd(&centres[n], 1u);
+    }
+}
+
+/// Per node: whether it splits (octree_build.cpp, should_split and octree_splits_node).
+__global__ void decide_kernel(std::uint32_t nodes, const std::uint32_t* counts, const std::uint32_t* begin,
+                              const unsigned* rmin, const unsigned* rmax, const unsigned* centres,
+                              const std::uint32_t* ids, const core::BuildSplat* splats, OctreeCudaParams p,
+                              RootCube root, std::uint32_t level, std::uint8_t* split) {
+    const std::uint64_t i = thread_index();
+    if (i >= nodes) return;
+    const std::uint32_t count = counts[i];
+    bool s = true;
+    if (count <= p.max_leaf_splats || level >= p.max_depth) {
+        s = false;
+    } else if (p.split_by_centres && p.replicate && centres[i] <= p.max_leaf_splats) {
+        s = false;
+    } else if (p.min_cell_ratio > 0) {
+        // The CPU: no split when edge < ratio x (sum of the list's radii in list order / count).
+        // That mean lies within 5e-7 (relative) of [smallest, largest radius] for any list of
+        // fewer than 2^32 entries, so outside a band of 1e-6 the bounds decide alone.
+        const double edge = double(root.size) / double(std::uint64_t(1) << level);
+        const double ratio = double(p.min_cell_ratio);
+        const double lo = double(__uint_as_float(rmin[i])), hi = double(__uint_as_float(rmax[i]));
+        if (edge < ratio * lo * (1.0 - 1e-6)) {
+            s = false;
+        } else if (!(edge >= ratio * hi * (1.0 + 1e-6))) {
+            double sum = 0;
+            const std::uint32_t b = begin[i];
+            for (std::uint32_t k = 0; k < count; ++k) sum += splats[ids[b + k]].r;
+            s = !(edge < ratio * (sum / double(count)));
+        }
+    }
+    split[i] = s ? 1 : 0;
+}
+
+/// Per splitting node: its children's boxes (child_cell_boxes), its children's cells.
+__global__ void children_kernel(std::uint32_t nodes, const std::uint8_t* split,
+                                const std::uint32_t* split_rank, const std::uint32_t* cells, RootCube root,
+                                std::uint32_t level, ChildBoxes* boxes, std::uint32_t* next_cells) {
+    const std::uint64_t i = thread_index();
+    if (i >= nodes || !split[i]) return;
+    const std::uint32_t s = split_rank[i];
+    ChildBoxes& b = boxes[s];
+    for (unsigned child = 0; child < 8; ++child) {
+        const std::uint32_t cc[3] = {2 * cells[3 * i] + (child & 1u),
+                                     2 * cells[3 * i + 1] + (child >> 1 & 1u),
+                                     2 * cells[3 * i + 2] + (child >> 2 & 1u)};
+        core::octree_node_box(root.min, root.size, level + 1, cc, b.lo[child], b.hi[child]);
+        for (int a = 0; a < 3; ++a) next_cells[3 * (8 * std::size_t(s) + child) + a] = cc[a];
+    }
+    for (int a = 0; a < 3; ++a) b.mid[a] = b.hi[0][a];
+}
+
+/// Per entry of a splitting node: the children its disk belongs to; counts per child.
+__global__ void classify_kernel(std::uint64_t entries, const std::uint32_t* ids, const std::uint32_t* seg,
+                                const std::uint8_t* split, const std::uint32_t* split_rank,
+                                const ChildBoxes* boxes, const core::BuildSplat* splats, bool replicate,
+                                std::uint8_t* masks, unsigned* child_count) {
+    const std::uint64_t k = thread_index();
+    const bool active = k < entries;
+    std::uint32_t n = k_no_node, s = 0;
+    unsigned m = 0;
+    if (active) {
+        n = seg[k];
+        if (split[n]) {
+            s = split_rank[n];
+            const ChildBoxes& b = boxes[s];
+            m = core::disk_child_mask(splats[ids[k]], replicate, b.mid, b.lo, b.hi);
+        } else {
+            n = k_no_node;  // a leaf's entries are not split
+        }
+        masks[k] = static_cast<std::uint8_t>(m);
+    }
+    const unsigned full = 0xffffffffu;
+    const std::uint32_t n0 = __shfl_sync(full, n, 0);
+    if (__all_sync(full, n == n0)) {
+        if (n0 == k_no_node) return;
+        for (unsigned c = 0; c < 8; ++c) {
+            const unsigned cnt = __popc(__ballot_sync(full, (m >> c) & 1u));
+            if ((threadIdx.x & 31u) == 0 && cnt) atomicAdd(&child_count[8 * std::size_t(s) + c], cnt);
+        }
+    } else if (n != k_no_node) {
+        for (unsigned c = 0; c < 8; ++c)
+            if ((m >> c) & 1u) atomicAdd(&child_count[8 * std::size_t(s) + c], 1u);
+    }
+}
+
+__global__ void iota_kernel(std::uint64_t count, std::uint32_t* out) {
+    const std::uint64_t k = thread_index();
+    if (k < count) out[k] = static_cast<std::uint32_t>(k);
+}
+
+__global__ void bit_flags_kernel(std::uint64_t entries, const std::uint8_t* masks, unsigned bit,
+                                 std::uint32_t* flags) {
+    const std::uint64_t k = thread_index();
+    if (k < entries) flags[k] = (masks[k] >> bit) & 1u;
+}
+
+/// Entries with child bit `bit` to their place in that child's list (list order kept).
+__global__ void scatter_kernel(std::uint64_t entries, const std::uint8_t* masks, unsigned bit,
+                               const std::uint32_t* rank, const std::uint32_t* ids, const std::uint32_t* seg,
+                               const std::uint32_t* begin, const std::uint32_t* split_rank,
+                               const std::uint32_t* next_begin, std::uint32_t* next_ids,
+                               std::uint32_t* next_seg) {
+    const std::uint64_t k = thread_index();
+    if (k >= entries || !((masks[k] >> bit) & 1u)) return;
+    const std::uint32_t n = seg[k];
+    const std::uint32_t j = 8 * split_rank[n] + bit;
+    const std::uint32_t pos = next_begin[j] + (rank[k] - rank[begin[n]]);
+    next_ids[pos] = ids[k];
+    next_seg[pos] = j;
+}
+
+/// Bottom-up: filled leaves and stored splats in each node's subtree.
+__global__ void subtree_kernel(std::uint32_t nodes, const std::uint8_t* split,
+                               const std::uint32_t* split_rank, const std::uint32_t* counts,
+                               const unsigned long long* child_leaves, const unsigned long long* child_splats,
+                               unsigned long long* leaves, unsigned long long* stored) {
+    const std::uint64_t i = thread_index();
+    if (i >= nodes) return;
+    if (split[i]) {
+        unsigned long long l = 0, s = 0;
+        const std::size_t first = 8 * std::size_t(split_rank[i]);
+        for (unsigned c = 0; c < 8; ++c) {
+            l += child_leaves[first + c];
+            s += child_splats[first + c];
+        }
+        leaves[i] = l;
+        stored[i] = s;
+    } else {
+        leaves[i] = counts[i] > 0 ? 1 : 0;
+        stored[i] = counts[i];
+    }
+}
+
+/// Top-down: each child's first leaf and first stored splat (depth-first order).
+__global__ void offsets_kernel(std::uint32_t nodes, const std::uint8_t* split,
+                               const std::uint32_t* split_rank, const unsigned long long* leaf_off,
+                               const unsigned long long* splat_off, const unsigned long long* child_leaves,
+                               const unsigned long long* child_splats, unsigned long long* child_leaf_off,
+                               unsigned long long* child_splat_off) {
+    const std::uint64_t i = thread_index();
+    if (i >= nodes || !split[i]) return;
+    unsigned long long l = leaf_off[i], s = splat_off[i];
+    const std::size_t first = 8 * std::size_t(split_rank[i]);
+    for (unsigned c = 0; c < 8; ++c) {
+        child_leaf_off[first + c] = l;
+        child_splat_off[first + c] = s;
+        l += child_leaves[first + c];
+        s += child_splats[first + c];
+    }
+}
+
+/// One level's node words, and its filled leaves' ranges and splats (octree_build.cpp, emit_leaf).
+__global__ void emit_kernel(std::uint32_t nodes, const std::uint8_t* split, const std::uint32_t* split_rank,
+                            const std::uint32_t* counts, const std::uint32_t* begin, const std::uint32_t* ids,
+                            const std::uint32_t* cells, const unsigned long long* leaf_off,
+                            const unsigned long long* splat_off, std::uint64_t next_level_start,
+                            RootCube root, std::uint32_t level, const core::BuildSplat* splats,
+                            std::uint32_t* out_nodes, std::uint32_t* leaf_info, pool::Splat* out_splats,
+                            unsigned long long* empty, unsigned long long* max_leaf) {
+    const std::uint64_t i = thread_index();
+    if (i >= nodes) return;
+    const std::uint32_t count = counts[i];
+    if (split[i]) {
+        out_nodes[i] =
+            node_word(pool::NodeType::internal, next_level_start + 8 * std::uint64_t(split_rank[i]));
+        return;
+    }
+    if (count == 0) {
+        out_nodes[i] = node_word(pool::NodeType::empty_leaf, 0);
+        atomicAdd(empty, 1ull);
+        return;
+    }
+    const unsigned long long leaf = leaf_off[i];
+    out_nodes[i] = node_word(pool::NodeType::filled_leaf, leaf);
+    atomicMax(max_leaf, static_cast<unsigned long long>(count));
+    std::uint64_t o = splat_off[i];
+    leaf_info[leaf] = static_cast<std::uint32_t>(o);
+    double lo[3], hi[3];
+    core::octree_node_box(root.min, root.size, level, cells + 3 * i, lo, hi);
+    const std::uint32_t b = begin[i];
+    for (int pass = 0; pass < 2; ++pass) {
+        for (std::uint32_t k = 0; k < count; ++k) {
+            const core::BuildSplat& s = splats[ids[b + k]];
+            bool inside = true;
+            for (int a = 0; a < 3; ++a)
+                if (!(double(s.c[a]) >= lo[a] && double(s.c[a]) <= hi[a])) inside = false;
+            if (inside != (pass == 0)) continue;
+            pool::Splat& out = out_splats[o++];
+            out.position = pool::Float3{s.c[0], s.c[1], s.c[2]};
+            out.radius = s.r;
+            out.normal = pool::Float3{s.n[0], s.n[1], s.n[2]};
+            out.point = s.point;
+        }
+    }
+}
+
+/// Exclusive prefix sums of `count` uint32 on `stream` (cub), `temp` grown as needed.
+void exclusive_sum(const std::uint32_t* in, std::uint32_t* out, std::uint64_t count,
+                   AsyncBuffer<std::uint8_t>& temp, cudaStream_t stream) {
+    if (count == 0) return;
+    std::size_t bytes = 0;
+    PRT_CUDA_CHECK(
+        cub::DeviceScan::ExclusiveSum(nullptr, bytes, in, out, static_cast<std::int64_t>(count), stream));
+    temp.reserve(bytes);
+    PRT_CUDA_CHECK(
+        cub::DeviceScan::ExclusiveSum(temp.data(), bytes, in, out, static_cast<std::int64_t>(count), stream));
+}
+
+template <class T>
+T read_back(const T* device, cudaStream_t stream) {
+    T v{};
+    PRT_CUDA_CHECK(cudaMemcpyAsync(&v, device, sizeof(T), cudaMemcpyDeviceToHost, stream));
+    PRT_CUDA_CHECK(cudaStreamSynchronize(stream));
+    return v;
+}
+
+}  // namespace
+
+void build_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3], float root_size,
+                       std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                       const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                       OctreeCudaResult& out) {
+    PRT_CUDA_CHECK(cudaSetDevice(0));
+    keep_pool_memory();
+    OwnedStream stream;
+    const cudaStream_t st = stream.get();
+    const RootCube root{{root_min[0], root_min[1], root_min[2]}, root_size};
+    check(1, 0, splats.size());
+    AsyncBuffer<core::BuildSplat> d_splats(st);
+    d_splats.upload(splats.data(), splats.size());
+    AsyncBuffer<std::uint8_t> temp(st), masks(st);
+    AsyncBuffer<std::uint32_t> flags(st), rank(st);
+    AsyncBuffer<unsigned> rmin(st), rmax(st), centres(st);
+    AsyncBuffer<ChildBoxes> boxes(st);
+
+    // The start node and its list: every splat, in the given order.
+    std::vector<Level> levels;
+    levels.emplace_back(st);
+    {
+        Level& l = levels[0];
+        l.nodes = 1;
+        l.entries = splats.size();
+        const std::uint32_t start[5] = {cell[0], cell[1], cell[2], 0,
+                                        static_cast<std::uint32_t>(splats.size())};
+        l.cell.upload(start, 3);
+        l.begin.upload(start + 3, 1);
+        l.count.upload(start + 4, 1);
+        l.ids.resize(l.entries);
+        launch_kernel(launch_1d(l.entries, k_block, st), iota_kernel, l.entries, l.ids.data());
+        l.seg.resize(l.entries);
+        PRT_CUDA_CHECK(cudaMemsetAsync(l.seg.data(), 0, l.seg.bytes(), st));
+        PRT_CUDA_CHECK(cudaStreamSynchronize(st));  // `start` goes out of scope
+    }
+    std::uint64_t total_nodes = 1;
+    for (std::uint32_t depth = 0;; ++depth) {
+        Level& l = levels[depth];
+        const std::uint32_t lev = level0 + depth;
+        // 1. splits
+        rmin.reserve(l.nodes);
+        rmax.reserve(l.nodes);
+        centres.reserve(l.nodes);
+        PRT_CUDA_CHECK(cudaMemsetAsync(rmin.data(), 0xff, l.nodes * sizeof(unsigned), st));
+        PRT_CUDA_CHECK(cudaMemsetAsync(rmax.data(), 0, l.nodes * sizeof(unsigned), st));
+        PRT_CUDA_CHECK(cudaMemsetAsync(centres.data(), 0, l.nodes * sizeof(unsigned), st));
+        const bool need_centres = params.split_by_centres && params.replicate;
+        if (l.entries)
+            launch_kernel(launch_1d(l.entries, k_block, st), node_stats_kernel, l.entries, l.ids.data(),
+                          l.seg.data(), d_splats.data(), rmin.data(), rmax.data(), centres.data(), root, lev,
+                          l.cell.data(), need_centres);
+        l.split.resize(l.nodes);
+        l.split_rank.resize(l.nodes);
+        launch_kernel(launch_1d(l.nodes, k_block, st), decide_kernel, l.nodes, l.count.data(), l.begin.data(),
+                      rmin.data(), rmax.data(), centres.data(), l.ids.data(), d_splats.data(), params, root,
+                      lev, l.split.data());
+        flags.reserve(l.nodes);
+        launch_kernel(launch_1d(l.nodes, k_block, st), bit_flags_kernel, std::uint64_t(l.nodes),
+                      l.split.data(), 0u, flags.data());
+        exclusive_sum(flags.data(), l.split_rank.data(), l.nodes, temp, st);
+        const std::uint32_t last_rank = read_back(l.split_rank.data() + (l.nodes - 1), st);
+        const std::uint8_t last_split = read_back(l.split.data() + (l.nodes - 1), st);
+        l.splits = last_rank + last_split;
+        if (l.splits == 0) break;
+        // 2. children: boxes, cells, each entry's child mask and the children's counts
+        Level next(st);
+        next.nodes = 8 * l.splits;
+        total_nodes += next.nodes;
+        check(total_nodes, 0, 0);
+        boxes.reserve(l.splits);
+        next.cell.resize(3 * std::size_t(next.nodes));
+        launch_kernel(launch_1d(l.nodes, k_block, st), children_kernel, l.nodes, l.split.data(),
+                      l.split_rank.data(), l.cell.data(), root, lev, boxes.data(), next.cell.data());
+        next.count.resize(next.nodes);
+        PRT_CUDA_CHECK(cudaMemsetAsync(next.count.data(), 0, next.count.bytes(), st));
+        masks.reserve(l.entries);
+        launch_kernel(launch_1d(l.entries, k_block, st), classify_kernel, l.entries, l.ids.data(),
+                      l.seg.data(), l.split.data(), l.split_rank.data(), boxes.data(), d_splats.data(),
+                      params.replicate, masks.data(), next.count.data());
+        next.begin.resize(next.nodes);
+        exclusive_sum(next.count.data(), next.begin.data(), next.nodes, temp, st);
+        next.entries = std::uint64_t(read_back(next.begin.data() + (next.nodes - 1), st)) +
+                       read_back(next.count.data() + (next.nodes - 1), st);
+        check(0, 0, next.entries);  // positions are 32-bit: refused before they could wrap
+        // 3. the children's lists, one child bit at a time
+        next.ids.resize(next.entries);
+        next.seg.resize(next.entries);
+        flags.reserve(l.entries);
+        rank.reserve(l.entries);
+        for (unsigned bit = 0; bit < 8; ++bit) {
+            launch_kernel(launch_1d(l.entries, k_block, st), bit_flags_kernel, l.entries, masks.data(), bit,
+                          flags.data());
+            exclusive_sum(flags.data(), rank.data(), l.entries, temp, st);
+            launch_kernel(launch_1d(l.entries, k_block, st), scatter_kernel, l.entries, masks.data(), bit,
+                          rank.data(), l.ids.data(), l.seg.data(), l.begin.data(), l.split_rank.data(),
+                          next.begin.data(), next.ids.data(), next.seg.data());
+        }
+        l.seg.release();  // kept: cells, counts, begins and ids (leaves)
+        levels.push_back(std::move(next));
+    }
+    masks.release();
+    flags.release();
+    rank.release();
+    boxes.release();
+
+    // Depth-first numbering: subtree sizes bottom-up, offsets top-down.
+    const std::size_t depth_count = levels.size();
+    for (Level& l : levels) {
+        l.sub_leaves.resize(l.nodes);
+        l.sub_splats.resize(l.nodes);
+        l.leaf_off.resize(l.nodes);
+        l.splat_off.resize(l.nodes);
+    }
+    for (std::size_t d = depth_count; d-- > 0;) {
+        Level& l = levels[d];
+        const Level* child = d + 1 < depth_count ? &levels[d + 1] : nullptr;
+        launch_kernel(launch_1d(l.nodes, k_block, st), subtree_kernel, l.nodes, l.split.data(),
+                      l.split_rank.data(), l.count.data(), child ? child->sub_leaves.data() : nullptr,
+                      child ? child->sub_splats.data() : nullptr, l.sub_leaves.data(), l.sub_splats.data());
+    }
+    PRT_CUDA_CHECK(cudaMemsetAsync(levels[0].leaf_off.data(), 0, sizeof(unsigned long long), st));
+    PRT_CUDA_CHECK(cudaMemsetAsync(levels[0].splat_off.data(), 0, sizeof(unsigned long long), st));
+    for (std::size_t d = 0; d + 1 < depth_count; ++d) {
+        Level& l = levels[d];
+        Level& c = levels[d + 1];
+        launch_kernel(launch_1d(l.nodes, k_block, st), offsets_kernel, l.nodes, l.split.data(),
+                      l.split_rank.data(), l.leaf_off.data(), l.splat_off.data(), c.sub_leaves.data(),
+                      c.sub_splats.data(), c.leaf_off.data(), c.splat_off.data());
+    }
+    const unsigned long long filled = read_back(levels[0].sub_leaves.data(), st);
+    const unsigned long long stored = read_back(levels[0].sub_splats.data(), st);
+    check(total_nodes, filled, stored);
+
+    AsyncBuffer<std::uint32_t> d_nodes(st), d_leaf_info(st);
+    AsyncBuffer<pool::Splat> d_out(st);
+    AsyncBuffer<unsigned long long> d_stats(st);  // empty leaves, largest leaf
+    d_nodes.resize(total_nodes);
+    d_leaf_info.resize(filled + 1);
+    d_out.resize(stored);
+    d_stats.resize(2);
+    PRT_CUDA_CHECK(cudaMemsetAsync(d_stats.data(), 0, d_stats.bytes(), st));
+    std::uint64_t level_start = 0;
+    for (std::size_t d = 0; d < depth_count; ++d) {
+        Level& l = levels[d];
+        launch_kernel(launch_1d(l.nodes, k_block, st), emit_kernel, l.nodes, l.split.data(),
+                      l.split_rank.data(), l.count.data(), l.begin.data(), l.ids.data(), l.cell.data(),
+                      l.leaf_off.data(), l.splat_off.data(), level_start + l.nodes, root,
+                      static_cast<std::uint32_t>(level0 + d), d_splats.data(), d_nodes.data() + level_start,
+                      d_leaf_info.data(), d_out.data(), d_stats.data(), d_stats.data() + 1);
+        level_start += l.nodes;
+    }
+    const std::uint32_t end = static_cast<std::uint32_t>(stored);
+    PRT_CUDA_CHECK(
+        cudaMemcpyAsync(d_leaf_info.data() + filled, &end, sizeof end, cudaMemcpyHostToDevice, st));
+    out.nodes.resize(total_nodes);
+    out.leaf_info.resize(filled + 1);
+    out.splats.resize(stored);
+    d_nodes.download(out.nodes.data(), total_nodes);
+    d_leaf_info.download(out.leaf_info.data(), filled + 1);
+    d_out.download(out.splats.data(), stored);
+    unsigned long long stats[2];
+    d_stats.download(stats, 2);
+    PRT_CUDA_CHECK(cudaStreamSynchronize(st));
+    out.depth = static_cast<std::uint32_t>(level0 + depth_count - 1);
+    out.empty_leaves = stats[0];
+    out.max_leaf = stats[1];
+}
+
+}  // namespace prt::cuda
