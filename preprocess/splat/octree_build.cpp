@@ -63,6 +63,32 @@ void child_cell_boxes(const pool::OctreeInfo& info, std::uint32_t level, const s
     for (int a = 0; a < 3; ++a) mid[a] = hi[0][a];  // child 0 is the lower half on every axis
 }
 
+/// The header and the statistics of a built octree (its nodes, leaf ranges and splats set), from
+/// either builder: the root cube `root`, `unique` usable points, the deepest leaf's level, the empty
+/// leaves and the largest leaf.
+void describe_octree(SplatOctree& octree, const pool::OctreeInfo& root, const OctreeParams& params,
+                     std::uint64_t unique, std::uint32_t depth, std::uint64_t empty, std::uint64_t max_leaf,
+                     OctreeStats& stats) {
+    octree.info = root;
+    octree.info.depth = depth;
+    octree.info.max_leaf_splats = params.max_leaf_splats;
+    octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
+    octree.info.filled_leaves = static_cast<std::uint32_t>(octree.leaf_info.size() - 1);
+    octree.info.splat_count = octree.splats.size();
+    octree.info.unique_splats = unique;
+    octree.info.flags = params.replicate ? pool::k_octree_replicated : 0u;
+    stats.nodes = octree.info.node_count;
+    stats.depth = depth;
+    stats.filled_leaves = octree.info.filled_leaves;
+    stats.empty_leaves = static_cast<std::uint32_t>(empty);
+    stats.unique_splats = unique;
+    stats.stored_splats = octree.splats.size();
+    stats.replication_factor = unique == 0 ? 0.0 : double(stats.stored_splats) / double(unique);
+    stats.max_leaf_count = max_leaf;
+    stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
+                  octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+}
+
 /// A subtree under construction: nodes in local numbering (children of a node contiguous, the
 /// internal nodes' address = local index of the first child), leaves in depth-first order.
 struct LocalTree {
@@ -394,25 +420,7 @@ private:
         });
         octree.leaf_info[filled] = static_cast<std::uint32_t>(stored);
 
-        octree.info = m_info;
-        octree.info.depth = depth;
-        octree.info.max_leaf_splats = m_params.max_leaf_splats;
-        octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
-        octree.info.filled_leaves = static_cast<std::uint32_t>(filled);
-        octree.info.splat_count = stored;
-        octree.info.unique_splats = m_splats.size();
-        octree.info.flags = m_params.replicate ? pool::k_octree_replicated : 0u;
-
-        stats.nodes = octree.info.node_count;
-        stats.depth = depth;
-        stats.filled_leaves = octree.info.filled_leaves;
-        stats.empty_leaves = static_cast<std::uint32_t>(empty);
-        stats.unique_splats = m_splats.size();
-        stats.stored_splats = stored;
-        stats.replication_factor = m_splats.empty() ? 0.0 : double(stored) / double(m_splats.size());
-        stats.max_leaf_count = max_leaf;
-        stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
-                      octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+        describe_octree(octree, m_info, m_params, m_splats.size(), depth, empty, max_leaf, stats);
         return octree;
     }
 
@@ -597,24 +605,7 @@ SplatOctree build_sorted(pre::LargeVector<BuildSplat> splats, const pool::Octree
     octree.nodes = std::move(r.nodes);
     octree.leaf_info = std::move(r.leaf_info);
     octree.splats = std::move(r.splats);
-    octree.info = info;
-    octree.info.depth = r.depth;
-    octree.info.max_leaf_splats = params.max_leaf_splats;
-    octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
-    octree.info.filled_leaves = static_cast<std::uint32_t>(octree.leaf_info.size() - 1);
-    octree.info.splat_count = octree.splats.size();
-    octree.info.unique_splats = splats.size();
-    octree.info.flags = params.replicate ? pool::k_octree_replicated : 0u;
-    stats.nodes = octree.info.node_count;
-    stats.depth = r.depth;
-    stats.filled_leaves = octree.info.filled_leaves;
-    stats.empty_leaves = static_cast<std::uint32_t>(r.empty_leaves);
-    stats.unique_splats = splats.size();
-    stats.stored_splats = octree.splats.size();
-    stats.replication_factor = splats.empty() ? 0.0 : double(stats.stored_splats) / double(splats.size());
-    stats.max_leaf_count = r.max_leaf;
-    stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
-                  octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+    describe_octree(octree, info, params, splats.size(), r.depth, r.empty_leaves, r.max_leaf, stats);
     return octree;
 #else
     throw Error("octree build: this build has no CUDA backend");

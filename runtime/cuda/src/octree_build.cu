@@ -16,7 +16,6 @@
 // leaf's closed box first, then the replicas, each group in list order).
 #include <cuda_runtime.h>
 
-#include <cstring>
 #include <cub/device/device_scan.cuh>
 #include <vector>
 
