@@ -128,6 +128,21 @@ void AtomicFile::write(const void* data, std::size_t n) {
     }
 }
 
+void AtomicFile::write_at(std::uint64_t offset, const void* data, std::size_t n) {
+    if (m_fd < 0 || offset > m_written || n > m_written - offset)
+        throw Error(m_path.string() + ": internal: rewriting bytes not yet written");
+    const auto* p = static_cast<const unsigned char*>(data);
+    std::size_t done = 0;
+    while (done < n) {
+        const ssize_t w = ::pwrite(m_fd, p + done, n - done, static_cast<off_t>(offset + done));
+        if (w < 0) {
+            if (errno == EINTR) continue;
+            fail("write failed", errno);
+        }
+        done += static_cast<std::size_t>(w);
+    }
+}
+
 void AtomicFile::commit() {
     if (m_fd < 0) {
         // Written by someone else through temporary(), or nothing written: an empty file.

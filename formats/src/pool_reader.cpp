@@ -17,12 +17,8 @@ std::uint64_t checksum(std::span<const std::byte> bytes) {
     return XXH3_64bits(bytes.data(), bytes.size());
 }
 
-namespace {
-
-/// Maps the pages of [data, data + bytes) of a mapped file into this process from every core it may
-/// use (a read per 4 KiB, in 2 MiB runs) before a serial pass reads them: one thread faulting a
-/// 175 MB section in page by page was most of prt-cull's one-thread time outside the culling
-/// (perf, dev VM). Small ranges are left to the serial pass.
+/// One thread faulting a 175 MB section in page by page was most of prt-cull's one-thread time
+/// outside the culling (perf, dev VM).
 void map_in_parallel(const std::byte* data, std::size_t bytes) {
     constexpr std::size_t k_page = 4096, k_run = std::size_t{2} << 20;
     if (bytes < 4 * k_run) return;
@@ -31,8 +27,6 @@ void map_in_parallel(const std::byte* data, std::size_t bytes) {
         for (std::size_t i = b; i < e; ++i) (void)*static_cast<const volatile std::byte*>(data + i * k_page);
     });
 }
-
-}  // namespace
 
 /// checksum() of a section; on a mapped file, in 64 MiB steps (XXH3 streaming: the same value),
 /// each step's pages mapped in parallel first (map_in_parallel) and dropped once hashed.

@@ -10,6 +10,7 @@
 
 #include "prt/atomic_file.h"
 #include "prt/formats/pool.h"
+#include "xxhash_inline.h"
 
 namespace prt::pool {
 
@@ -51,7 +52,16 @@ void PoolWriter::add_shared(SectionType type, std::uint32_t element_size, std::u
     if (element_size == 0 || payload.size() != count * element_size)
         throw Error(std::string("internal: section ") + section_name(type) + ": payload size mismatch");
     remove(type);
-    m_sections.push_back({type, element_size, count, payload, std::move(keep_alive)});
+    m_sections.push_back(
+        {type, element_size, count, payload, payload.size(), nullptr, std::move(keep_alive)});
+}
+
+void PoolWriter::add_generated(SectionType type, std::uint32_t element_size, std::uint64_t count,
+                               Generator generate) {
+    if (element_size == 0 || count > std::numeric_limits<std::uint64_t>::max() / element_size || !generate)
+        throw Error(std::string("internal: section ") + section_name(type) + ": bad generated section");
+    remove(type);
+    m_sections.push_back({type, element_size, count, {}, count * element_size, std::move(generate), nullptr});
 }
 
 void PoolWriter::add(SectionType type, std::uint32_t element_size, std::uint64_t count,
@@ -95,11 +105,16 @@ void PoolWriter::add_provenance(const std::string& tool, const std::string& vers
     m_provenance = list.dump();
 }
 
-std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::size_t)>& sink) const {
+std::uint64_t PoolWriter::emit(const ByteSink& sink, const ByteSink& rewrite_front) const {
     // Section order: provenance first, then by type, so files are deterministic.
     std::vector<Pending> sections = m_sections;
-    sections.push_back({SectionType::provenance, 1, m_provenance.size(),
-                        {reinterpret_cast<const std::byte*>(m_provenance.data()), m_provenance.size()}, nullptr});
+    sections.push_back({SectionType::provenance,
+                        1,
+                        m_provenance.size(),
+                        {reinterpret_cast<const std::byte*>(m_provenance.data()), m_provenance.size()},
+                        m_provenance.size(),
+                        nullptr,
+                        nullptr});
     std::stable_sort(sections.begin(), sections.end(),
                      [](const Pending& a, const Pending& b) { return a.type < b.type; });
     if (sections.size() > k_max_sections) throw Error("too many sections");
@@ -118,21 +133,19 @@ std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::s
         e.type = static_cast<std::uint32_t>(p.type);
         e.version = section_version(p.type);
         e.offset = offset;
-        e.size = p.payload.size();
+        e.size = p.size;
         e.count = p.count;
         e.element_size = p.element_size;
-        e.checksum = p.checksum_known ? p.checksum : checksum_section(p.payload, p.file_mapped);
         const char* name = section_name(p.type);  // informative; long names are cut to 15 bytes
         std::memcpy(e.name, name, std::min(std::strlen(name), sizeof e.name - 1));
         offset = align_up(offset + e.size);
     }
     header.file_size = offset;
-    header.table_checksum =
-        checksum({reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry)});
-    header.header_checksum =
-        checksum({reinterpret_cast<const std::byte*>(&header), offsetof(PoolHeader, header_checksum)});
+    const std::uint64_t front = table[0].offset;  // header, table, padding
 
-    // Front to back: header, table, then each payload after zero padding to its offset.
+    // Front to back: the header and table as zeros (their checksums are not known yet), then each
+    // payload after zero padding to its offset, hashed as it is handed over (one pass over the data:
+    // hashing first and writing after read a mapped section twice).
     static const std::byte zeros[k_alignment] = {};
     std::uint64_t at = 0;
     auto pad_to = [&](std::uint64_t target) {
@@ -142,35 +155,75 @@ std::uint64_t PoolWriter::emit(const std::function<void(const std::byte*, std::s
             at += n;
         }
     };
-    sink(reinterpret_cast<const std::byte*>(&header), sizeof header);
-    at = sizeof header;
-    pad_to(header.table_offset);
-    sink(reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry));
-    at += table.size() * sizeof(SectionEntry);
+    pad_to(front);
+    XXH3_state_t state;
     for (std::size_t i = 0; i < sections.size(); ++i) {
+        const Pending& p = sections[i];
         pad_to(table[i].offset);
-        const std::span<const std::byte> payload = sections[i].payload;
-        constexpr std::size_t chunk = std::size_t{64} << 20;
-        for (std::size_t done = 0; done < payload.size(); done += chunk) {
-            const std::size_t n = std::min(chunk, payload.size() - done);
-            sink(payload.data() + done, n);
-            if (sections[i].file_mapped) drop_mapped_pages(payload.data() + done, n);
+        const bool hash = !p.checksum_known;
+        if (hash) {
+            XXH3_INITSTATE(&state);
+            XXH3_64bits_reset(&state);
         }
-        at += payload.size();
+        // Hashed and written in pieces that stay in the cache between the two.
+        constexpr std::size_t piece = std::size_t{1} << 20;
+        auto take = [&](const std::byte* data, std::size_t n) {
+            for (std::size_t done = 0; done < n; done += piece) {
+                const std::size_t k = std::min(piece, n - done);
+                if (hash) XXH3_64bits_update(&state, data + done, k);
+                sink(data + done, k);
+            }
+        };
+        if (p.generate) {
+            std::uint64_t handed = 0;
+            p.generate([&](const std::byte* data, std::size_t n) {
+                if (n > p.size - handed)
+                    throw Error(std::string("internal: section ") + section_name(p.type) +
+                                ": the generator handed over more bytes than the section holds");
+                handed += n;
+                take(data, n);
+            });
+            if (handed != p.size)
+                throw Error(std::string("internal: section ") + section_name(p.type) +
+                            ": the generator handed over fewer bytes than the section holds");
+        } else {
+            const std::span<const std::byte> payload = p.payload;
+            constexpr std::size_t step = std::size_t{64} << 20;
+            for (std::size_t done = 0; done < payload.size(); done += step) {
+                const std::size_t n = std::min(step, payload.size() - done);
+                if (p.file_mapped && hash) map_in_parallel(payload.data() + done, n);
+                take(payload.data() + done, n);
+                if (p.file_mapped) drop_mapped_pages(payload.data() + done, n);
+            }
+        }
+        at += p.size;
+        table[i].checksum = hash ? XXH3_64bits_digest(&state) : p.checksum;
     }
     pad_to(header.file_size);
+
+    header.table_checksum =
+        checksum({reinterpret_cast<const std::byte*>(table.data()), table.size() * sizeof(SectionEntry)});
+    header.header_checksum =
+        checksum({reinterpret_cast<const std::byte*>(&header), offsetof(PoolHeader, header_checksum)});
+    std::vector<std::byte> head(front, std::byte{0});
+    std::memcpy(head.data(), &header, sizeof header);
+    std::memcpy(head.data() + header.table_offset, table.data(), table.size() * sizeof(SectionEntry));
+    rewrite_front(head.data(), head.size());
     return header.file_size;
 }
 
 std::vector<std::byte> PoolWriter::serialize() const {
     std::vector<std::byte> out;
-    emit([&](const std::byte* data, std::size_t n) { out.insert(out.end(), data, data + n); });
+    emit([&](const std::byte* data, std::size_t n) { out.insert(out.end(), data, data + n); },
+         [&](const std::byte* data, std::size_t n) { std::memcpy(out.data(), data, n); });
     return out;
 }
 
 std::uint64_t PoolWriter::write(const std::filesystem::path& path) const {
     AtomicFile file(path);
-    const std::uint64_t bytes = emit([&](const std::byte* data, std::size_t n) { file.write(data, n); });
+    const std::uint64_t bytes =
+        emit([&](const std::byte* data, std::size_t n) { file.write(data, n); },
+             [&](const std::byte* data, std::size_t n) { file.write_at(0, data, n); });
     file.commit();
     return bytes;
 }

@@ -15,6 +15,7 @@
 #include "brick_build.h"
 #include "cull_build.h"
 #include "octree_build.h"
+#include "prt/formats/pool.h"
 #include "spill_file.h"
 
 namespace prt::pre {
@@ -74,10 +75,14 @@ struct PointBrickStats {
            assemble_seconds = 0;
 };
 
-/// The brick sections with brick_data in a spill file (`data`, `data_bytes` long).
+/// The brick sections; brick_data (`data_bytes` long) is not gathered anywhere: `data` hands it to a
+/// sink front to back (the payloads in table order, each padded to pool::k_brick_alignment with
+/// zeros), reading the cells' payloads from the spill or part files it holds, as the pool is written
+/// (pool::PoolWriter::add_generated). It may be called more than once; it reports "writing bricks"
+/// through the build's PointBrickParams::progress, which must outlive it (null: none).
 struct PointBricks {
     BrickedOctree bricks;  ///< data empty
-    SpillFile data;
+    pool::PoolWriter::Generator data;
     std::uint64_t data_bytes = 0;
 };
 

@@ -284,21 +284,16 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         pre::cell_workers(p), p.spill_folder.string().c_str());
     pre::PointBrickStats stats;
     pre::PointBricks built;
-    {
-        tool::StagedProgress progress("prt-bricks", step.quiet());
-        report_to(p, progress);
-        built = opt.stage == "merge" ? pre::merge_brick_cells(folder, p, &stats) : step.about_input([&] {
-            return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats);
-        });
-        progress.finish();
-    }
+    // Lives until the pool is written: the brick payloads are copied into it then (PointBricks::data).
+    tool::StagedProgress progress("prt-bricks", step.quiet());
+    report_to(p, progress);
+    built = opt.stage == "merge" ? pre::merge_brick_cells(folder, p, &stats) : step.about_input([&] {
+        return pre::build_bricks_from_points(positions, normals, radii, colors, p, &stats);
+    });
     pool::PoolWriter& writer = step.writer();
     pre::BrickedOctree& b = built.bricks;
     pre::add_brick_index_sections(std::move(b), writer);
-    auto data = std::make_shared<pre::SpillFile>(std::move(built.data));
-    writer.add_view(pool::SectionType::brick_data, 1, built.data_bytes,
-                    {data->data(), static_cast<std::size_t>(built.data_bytes)},
-                    std::shared_ptr<const void>(data, data->data()), true);
+    writer.add_generated(pool::SectionType::brick_data, 1, built.data_bytes, built.data);
     const std::uint64_t point_bytes = drop_points(step, keep_points);
     if (keep_points && own_radii)  // the per-point sections kept: the radii computed here with them
         step.writer().add_array(pool::SectionType::radii,
@@ -319,6 +314,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                                  {"staged", opt.stage == "merge"}};
     if (own_radii) parameters["radii"] = own.parameters;
     const std::uint64_t bytes = step.write(parameters);
+    progress.finish();
     const double per_point = 1.0 / double(stats.points ? stats.points : 1);
     step.note(
         "prt-bricks: %u cells (deepest at level %u, at most %llu points, %.2f records per point); %llu "

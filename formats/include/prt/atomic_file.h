@@ -34,6 +34,9 @@ public:
     /// commit()'s fsync waits for the tail only and a large file's disk writes overlap its copy
     /// into the page cache.
     void write(const void* data, std::size_t n);
+    /// Writes n bytes over the file's bytes at `offset`, all of which write() has written already
+    /// (a header whose checksums are known once the rest is written).
+    void write_at(std::uint64_t offset, const void* data, std::size_t n);
     /// fsync, rename over path(), then removal of this host's dead writers' temporary files.
     void commit();
 

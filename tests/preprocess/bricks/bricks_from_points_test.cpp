@@ -143,7 +143,10 @@ void expect_equal(const pre::BrickedOctree& ref, const pre::PointBricks& got) {
     expect_same_bytes(ref.lod_nodes, got.bricks.lod_nodes, "LOD prefix node");
     expect_same_bytes(ref.lod_discs, got.bricks.lod_discs, "LOD prefix disc");
     ASSERT_EQ(ref.data.size(), got.data_bytes);
-    ASSERT_EQ(std::memcmp(ref.data.data(), got.data.data(), ref.data.size()), 0) << "brick payloads differ";
+    std::vector<std::byte> data;
+    got.data([&](const std::byte* p, std::size_t n) { data.insert(data.end(), p, p + n); });
+    ASSERT_EQ(data.size(), ref.data.size());
+    ASSERT_EQ(std::memcmp(ref.data.data(), data.data(), ref.data.size()), 0) << "brick payloads differ";
 }
 
 TEST(BricksFromPoints, CulledCellByCellEqualsTheInCorePipeline) {
@@ -384,6 +387,32 @@ TEST(BricksFromPoints, StagedBuildNeedsOutputOnlyToMerge) {
         const auto x = a.bytes(*a.find(t)), y = b.bytes(*b.find(t));
         EXPECT_TRUE(x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size()) == 0) << int(t);
     }
+    // A part whose payload was damaged after it was built: the merge reads the payloads as it writes
+    // the pool, so the write fails with one line naming the part, and the pool written before stays.
+    const std::string before = test::slurp(file("staged.pool"));
+    const std::filesystem::path part = cells.path / ("cells-0-" + all + ".bin");  // the last cells stage's
+    {
+        // a byte half way through the payloads (the footer's first word: where they end)
+        std::fstream f(part, std::ios::in | std::ios::out | std::ios::binary);
+        ASSERT_TRUE(f.is_open()) << part;
+        std::uint64_t end = 0;
+        f.seekg(-32, std::ios::end);
+        f.read(reinterpret_cast<char*>(&end), sizeof end);
+        ASSERT_GT(end, 0u);
+        char c = 0;
+        f.seekg(std::streamoff(end / 2));
+        f.read(&c, 1);
+        c = char(c ^ 0x5a);
+        f.seekp(std::streamoff(end / 2));
+        f.write(&c, 1);
+    }
+    r = run("--stage merge" + staged + " -q -o " + file("staged.pool"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.err, "prt-bricks: error: " + part.string() +
+                         ": checksum mismatch: corrupt, truncated or not written by this prt-bricks\n");
+    EXPECT_TRUE(test::slurp(file("staged.pool")) == before);
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path))
+        EXPECT_EQ(entry.path().filename().string().find(".tmp."), std::string::npos) << entry.path();
 }
 
 TEST(BricksFromPoints, StagedBuildRefusesMissingCorruptOverlappingAndForeignParts) {
@@ -429,7 +458,8 @@ TEST(BricksFromPoints, StagedBuildRefusesMissingCorruptOverlappingAndForeignPart
         c = char(c ^ 0x5a);
         f.write(&c, 1);
     }
-    e = error_of([&] { pre::merge_brick_cells(folder.path, p); });
+    // (the payloads are read, and their checksums checked, as the pool is written: PointBricks::data)
+    e = error_of([&] { pre::merge_brick_cells(folder.path, p).data([](const std::byte*, std::size_t) {}); });
     EXPECT_NE(e.find(part.string() + ": checksum mismatch"), std::string::npos) << e;
     std::filesystem::resize_file(folder.path / "plan.bin", 40);
     e = error_of([&] { pre::merge_brick_cells(folder.path, p); });

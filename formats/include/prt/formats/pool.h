@@ -130,6 +130,15 @@ public:
         add_shared(type, element_size, count, payload, std::move(keep_alive));
         m_sections.back().file_mapped = file_mapped;
     }
+    /// The bytes of a generated section: `sink` takes them front to back, in any pieces.
+    using ByteSink = std::function<void(const std::byte*, std::size_t)>;
+    using Generator = std::function<void(const ByteSink& sink)>;
+    /// Adds (or replaces) a section whose `count` x `element_size` bytes `generate` hands to its sink
+    /// when the pool is written, front to back (each write() or serialize() calls it once): a large
+    /// section assembled from pieces goes to the file without first being gathered in memory or a
+    /// spill file (prt-bricks' brick payloads). A generator that hands over another number of bytes
+    /// is an error (nothing is written).
+    void add_generated(SectionType type, std::uint32_t element_size, std::uint64_t count, Generator generate);
     /// Carries every section of `source` over as a view (no copy), except provenance, which is
     /// merged by add_provenance().
     void carry_over(const PoolFile& source);
@@ -144,7 +153,9 @@ public:
     /// Writes to "PATH.tmp.HOST.PID", fsyncs, renames over PATH; after the rename, removes this
     /// host's temporary files of PATH left by writers that no longer run (POOL.md "Writing"). On
     /// any failure the temporary file is removed and PATH is untouched. Returns the bytes written.
-    /// The sections are streamed to the file (the pool is never assembled in memory).
+    /// The sections are streamed to the file (the pool is never assembled in memory) in one pass:
+    /// each payload is hashed as it is written, and the header and table, whose checksums that
+    /// gives, are written over their place at the end.
     std::uint64_t write(const std::filesystem::path& path) const;
     /// The exact bytes write() would produce (for tests and the fuzz corpus).
     std::vector<std::byte> serialize() const;
@@ -154,7 +165,9 @@ private:
         SectionType type;
         std::uint32_t element_size;
         std::uint64_t count;
-        std::span<const std::byte> payload;
+        std::span<const std::byte> payload;      // empty for a generated section
+        std::uint64_t size = 0;                  // payload bytes
+        Generator generate;                      // a generated section's bytes, else null
         std::shared_ptr<const void> keep_alive;  // owner of payload, or null for carried views
         bool file_mapped = false;                // a file mapping: pages dropped once written
         bool checksum_known = false;             // carried: the source's checked checksum
@@ -162,8 +175,10 @@ private:
     };
     void add_shared(SectionType type, std::uint32_t element_size, std::uint64_t count,
                     std::span<const std::byte> payload, std::shared_ptr<const void> keep_alive);
-    /// Lays the file out and hands its bytes, front to back, to `sink`; returns the file size.
-    std::uint64_t emit(const std::function<void(const std::byte*, std::size_t)>& sink) const;
+    /// Lays the file out and hands its bytes, front to back, to `sink` (the header and table as
+    /// zeros), hashing each payload as it goes, then the header and table with their checksums to
+    /// `rewrite_front` (the same bytes' place at offset 0); returns the file size.
+    std::uint64_t emit(const ByteSink& sink, const ByteSink& rewrite_front) const;
     std::vector<Pending> m_sections;
     std::string m_provenance = "[]";
 };
@@ -173,6 +188,9 @@ std::uint64_t checksum(std::span<const std::byte> bytes);
 /// checksum(); when `mapped` (a file mapping), computed in 64 MiB steps whose pages are dropped
 /// once hashed (prt::drop_mapped_pages): the same value, a bounded resident set.
 std::uint64_t checksum_section(std::span<const std::byte> bytes, bool mapped);
+/// Maps the pages of a file mapping's [data, data + bytes) in with every core (one read per 4 KiB, in
+/// 2 MiB runs) before a one-thread pass reads them; ranges under 8 MiB are left to that pass.
+void map_in_parallel(const std::byte* data, std::size_t bytes);
 
 /// Sets `info`'s point_count and bounding box (bounds_min, bounds_max) from the points' positions
 /// in its local frame (an empty set: min = FLT_MAX, max = -FLT_MAX).
