@@ -561,6 +561,9 @@ private:
             node_box(m_octree.info, lc.level, lc.cell, lo, hi);
             for (std::uint32_t k = sb; k < se; ++k) {
                 const pool::Splat& sp = m_octree.splats[k];
+                // encode() reads each splat's colour by its point index, scattered over the whole
+                // colour array: fetched here, the misses overlap this loop's work.
+                if (sp.point < m_colors.size()) __builtin_prefetch(m_colors.data() + sp.point);
                 s.splats.push_back(&sp);
                 const double cp[3] = {sp.position.x, sp.position.y, sp.position.z};
                 bool inside = true;
