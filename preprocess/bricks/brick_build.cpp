@@ -208,7 +208,7 @@ void lay_out_bricks(const TopCut& cut, const Subtrees& sub, const pool::OctreeIn
                                           counts[b].direct);
         e.top_node = t;
         e.level = cut.level[t];
-        offset += (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
+        offset += pool::brick_padded_size(e.size);
     }
     out.data.assign(offset, std::byte{0});
 }

@@ -205,12 +205,7 @@ struct PayloadSource {
     AppendFile payloads;            // the whole build in one process
     std::vector<MappedFile> parts;  // the staged build's parts (then `payloads` is empty)
     std::vector<Brick> bricks;      // in table order
-    std::uint64_t bytes = 0;        // the section's size
     std::function<void(const char*, std::uint64_t, std::uint64_t)> progress;
-
-    static std::uint64_t padded(std::uint64_t size) {
-        return (size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
-    }
 
     /// Bricks [b, e) one after the other into `to` (padded, zeros between them).
     void read(std::size_t b, std::size_t e, std::byte* to) const {
@@ -226,8 +221,8 @@ struct PayloadSource {
                     throw Error(file.label() +
                                 ": checksum mismatch: corrupt, truncated or not written by this prt-bricks");
             }
-            std::memset(to + br.size, 0, padded(br.size) - br.size);
-            to += padded(br.size);
+            std::memset(to + br.size, 0, pool::brick_padded_size(br.size) - br.size);
+            to += pool::brick_padded_size(br.size);
         }
     }
 
@@ -237,7 +232,7 @@ struct PayloadSource {
         constexpr std::uint64_t k_batch = std::uint64_t(16) << 20;
         std::vector<std::pair<std::size_t, std::uint64_t>> batches;  // (first brick, bytes)
         for (std::size_t k = 0; k < bricks.size(); ++k) {
-            const std::uint64_t n = padded(bricks[k].size);
+            const std::uint64_t n = pool::brick_padded_size(bricks[k].size);
             if (batches.empty() || batches.back().second + n > k_batch) batches.emplace_back(k, 0);
             batches.back().second += n;
         }
@@ -259,7 +254,6 @@ struct PayloadSource {
             });
         };
         if (!batches.empty()) start(0);
-        std::uint64_t done = 0;
         for (std::size_t g = 0; g < batches.size(); ++g) {
             reader.join();
             if (failed) std::rethrow_exception(failed);
@@ -270,12 +264,8 @@ struct PayloadSource {
                 if (reader.joinable()) reader.join();
                 throw;
             }
-            done += batches[g].second;
             if (progress) progress("writing bricks", end_of(g), bricks.size());
         }
-        if (done != bytes)
-            throw Error("brick payloads: " + std::to_string(done) + " bytes, not " + std::to_string(bytes) +
-                        " (internal error)");
     }
 };
 
@@ -970,8 +960,7 @@ private:
             pool::BrickEntry e = m_cells[brick_src[b].first].table[brick_src[b].second];
             e.offset = offset;
             br.table[b] = e;
-            offset +=
-                (e.size + pool::k_brick_alignment - 1) / pool::k_brick_alignment * pool::k_brick_alignment;
+            offset += pool::brick_padded_size(e.size);
         }
         if (m_params.bricks.lod_splats > 0) {  // the LOD prefixes in brick order
             br.lod_table.resize(brick_src.size());
@@ -995,7 +984,6 @@ private:
             const pool::BrickEntry& src = cb.table[brick_src[b].second];
             source->bricks[b] = PayloadSource::Brick{cb.part, src.offset, src.size, src.checksum};
         }
-        source->bytes = offset;
         source->progress = m_params.progress;
         out.data = [source](const pool::PoolWriter::ByteSink& sink) { source->generate(sink); };
         out.data_bytes = offset;

@@ -71,6 +71,10 @@ namespace prt::pool {
 
 /// Every brick payload starts on this boundary inside brick_data.
 inline constexpr std::uint64_t k_brick_alignment = 64;
+/// A payload's `size` rounded up to k_brick_alignment: the bytes it takes in brick_data.
+constexpr std::uint64_t brick_padded_size(std::uint64_t size) {
+    return (size + k_brick_alignment - 1) / k_brick_alignment * k_brick_alignment;
+}
 /// Octahedral normal levels per axis: codes 0..1022, 511 is exactly 0 (so +-z and the folds are exact).
 inline constexpr std::uint32_t k_oct_max_code = 1022;
 inline constexpr float k_oct_half = 511.0f;
