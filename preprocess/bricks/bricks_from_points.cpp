@@ -300,10 +300,16 @@ public:
     /// `records_file`, in that named file (the staged build).
     void plan(PointBrickStats& stats, const std::filesystem::path& records_file = {}) {
         const double start = tool::now_seconds();
-        bounds(stats);           // 1
+        double t[5] = {start};
+        bounds(stats);  // 1
+        t[1] = tool::now_seconds();
         partition(histogram());  // 2, 3
-        count();                 // 4
-        scatter(records_file);   // 5
+        t[2] = tool::now_seconds();
+        count();  // 4
+        t[3] = tool::now_seconds();
+        scatter(records_file);  // 5
+        t[4] = tool::now_seconds();
+        for (int k = 0; k < 4; ++k) stats.partition_pass_seconds[k] = t[k + 1] - t[k];
         stats.partition_seconds = tool::now_seconds() - start;
     }
 
@@ -781,25 +787,36 @@ private:
                         ? SpillFile(m_params.spill_folder, bytes, "the partitioned points")
                         : SpillFile::named(records_file, bytes + sizeof m_plan_id, "the partitioned points");
         if (!records_file.empty()) std::memcpy(m_records.data() + bytes, &m_plan_id, sizeof m_plan_id);
-        Record* out = m_records.as<Record>().data();
         std::atomic<std::uint64_t> done{0};
         m_record_view = m_records.as<const Record>().first(records);
+        // Each chunk's records are sorted by cell in a buffer of the worker's (the count pass gave
+        // the chunk's count per cell) and written with one pwrite per cell: through the mapping, every
+        // page of the spill file cost the writing thread a fault (the 20M room's scatter 2.05 s on the
+        // dev VM's 2 cores, of which the count pass's same classification is 0.65 s).
+        std::vector<std::vector<Record>> buffers(m_threads);
+        std::vector<std::vector<std::uint64_t>> cursors(m_threads, std::vector<std::uint64_t>(cells));
         parallel_chunks(
             m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
-                std::uint64_t* slot = m_slot.data() + (b / k_chunk) * cells;
-                const std::vector<std::uint64_t> first(slot, slot + cells);
+                const std::size_t row = (b / k_chunk) * cells;
+                const std::uint64_t* count = m_cell_count.data() + row;
+                std::vector<std::uint64_t>& at = cursors[w];
+                std::uint64_t total = 0;
+                for (std::size_t c = 0; c < cells; ++c) at[c] = total, total += count[c];
+                std::vector<Record>& buffer = buffers[w];
+                if (buffer.size() < total) buffer.resize(total);
                 BuildSplat s;
                 for (std::size_t i = b; i < e; ++i) {
                     if (!prepare(i, s)) continue;
                     const Record r{m_positions[i], m_normals[i], m_radii[i],
                                    m_colors.empty() ? pool::Rgba8{255, 255, 255, 255} : m_colors[i]};
                     classify(
-                        s, [&](std::uint32_t cell) { out[slot[cell]++] = r; }, nullptr, nullptr);
+                        s, [&](std::uint32_t cell) { buffer[at[cell]++] = r; }, nullptr, nullptr);
                 }
                 drop_input(b, e);
-                // the records written stay in the spill file (shared mapping), not in the process
                 for (std::size_t c = 0; c < cells; ++c)
-                    drop_pages(out + first[c], (slot[c] - first[c]) * sizeof(Record));
+                    if (count[c] > 0)
+                        m_records.write_at(m_slot[row + c] * sizeof(Record),
+                                           buffer.data() + (at[c] - count[c]), count[c] * sizeof(Record));
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
                 if (w == 0) report("partitioning points", m_positions.size() + d, 2 * m_positions.size());
             });

@@ -6,6 +6,7 @@
 // above the cells are assembled at the end.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -73,6 +74,8 @@ struct PointBrickStats {
     /// octree builds, culling, brick cuts, and the assembly.
     double partition_seconds = 0, octree_seconds = 0, cull_seconds = 0, brick_seconds = 0,
            assemble_seconds = 0;
+    /// partition_seconds by pass: bounds, histogram (with the partition), count, scatter.
+    std::array<double, 4> partition_pass_seconds{};
 };
 
 /// The brick sections; brick_data (`data_bytes` long) is not gathered anywhere: `data` hands it to a

@@ -36,10 +36,26 @@ int temporary_file(const std::filesystem::path& folder, const std::string& what)
     return fd;
 }
 
+/// pwrite of all `bytes` at `offset`; throws prt::Error "spill file for WHAT: write failed: REASON".
+void write_fully(int fd, std::uint64_t offset, const void* data, std::uint64_t bytes,
+                 const std::string& what) {
+    const auto* p = static_cast<const char*>(data);
+    for (std::uint64_t done = 0; done < bytes;) {
+        const ssize_t n =
+            ::pwrite(fd, p + done, static_cast<std::size_t>(bytes - done), static_cast<off_t>(offset + done));
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0)
+            throw Error("spill file for " + what +
+                        ": write failed: " + std::strerror(n < 0 ? errno : ENOSPC));
+        done += static_cast<std::uint64_t>(n);
+    }
+}
+
 }  // namespace
 
 SpillFile::SpillFile(const std::filesystem::path& folder, std::uint64_t bytes, const std::string& what) {
     const std::filesystem::path dir = folder.empty() ? std::filesystem::path(".") : folder;
+    m_what = what;
     map(temporary_file(folder, what), bytes, dir.string() + ": cannot create a spill file for " + what);
 }
 
@@ -48,6 +64,7 @@ SpillFile SpillFile::named(const std::filesystem::path& file, std::uint64_t byte
     const int fd = ::open(file.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) throw Error(failure + ": " + std::strerror(errno));
     SpillFile f;
+    f.m_what = what;
     f.map(fd, bytes, failure);
     return f;
 }
@@ -63,8 +80,15 @@ void SpillFile::map(int fd, std::uint64_t bytes, const std::string& failure) {
         else
             m_data = static_cast<std::byte*>(map), m_size = bytes;
     }
-    ::close(fd);
-    if (err != 0) throw Error(failure + ": " + std::strerror(err));
+    if (err != 0) {
+        ::close(fd);
+        throw Error(failure + ": " + std::strerror(err));
+    }
+    m_fd = fd;
+}
+
+void SpillFile::write_at(std::uint64_t offset, const void* data, std::uint64_t bytes) const {
+    write_fully(m_fd, offset, data, bytes, m_what);
 }
 
 AppendFile::AppendFile(const std::filesystem::path& folder, const std::string& what)
@@ -91,16 +115,7 @@ AppendFile::~AppendFile() {
 
 std::uint64_t AppendFile::append(const void* data, std::uint64_t bytes) {
     const std::uint64_t at = m_size;
-    const auto* p = static_cast<const char*>(data);
-    for (std::uint64_t done = 0; done < bytes;) {
-        const ssize_t n =
-            ::pwrite(m_fd, p + done, static_cast<std::size_t>(bytes - done), static_cast<off_t>(at + done));
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0)
-            throw Error("spill file for " + m_what +
-                        ": write failed: " + std::strerror(n < 0 ? errno : ENOSPC));
-        done += static_cast<std::uint64_t>(n);
-    }
+    write_fully(m_fd, at, data, bytes, m_what);
     m_size += bytes;
     return at;
 }
@@ -119,13 +134,18 @@ void AppendFile::read(std::uint64_t offset, void* out, std::uint64_t bytes) cons
 }
 
 SpillFile::SpillFile(SpillFile&& other) noexcept
-    : m_data(std::exchange(other.m_data, nullptr)), m_size(std::exchange(other.m_size, 0)) {}
+    : m_data(std::exchange(other.m_data, nullptr)),
+      m_size(std::exchange(other.m_size, 0)),
+      m_fd(std::exchange(other.m_fd, -1)),
+      m_what(std::move(other.m_what)) {}
 
 SpillFile& SpillFile::operator=(SpillFile&& other) noexcept {
     if (this != &other) {
         release();
         m_data = std::exchange(other.m_data, nullptr);
         m_size = std::exchange(other.m_size, 0);
+        m_fd = std::exchange(other.m_fd, -1);
+        m_what = std::move(other.m_what);
     }
     return *this;
 }
@@ -136,8 +156,10 @@ SpillFile::~SpillFile() {
 
 void SpillFile::release() {
     if (m_data) ::munmap(m_data, m_size);
+    if (m_fd >= 0) ::close(m_fd);
     m_data = nullptr;
     m_size = 0;
+    m_fd = -1;
 }
 
 void SpillFile::drop() const {
