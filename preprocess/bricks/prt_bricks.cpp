@@ -88,8 +88,12 @@ OwnRadii compute_own_radii(prt::tool::PoolStep& step, std::span<const prt::pool:
     // what decides the radii (the backend does not: its radii are the same)
     out.parameters = {
         {"k", rp.k}, {"clamp_factor", rp.clamp_factor}, {"clamp_scope", pre::clamp_scope_name(rp.scope)}};
-    out.stats = {
-        {"backend", rs.backend}, {"seconds", rs.seconds}, {"median", rs.median}, {"clamped", rs.clamped}};
+    out.stats = {{"backend", rs.backend},
+                 {"seconds", rs.seconds},
+                 {"seconds_index", rs.seconds_index},
+                 {"seconds_search", rs.seconds_search},
+                 {"median", rs.median},
+                 {"clamped", rs.clamped}};
     return out;
 }
 
