@@ -32,6 +32,6 @@ print('   partition passes', s.get('partition_passes'), 'radii', s['radii'], 'pe
 }
 line new $x/prt-bricks
 line cur $cur/prt-bricks
-diff <(python3 $here/poolsum.py $w/b-cur.pool) <(python3 $here/poolsum.py $w/b-new.pool) > /dev/null \
+diff <(python3 $root/preprocess/bench/results/h200-2026-12-04-issue17-cells-alloc/poolsum.py $w/b-cur.pool) <(python3 $root/preprocess/bench/results/h200-2026-12-04-issue17-cells-alloc/poolsum.py $w/b-new.pool) > /dev/null \
   && echo "500M bricks: sections equal" || echo "500M bricks: SECTIONS DIFFER"
 echo "ALL_DONE $((SECONDS - t0)) s"
