@@ -7,7 +7,6 @@
 set -uo pipefail
 out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/b1.txt") 2>&1
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; t0=$SECONDS; root=$PWD
-here=$root/preprocess/bench/results/h200-2026-12-05-issue17-device-cells
 rm -rf /tmp/ab; mkdir -p /tmp/ab
 python3 -c "import tarfile; tarfile.open('build-ab/pack.tar.xz').extractall('/tmp/ab'); tarfile.open('build-ab/cur.tar.xz').extractall('/tmp/ab')"
 x=/tmp/ab/bin; cur=/tmp/ab/cur; w=/tmp/wb1; mkdir -p $w /tmp/b1
