@@ -162,6 +162,7 @@ private:
 /// Adds the cell counts and times of `from` (one cell's, or a part's) to `to`.
 void add_cells(PointBrickStats& to, const PointBrickStats& from) {
     to.cells += from.cells;
+    to.cells_culled_on_device += from.cells_culled_on_device;
     to.partition_depth = std::max(to.partition_depth, from.partition_depth);
     to.max_cell_points = std::max(to.max_cell_points, from.max_cell_points);
     to.cell_records += from.cell_records;
@@ -856,27 +857,34 @@ private:
             if (!colors.empty()) colors[k] = recs[k].color;
         }
         drop_pages(recs.data(), recs.size_bytes());
-        const double t0 = tool::now_seconds();
         OctreeParams op = m_params.octree;
         op.threads = threads;
         op.progress = nullptr;
         op.backend = m_octree_backend;
-        SplatOctree octree = build_octree_cell(positions, normals, radii, m_root, at, op);
-        std::vector<pool::Float3>().swap(positions);
-        std::vector<pool::Float3>().swap(normals);
-        std::vector<float>().swap(radii);
-        const double t1 = tool::now_seconds();
-        const std::uint64_t stored = octree.splats.size();
-        pool::SplatOctreeSections sections{octree.info, octree.nodes, octree.leaf_info, octree.splats};
-        CulledOctree culled;
+        SplatOctree octree;
+        std::uint64_t stored = 0;
+        double octree_seconds = 0, cull_seconds = 0;
+        bool on_device = false;
         if (m_params.cull) {
             CullParams cp = m_params.culling;
             cp.threads = threads;
             cp.progress = nullptr;
-            culled = cull_octree(sections, cp, nullptr, OctreePart{at});
-            std::vector<pool::Splat>().swap(octree.splats);
-            sections = pool::SplatOctreeSections{culled.info, octree.nodes, culled.leaf_info, culled.splats};
+            CulledCell culled = build_culled_cell(positions, normals, radii, m_root, at, op, cp);
+            octree = std::move(culled.octree);
+            stored = culled.stored;
+            octree_seconds = culled.build_seconds;
+            cull_seconds = culled.cull_seconds;
+            on_device = culled.on_device;
+        } else {
+            const double t0 = tool::now_seconds();
+            octree = build_octree_cell(positions, normals, radii, m_root, at, op);
+            stored = octree.splats.size();
+            octree_seconds = tool::now_seconds() - t0;
         }
+        std::vector<pool::Float3>().swap(positions);
+        std::vector<pool::Float3>().swap(normals);
+        std::vector<float>().swap(radii);
+        const pool::SplatOctreeSections sections{octree.info, octree.nodes, octree.leaf_info, octree.splats};
         const double t2 = tool::now_seconds();
         BrickParams bp = m_params.bricks;
         bp.threads = threads;
@@ -906,8 +914,9 @@ private:
         cell.max_cell_points = cell.cell_records = e - b;
         cell.stored_splats = stored;
         cell.culled_splats = sections.splats.size();
-        cell.octree_seconds = t1 - t0;
-        cell.cull_seconds = t2 - t1;
+        cell.octree_seconds = octree_seconds;
+        cell.cull_seconds = cull_seconds;
+        cell.cells_culled_on_device = on_device ? 1 : 0;
         cell.brick_seconds = tool::now_seconds() - t2;
         add_cells(stats, cell);
     }

@@ -64,6 +64,9 @@ std::uint64_t cell_capacity(const PointBrickParams& params);
 struct PointBrickStats {
     std::uint64_t points = 0, skipped = 0;  ///< usable points; points the octree skips
     std::uint32_t cells = 0;                ///< cells built (non-empty)
+    /// of those, cells built and culled on the GPU in one pass (cull_build.h, build_culled_cell):
+    /// their culling time is in octree_seconds
+    std::uint32_t cells_culled_on_device = 0;
     std::uint32_t partition_depth = 0;      ///< deepest cell level
     std::uint64_t cell_records = 0;  ///< points over all cells (a point in several cells counts in each)
     std::uint64_t max_cell_points = 0;

@@ -224,6 +224,7 @@ void cells_step(prt::tool::PoolStep& step, PointOptions& opt) {
                       {"first", first},
                       {"last", last},
                       {"cells_built", stats.cells},
+                      {"cells_culled_on_device", stats.cells_culled_on_device},
                       {"seconds", stats.seconds},
                       {"peak_rss_bytes", pre::peak_rss_bytes()}});
 }
@@ -335,9 +336,14 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
     const double seconds = step.seconds();
     step.note(
-        "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks, %.1f s assembly",
+        "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks, %.1f s assembly%s",
         stats.partition_seconds, stats.octree_seconds, stats.cull_seconds, stats.brick_seconds,
-        stats.assemble_seconds);
+        stats.assemble_seconds,
+        stats.cells_culled_on_device
+            ? (" (" + std::to_string(stats.cells_culled_on_device) + " of " + std::to_string(stats.cells) +
+               " cells culled on the GPU where they were built: their culling is in the octrees' time)")
+                  .c_str()
+            : "");
     if (opt.stage == "merge")  // the cells ran in other processes, perhaps at the same time
         step.note(
             "prt-bricks: staged build: the stages' times summed over their processes %.3f s (merge %.3f s), "
@@ -353,6 +359,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                       {"points", stats.points},
                       {"skipped_points", stats.skipped},
                       {"cells", stats.cells},
+                      {"cells_culled_on_device", stats.cells_culled_on_device},
                       {"partition_depth", stats.partition_depth},
                       {"max_cell_points", stats.max_cell_points},
                       {"cell_records", stats.cell_records},

@@ -54,6 +54,7 @@
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/cull_cuda.h"
 #include "prt/cuda/device.h"
+#include "prt/cuda/octree_cuda.h"
 #endif
 
 namespace prt::pre {
@@ -127,6 +128,20 @@ void check_sections(const OctreeSections& s) {
         throw Error("culling: more than 2^32 - 1 stored splats");
     if (!(s.info.root_size > 0.0f) || !std::isfinite(s.info.root_size))
         throw Error("culling: the octree's root cube is empty or not finite");
+}
+
+/// The probes' settings of a CullView (its octree and leaves unset), `directions` from
+/// make_probe_directions(params.directions, k_direction_sets, params.seed).
+CullView probe_view(const CullParams& params, const std::vector<ProbeDirection>& directions) {
+    CullView view;
+    view.directions = directions.data();
+    view.direction_sets = k_direction_sets;
+    view.directions_per_set = params.directions;
+    view.grid = params.grid;
+    view.policy = params.policy;
+    view.window = params.window;
+    view.seed = params.seed;
+    return view;
 }
 
 }  // namespace
@@ -301,16 +316,9 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
     }
     stats.replicas_before = stats.splats_before - stats.centre_splats;
 
-    CullView view;
+    CullView view = probe_view(params, directions);
     view.octree = octree_view(s);
     view.leaves = leaves.data();
-    view.directions = directions.data();
-    view.direction_sets = k_direction_sets;
-    view.directions_per_set = params.directions;
-    view.grid = params.grid;
-    view.policy = params.policy;
-    view.window = params.window;
-    view.seed = params.seed;
 
     if (backend == "cuda") {
 #ifdef PRT_HAVE_CUDA
@@ -362,6 +370,59 @@ CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, Cull
     out.info.splat_count = out.splats.size();
     out.info.flags |= pool::k_octree_culled;
     return out;
+}
+
+CulledCell build_culled_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                             std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
+                             const OctreeParams& octree, const CullParams& culling) {
+    CulledCell out;
+    const double start = tool::now_seconds();
+    const bool on_device = octree.replicate && resolve_octree_backend(octree.backend) == "cuda" &&
+                           resolve_cull_backend(culling.backend) == "cuda";
+    if (!on_device) {
+        SplatOctree built = build_octree_cell(positions, normals, radii, root, cell, octree);
+        out.stored = built.splats.size();
+        const double built_at = tool::now_seconds();
+        out.build_seconds = built_at - start;
+        CulledOctree culled =
+            cull_octree(pool::SplatOctreeSections{built.info, built.nodes, built.leaf_info, built.splats},
+                        culling, nullptr, OctreePart{cell});
+        out.octree.info = culled.info;
+        out.octree.nodes = std::move(built.nodes);
+        out.octree.leaf_info = std::move(culled.leaf_info);
+        out.octree.splats = std::move(culled.splats);
+        out.cull_seconds = tool::now_seconds() - built_at;
+        return out;
+    }
+#ifdef PRT_HAVE_CUDA
+    check_params(culling);
+    OctreeStats stats;
+    const pre::LargeVector<BuildSplat> splats =
+        cell_build_splats(positions, normals, radii, root, cell, octree, stats);
+    const std::vector<ProbeDirection> directions =
+        make_probe_directions(culling.directions, k_direction_sets, culling.seed);
+    cuda::OctreeCudaParams op;
+    op.max_leaf_splats = octree.max_leaf_splats;
+    op.max_depth = octree.max_depth;
+    op.replicate = octree.replicate;
+    op.min_cell_ratio = octree.min_cell_ratio;
+    op.split_by_centres = octree.split_by_centres;
+    cuda::OctreeCudaResult r;
+    cuda::build_cull_octree_cuda(std::span<const BuildSplat>(splats.data(), splats.size()), root.root_min,
+                                 root.root_size, cell.level, cell.cell, op, probe_view(culling, directions),
+                                 check_octree_limits, r);
+    out.octree.nodes = std::move(r.nodes);
+    out.octree.leaf_info = std::move(r.leaf_info);
+    out.octree.splats = std::move(r.splats);
+    describe_octree(out.octree, root, octree, splats.size(), r.depth, r.empty_leaves, r.max_leaf, stats);
+    out.octree.info.flags |= pool::k_octree_culled;  // cull_octree's header
+    out.stored = r.stored;
+    out.on_device = true;
+    out.build_seconds = tool::now_seconds() - start;
+    return out;
+#else
+    throw Error("octree build: this build has no CUDA backend");
+#endif
 }
 
 // ---- Hole rate ---------------------------------------------------------------------------------

@@ -166,6 +166,24 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
 CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, CullStats* stats = nullptr,
                          const OctreePart& part = {});
 
+/// One cell of the out-of-core brick build (issue 17), built and culled: build_octree_cell, then
+/// cull_octree over OctreePart{cell}.
+struct CulledCell {
+    SplatOctree octree;        ///< the culled octree (info: k_octree_culled, the kept splats' count)
+    std::uint64_t stored = 0;  ///< splats stored before culling
+    bool on_device = false;    ///< built and culled on the GPU without the replicas coming down
+    double build_seconds = 0;  ///< the octree (and the culling too, when on_device)
+    double cull_seconds = 0;   ///< the culling, when not on_device
+};
+
+/// build_octree_cell then cull_octree over the cell, byte for byte; when both octree.backend and
+/// culling.backend resolve to "cuda", in one pass on the GPU (prt/cuda/octree_cuda.h,
+/// build_cull_octree_cuda): the tree is culled and compacted where it was built, so only the kept
+/// splats come down (on the 500M room, 504M of 3.25G stored). Throws as the two steps do.
+CulledCell build_culled_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                             std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
+                             const OctreeParams& octree, const CullParams& culling);
+
 // ---- Hole rate -----------------------------------------------------------------------------------
 
 /// Ray families of the hole measurement.

@@ -63,32 +63,6 @@ void child_cell_boxes(const pool::OctreeInfo& info, std::uint32_t level, const s
     for (int a = 0; a < 3; ++a) mid[a] = hi[0][a];  // child 0 is the lower half on every axis
 }
 
-/// The header and the statistics of a built octree (its nodes, leaf ranges and splats set), from
-/// either builder: the root cube `root`, `unique` usable points, the deepest leaf's level, the empty
-/// leaves and the largest leaf.
-void describe_octree(SplatOctree& octree, const pool::OctreeInfo& root, const OctreeParams& params,
-                     std::uint64_t unique, std::uint32_t depth, std::uint64_t empty, std::uint64_t max_leaf,
-                     OctreeStats& stats) {
-    octree.info = root;
-    octree.info.depth = depth;
-    octree.info.max_leaf_splats = params.max_leaf_splats;
-    octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
-    octree.info.filled_leaves = static_cast<std::uint32_t>(octree.leaf_info.size() - 1);
-    octree.info.splat_count = octree.splats.size();
-    octree.info.unique_splats = unique;
-    octree.info.flags = params.replicate ? pool::k_octree_replicated : 0u;
-    stats.nodes = octree.info.node_count;
-    stats.depth = depth;
-    stats.filled_leaves = octree.info.filled_leaves;
-    stats.empty_leaves = static_cast<std::uint32_t>(empty);
-    stats.unique_splats = unique;
-    stats.stored_splats = octree.splats.size();
-    stats.replication_factor = unique == 0 ? 0.0 : double(stats.stored_splats) / double(unique);
-    stats.max_leaf_count = max_leaf;
-    stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
-                  octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
-}
-
 /// A subtree under construction: nodes in local numbering (children of a node contiguous, the
 /// internal nodes' address = local index of the first child), leaves in depth-first order.
 struct LocalTree {
@@ -614,6 +588,29 @@ SplatOctree build_sorted(pre::LargeVector<BuildSplat> splats, const pool::Octree
 
 }  // namespace
 
+void describe_octree(SplatOctree& octree, const pool::OctreeInfo& root, const OctreeParams& params,
+                     std::uint64_t unique, std::uint32_t depth, std::uint64_t empty, std::uint64_t max_leaf,
+                     OctreeStats& stats) {
+    octree.info = root;
+    octree.info.depth = depth;
+    octree.info.max_leaf_splats = params.max_leaf_splats;
+    octree.info.node_count = static_cast<std::uint32_t>(octree.nodes.size());
+    octree.info.filled_leaves = static_cast<std::uint32_t>(octree.leaf_info.size() - 1);
+    octree.info.splat_count = octree.splats.size();
+    octree.info.unique_splats = unique;
+    octree.info.flags = params.replicate ? pool::k_octree_replicated : 0u;
+    stats.nodes = octree.info.node_count;
+    stats.depth = depth;
+    stats.filled_leaves = octree.info.filled_leaves;
+    stats.empty_leaves = static_cast<std::uint32_t>(empty);
+    stats.unique_splats = unique;
+    stats.stored_splats = octree.splats.size();
+    stats.replication_factor = unique == 0 ? 0.0 : double(stats.stored_splats) / double(unique);
+    stats.max_leaf_count = max_leaf;
+    stats.bytes = octree.nodes.size() * 4 + octree.leaf_info.size() * 4 +
+                  octree.splats.size() * sizeof(pool::Splat) + sizeof(pool::OctreeInfo);
+}
+
 std::string resolve_octree_backend(const std::string& name, std::string* why) {
 #ifdef PRT_HAVE_CUDA
     return choose_backend(
@@ -695,18 +692,29 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
     return octree;
 }
 
-SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
-                              std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
-                              const OctreeParams& params, OctreeStats* stats_out) {
-    const double start = tool::now_seconds();
+pre::LargeVector<BuildSplat> cell_build_splats(std::span<const pool::Float3> positions,
+                                               std::span<const pool::Float3> normals,
+                                               std::span<const float> radii, const pool::OctreeInfo& root,
+                                               NodeCell cell, const OctreeParams& params,
+                                               OctreeStats& stats) {
     check_params(params, positions.size());
     if (cell.level > params.max_depth)
         throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
     const unsigned threads = resolve_threads(params.threads);
-    OctreeStats stats;
     pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr, threads);
     sort_by_morton(splats, root, threads);
-    SplatOctree octree = build_sorted(std::move(splats), root, cell, params, threads, stats);
+    return splats;
+}
+
+SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
+                              std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,
+                              const OctreeParams& params, OctreeStats* stats_out) {
+    const double start = tool::now_seconds();
+    OctreeStats stats;
+    pre::LargeVector<BuildSplat> splats =
+        cell_build_splats(positions, normals, radii, root, cell, params, stats);
+    SplatOctree octree =
+        build_sorted(std::move(splats), root, cell, params, resolve_threads(params.threads), stats);
     stats.seconds = tool::now_seconds() - start;
     if (stats_out) *stats_out = stats;
     return octree;

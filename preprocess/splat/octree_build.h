@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "buffer.h"
 #include "prt/core/disk_box.h"
 #include "prt/formats/pool.h"
 
@@ -121,6 +122,21 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
 /// and its bounding box rounded outward. Prepared once (prepare_build_splat), it is classified at
 /// any number of nodes (the out-of-core brick build walks each point down its partition twice).
 using BuildSplat = core::BuildSplat;
+
+/// build_octree_cell's first steps (thesis 3.1), for a caller that builds the tree itself
+/// (cull_build.h, build_culled_cell): the usable points' build records, Morton-sorted (stats gets
+/// the skipped points). Checks the parameters and the cell as build_octree_cell does.
+pre::LargeVector<BuildSplat> cell_build_splats(std::span<const pool::Float3> positions,
+                                               std::span<const pool::Float3> normals,
+                                               std::span<const float> radii, const pool::OctreeInfo& root,
+                                               NodeCell cell, const OctreeParams& params, OctreeStats& stats);
+
+/// The header and the statistics of a built octree (its nodes, leaf ranges and splats set), from
+/// either builder: the root cube `root`, `unique` usable points, the deepest leaf's level, the empty
+/// leaves and the largest leaf.
+void describe_octree(SplatOctree& octree, const pool::OctreeInfo& root, const OctreeParams& params,
+                     std::uint64_t unique, std::uint32_t depth, std::uint64_t empty, std::uint64_t max_leaf,
+                     OctreeStats& stats);
 
 /// The point's build record; false for a point build_octree skips (octree_uses_point()).
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,

@@ -14,9 +14,10 @@
 #include <vector>
 
 #include "cuda_check.h"
+#include "cull_device.h"
 #include "device_buffer.h"
-#include "prt/cuda/device.h"
 #include "prt/cuda/cull_cuda.h"
+#include "prt/cuda/device.h"
 
 namespace prt::cuda {
 
@@ -77,6 +78,33 @@ struct DeviceOctree {
 
 }  // namespace
 
+core::CullCounters cull_on_stream(const core::CullView& view, std::uint8_t* keep, std::uint32_t* votes,
+                                  cudaStream_t st,
+                                  const std::function<void(std::uint64_t, std::uint64_t)>& progress) {
+    const std::uint32_t leaves = view.octree.filled_leaves;
+    AsyncBuffer<unsigned long long> d_counters(st);
+    d_counters.resize(k_c_count);
+    PRT_CUDA_CHECK(cudaMemsetAsync(d_counters.data(), 0, d_counters.bytes(), st));
+    for (std::uint32_t first = 0; first < leaves; first += k_leaves_per_launch) {
+        const std::uint32_t count = std::min(k_leaves_per_launch, leaves - first);
+        launch_kernel(launch_1d(count, k_block, st), cull_kernel, view, first, count, keep, votes,
+                      d_counters.data());
+        if (progress) {
+            PRT_CUDA_CHECK(cudaStreamSynchronize(st));
+            progress(first + count, leaves);
+        }
+    }
+    unsigned long long c[k_c_count];
+    PRT_CUDA_CHECK(cudaMemcpyAsync(c, d_counters.data(), sizeof c, cudaMemcpyDeviceToHost, st));
+    PRT_CUDA_CHECK(cudaStreamSynchronize(st));
+    core::CullCounters out;
+    out.probes = c[k_c_probes];
+    out.probes_hit = c[k_c_hit];
+    out.probes_unserved = c[k_c_unserved];
+    out.splat_tests = c[k_c_tests];
+    return out;
+}
+
 bool cull_device_available(std::string* why) {
     return device_available(why);
 }
@@ -113,31 +141,15 @@ core::CullCounters cull_leaves_cuda(const core::CullView& host, std::span<std::u
         d_votes.resize(keep.size());
         PRT_CUDA_CHECK(cudaMemsetAsync(d_votes.data(), 0, d_votes.bytes(), st));
     }
-    AsyncBuffer<unsigned long long> d_counters(st);
-    d_counters.resize(k_c_count);
-    PRT_CUDA_CHECK(cudaMemsetAsync(d_counters.data(), 0, d_counters.bytes(), st));
     core::CullView view = host;
     view.octree.nodes = d_nodes.data();
     view.octree.leaf_info = d_leaf_info.data();
     view.octree.splats = d_splats.data();
     view.leaves = d_leaves.data();
     view.directions = d_dirs.data();
-    for (std::uint32_t first = 0; first < leaves; first += k_leaves_per_launch) {
-        const std::uint32_t count = std::min(k_leaves_per_launch, leaves - first);
-        launch_kernel(launch_1d(count, k_block, st), cull_kernel, view, first, count, d_keep.data(),
-                      d_votes.data(), d_counters.data());
-        PRT_CUDA_CHECK(cudaStreamSynchronize(st));
-        if (progress) progress(first + count, leaves);
-    }
+    const core::CullCounters out = cull_on_stream(view, d_keep.data(), d_votes.data(), st, progress);
     d_keep.download(keep.data(), keep.size());
-    unsigned long long c[k_c_count];
-    d_counters.download(c, k_c_count);
     PRT_CUDA_CHECK(cudaStreamSynchronize(st));
-    core::CullCounters out;
-    out.probes = c[k_c_probes];
-    out.probes_hit = c[k_c_hit];
-    out.probes_unserved = c[k_c_unserved];
-    out.splat_tests = c[k_c_tests];
     return out;
 }
 

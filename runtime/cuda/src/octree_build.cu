@@ -14,13 +14,21 @@
 // node array; filled leaves are numbered depth first (subtree sizes summed bottom-up, offsets
 // handed top-down), and each leaf's splats are written as emit_leaf writes them (centres in the
 // leaf's closed box first, then the replicas, each group in list order).
+//
+// build_cull_octree_cuda (issue 17) goes on on the device: the emit step also writes each filled
+// leaf's CullLeaf (node word, level, cell) and the initial keep flags (centre splats first in each
+// leaf: exactly cull_build.cpp's centre_flags), the leaves are culled by cull.cu's kernel (thesis
+// 3.4, cull_on_stream), and the kept splats are compacted by a scan of the flags, in leaf order
+// (cull_build.cpp's cull_octree); only the culled sections come down.
 #include <cuda_runtime.h>
 
 #include <cub/device/device_scan.cuh>
 #include <vector>
 
 #include "cuda_check.h"
+#include "cull_device.h"
 #include "device_buffer.h"
+#include "prt/core/octree.h"
 #include "prt/cuda/octree_cuda.h"
 
 namespace prt::cuda {
@@ -274,7 +282,8 @@ __global__ void emit_kernel(std::uint32_t nodes, const std::uint8_t* split, cons
                             const unsigned long long* splat_off, std::uint64_t next_level_start,
                             RootCube root, std::uint32_t level, const core::BuildSplat* splats,
                             std::uint32_t* out_nodes, std::uint32_t* leaf_info, pool::Splat* out_splats,
-                            unsigned long long* empty, unsigned long long* max_leaf) {
+                            unsigned long long* empty, unsigned long long* max_leaf,
+                            core::CullLeaf* cull_leaves, std::uint8_t* keep) {
     const std::uint64_t i = thread_index();
     if (i >= nodes) return;
     const std::uint32_t count = counts[i];
@@ -289,7 +298,10 @@ __global__ void emit_kernel(std::uint32_t nodes, const std::uint8_t* split, cons
         return;
     }
     const unsigned long long leaf = leaf_off[i];
-    out_nodes[i] = node_word(pool::NodeType::filled_leaf, leaf);
+    const std::uint32_t word = node_word(pool::NodeType::filled_leaf, leaf);
+    out_nodes[i] = word;
+    if (cull_leaves)
+        cull_leaves[leaf] = core::CullLeaf{word, level, {cells[3 * i], cells[3 * i + 1], cells[3 * i + 2]}};
     atomicMax(max_leaf, static_cast<unsigned long long>(count));
     std::uint64_t o = splat_off[i];
     leaf_info[leaf] = static_cast<std::uint32_t>(o);
@@ -303,6 +315,7 @@ __global__ void emit_kernel(std::uint32_t nodes, const std::uint8_t* split, cons
             for (int a = 0; a < 3; ++a)
                 if (!(double(s.c[a]) >= lo[a] && double(s.c[a]) <= hi[a])) inside = false;
             if (inside != (pass == 0)) continue;
+            if (keep) keep[o] = pass == 0 ? core::k_keep_centre : core::k_keep_none;
             pool::Splat& out = out_splats[o++];
             out.position = pool::Float3{s.c[0], s.c[1], s.c[2]};
             out.radius = s.r;
@@ -310,6 +323,25 @@ __global__ void emit_kernel(std::uint32_t nodes, const std::uint8_t* split, cons
             out.point = s.point;
         }
     }
+}
+
+/// Culling's compaction (cull_build.cpp, cull_octree): 1 per kept splat.
+__global__ void kept_flags_kernel(std::uint64_t count, const std::uint8_t* keep, std::uint32_t* flags) {
+    const std::uint64_t k = thread_index();
+    if (k < count) flags[k] = keep[k] != core::k_keep_none ? 1u : 0u;
+}
+
+/// Each filled leaf's first kept splat: the kept splats before its first stored one.
+__global__ void culled_leaf_info_kernel(std::uint32_t filled, const std::uint32_t* leaf_info,
+                                        const std::uint32_t* kept_before, std::uint32_t* out) {
+    const std::uint64_t a = thread_index();
+    if (a < filled) out[a] = kept_before[leaf_info[a]];
+}
+
+__global__ void compact_kernel(std::uint64_t count, const std::uint8_t* keep,
+                               const std::uint32_t* kept_before, const pool::Splat* in, pool::Splat* out) {
+    const std::uint64_t k = thread_index();
+    if (k < count && keep[k] != core::k_keep_none) out[kept_before[k]] = in[k];
 }
 
 /// Exclusive prefix sums of `count` uint32 on `stream` (cub), `temp` grown as needed.
@@ -332,20 +364,24 @@ T read_back(const T* device, cudaStream_t stream) {
     return v;
 }
 
-}  // namespace
+/// A subtree built on the device (build_levels), its sections still there.
+struct DeviceTree {
+    explicit DeviceTree(cudaStream_t s) : nodes(s), leaf_info(s), splats(s), leaves(s), keep(s) {}
+    std::uint64_t node_count = 0, filled = 0, stored = 0;
+    std::uint32_t depth = 0;  ///< the deepest leaf's level in the whole octree's numbering
+    unsigned long long empty_leaves = 0, max_leaf = 0;
+    AsyncBuffer<std::uint32_t> nodes, leaf_info;  // leaf_info: filled + 1
+    AsyncBuffer<pool::Splat> splats;
+    AsyncBuffer<core::CullLeaf> leaves;  // for culling only: per filled leaf
+    AsyncBuffer<std::uint8_t> keep;      // for culling only: per stored splat, centre_flags' flags
+};
 
-void build_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3], float root_size,
-                       std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
-                       const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
-                       OctreeCudaResult& out) {
-    PRT_CUDA_CHECK(cudaSetDevice(0));
-    keep_pool_memory();
-    OwnedStream stream;
-    const cudaStream_t st = stream.get();
-    const RootCube root{{root_min[0], root_min[1], root_min[2]}, root_size};
-    check(1, 0, splats.size());
-    AsyncBuffer<core::BuildSplat> d_splats(st);
-    d_splats.upload(splats.data(), splats.size());
+/// The subtree below (level0, cell) over the Morton-sorted build records `d_splats` (`count`, device
+/// memory) built level by level on `st`; with `for_culling`, t.leaves and t.keep are filled too.
+void build_levels(const core::BuildSplat* d_splats, std::uint64_t count, const RootCube& root,
+                  std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                  const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                  bool for_culling, cudaStream_t st, DeviceTree& t) {
     AsyncBuffer<std::uint8_t> temp(st), masks(st);
     AsyncBuffer<std::uint32_t> flags(st), rank(st);
     AsyncBuffer<unsigned> rmin(st), rmax(st), centres(st);
@@ -357,9 +393,8 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
     {
         Level& l = levels[0];
         l.nodes = 1;
-        l.entries = splats.size();
-        const std::uint32_t start[5] = {cell[0], cell[1], cell[2], 0,
-                                        static_cast<std::uint32_t>(splats.size())};
+        l.entries = count;
+        const std::uint32_t start[5] = {cell[0], cell[1], cell[2], 0, static_cast<std::uint32_t>(count)};
         l.cell.upload(start, 3);
         l.begin.upload(start + 3, 1);
         l.count.upload(start + 4, 1);
@@ -383,13 +418,13 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
         const bool need_centres = params.split_by_centres && params.replicate;
         if (l.entries)
             launch_kernel(launch_1d(l.entries, k_block, st), node_stats_kernel, l.entries, l.ids.data(),
-                          l.seg.data(), d_splats.data(), rmin.data(), rmax.data(), centres.data(), root, lev,
+                          l.seg.data(), d_splats, rmin.data(), rmax.data(), centres.data(), root, lev,
                           l.cell.data(), need_centres);
         l.split.resize(l.nodes);
         l.split_rank.resize(l.nodes);
         launch_kernel(launch_1d(l.nodes, k_block, st), decide_kernel, l.nodes, l.count.data(), l.begin.data(),
-                      rmin.data(), rmax.data(), centres.data(), l.ids.data(), d_splats.data(), params, root,
-                      lev, l.split.data());
+                      rmin.data(), rmax.data(), centres.data(), l.ids.data(), d_splats, params, root, lev,
+                      l.split.data());
         flags.reserve(l.nodes);
         launch_kernel(launch_1d(l.nodes, k_block, st), bit_flags_kernel, std::uint64_t(l.nodes),
                       l.split.data(), 0u, flags.data());
@@ -411,7 +446,7 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
         PRT_CUDA_CHECK(cudaMemsetAsync(next.count.data(), 0, next.count.bytes(), st));
         masks.reserve(l.entries);
         launch_kernel(launch_1d(l.entries, k_block, st), classify_kernel, l.entries, l.ids.data(),
-                      l.seg.data(), l.split.data(), l.split_rank.data(), boxes.data(), d_splats.data(),
+                      l.seg.data(), l.split.data(), l.split_rank.data(), boxes.data(), d_splats,
                       params.replicate, masks.data(), next.count.data());
         next.begin.resize(next.nodes);
         exclusive_sum(next.count.data(), next.begin.data(), next.nodes, temp, st);
@@ -467,12 +502,18 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
     const unsigned long long stored = read_back(levels[0].sub_splats.data(), st);
     check(total_nodes, filled, stored);
 
-    AsyncBuffer<std::uint32_t> d_nodes(st), d_leaf_info(st);
-    AsyncBuffer<pool::Splat> d_out(st);
+    t.node_count = total_nodes;
+    t.filled = filled;
+    t.stored = stored;
+    t.depth = static_cast<std::uint32_t>(level0 + depth_count - 1);
+    t.nodes.resize(total_nodes);
+    t.leaf_info.resize(filled + 1);
+    t.splats.resize(stored);
+    if (for_culling) {
+        t.leaves.resize(filled);
+        t.keep.resize(stored);
+    }
     AsyncBuffer<unsigned long long> d_stats(st);  // empty leaves, largest leaf
-    d_nodes.resize(total_nodes);
-    d_leaf_info.resize(filled + 1);
-    d_out.resize(stored);
     d_stats.resize(2);
     PRT_CUDA_CHECK(cudaMemsetAsync(d_stats.data(), 0, d_stats.bytes(), st));
     std::uint64_t level_start = 0;
@@ -481,25 +522,136 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
         launch_kernel(launch_1d(l.nodes, k_block, st), emit_kernel, l.nodes, l.split.data(),
                       l.split_rank.data(), l.count.data(), l.begin.data(), l.ids.data(), l.cell.data(),
                       l.leaf_off.data(), l.splat_off.data(), level_start + l.nodes, root,
-                      static_cast<std::uint32_t>(level0 + d), d_splats.data(), d_nodes.data() + level_start,
-                      d_leaf_info.data(), d_out.data(), d_stats.data(), d_stats.data() + 1);
+                      static_cast<std::uint32_t>(level0 + d), d_splats, t.nodes.data() + level_start,
+                      t.leaf_info.data(), t.splats.data(), d_stats.data(), d_stats.data() + 1,
+                      for_culling ? t.leaves.data() : nullptr, for_culling ? t.keep.data() : nullptr);
         level_start += l.nodes;
     }
     const std::uint32_t end = static_cast<std::uint32_t>(stored);
     PRT_CUDA_CHECK(
-        cudaMemcpyAsync(d_leaf_info.data() + filled, &end, sizeof end, cudaMemcpyHostToDevice, st));
-    out.nodes.resize(total_nodes);
-    out.leaf_info.resize(filled + 1);
-    out.splats.resize(stored);
-    d_nodes.download(out.nodes.data(), total_nodes);
-    d_leaf_info.download(out.leaf_info.data(), filled + 1);
-    d_out.download(out.splats.data(), stored);
+        cudaMemcpyAsync(t.leaf_info.data() + filled, &end, sizeof end, cudaMemcpyHostToDevice, st));
     unsigned long long stats[2];
-    d_stats.download(stats, 2);
+    PRT_CUDA_CHECK(cudaMemcpyAsync(stats, d_stats.data(), sizeof stats, cudaMemcpyDeviceToHost, st));
+    PRT_CUDA_CHECK(cudaStreamSynchronize(st));  // `end` and `stats` are on this stack
+    t.empty_leaves = stats[0];
+    t.max_leaf = stats[1];
+}
+
+/// build_levels over host records: `check`ed, uploaded, built; the records freed again.
+void build_tree(std::span<const core::BuildSplat> splats, const float root_min[3], float root_size,
+                std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                bool for_culling, cudaStream_t st, DeviceTree& t) {
+    check(1, 0, splats.size());
+    AsyncBuffer<core::BuildSplat> d_splats(st);
+    d_splats.upload(splats.data(), splats.size());
+    const RootCube root{{root_min[0], root_min[1], root_min[2]}, root_size};
+    build_levels(d_splats.data(), splats.size(), root, level0, cell, params, check, for_culling, st, t);
+}
+
+}  // namespace
+
+void build_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3], float root_size,
+                       std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                       const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                       OctreeCudaResult& out) {
+    PRT_CUDA_CHECK(cudaSetDevice(0));
+    keep_pool_memory();
+    OwnedStream stream;
+    const cudaStream_t st = stream.get();
+    DeviceTree t(st);
+    build_tree(splats, root_min, root_size, level0, cell, params, check, false, st, t);
+    out.nodes.resize(t.node_count);
+    out.leaf_info.resize(t.filled + 1);
+    out.splats.resize(t.stored);
+    t.nodes.download(out.nodes.data(), t.node_count);
+    t.leaf_info.download(out.leaf_info.data(), t.filled + 1);
+    t.splats.download(out.splats.data(), t.stored);
     PRT_CUDA_CHECK(cudaStreamSynchronize(st));
-    out.depth = static_cast<std::uint32_t>(level0 + depth_count - 1);
-    out.empty_leaves = stats[0];
-    out.max_leaf = stats[1];
+    out.depth = t.depth;
+    out.empty_leaves = t.empty_leaves;
+    out.max_leaf = t.max_leaf;
+    out.stored = t.stored;
+}
+
+void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3],
+                            float root_size, std::uint32_t level0, const std::uint32_t cell[3],
+                            const OctreeCudaParams& params, const core::CullView& probes,
+                            const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                            OctreeCudaResult& out, core::CullCounters* counters) {
+    if (!params.replicate) throw Error("build_cull_octree_cuda: culling needs a replicated octree");
+    PRT_CUDA_CHECK(cudaSetDevice(0));
+    keep_pool_memory();
+    OwnedStream stream;
+    const cudaStream_t st = stream.get();
+    DeviceTree t(st);
+    build_tree(splats, root_min, root_size, level0, cell, params, check, true, st, t);
+
+    // Culling (thesis 3.4) over the tree as the CPU path sees it (cull_build.cpp, octree_view).
+    pool::OctreeInfo info{};
+    for (int a = 0; a < 3; ++a) info.root_min[a] = root_min[a];
+    info.root_size = root_size;
+    info.depth = t.depth;
+    info.max_leaf_splats = params.max_leaf_splats;
+    info.node_count = static_cast<std::uint32_t>(t.node_count);
+    info.filled_leaves = static_cast<std::uint32_t>(t.filled);
+    info.splat_count = t.stored;
+    info.unique_splats = splats.size();
+    info.flags = pool::k_octree_replicated;
+    AsyncBuffer<core::ProbeDirection> d_dirs(st);
+    d_dirs.upload(probes.directions, std::size_t(probes.direction_sets) * probes.directions_per_set);
+    AsyncBuffer<std::uint32_t> d_votes(st);
+    if (probes.policy == core::CullPolicy::votes && t.stored) {
+        d_votes.resize(t.stored);
+        PRT_CUDA_CHECK(cudaMemsetAsync(d_votes.data(), 0, d_votes.bytes(), st));
+    }
+    core::CullView view = probes;
+    view.octree = core::make_octree_view(info, t.nodes.data(), t.leaf_info.data(), t.splats.data());
+    view.leaves = t.leaves.data();
+    view.directions = d_dirs.data();
+    const core::CullCounters c = cull_on_stream(view, t.keep.data(), d_votes.data(), st, {});
+    if (counters) *counters = c;
+    d_votes.release();
+    t.leaves.release();
+
+    // The kept splats in their leaf order, and the leaves' new ranges (cull_octree).
+    AsyncBuffer<std::uint32_t> flags(st), kept_before(st), culled_info(st);
+    AsyncBuffer<std::uint8_t> temp(st);
+    std::uint64_t kept = 0;
+    if (t.stored) {
+        flags.resize(t.stored);
+        kept_before.resize(t.stored);
+        launch_kernel(launch_1d(t.stored, k_block, st), kept_flags_kernel, t.stored, t.keep.data(),
+                      flags.data());
+        exclusive_sum(flags.data(), kept_before.data(), t.stored, temp, st);
+        kept = std::uint64_t(read_back(kept_before.data() + (t.stored - 1), st)) +
+               read_back(flags.data() + (t.stored - 1), st);
+        flags.release();
+    }
+    culled_info.resize(t.filled + 1);
+    if (t.filled)
+        launch_kernel(launch_1d(t.filled, k_block, st), culled_leaf_info_kernel,
+                      static_cast<std::uint32_t>(t.filled), t.leaf_info.data(), kept_before.data(),
+                      culled_info.data());
+    const std::uint32_t end = static_cast<std::uint32_t>(kept);
+    PRT_CUDA_CHECK(
+        cudaMemcpyAsync(culled_info.data() + t.filled, &end, sizeof end, cudaMemcpyHostToDevice, st));
+    AsyncBuffer<pool::Splat> culled(st);
+    culled.resize(kept);
+    if (kept)
+        launch_kernel(launch_1d(t.stored, k_block, st), compact_kernel, t.stored, t.keep.data(),
+                      kept_before.data(), t.splats.data(), culled.data());
+    out.nodes.resize(t.node_count);
+    out.leaf_info.resize(t.filled + 1);
+    out.splats.resize(kept);
+    t.nodes.download(out.nodes.data(), t.node_count);
+    culled_info.download(out.leaf_info.data(), t.filled + 1);
+    culled.download(out.splats.data(), kept);
+    PRT_CUDA_CHECK(cudaStreamSynchronize(st));  // `end` is on this stack
+    out.depth = t.depth;
+    out.empty_leaves = t.empty_leaves;
+    out.max_leaf = t.max_leaf;
+    out.stored = t.stored;
 }
 
 }  // namespace prt::cuda

@@ -2,7 +2,8 @@
 // (preprocess/splat/octree_build.cpp), byte for byte: node words, leaf ranges, splats (replicas and
 // their order in each leaf), the header's counts and the statistics, for whole trees and for cells
 // of an out-of-core build, on a room and a sphere whose radii vary (so the cell-size rule's mean
-// is near the edge in some nodes and its list-order sum decides), for every builder option.
+// is near the edge in some nodes and its list-order sum decides), for every builder option; and
+// cells built and culled in one pass on the GPU (build_culled_cell) against the CPU's two steps.
 // Label gpu: skips with the reason where no CUDA device is usable.
 #include <gtest/gtest.h>
 
@@ -11,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "cull_build.h"
 #include "octree_build.h"
 #include "prt/error.h"
 #include "splat_test_data.h"
@@ -181,6 +183,66 @@ TEST(OctreeGpu, CellsOfAnOutOfCoreBuildEqualTheCpuBuilders) {
         }
     }
     EXPECT_GE(cells, 6);
+}
+
+/// The out-of-core build's cells built, culled and compacted on the GPU (cull_build.h,
+/// build_culled_cell over build_cull_octree_cuda) against build_octree_cell then cull_octree on the
+/// CPU: the same header, nodes, culled leaf ranges and kept splats, for both probe policies that
+/// keep replicas one by one.
+TEST(OctreeGpu, CellsBuiltAndCulledOnTheDeviceEqualTheCpuSteps) {
+    std::string why;
+    if (!usable(why)) GTEST_SKIP() << why;
+    const test::SplatSet model = room(80000);
+    pre::RootBounds bounds;
+    for (std::size_t i = 0; i < model.positions.size(); ++i)
+        bounds.add(model.positions[i], model.normals[i], model.radii[i]);
+    const pool::OctreeInfo root = bounds.root();
+    int cells = 0;
+    for (const pre::NodeCell cell : {pre::NodeCell{1, {0, 0, 0}}, pre::NodeCell{2, {0, 1, 3}},
+                                     pre::NodeCell{2, {3, 3, 3}}, pre::NodeCell{3, {0, 2, 5}}}) {
+        for (Variant v : {variants()[0], variants()[1], variants()[5]}) {
+            const test::SplatSet pts = cell_points(model, root, cell, true);
+            if (pts.positions.size() < 200) continue;
+            for (const pre::CullPolicy policy : {pre::CullPolicy::greedy, pre::CullPolicy::votes}) {
+                SCOPED_TRACE("cell " + std::to_string(cell.level) + " (" + std::to_string(cell.cell[0]) +
+                             "," + std::to_string(cell.cell[1]) + "," + std::to_string(cell.cell[2]) + "), " +
+                             v.name + (policy == pre::CullPolicy::votes ? ", votes" : ", greedy") + ", " +
+                             std::to_string(pts.positions.size()) + " points");
+                v.params.threads = 2;
+                v.params.backend = "cpu";
+                pre::CullParams cp;
+                cp.policy = policy;
+                cp.threads = 2;
+                cp.backend = "cpu";
+                const pre::SplatOctree built =
+                    pre::build_octree_cell(pts.positions, pts.normals, pts.radii, root, cell, v.params);
+                const pre::CulledOctree cpu = pre::cull_octree(
+                    pool::SplatOctreeSections{built.info, built.nodes, built.leaf_info, built.splats}, cp,
+                    nullptr, pre::OctreePart{cell});
+                const pre::CulledCell steps =
+                    pre::build_culled_cell(pts.positions, pts.normals, pts.radii, root, cell, v.params, cp);
+                EXPECT_FALSE(steps.on_device);
+                v.params.backend = "cuda";
+                cp.backend = "cuda";
+                const pre::CulledCell gpu =
+                    pre::build_culled_cell(pts.positions, pts.normals, pts.radii, root, cell, v.params, cp);
+                EXPECT_TRUE(gpu.on_device);
+                EXPECT_EQ(built.splats.size(), gpu.stored);
+                EXPECT_EQ(built.splats.size(), steps.stored);
+                EXPECT_LT(cpu.splats.size(), built.splats.size());  // culling removed replicas
+                for (const pre::CulledCell* c : {&steps, &gpu}) {
+                    EXPECT_EQ(0, std::memcmp(&cpu.info, &c->octree.info, sizeof cpu.info));
+                    EXPECT_EQ(built.nodes, c->octree.nodes);
+                    EXPECT_EQ(cpu.leaf_info, c->octree.leaf_info);
+                    ASSERT_EQ(cpu.splats.size(), c->octree.splats.size());
+                    EXPECT_EQ(0, std::memcmp(cpu.splats.data(), c->octree.splats.data(),
+                                             cpu.splats.size() * sizeof(pool::Splat)));
+                }
+                ++cells;
+            }
+        }
+    }
+    EXPECT_GE(cells, 12);
 }
 
 }  // namespace

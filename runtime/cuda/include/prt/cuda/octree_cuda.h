@@ -12,6 +12,7 @@
 #include <span>
 #include <vector>
 
+#include "prt/core/cull.h"
 #include "prt/core/disk_box.h"
 #include "prt/formats/pool_layout.h"
 
@@ -36,6 +37,8 @@ struct OctreeCudaResult {
     std::uint32_t depth = 0;  ///< the deepest leaf's level in the whole octree's numbering
     std::uint64_t empty_leaves = 0;
     std::uint64_t max_leaf = 0;  ///< most splats in one leaf
+    /// Splats stored before culling (build_cull_octree_cuda); splats.size() otherwise.
+    std::uint64_t stored = 0;
 };
 
 /// Builds the subtree below node (level, cell) of the octree whose root cube is (root_min,
@@ -46,5 +49,19 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
                        std::uint32_t level, const std::uint32_t cell[3], const OctreeCudaParams& params,
                        const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
                        OctreeCudaResult& out);
+
+/// build_octree_cuda, then the subtree culled on the device (thesis 3.4; runtime/cuda/src/cull.cu,
+/// the per-leaf function prt-cull runs) and its kept splats compacted there, so the replicated
+/// splats (several per point) never come down to the host: the out-of-core brick build's cells
+/// (issue 17). `probes` gives the probes' settings (directions in host memory, their sets, grid,
+/// policy, window, seed; its octree and leaves are ignored). `out` gets the node words (unchanged
+/// by culling), the culled leaf ranges and splats, as preprocess/splat/cull_build.h's cull_octree
+/// gives them over OctreePart{(level, cell)}; out.stored the splats stored before culling. `counters` (if
+/// given) gets culling's counters. Requires params.replicate. Throws prt::Error on a CUDA error.
+void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3],
+                            float root_size, std::uint32_t level, const std::uint32_t cell[3],
+                            const OctreeCudaParams& params, const core::CullView& probes,
+                            const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
+                            OctreeCudaResult& out, core::CullCounters* counters = nullptr);
 
 }  // namespace prt::cuda
