@@ -167,9 +167,12 @@ TEST(BricksFromPoints, CulledCellByCellEqualsTheInCorePipeline) {
     EXPECT_EQ(stats.bricks.top_depth, ref_stats.top_depth);
     EXPECT_EQ(stats.bricks.encoded, ref_stats.encoded);
     EXPECT_EQ(stats.bricks.error.splats, ref_stats.error.splats);
-    // Cells built by 3 workers at once: the same bytes, the same counts.
+    // Cells built by 3 workers at once, and a memory budget too small to keep each point's cell
+    // from the count pass for the scatter (which then classifies every point again): the same
+    // bytes, the same counts.
     pre::PointBrickParams p = point_params(setup, 2500);
     p.cell_workers = 3;
+    p.memory = 64 << 10;
     pre::PointBrickStats concurrent;
     expect_equal(ref,
                  pre::build_bricks_from_points(s.positions, s.normals, s.radii, s.colors, p, &concurrent));
