@@ -58,7 +58,7 @@ namespace {
 constexpr std::uint32_t k_histogram_level = 6;  // 262144 cells
 constexpr std::size_t k_chunk = std::size_t(1) << 20;
 constexpr std::uint32_t k_no_cell = 0xFFFFFFFFu;
-/// PointCells: a point in more than one cell (classified again by the scatter).
+/// m_point_cell: a point in more than one cell (classified again by the scatter).
 constexpr std::uint32_t k_several_cells = 0xFFFFFFFEu;
 
 /// One point as a cell's build reads it.
