@@ -338,10 +338,10 @@ public:
     /// The compressed splats of brick b (the one whose top node is `top_node`), whether it is direct,
     /// and its LOD prefix's nodes (`lod_splats` M, 0: none).
     BrickCounts count(std::uint32_t top_node, std::uint32_t lod_splats, Scratch& scratch) const {
-        gather(top_node, scratch);
-        const bool direct = store_direct(m_direct, scratch.splats.size(), scratch.encoded.size());
-        return BrickCounts{std::uint32_t(direct ? scratch.splats.size() : scratch.encoded.size()),
-                           lod_splats > 0 ? lod_prefix_nodes(lod_splats, scratch) : 0u, direct};
+        const std::size_t references = gather(top_node, scratch, false);
+        const bool direct = store_direct(m_direct, references, scratch.encoded.size());
+        return BrickCounts{std::uint32_t(direct ? references : scratch.encoded.size()),
+                           lod_splats > 0 ? lod_prefix_nodes(lod_splats, references, scratch) : 0u, direct};
     }
 
     /// Brick b: its subtree renumbered breadth first from 0, its leaves in the source's leaf order,
@@ -352,7 +352,7 @@ public:
     /// do not depend on other bricks (an out-of-core build makes them cell by cell).
     LodSum encode(std::size_t b, CodecError& err, Scratch& scratch) const {
         pool::BrickEntry& e = m_out.table[b];
-        gather(e.top_node, scratch);
+        gather(e.top_node, scratch, true);
         const bool direct = store_direct(m_direct, scratch.splats.size(), scratch.encoded.size());
         if (direct) scratch.encoded = scratch.splats;  // in leaf order, a replica once per leaf
         if (scratch.encoded.size() != e.encoded_count || scratch.splats.size() != e.splat_count)
@@ -416,7 +416,7 @@ private:
     /// The nodes of the brick's LOD prefix: levels 0..D (breadth first, so a prefix of the node
     /// array), D the deepest level whose non-empty nodes hold at least `m` references on average
     /// (level 0 always).
-    static std::uint32_t lod_prefix_nodes(std::uint32_t m, Scratch& s) {
+    static std::uint32_t lod_prefix_nodes(std::uint32_t m, std::size_t references, Scratch& s) {
         s.level_nodes.assign(1, 0);
         const std::uint32_t root_level = s.cells[0].level;
         for (std::size_t i = 0; i < s.nodes.size(); ++i) {
@@ -426,7 +426,7 @@ private:
         }
         std::uint32_t deepest = 0;
         while (deepest + 1 < s.level_nodes.size() &&
-               std::uint64_t(s.level_nodes[deepest + 1]) * m <= s.splats.size())
+               std::uint64_t(s.level_nodes[deepest + 1]) * m <= references)
             ++deepest;
         std::uint32_t k = 0;
         while (k < s.nodes.size() && s.cells[k].level - root_level <= deepest) ++k;
@@ -509,8 +509,11 @@ private:
         return a.point == b.point && std::memcmp(&a, &b, sizeof(pool::Splat)) == 0;
     }
 
-    /// The brick's nodes (breadth first from 0), leaf ranges, references and distinct splats into `s`.
-    void gather(std::uint32_t top_node, Scratch& s) const {
+    /// The brick's nodes (breadth first from 0), leaf ranges, references and distinct splats into `s`;
+    /// returns the number of references. Without `full` (count()), only the nodes, cells, leaves
+    /// and distinct splats: not the references' pointers, centre flags and indices, which only
+    /// encode() reads.
+    std::size_t gather(std::uint32_t top_node, Scratch& s, bool full) const {
         s.src.assign(1, m_cut.src[top_node]);
         s.parent.assign(1, 0);
         s.cells.assign(1, NodeCell{m_cut.level[top_node],
@@ -556,6 +559,14 @@ private:
             s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
             const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
                                 se = m_octree.leaf_info[s.leaves[l].first + 1];
+            if (!full) {
+                for (std::uint32_t k = sb; k < se; ++k) {
+                    const pool::Splat& sp = m_octree.splats[k];
+                    const auto [at, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
+                    if (fresh || !same_splat(*s.encoded[at], sp)) s.encoded.push_back(&sp);
+                }
+                continue;
+            }
             const NodeCell& lc = s.cells[s.leaves[l].second];
             double lo[3], hi[3];
             node_box(m_octree.info, lc.level, lc.cell, lo, hi);
@@ -579,6 +590,7 @@ private:
             }
             s.leaf_info[l + 1] = std::uint32_t(s.splats.size());
         }
+        return references;
     }
 
     const pool::SplatOctreeSections& m_octree;
