@@ -559,34 +559,27 @@ private:
             s.nodes[s.leaves[l].second] = pool::make_node(NodeType::filled_leaf, std::uint32_t(l));
             const std::uint32_t sb = m_octree.leaf_info[s.leaves[l].first],
                                 se = m_octree.leaf_info[s.leaves[l].first + 1];
-            if (!full) {
-                for (std::uint32_t k = sb; k < se; ++k) {
-                    const pool::Splat& sp = m_octree.splats[k];
-                    const auto [at, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
-                    if (fresh || !same_splat(*s.encoded[at], sp)) s.encoded.push_back(&sp);
-                }
-                continue;
-            }
-            const NodeCell& lc = s.cells[s.leaves[l].second];
             double lo[3], hi[3];
-            node_box(m_octree.info, lc.level, lc.cell, lo, hi);
+            if (full) {
+                const NodeCell& lc = s.cells[s.leaves[l].second];
+                node_box(m_octree.info, lc.level, lc.cell, lo, hi);
+            }
             for (std::uint32_t k = sb; k < se; ++k) {
                 const pool::Splat& sp = m_octree.splats[k];
-                // encode() reads each splat's colour by its point index, scattered over the whole
-                // colour array: fetched here, the misses overlap this loop's work.
-                if (sp.point < m_colors.size()) __builtin_prefetch(m_colors.data() + sp.point);
-                s.splats.push_back(&sp);
-                const double cp[3] = {sp.position.x, sp.position.y, sp.position.z};
-                bool inside = true;
-                for (int ax = 0; ax < 3; ++ax) inside = inside && cp[ax] >= lo[ax] && cp[ax] < hi[ax];
-                s.centre.push_back(inside);
                 const auto [at, fresh] = s.first.try_emplace(sp.point, std::uint32_t(s.encoded.size()));
-                if (fresh || !same_splat(*s.encoded[at], sp)) {
-                    s.refs.push_back(std::uint32_t(s.encoded.size()));
-                    s.encoded.push_back(&sp);
-                } else {
-                    s.refs.push_back(at);
+                const bool distinct = fresh || !same_splat(*s.encoded[at], sp);
+                if (full) {
+                    // encode() reads each splat's colour by its point index, scattered over the whole
+                    // colour array: fetched here, the misses overlap this loop's work.
+                    if (sp.point < m_colors.size()) __builtin_prefetch(m_colors.data() + sp.point);
+                    s.splats.push_back(&sp);
+                    const double cp[3] = {sp.position.x, sp.position.y, sp.position.z};
+                    bool inside = true;
+                    for (int ax = 0; ax < 3; ++ax) inside = inside && cp[ax] >= lo[ax] && cp[ax] < hi[ax];
+                    s.centre.push_back(inside);
+                    s.refs.push_back(distinct ? std::uint32_t(s.encoded.size()) : at);
                 }
+                if (distinct) s.encoded.push_back(&sp);
             }
             s.leaf_info[l + 1] = std::uint32_t(s.splats.size());
         }
