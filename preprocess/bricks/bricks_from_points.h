@@ -74,9 +74,10 @@ struct PointBrickStats {
     BrickStats bricks;
     double seconds = 0;
     /// Where the time went: passes over the points (bounds, histogram, count, scatter), the cells'
-    /// octree builds, culling, brick cuts, and the assembly.
+    /// octree builds, culling, brick cuts, the cuts' payloads written to the spill or part file, and
+    /// the assembly (the cells' times summed over the workers).
     double partition_seconds = 0, octree_seconds = 0, cull_seconds = 0, brick_seconds = 0,
-           assemble_seconds = 0;
+           payload_write_seconds = 0, assemble_seconds = 0;
     /// partition_seconds by pass: bounds, histogram (with the partition), count, scatter.
     std::array<double, 4> partition_pass_seconds{};
 };

@@ -336,9 +336,10 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
         point_bytes ? "; per-point sections dropped (--keep-points keeps them)" : "");
     const double seconds = step.seconds();
     step.note(
-        "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks, %.1f s assembly%s",
+        "prt-bricks: %.1f s partitioning, %.1f s octrees, %.1f s culling, %.1f s bricks (%.1f s writing "
+        "them), %.1f s assembly%s",
         stats.partition_seconds, stats.octree_seconds, stats.cull_seconds, stats.brick_seconds,
-        stats.assemble_seconds,
+        stats.payload_write_seconds, stats.assemble_seconds,
         stats.cells_culled_on_device
             ? (" (" + std::to_string(stats.cells_culled_on_device) + " of " + std::to_string(stats.cells) +
                " cells culled on the GPU where they were built: their culling is in the octrees' time)")
@@ -381,6 +382,7 @@ void points_step(prt::tool::PoolStep& step, PointOptions& opt, bool keep_float, 
                         {"octree", stats.octree_seconds},
                         {"cull", stats.cull_seconds},
                         {"bricks", stats.brick_seconds},
+                        {"payload_writes", stats.payload_write_seconds},
                         {"assemble", stats.assemble_seconds}}},
                       {"partition_passes",
                        {{"bounds", stats.partition_pass_seconds[0]},

@@ -96,14 +96,14 @@ AppendFile::AppendFile(const std::filesystem::path& folder, const std::string& w
 
 AppendFile::AppendFile(AppendFile&& other) noexcept
     : m_fd(std::exchange(other.m_fd, -1)),
-      m_size(std::exchange(other.m_size, 0)),
+      m_size(other.m_size.exchange(0)),
       m_what(std::move(other.m_what)) {}
 
 AppendFile& AppendFile::operator=(AppendFile&& other) noexcept {
     if (this != &other) {
         if (m_fd >= 0) ::close(m_fd);
         m_fd = std::exchange(other.m_fd, -1);
-        m_size = std::exchange(other.m_size, 0);
+        m_size = other.m_size.exchange(0);
         m_what = std::move(other.m_what);
     }
     return *this;
@@ -114,9 +114,8 @@ AppendFile::~AppendFile() {
 }
 
 std::uint64_t AppendFile::append(const void* data, std::uint64_t bytes) {
-    const std::uint64_t at = m_size;
+    const std::uint64_t at = m_size.fetch_add(bytes);
     write_fully(m_fd, at, data, bytes, m_what);
-    m_size += bytes;
     return at;
 }
 

@@ -6,6 +6,7 @@
 // a pass is done with, which keeps the resident set (and getrusage's peak) of a long pass bounded.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -70,14 +71,16 @@ public:
     ~AppendFile();
 
     /// Appends `bytes` bytes; returns the offset they start at. Throws prt::Error on a write error.
+    /// Several threads may append at once: each call reserves its range first, then writes it
+    /// (the writes of concurrent calls overlap; none waits for another's).
     std::uint64_t append(const void* data, std::uint64_t bytes);
     /// Reads `bytes` bytes at `offset` (written before) into `out`. Throws prt::Error on a read error.
     void read(std::uint64_t offset, void* out, std::uint64_t bytes) const;
-    std::uint64_t size() const { return m_size; }
+    std::uint64_t size() const { return m_size.load(); }
 
 private:
     int m_fd = -1;
-    std::uint64_t m_size = 0;
+    std::atomic<std::uint64_t> m_size{0};
     std::string m_what;
 };
 
