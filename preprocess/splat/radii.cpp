@@ -5,9 +5,12 @@
 #include <atomic>
 #include <cmath>
 #include <cstring>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "backend_choice.h"
+#include "buffer.h"
 #include "kd_tree.h"
 #ifdef PRT_HAVE_CUDA
 #include "prt/cuda/knn_cuda.h"
@@ -20,18 +23,39 @@ namespace prt::pre {
 
 namespace {
 
-/// Minimum, maximum, sum and zeros of the final radii, added in index order (the in-core and the
-/// streamed statistics sum alike).
+/// Minimum, maximum, sum and zeros of the final radii. The sum is taken in blocks of
+/// k_summary_block values in index order, each block summed from zero and the block sums added in
+/// order, so that every path gets the same bits: summarize() over threads (the in-core and GPU
+/// paths: the host's one-thread pass over the 500M room's radii took most of a second) and the
+/// streamed statistics block by block.
+constexpr std::size_t k_summary_block = std::size_t{1} << 20;
+
 struct RadiusSummary {
     double sum = 0;
     float lo = 0, hi = 0;
     std::uint64_t zero = 0, count = 0;
-    void add(float r) {
-        sum += r;
-        lo = count == 0 ? r : std::min(lo, r);
-        hi = count == 0 ? r : std::max(hi, r);
-        if (r == 0) ++zero;
-        ++count;
+    /// One block of at most k_summary_block values, after the blocks before it.
+    void add_block(std::span<const float> values) {
+        RadiusSummary b;
+        double block_sum = 0;
+        for (const float r : values) {
+            block_sum += r;
+            b.lo = b.count == 0 ? r : std::min(b.lo, r);
+            b.hi = b.count == 0 ? r : std::max(b.hi, r);
+            if (r == 0) ++b.zero;
+            ++b.count;
+        }
+        b.sum = block_sum;
+        merge(b);
+    }
+    /// The summary of the values after this one's.
+    void merge(const RadiusSummary& b) {
+        if (b.count == 0) return;
+        sum += b.sum;
+        lo = count == 0 ? b.lo : std::min(lo, b.lo);
+        hi = count == 0 ? b.hi : std::max(hi, b.hi);
+        zero += b.zero;
+        count += b.count;
     }
     void into(RadiiStats& stats) const {
         stats.min = lo;
@@ -40,6 +64,21 @@ struct RadiusSummary {
         stats.zero = zero;
     }
 };
+
+/// The summary of `values`, its blocks on `threads` workers.
+RadiusSummary summarize(std::span<const float> values, unsigned threads) {
+    const std::size_t blocks = (values.size() + k_summary_block - 1) / k_summary_block;
+    std::vector<RadiusSummary> part(blocks);
+    parallel_chunks(blocks, 1, resolve_threads(threads), [&](std::size_t b, std::size_t e, unsigned) {
+        for (std::size_t i = b; i < e; ++i) {
+            const std::size_t first = i * k_summary_block;
+            part[i].add_block(values.subspan(first, std::min(k_summary_block, values.size() - first)));
+        }
+    });
+    RadiusSummary all;
+    for (const RadiusSummary& p : part) all.merge(p);
+    return all;
+}
 
 /// The checks every compute_radii path makes before searching (knn_distances' own, and the clamp's).
 void check_radii_params(std::size_t n, const RadiiParams& params) {
@@ -109,7 +148,7 @@ std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::u
     return radii;
 }
 
-void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stats) {
+void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stats, unsigned threads) {
     if (!(clamp_factor >= 0) || !std::isfinite(clamp_factor))
         throw Error("k-NN radii: the clamp factor must be finite and >= 0");
     const std::size_t n = radii.size();
@@ -135,9 +174,7 @@ void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stat
                 ++stats.clamped;
             }
     }
-    RadiusSummary summary;
-    for (const float r : radii) summary.add(r);
-    summary.into(stats);
+    summarize(radii, threads).into(stats);
     stats.median = median_of(radii);
 }
 
@@ -160,10 +197,10 @@ void clamp_radii_local(std::vector<float>& radii, const std::vector<std::uint32_
         }
         clamped += c;
     });
-    clamp_radii(radii, 0.0f, stats);  // raw_median (no global clamp)
+    clamp_radii(radii, 0.0f, stats, threads);  // raw_median (no global clamp)
     const double raw_median = stats.raw_median;
     radii.swap(out);
-    clamp_radii(radii, 0.0f, stats);  // the statistics of the result
+    clamp_radii(radii, 0.0f, stats, threads);  // the statistics of the result
     stats.raw_median = raw_median;
     stats.clamped = clamped.load();
 }
@@ -215,7 +252,10 @@ std::vector<float> compute_radii_cuda(std::span<const pool::Float3> positions, c
     const cuda::KnnClamp clamp = params.clamp_factor == 0            ? cuda::KnnClamp::none
                                  : params.scope == ClampScope::local ? cuda::KnnClamp::local
                                                                      : cuda::KnnClamp::global;
-    std::vector<float> radii(n);
+    // The 4 bytes a point the search downloads into: huge pages, first touched by every worker
+    // (the 500M room's 2 GB were faulted in 4 KiB at a time by the zeroing on this thread).
+    std::vector<float> radii;
+    resize_on_huge_pages(radii, n, resolve_threads(params.threads));
     const cuda::KnnRadiiResult r =
         cuda::knn_radii_cuda({reinterpret_cast<const float*>(positions.data()), 3 * n}, k, clamp,
                              params.clamp_factor, radii, progress);
@@ -225,9 +265,7 @@ std::vector<float> compute_radii_cuda(std::span<const pool::Float3> positions, c
     stats.raw_median = r.raw_median;
     stats.clamp_limit = r.clamp_limit;
     stats.clamped = r.clamped;
-    RadiusSummary summary;
-    for (const float v : radii) summary.add(v);
-    summary.into(stats);
+    summarize(radii, params.threads).into(stats);
     stats.median = r.median;
     stats.seconds_index = r.seconds_upload + r.seconds_index;
     stats.seconds_search = r.seconds_search;
@@ -262,7 +300,7 @@ std::vector<float> compute_radii(std::span<const pool::Float3> positions, const 
     if (local_clamp)
         clamp_radii_local(radii, neighbours, params.k, params.clamp_factor, local, params.threads);
     else
-        clamp_radii(radii, params.clamp_factor, local);
+        clamp_radii(radii, params.clamp_factor, local, params.threads);
     local.seconds = tool::now_seconds() - start;
     if (stats) *stats = local;
     return radii;
@@ -302,6 +340,20 @@ void stream(std::span<const float> values, bool mapped, F&& f) {
     }
 }
 
+/// Calls f(block) for every k_summary_block values in order (the last block shorter), dropping the
+/// pages of each 4M-value step once read, as stream() does.
+template <class F>
+void stream_blocks(std::span<const float> values, bool mapped, F&& f) {
+    constexpr std::size_t step = std::size_t{1} << 22;
+    static_assert(step % k_summary_block == 0, "a step holds whole blocks");
+    for (std::size_t s = 0; s < values.size(); s += step) {
+        const std::size_t e = std::min(values.size(), s + step);
+        for (std::size_t b = s; b < e; b += k_summary_block)
+            f(values.subspan(b, std::min(k_summary_block, e - b)));
+        if (mapped) drop_pages(values.data() + s, (e - s) * sizeof(float));
+    }
+}
+
 /// The element of rank `rank` (0-based) in sorted order: two radix passes of 16 bits.
 float select_rank(std::span<const float> values, std::uint64_t rank, bool mapped) {
     std::vector<std::uint64_t> hist(65536, 0);
@@ -326,8 +378,8 @@ void streamed_statistics(std::span<const float> radii, RadiiStats& stats) {
     stats.clamp_limit = 0;
     if (n == 0) return;
     stats.raw_median = median_streaming(radii, true);
-    RadiusSummary summary;
-    stream(radii, true, [&](float r) { summary.add(r); });  // in index order, as clamp_radii sums
+    RadiusSummary summary;  // block by block, as summarize() adds them
+    stream_blocks(radii, true, [&](std::span<const float> block) { summary.add_block(block); });
     summary.into(stats);
     stats.median = stats.raw_median;
 }

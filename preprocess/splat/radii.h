@@ -86,8 +86,9 @@ std::vector<float> knn_distances(std::span<const pool::Float3> positions, std::u
 
 /// The documented outlier rule: with m the median of `radii` and F = clamp_factor > 0, every radius
 /// above F * m becomes F * m (isolated points otherwise get disks spanning the model). Fills the
-/// clamp fields and the statistics of the result in `stats`.
-void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stats);
+/// clamp fields and the statistics of the result in `stats` (summed on `threads` workers, 0: every
+/// core; the same bits for any count).
+void clamp_radii(std::vector<float>& radii, float clamp_factor, RadiiStats& stats, unsigned threads = 1);
 
 /// The local rule (issue 15): with m_i the median raw radius of point i's k neighbours
 /// (`neighbours` as knn_distances gives them) and F = clamp_factor > 0, a radius above F * m_i

@@ -99,6 +99,34 @@ TEST(KnnRadii, ClampRuleAndStatistics) {
     EXPECT_FLOAT_EQ(four[0], 2.5f);
 }
 
+// The statistics sum in blocks of 2^20 radii, each from zero, the block sums in index order: the
+// same bits on any thread count (the GPU and streamed paths take them the same way), over a model
+// of several blocks whose last is short.
+TEST(KnnRadii, StatisticsSumInBlocksWhateverTheThreads) {
+    std::vector<float> r(9 * (std::size_t{1} << 20) + 12345);
+    std::mt19937_64 rng(26);
+    std::uniform_real_distribution<float> u(0.001f, 0.01f);
+    for (float& v : r) v = u(rng);
+    r[5] = 0;
+    r[3000000] = 0.5f;
+    double want = 0;
+    for (std::size_t b = 0; b < r.size(); b += std::size_t{1} << 20) {
+        double block = 0;
+        for (std::size_t i = b; i < std::min(r.size(), b + (std::size_t{1} << 20)); ++i) block += r[i];
+        want += block;
+    }
+    for (const unsigned threads : {1u, 3u, 0u}) {
+        SCOPED_TRACE("threads " + std::to_string(threads));
+        std::vector<float> copy = r;
+        prt::pre::RadiiStats stats;
+        prt::pre::clamp_radii(copy, 0.0f, stats, threads);
+        EXPECT_EQ(stats.mean, want / double(r.size()));
+        EXPECT_EQ(stats.zero, 1u);
+        EXPECT_EQ(stats.min, 0.0);
+        EXPECT_EQ(stats.max, 0.5);
+    }
+}
+
 TEST(KnnRadii, ComputeRadiiClampsTheOutlierGlobally) {
     const std::vector<Float3> p = mixed_points();
     prt::pre::RadiiParams params;
