@@ -4,8 +4,10 @@
 # GPU with several workers), so that more workers than cores can fill the cores with the cells' CPU
 # work. Carried: build-ab/pack.tar.xz (main, folder bin/) and build-ab/blk.tar.xz (folder blk/:
 # prt-bricks built with the patch applied to the same main). The 500M room from points
-# (--memory 12G, 16 cores): main, blk, blk with 24 and 32 cell workers, main with 24 (spinning
-# waiters); sections compared, pools removed as it goes.
+# (--memory 12G, 16 cores): main, blk, blk with 24 and 32 cell workers, and main with glibc's malloc
+# keeping freed blocks below 32 MiB in its arenas (tun16: does the cells' allocation churn, fresh
+# zeroed pages for every cell, cost the host's 57 s of system time?); sections compared, pools
+# removed as it goes.
 set -uo pipefail
 out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/d2.txt") 2>&1
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader; t0=$SECONDS; root=$PWD
@@ -29,8 +31,9 @@ line main1 $x/prt-bricks; sum main1
 line blk16 $blk/prt-bricks; sum blk16
 line blk24 $blk/prt-bricks "--cell-workers 24"; sum blk24
 line blk32 $blk/prt-bricks "--cell-workers 32"; sum blk32
-line main24 $x/prt-bricks "--cell-workers 24"; sum main24
-for v in blk16 blk24 blk32 main24; do
+export GLIBC_TUNABLES=glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=4294967296
+line tun16 $x/prt-bricks; unset GLIBC_TUNABLES; sum tun16
+for v in blk16 blk24 blk32 tun16; do
   cmp -s $w/main1.sum $w/$v.sum && echo "500M bricks $v: sections equal to main1" || echo "500M bricks $v: SECTIONS DIFFER"
 done
 echo "ALL_DONE $((SECONDS - t0)) s"
