@@ -36,16 +36,14 @@ struct RadiusSummary {
     std::uint64_t zero = 0, count = 0;
     /// One block of at most k_summary_block values, after the blocks before it.
     void add_block(std::span<const float> values) {
-        RadiusSummary b;
-        double block_sum = 0;
+        RadiusSummary b;  // summed from zero
         for (const float r : values) {
-            block_sum += r;
+            b.sum += r;
             b.lo = b.count == 0 ? r : std::min(b.lo, r);
             b.hi = b.count == 0 ? r : std::max(b.hi, r);
             if (r == 0) ++b.zero;
             ++b.count;
         }
-        b.sum = block_sum;
         merge(b);
     }
     /// The summary of the values after this one's.
@@ -328,20 +326,8 @@ float from_order_key(std::uint32_t key) {
     return f;
 }
 
-/// Calls f(v) for every value in order, dropping the pages of each 4M-value step once read (the
-/// spans here are spill files: prt::drop_mapped_pages).
-template <class F>
-void stream(std::span<const float> values, bool mapped, F&& f) {
-    constexpr std::size_t step = std::size_t{1} << 22;
-    for (std::size_t s = 0; s < values.size(); s += step) {
-        const std::size_t e = std::min(values.size(), s + step);
-        for (std::size_t i = s; i < e; ++i) f(values[i]);
-        if (mapped) drop_pages(values.data() + s, (e - s) * sizeof(float));
-    }
-}
-
 /// Calls f(block) for every k_summary_block values in order (the last block shorter), dropping the
-/// pages of each 4M-value step once read, as stream() does.
+/// pages of each 4M-value step once read (the spans here are spill files: prt::drop_mapped_pages).
 template <class F>
 void stream_blocks(std::span<const float> values, bool mapped, F&& f) {
     constexpr std::size_t step = std::size_t{1} << 22;
@@ -352,6 +338,14 @@ void stream_blocks(std::span<const float> values, bool mapped, F&& f) {
             f(values.subspan(b, std::min(k_summary_block, e - b)));
         if (mapped) drop_pages(values.data() + s, (e - s) * sizeof(float));
     }
+}
+
+/// Calls f(v) for every value in order, as stream_blocks reads them.
+template <class F>
+void stream(std::span<const float> values, bool mapped, F&& f) {
+    stream_blocks(values, mapped, [&](std::span<const float> block) {
+        for (const float v : block) f(v);
+    });
 }
 
 /// The element of rank `rank` (0-based) in sorted order: two radix passes of 16 bits.
