@@ -1,17 +1,28 @@
-# Sourced by gpu-d1.sh .. gpu-d4.sh: the shared steps of one call on the GPU host. Before sourcing,
+# Sourced by gpu-d1.sh .. gpu-d5.sh: the shared steps of one call on the GPU host. Before sourcing,
 # set NAME (the log's name) and TARS (the carried tarballs of build-ab/ to unpack into /tmp/ab:
-# pack.tar.xz gives bin/, knn.tar.xz knn/, blk.tar.xz blk/).
+# pack.tar.xz gives bin/, knn.tar.xz knn/, blk.tar.xz blk/, kall.tar.xz kall/).
 set -uo pipefail
 out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/$NAME.txt") 2>&1
 nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv,noheader; t0=$SECONDS; root=$PWD
 rm -rf /tmp/ab; mkdir -p /tmp/ab
 for t in $TARS; do python3 -c "import tarfile, sys; tarfile.open(sys.argv[1]).extractall('/tmp/ab')" build-ab/$t; done
-x=/tmp/ab/bin; knn=/tmp/ab/knn; blk=/tmp/ab/blk; w=/tmp/w$NAME; mkdir -p $w
+x=/tmp/ab/bin; knn=/tmp/ab/knn; blk=/tmp/ab/blk; kall=/tmp/ab/kall; w=/tmp/w$NAME; mkdir -p $w
 
 radii_tests() {  # the patched radii GPU tests (the CPU's radii bit for bit, both ways to the neighbours equal)
   timeout 300 $knn/prt_radii_gpu_tests > $out/prt_radii_gpu_tests-knn.log 2>&1
   echo "knn prt_radii_gpu_tests rc $? $(grep -E '^\[  (PASSED|FAILED|SKIPPED)|^\[       OK' $out/prt_radii_gpu_tests-knn.log | tr '\n' ' ')"
   grep -B2 -A6 "Failure" $out/prt_radii_gpu_tests-knn.log | head -30
+  echo "tests done $((SECONDS - t0)) s"
+}
+gpu_tests() {  # every GPU test program of kall/ (the whole tree with the radii patch), its tools beside it
+  mkdir -p /work/shared/data/bezier && cp -r build-ab/bezier/* /work/shared/data/bezier/
+  mkdir -p $root/build-cu && ln -sfn "$kall" $root/build-cu/bin; mkdir -p /tmp/gt
+  for t in $kall/*_gpu_tests; do
+    local b=$(basename $t); PRT_BIN_DIR=$kall timeout 240 $t > /tmp/gt/$b.log 2>&1
+    echo "$b rc $? $(grep -E '^\[  (PASSED|FAILED|SKIPPED)' /tmp/gt/$b.log | tr '\n' ' ')"
+    grep -B2 -A6 "Failure" /tmp/gt/$b.log | head -20
+  done
+  tar -czf $out/gpu-test-logs-$NAME.tar.gz -C /tmp/gt $(cd /tmp/gt && ls)
   echo "tests done $((SECONDS - t0)) s"
 }
 synth() {  # the 500M room (prt-synth's pool, fed straight to prt-bricks)
