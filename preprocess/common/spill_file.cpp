@@ -165,6 +165,10 @@ void SpillFile::drop() const {
     drop_pages(m_data, m_size);
 }
 
+void SpillFile::advise_random() const {
+    if (m_data && m_size > 0) ::madvise(m_data, m_size, MADV_RANDOM);
+}
+
 void drop_pages(const void* data, std::size_t bytes) {
     if (!data || bytes == 0) return;
     const auto page = static_cast<std::uintptr_t>(::sysconf(_SC_PAGESIZE));
@@ -179,11 +183,14 @@ std::uint64_t peak_rss_bytes() {
     return std::uint64_t(usage.ru_maxrss) * 1024;  // kilobytes on Linux
 }
 
-std::uint64_t current_anon_rss_bytes() {
+namespace {
+
+/// A "Rss...:" line of /proc/self/status in bytes (0 when absent).
+std::uint64_t status_bytes(const std::string& field) {
     std::ifstream in("/proc/self/status");
     std::string key;
     while (in >> key) {
-        if (key == "RssAnon:") {
+        if (key == field) {
             std::uint64_t kb = 0;
             in >> kb;
             return kb * 1024;
@@ -191,6 +198,16 @@ std::uint64_t current_anon_rss_bytes() {
         std::getline(in, key);
     }
     return 0;
+}
+
+}  // namespace
+
+std::uint64_t current_anon_rss_bytes() {
+    return status_bytes("RssAnon:");
+}
+
+std::uint64_t current_file_rss_bytes() {
+    return status_bytes("RssFile:");
 }
 
 }  // namespace prt::pre

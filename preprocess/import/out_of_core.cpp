@@ -403,6 +403,7 @@ OrientStats orient_by_propagation_tiled(std::span<const std::array<double, 3>> p
     const std::uint64_t n = positions.size();
     OrientStats stats;
     SpillFile rows_file(memory.spill_folder, std::max<std::uint64_t>(n * k, 1) * 4, "the k-NN graph");
+    rows_file.advise_random();  // written by point as the tiles come
     const std::span<std::uint32_t> rows = rows_file.as<std::uint32_t>();
     {
         const SpillFile offsets = float_offsets(positions, centre, memory);
@@ -446,7 +447,10 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     OrientStats stats;
     MemoryParams memory;
     memory.spill_folder = spill_folder;
+    // Every array here is read or written at random (the edges' far ends, the propagation's heap
+    // order): single pages in the page cache, not large folios (SpillFile::advise_random).
     SpillFile ok_file(memory.spill_folder, std::max<std::uint64_t>(n, 1), "the orientation flags");
+    ok_file.advise_random();
     const std::span<std::uint8_t> ok = ok_file.as<std::uint8_t>();
     for (std::uint64_t i = 0; i < n; ++i) {
         ok[i] = orient_detail::valid(normals[i]);
@@ -454,6 +458,7 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     }
     // The symmetric adjacency (CSR), orient_by_propagation()'s each_edge in point order.
     SpillFile begin_file(memory.spill_folder, (n + 1) * 8, "the adjacency offsets");
+    begin_file.advise_random();
     const std::span<std::uint64_t> begin = begin_file.as<std::uint64_t>();
     const SpillFile* pages = nullptr;  // the adjacency lists and their fill, once they exist
     const SpillFile* fill_pages = nullptr;
@@ -481,10 +486,12 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     for (std::uint64_t i = 0; i < n; ++i) begin[i + 1] += begin[i];
     SpillFile adjacent_file(memory.spill_folder, std::max<std::uint64_t>(begin[n], 1) * 4,
                             "the adjacency lists");
+    adjacent_file.advise_random();
     const std::span<std::uint32_t> adjacent = adjacent_file.as<std::uint32_t>().subspan(0, begin[n]);
     pages = &adjacent_file;
     {
         SpillFile fill_file(memory.spill_folder, std::max<std::uint64_t>(n, 1) * 8, "the adjacency fill");
+        fill_file.advise_random();
         const std::span<std::uint64_t> fill = fill_file.as<std::uint64_t>();
         fill_pages = &fill_file;
         std::copy(begin.begin(), begin.begin() + std::ptrdiff_t(n), fill.begin());
@@ -499,6 +506,7 @@ OrientStats orient_over_rows(std::span<const std::uint32_t> rows, std::uint32_t 
     // propagate_signs() with its per-point arrays in one spill file.
     const std::uint64_t per = 1 + 4 + 8 + 4 + 4 + 4;
     SpillFile work(memory.spill_folder, std::max<std::uint64_t>(n, 1) * per + 64, "the orientation's arrays");
+    work.advise_random();
     std::byte* w = work.data();
     auto carve = [&](auto* type, std::uint64_t bytes_each) {
         using T = std::remove_pointer_t<decltype(type)>;
@@ -954,6 +962,7 @@ void estimate_normals(Arrays& arrays, const Options& options, const MemoryParams
     // The file's normals (merged scans, some with normals) stay in their array; PCA writes a new one.
     const SpillArray<pool::Float3> file_normals = out.normals;
     out.normals = make_spill<pool::Float3>(memory, out.size, "the normals");
+    if (out.sensors.empty()) out.normals.file->advise_random();  // the propagation reads them at random
     arrays.normals = true;
     const auto positions = out.positions.span().subspan(0, out.size);
     const auto normals = out.normals.span().subspan(0, out.size);

@@ -17,7 +17,8 @@
 // import_merged() does (import_merged_out_of_core).
 // Pools of one scan are read the same way (read_point_sections() in chunks).
 // Normals without a sensor: propagation over the whole k-NN graph with every array in spill files
-// (orient_over_rows; semi-external: its resident set is not bounded by the memory).
+// (orient_over_rows; semi-external: the files advised random, their pages dropped every 4096
+// vertices; the resident set is reclaimable file pages, a few times --memory between drops).
 // Not out of core (estimate_import says why, one line): meshes, PCD, pools of several scans,
 // grazing normals whose edges do not fit in half the memory.
 #pragma once

@@ -469,6 +469,26 @@ TEST_F(GrazingPropagation, TakesTheStepsOfOrientByPropagation) {
     }
 }
 
+class SpillFileAdvice : public TempDirTest {};
+
+// The orientation's arrays are read and written at random; a kernel that keeps a file's page cache
+// in large folios (Linux 6.x, ext4) maps a whole folio per fault, so 4096 scattered writes mapped
+// nearly all of a 576 MB file. advise_random() (before the first touch) keeps single pages.
+TEST_F(SpillFileAdvice, ScatteredWritesMapOnlyThePagesTheyTouch) {
+    constexpr std::uint64_t bytes = std::uint64_t(64) << 20, page = 4096, touched = 256;
+    const prt::pre::SpillFile file(m_dir, bytes, "the test's array");
+    file.advise_random();
+    std::memset(file.data(), 1, bytes);  // every page in the page cache
+    file.drop();
+    const std::uint64_t before = prt::pre::current_file_rss_bytes();
+    std::mt19937_64 rng(5);
+    for (std::uint64_t i = 0; i < touched; ++i) file.data()[(rng() % (bytes / page)) * page] = std::byte{2};
+    const std::uint64_t after = prt::pre::current_file_rss_bytes();
+    const std::uint64_t grown = after - std::min(before, after);
+    EXPECT_LE(grown, touched * 16 * page) << "a write fault mapped more than a fault-around window";
+    file.drop();
+}
+
 TEST(MedianStreamed, EqualsNthElement) {
     std::mt19937_64 rng(3);
     std::exponential_distribution<float> d(2.0f);
