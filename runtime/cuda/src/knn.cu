@@ -18,8 +18,10 @@
 // --fmad=false) so nothing is fused; a box's squared distance is computed from its float corners
 // in the same order, so it is never above the distance of a point inside it (rounding is
 // monotone), and a box is skipped only when strictly farther than the k-th candidate (a point at
-// the same distance with a smaller index would still enter). The local clamp runs as a second
-// search once every raw radius is known, instead of storing 4k bytes of neighbours per point.
+// the same distance with a smaller index would still enter). The local clamp needs every raw radius
+// before it can take a point's neighbours' median: the search stores each point's k neighbours
+// (4k bytes a point, in curve order) where the device has that memory free, and a clamp kernel reads
+// them; otherwise a second search finds them again (the same neighbours: the search is exact).
 #include <cuda_runtime.h>
 
 #include <algorithm>
@@ -43,6 +45,9 @@ constexpr std::uint32_t k_leaf = 32;   ///< points per leaf of the search tree: 
 constexpr std::uint32_t k_stack = 32;  ///< n < 2^32: at most 2^27 leaves, a depth of 27
 constexpr unsigned k_block = 128;
 constexpr std::uint64_t k_queries_per_launch = std::uint64_t{1} << 22;  ///< progress between launches
+/// Device memory left free beside the local clamp's stored neighbours (the medians' sorts and cub's
+/// temporary storage come after the search, from what it frees).
+constexpr std::uint64_t k_neighbour_margin = std::uint64_t{256} << 20;
 
 double now_seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -169,17 +174,46 @@ __device__ __forceinline__ bool before(float da, std::uint32_t ia, float db, std
     return da < db || (da == db && ia < ib);
 }
 
+/// radii.cpp clamp_radii_local for point qi: m = the (k / 2)-th smallest raw radius of its k
+/// neighbours (0-based, nth_element's; `v` holds them in its last k slots, the first KMAX - k are
+/// -inf), limit = factor * m; out[qi] the clamped radius, the clamped counted (a ballot of the lanes
+/// active here).
+template <int KMAX>
+__device__ __forceinline__ void clamp_local(const float (&v)[KMAX], std::uint32_t k, std::uint32_t qi,
+                                            const float* raw, float factor, float* out,
+                                            unsigned long long* clamped) {
+    const int target = KMAX - int(k) + int(k / 2);  // the sentinels rank first
+    float m = 0;
+#pragma unroll
+    for (int j = 0; j < KMAX; ++j) {
+        int less = 0, equal_or_less = 0;
+#pragma unroll
+        for (int i = 0; i < KMAX; ++i) less += v[i] < v[j], equal_or_less += v[i] <= v[j];
+        if (less <= target && target < equal_or_less) m = v[j];
+    }
+    const float limit = __fmul_rn(factor, m);
+    const float self = raw[qi];
+    const bool clamp = self > limit;
+    out[qi] = clamp ? limit : self;
+    const unsigned ballot = __ballot_sync(__activemask(), clamp);
+    if (ballot && (threadIdx.x & 31) == __ffs(__activemask()) - 1)
+        atomicAdd(clamped, static_cast<unsigned long long>(__popc(ballot)));
+}
+
 /// One query per thread, points [first, first + count) of the curve, a warp's 32 queries walking
 /// the tree together: a node is entered when any of them needs it (its box no farther than that
 /// query's k-th candidate), so the warp never diverges in the walk, a leaf's 32 points are one
 /// coalesced load, each handed to every lane by shuffles. A query sees every node it would see
-/// alone (and some more), so the result is the same. Pass 1 (CLAMP false) writes the raw radius;
-/// pass 2 (CLAMP true, every raw radius known) the locally clamped radius, counting the clamped.
+/// alone (and some more), so the result is the same. Pass 1 (CLAMP false) writes the raw radius
+/// and, with `neighbours`, the query's k neighbours at [(first + t) k, (first + t + 1) k) (curve
+/// order, nearest first); pass 2 (CLAMP true, every raw radius known) the locally clamped radius,
+/// counting the clamped.
 template <int KMAX, bool CLAMP>
 __global__ void __launch_bounds__(k_block)
     knn_kernel(const float4* __restrict__ pts, const float4* __restrict__ lo, const float4* __restrict__ hi,
                std::uint32_t first_leaf, std::uint64_t n, std::uint32_t k, std::uint64_t first,
-               std::uint64_t count, float* raw, float factor, float* out, unsigned long long* clamped) {
+               std::uint64_t count, float* raw, float factor, float* out, unsigned long long* clamped,
+               std::uint32_t* neighbours) {
     constexpr unsigned all = 0xffffffffu;
     const std::uint64_t t = std::uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
     const bool active = t < count;
@@ -256,29 +290,35 @@ __global__ void __launch_bounds__(k_block)
 
     if constexpr (!CLAMP) {
         raw[qi] = __fsqrt_rn(bd[KMAX - 1]);  // n > k: k others are always found
+        if (neighbours != nullptr) {
+            std::uint32_t* own = neighbours + (first + t) * k;
+#pragma unroll
+            for (int j = 0; j < KMAX; ++j)
+                if (j >= KMAX - int(k)) own[j - (KMAX - int(k))] = bi[j];
+        }
     } else {
-        // radii.cpp clamp_radii_local: m = the (k / 2)-th smallest raw radius of the k neighbours
-        // (0-based, nth_element's), limit = factor * m.
         float v[KMAX];
 #pragma unroll
         for (int j = 0; j < KMAX; ++j) v[j] = j < KMAX - int(k) ? -INFINITY : raw[bi[j]];
-        const int target = KMAX - int(k) + int(k / 2);  // the sentinels rank first
-        float m = 0;
-#pragma unroll
-        for (int j = 0; j < KMAX; ++j) {
-            int less = 0, equal_or_less = 0;
-#pragma unroll
-            for (int i = 0; i < KMAX; ++i) less += v[i] < v[j], equal_or_less += v[i] <= v[j];
-            if (less <= target && target < equal_or_less) m = v[j];
-        }
-        const float limit = __fmul_rn(factor, m);
-        const float self = raw[qi];
-        const bool clamp = self > limit;
-        out[qi] = clamp ? limit : self;
-        const unsigned ballot = __ballot_sync(__activemask(), clamp);
-        if (ballot && (threadIdx.x & 31) == __ffs(__activemask()) - 1)
-            atomicAdd(clamped, static_cast<unsigned long long>(__popc(ballot)));
+        clamp_local<KMAX>(v, k, qi, raw, factor, out, clamped);
     }
+}
+
+/// The local clamp from the neighbours pass 1 stored (knn_kernel): curve point s's radius, as
+/// pass 2 would clamp it.
+template <int KMAX>
+__global__ void stored_clamp_kernel(const float4* __restrict__ pts,
+                                    const std::uint32_t* __restrict__ neighbours, std::uint64_t n,
+                                    std::uint32_t k, const float* raw, float factor, float* out,
+                                    unsigned long long* clamped) {
+    const std::uint64_t s = std::uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
+    if (s >= n) return;
+    const std::uint32_t qi = __float_as_uint(pts[s].w);
+    const std::uint32_t* own = neighbours + s * k;
+    float v[KMAX];
+#pragma unroll
+    for (int j = 0; j < KMAX; ++j) v[j] = j < KMAX - int(k) ? -INFINITY : raw[own[j - (KMAX - int(k))]];
+    clamp_local<KMAX>(v, k, qi, raw, factor, out, clamped);
 }
 
 /// radii.cpp clamp_radii with the global limit.
@@ -315,36 +355,61 @@ template <int KMAX>
 void run_search(const DeviceBuffer<float4>& pts, const DeviceBuffer<float4>& lo,
                 const DeviceBuffer<float4>& hi, std::uint32_t first_leaf, std::uint64_t n, std::uint32_t k,
                 bool clamp_pass, DeviceBuffer<float>& raw, float factor, DeviceBuffer<float>& out,
-                DeviceBuffer<unsigned long long>& clamped, const std::function<void(std::uint64_t)>& progress,
-                std::uint64_t done_before, std::uint64_t weight) {
+                DeviceBuffer<unsigned long long>& clamped, std::uint32_t* neighbours,
+                const std::function<void(std::uint64_t)>& progress, std::uint64_t done_before,
+                std::uint64_t weight) {
     for (std::uint64_t first = 0; first < n; first += k_queries_per_launch) {
         const std::uint64_t count = std::min(k_queries_per_launch, n - first);
         if (clamp_pass)
             launch_kernel(launch_1d(count, k_block), knn_kernel<KMAX, true>, pts.data(), lo.data(), hi.data(),
-                          first_leaf, n, k, first, count, raw.data(), factor, out.data(), clamped.data());
+                          first_leaf, n, k, first, count, raw.data(), factor, out.data(), clamped.data(),
+                          nullptr);
         else
             launch_kernel(launch_1d(count, k_block), knn_kernel<KMAX, false>, pts.data(), lo.data(),
                           hi.data(), first_leaf, n, k, first, count, raw.data(), factor, out.data(),
-                          clamped.data());
+                          clamped.data(), neighbours);
         PRT_CUDA_CHECK(cudaDeviceSynchronize());
         if (progress) progress(done_before + (first + count) / weight);
     }
 }
 
+template <int KMAX>
+void run_stored_clamp(const DeviceBuffer<float4>& pts, const DeviceBuffer<std::uint32_t>& neighbours,
+                      std::uint64_t n, std::uint32_t k, const DeviceBuffer<float>& raw, float factor,
+                      DeviceBuffer<float>& out, DeviceBuffer<unsigned long long>& clamped) {
+    launch_kernel(launch_1d(n, 256), stored_clamp_kernel<KMAX>, pts.data(), neighbours.data(), n, k,
+                  raw.data(), factor, out.data(), clamped.data());
+    PRT_CUDA_CHECK(cudaDeviceSynchronize());
+}
+
 void search(std::uint32_t k, const DeviceBuffer<float4>& pts, const DeviceBuffer<float4>& lo,
             const DeviceBuffer<float4>& hi, std::uint32_t first_leaf, std::uint64_t n, bool clamp_pass,
             DeviceBuffer<float>& raw, float factor, DeviceBuffer<float>& out,
-            DeviceBuffer<unsigned long long>& clamped, const std::function<void(std::uint64_t)>& progress,
-            std::uint64_t done_before, std::uint64_t weight) {
+            DeviceBuffer<unsigned long long>& clamped, std::uint32_t* neighbours,
+            const std::function<void(std::uint64_t)>& progress, std::uint64_t done_before,
+            std::uint64_t weight) {
     if (k <= 8)
-        run_search<8>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, progress,
-                      done_before, weight);
+        run_search<8>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
+                      progress, done_before, weight);
     else if (k <= 16)
-        run_search<16>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, progress,
-                       done_before, weight);
+        run_search<16>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
+                       progress, done_before, weight);
     else
-        run_search<32>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, progress,
-                       done_before, weight);
+        run_search<32>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
+                       progress, done_before, weight);
+}
+
+/// The local clamp from the neighbours the search stored (the same radii and count as the second
+/// search's).
+void stored_clamp(const DeviceBuffer<float4>& pts, const DeviceBuffer<std::uint32_t>& neighbours,
+                  std::uint64_t n, std::uint32_t k, const DeviceBuffer<float>& raw, float factor,
+                  DeviceBuffer<float>& out, DeviceBuffer<unsigned long long>& clamped) {
+    if (k <= 8)
+        run_stored_clamp<8>(pts, neighbours, n, k, raw, factor, out, clamped);
+    else if (k <= 16)
+        run_stored_clamp<16>(pts, neighbours, n, k, raw, factor, out, clamped);
+    else
+        run_stored_clamp<32>(pts, neighbours, n, k, raw, factor, out, clamped);
 }
 
 std::uint32_t leaf_level(std::uint64_t n) {
@@ -392,7 +457,8 @@ bool knn_radii_usable(std::uint64_t n, std::uint32_t k, std::string* why) {
 }
 
 KnnRadiiResult knn_radii_cuda(std::span<const float> xyz, std::uint32_t k, KnnClamp clamp, float factor,
-                              std::span<float> radii, const std::function<void(std::uint64_t)>& progress) {
+                              std::span<float> radii, const std::function<void(std::uint64_t)>& progress,
+                              KnnNeighbours neighbour_store) {
     KnnRadiiResult result;
     const std::uint64_t n = xyz.size() / 3;
     if (xyz.size() != 3 * n || radii.size() != n)
@@ -467,17 +533,30 @@ KnnRadiiResult knn_radii_cuda(std::span<const float> xyz, std::uint32_t k, KnnCl
     result.seconds_index = now_seconds() - t;
     t = now_seconds();
 
-    // The search: raw radii, then (local clamp) the clamped radii in a second pass.
+    // The search: raw radii, then (local clamp) the clamped radii from the neighbours it stored, or
+    // from a second search where the device lacks the memory to store them.
     DeviceBuffer<float> raw(n), out;
     DeviceBuffer<unsigned long long> d_clamped(1);
     PRT_CUDA_CHECK(cudaMemset(d_clamped.data(), 0, sizeof(unsigned long long)));
     const bool local = clamp == KnnClamp::local;
     if (local) out.resize(n);
-    const std::uint64_t weight = local ? 2 : 1;
-    search(k, pts, box_lo, box_hi, first_leaf, n, false, raw, factor, out, d_clamped, progress, 0, weight);
-    if (local)
-        search(k, pts, box_lo, box_hi, first_leaf, n, true, raw, factor, out, d_clamped, progress, n / 2,
-               weight);
+    DeviceBuffer<std::uint32_t> neighbours;
+    if (local && neighbour_store == KnnNeighbours::stored_if_free) {
+        std::size_t free = 0, total = 0;
+        const std::uint64_t bytes = n * k * sizeof(std::uint32_t);
+        PRT_CUDA_CHECK(cudaMemGetInfo(&free, &total));
+        if (bytes + k_neighbour_margin <= free) neighbours.resize(n * k);
+    }
+    result.neighbours_stored = neighbours.size() > 0;
+    const std::uint64_t weight = local && !result.neighbours_stored ? 2 : 1;
+    search(k, pts, box_lo, box_hi, first_leaf, n, false, raw, factor, out, d_clamped,
+           result.neighbours_stored ? neighbours.data() : nullptr, progress, 0, weight);
+    if (result.neighbours_stored)
+        stored_clamp(pts, neighbours, n, k, raw, factor, out, d_clamped);
+    else if (local)
+        search(k, pts, box_lo, box_hi, first_leaf, n, true, raw, factor, out, d_clamped, nullptr, progress,
+               n / 2, weight);
+    neighbours.release();
     pts.release();
     box_lo.release();
     box_hi.release();

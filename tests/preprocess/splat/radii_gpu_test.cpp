@@ -12,6 +12,9 @@
 #include <string>
 
 #include "prt/error.h"
+#ifdef PRT_HAVE_CUDA
+#include "prt/cuda/knn_cuda.h"
+#endif
 #include "radii.h"
 #include "splat_test_data.h"
 
@@ -130,6 +133,45 @@ TEST(KnnRadiiGpu, EqualTheCpuOnAMillionScanLikePoints) {
     p.pop_back();
     expect_same(p, 9, 3.0f, prt::pre::ClampScope::global);
 }
+
+#ifdef PRT_HAVE_CUDA
+// The local clamp reads the neighbours the search stored where the device has the memory (every
+// test above), else searches them again: both ways give the same radii and the same count, on the
+// lattice whose ties the index order breaks and on clouds of one and several launches (2^22
+// queries each) for each register size of the search (k <= 8, 16, 32).
+TEST(KnnRadiiGpu, StoredNeighboursClampAsASecondSearchDoes) {
+    std::string why;
+    if (!usable(why)) GTEST_SKIP() << why;
+    using prt::cuda::KnnClamp;
+    using prt::cuda::KnnNeighbours;
+    std::vector<Float3> big = prt::test::sphere_points(4500000, 39).positions;
+    std::mt19937_64 rng(40);
+    std::normal_distribution<float> noise(0.0f, 5e-4f);
+    for (Float3& q : big) q.x += noise(rng), q.y += noise(rng), q.z += noise(rng);
+    const std::vector<Float3> lattice = lattice_points(20), mixed = mixed_points();
+    for (const std::vector<Float3>* cloud :
+         std::initializer_list<const std::vector<Float3>*>{&lattice, &mixed, &big})
+        for (const std::uint32_t k : {5u, 9u, 17u, 32u}) {
+            if (cloud == &big && k != 9u) continue;
+            SCOPED_TRACE("n = " + std::to_string(cloud->size()) + ", k = " + std::to_string(k));
+            const std::span<const float> xyz(reinterpret_cast<const float*>(cloud->data()),
+                                             3 * cloud->size());
+            std::vector<float> stored(cloud->size()), searched(cloud->size());
+            const prt::cuda::KnnRadiiResult a = prt::cuda::knn_radii_cuda(
+                xyz, k, KnnClamp::local, 1.1f, stored, {}, KnnNeighbours::stored_if_free);
+            const prt::cuda::KnnRadiiResult b = prt::cuda::knn_radii_cuda(
+                xyz, k, KnnClamp::local, 1.1f, searched, {}, KnnNeighbours::searched_again);
+            EXPECT_TRUE(a.neighbours_stored);
+            EXPECT_FALSE(b.neighbours_stored);
+            if (cloud != &lattice) {
+                EXPECT_GT(a.clamped, 0u);  // the outlier; the noise
+            }
+            EXPECT_EQ(a.clamped, b.clamped);
+            EXPECT_EQ(a.median, b.median);
+            EXPECT_EQ(0, std::memcmp(stored.data(), searched.data(), stored.size() * sizeof(float)));
+        }
+}
+#endif
 
 TEST(KnnRadiiGpu, NamesTheFirstNonFinitePointAsTheCpuDoes) {
     std::string why;

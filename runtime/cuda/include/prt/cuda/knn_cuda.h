@@ -26,6 +26,14 @@ enum class KnnClamp : std::uint32_t {
     local,   ///< radii above factor x the median raw radius of their k neighbours become that value
 };
 
+/// How knn_radii_cuda()'s local clamp finds each point's neighbours again once every raw radius is
+/// known (the same neighbours, the same radii either way).
+enum class KnnNeighbours : std::uint32_t {
+    stored_if_free,  ///< stored by the search (4k bytes a point) where the device has them free, else
+                     ///< searched again
+    searched_again,  ///< a second search (no memory beyond the search's; about as long as the first)
+};
+
 /// What knn_radii_cuda() found besides the radii.
 struct KnnRadiiResult {
     /// The first point (index) with a non-finite coordinate, or -1. When set, nothing else is.
@@ -36,6 +44,7 @@ struct KnnRadiiResult {
     float clamp_limit = 0;  ///< global clamp: the limit (0 otherwise)
     std::uint64_t clamped = 0;
     double seconds_upload = 0, seconds_index = 0, seconds_search = 0, seconds_clamp = 0;
+    bool neighbours_stored = false;  ///< the local clamp read the neighbours the search stored
 };
 
 /// Device bytes knn_radii_cuda() needs for n points (its peak: the Morton sort).
@@ -51,7 +60,7 @@ bool knn_radii_usable(std::uint64_t n, std::uint32_t k, std::string* why = nullp
 /// `radii` (n floats, host memory, index order). n > k. `progress(done)` (points, of n) is called
 /// from the calling thread between launches. Throws prt::Error on a CUDA error.
 KnnRadiiResult knn_radii_cuda(std::span<const float> xyz, std::uint32_t k, KnnClamp clamp, float factor,
-                              std::span<float> radii,
-                              const std::function<void(std::uint64_t)>& progress = {});
+                              std::span<float> radii, const std::function<void(std::uint64_t)>& progress = {},
+                              KnnNeighbours neighbour_store = KnnNeighbours::stored_if_free);
 
 }  // namespace prt::cuda
