@@ -378,7 +378,7 @@ public:
         build(
             0, cell_count(), 0,
             [&](std::span<const std::byte> b) { return m_payloads.append(b.data(), b.size()); }, stats);
-        m_records = SpillFile{};
+        m_record_parts.clear();
         const double assembly = tool::now_seconds();
         auto source = std::make_shared<PayloadSource>();
         source->payloads = std::move(m_payloads);
@@ -459,8 +459,10 @@ public:
         if (records_plan != m_plan_id)
             throw Error(records.string() + ": written by another plan than " + path.string() +
                         " (a plan stage ran meanwhile: run this stage again)");
-        m_record_view = {reinterpret_cast<const Record*>(m_records_file.data()),
-                         static_cast<std::size_t>(m_cell_begin.back())};
+        m_part_views = {{reinterpret_cast<const Record*>(m_records_file.data()),
+                         static_cast<std::size_t>(m_cell_begin.back())}};
+        m_part_first = {0};
+        m_cell_part.assign(m_cell_nodes.size(), 0);
         return stats;
     }
 
@@ -739,6 +741,45 @@ private:
         }
     }
 
+    /// Calls visit(cell) for each cell point i's splat goes to, as classify() does, with its counts
+    /// and radius sums; false for a point the octree builder skips. Most points are placed from their
+    /// centre alone: where a cube around the centre that holds the splat's box
+    /// (build_splat_box_bound) reaches no mid-plane on the way down, child_overlap_mask picks the
+    /// centre's child at every node, so preparing the splat (its disk's box in double precision,
+    /// thesis 3.4) and testing it are skipped (most of the count pass's time before).
+    template <class Visit>
+    bool place(std::size_t i, Visit&& visit, std::uint64_t* counts, double* sums) const {
+        const pool::Float3 p = m_positions[i];
+        const float r = m_radii[i];
+        if (!octree_uses_point(p, m_normals[i], r)) return false;
+        const double c[3] = {p.x, p.y, p.z};
+        const bool replicate = m_params.octree.replicate;
+        double h[3] = {0, 0, 0};
+        if (replicate)
+            for (int a = 0; a < 3; ++a) h[a] = build_splat_box_bound(c[a], r);
+        std::uint32_t path[k_histogram_level + 1];
+        std::uint32_t depth = 0, k = 0;
+        while (inner(k)) {
+            const double* mid = m_boxes[k].mid;
+            unsigned child = 0;
+            for (int a = 0; a < 3; ++a) {
+                if (c[a] - h[a] <= mid[a] && c[a] + h[a] >= mid[a] && replicate) {  // the cube reaches it
+                    BuildSplat s;
+                    prepare(i, s);
+                    classify(s, visit, counts, sums);
+                    return true;
+                }
+                if (c[a] >= mid[a]) child |= 1u << a;  // the half-open child of the centre
+            }
+            path[depth++] = k;
+            k = m_nodes[k].first + child;
+        }
+        if (counts)
+            for (std::uint32_t d = 0; d < depth; ++d) ++counts[path[d]], sums[path[d]] += r;
+        visit(m_nodes[k].cell);
+        return true;
+    }
+
     // -- 4 ----------------------------------------------------------------------------------------
     void count() {
         const std::size_t nodes = m_nodes.size();
@@ -752,26 +793,24 @@ private:
         if (m_positions.size() * sizeof(std::uint32_t) <= m_params.memory / 4)
             m_point_cell = Buffer<std::uint32_t>(m_positions.size());
         std::uint32_t* point_cell = m_point_cell.size() ? m_point_cell.data() : nullptr;
-        parallel_chunks(
-            m_positions.size(), k_chunk, m_threads, [&](std::size_t b, std::size_t e, unsigned w) {
-                std::uint64_t* row = m_cell_count.data() + (b / k_chunk) * cells;
-                BuildSplat s;
-                for (std::size_t i = b; i < e; ++i) {
-                    std::uint32_t only = k_no_cell;
-                    if (prepare(i, s))
-                        classify(
-                            s,
-                            [&](std::uint32_t cell) {
-                                ++row[cell];
-                                only = only == k_no_cell ? cell : k_several_cells;
-                            },
-                            counts[w].data(), sums[w].data());
-                    if (point_cell) point_cell[i] = only;
-                }
-                drop_input(b, e);
-                const std::uint64_t d = done.fetch_add(e - b) + (e - b);
-                if (w == 0) report("partitioning points", d, 2 * m_positions.size());
-            });
+        parallel_chunks(m_positions.size(), k_chunk, m_threads,
+                        [&](std::size_t b, std::size_t e, unsigned w) {
+                            std::uint64_t* row = m_cell_count.data() + (b / k_chunk) * cells;
+                            for (std::size_t i = b; i < e; ++i) {
+                                std::uint32_t only = k_no_cell;
+                                place(
+                                    i,
+                                    [&](std::uint32_t cell) {
+                                        ++row[cell];
+                                        only = only == k_no_cell ? cell : k_several_cells;
+                                    },
+                                    counts[w].data(), sums[w].data());
+                                if (point_cell) point_cell[i] = only;
+                            }
+                            drop_input(b, e);
+                            const std::uint64_t d = done.fetch_add(e - b) + (e - b);
+                            if (w == 0) report("partitioning points", d, 2 * m_positions.size());
+                        });
         for (std::size_t k = 0; k < nodes; ++k) {
             if (!inner(std::uint32_t(k))) continue;
             for (unsigned w = 0; w < m_threads; ++w)
@@ -803,13 +842,36 @@ private:
     void scatter(const std::filesystem::path& records_file) {
         const std::size_t cells = m_cell_nodes.size();
         const std::uint64_t records = m_cell_begin[cells];
-        const std::uint64_t bytes = std::max<std::uint64_t>(records, 1) * sizeof(Record);
-        m_records = records_file.empty()
-                        ? SpillFile(m_params.spill_folder, bytes, "the partitioned points")
-                        : SpillFile::named(records_file, bytes + sizeof m_plan_id, "the partitioned points");
-        if (!records_file.empty()) std::memcpy(m_records.data() + bytes, &m_plan_id, sizeof m_plan_id);
+        // The records go to parts of whole cells, a file each, about four per worker: a write holds
+        // its file's lock (the inode's) for its whole copy, so into one file the workers' writes
+        // queue. The staged build writes its one named file.
+        const std::uint64_t parts =
+            records_file.empty() ? std::min<std::uint64_t>(cells, 4 * std::uint64_t(m_threads)) : 1;
+        m_part_first.assign(1, 0);
+        m_cell_part.assign(cells, 0);
+        for (std::size_t c = 0; c < cells; ++c) {
+            const std::uint64_t begin = m_cell_begin[c];
+            if (m_part_first.size() < parts && begin > m_part_first.back() &&
+                begin * parts >= m_part_first.size() * records)
+                m_part_first.push_back(begin);
+            m_cell_part[c] = std::uint32_t(m_part_first.size() - 1);
+        }
+        m_record_parts.clear();
+        m_part_views.clear();
+        for (std::size_t k = 0; k < m_part_first.size(); ++k) {
+            const std::uint64_t n =
+                (k + 1 < m_part_first.size() ? m_part_first[k + 1] : records) - m_part_first[k];
+            const std::uint64_t bytes = std::max<std::uint64_t>(n, 1) * sizeof(Record);
+            if (records_file.empty()) {
+                m_record_parts.emplace_back(m_params.spill_folder, bytes, "the partitioned points");
+            } else {
+                m_record_parts.push_back(
+                    SpillFile::named(records_file, bytes + sizeof m_plan_id, "the partitioned points"));
+                std::memcpy(m_record_parts.back().data() + bytes, &m_plan_id, sizeof m_plan_id);
+            }
+            m_part_views.push_back(m_record_parts.back().as<const Record>().first(n));
+        }
         std::atomic<std::uint64_t> done{0};
-        m_record_view = m_records.as<const Record>().first(records);
         // Each chunk's records are sorted by cell in a buffer of the worker's (the count pass gave
         // the chunk's count per cell) and written with one pwrite per cell: through the mapping, every
         // page of the spill file cost the writing thread a fault (the 20M room's scatter 2.05 s on the
@@ -826,7 +888,6 @@ private:
                 std::vector<Record>& buffer = buffers[w];
                 if (buffer.size() < total) buffer.resize(total);
                 const std::uint32_t* point_cell = m_point_cell.size() ? m_point_cell.data() : nullptr;
-                BuildSplat s;
                 for (std::size_t i = b; i < e; ++i) {
                     const std::uint32_t only = point_cell ? point_cell[i] : k_several_cells;
                     if (only == k_no_cell) continue;  // not usable, or in no cell
@@ -836,15 +897,17 @@ private:
                         buffer[at[only]++] = r;
                         continue;
                     }
-                    if (!prepare(i, s)) continue;
-                    classify(
-                        s, [&](std::uint32_t cell) { buffer[at[cell]++] = r; }, nullptr, nullptr);
+                    place(
+                        i, [&](std::uint32_t cell) { buffer[at[cell]++] = r; }, nullptr, nullptr);
                 }
                 drop_input(b, e);
                 for (std::size_t c = 0; c < cells; ++c)
-                    if (count[c] > 0)
-                        m_records.write_at(m_slot[row + c] * sizeof(Record),
-                                           buffer.data() + (at[c] - count[c]), count[c] * sizeof(Record));
+                    if (count[c] > 0) {
+                        const std::uint32_t rp = m_cell_part[c];
+                        m_record_parts[rp].write_at((m_slot[row + c] - m_part_first[rp]) * sizeof(Record),
+                                                    buffer.data() + (at[c] - count[c]),
+                                                    count[c] * sizeof(Record));
+                    }
                 const std::uint64_t d = done.fetch_add(e - b) + (e - b);
                 if (w == 0) report("partitioning points", m_positions.size() + d, 2 * m_positions.size());
             });
@@ -874,7 +937,8 @@ private:
         const std::uint64_t b = m_cell_begin[c], e = m_cell_begin[c + 1];
         if (b == e) return;
         const NodeCell at = m_nodes[m_cell_nodes[c]].at;
-        const std::span<const Record> recs = m_record_view.subspan(b, e - b);
+        const std::uint32_t rp = m_cell_part[c];
+        const std::span<const Record> recs = m_part_views[rp].subspan(b - m_part_first[rp], e - b);
         std::vector<pool::Float3> positions(recs.size()), normals(recs.size());
         std::vector<float> radii(recs.size());
         std::vector<pool::Rgba8> colors(m_has_colors ? recs.size() : 0);
@@ -1075,8 +1139,13 @@ private:
     std::vector<std::uint64_t> m_slot;        // [chunk][cell]: next record index
     Buffer<std::uint32_t> m_point_cell;       // per point: its only cell, k_several_cells or k_no_cell
     std::vector<std::uint64_t> m_cell_begin;  // cell -> first record
-    SpillFile m_records;
-    std::span<const Record> m_record_view;  // m_records, or the staged build's records file
+    // The records (step 5) in parts of whole cells: cell c's are m_part_views[m_cell_part[c]] from
+    // record m_cell_begin[c] - m_part_first[part]. Spill files of the build in this process
+    // (m_record_parts), else the staged build's one records file.
+    std::vector<SpillFile> m_record_parts;
+    std::vector<std::span<const Record>> m_part_views;
+    std::vector<std::uint64_t> m_part_first;  // part -> its first record
+    std::vector<std::uint32_t> m_cell_part;   // cell -> its part
     MappedFile m_records_file;
     std::vector<MappedFile> m_parts;  // the staged build's part files, by CellBricks::part
     std::mutex m_mutex;               // build_cell's shared results, the payload file, progress

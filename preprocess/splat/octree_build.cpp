@@ -720,6 +720,14 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
     return octree;
 }
 
+double build_splat_box_bound(double c, float radius) {
+    // make_build_splat: e = r sqrt(1 - n_a^2) + 1e-6 r <= r (1 + 1e-6), then c -+ e in double
+    // (relative error 2^-53) rounded outward to float (at most one float ulp, <= 2^-23 |c -+ e|):
+    // the box lies within c +- (r (1 + 1e-6) + 2^-22 (|c| + 2 r)); 1e-5 and 2^-20 leave room.
+    const double r = double(radius);
+    return r * (1.0 + 1e-5) + (std::fabs(c) + 2.0 * r) * 0x1p-20;
+}
+
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
                          BuildSplat& out) {
     double len;

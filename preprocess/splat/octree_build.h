@@ -142,6 +142,13 @@ void describe_octree(SplatOctree& octree, const pool::OctreeInfo& root, const Oc
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
                          BuildSplat& out);
 
+/// A half-width h such that the box prepare_build_splat gives a usable point with centre coordinate
+/// `c` and radius `radius` lies within [c - h, c + h] on that axis (the disk's extent is at most the
+/// radius; the margin covers the box's outward rounding to float). A point whose cube c +- h reaches
+/// no node's mid-plane goes to the child holding its centre (child_overlap_mask), so a caller can
+/// place it without preparing it.
+double build_splat_box_bound(double c, float radius);
+
 /// A node's children's closed boxes (node_box()) and its mid-planes, for child_overlap_mask().
 struct ChildBoxes {
     double mid[3];

@@ -293,3 +293,35 @@ TEST(SplatOctree, RoundTripsThroughAPool) {
 }
 
 }  // namespace
+
+// The out-of-core brick build places a point from its centre where the cube c +- h reaches no
+// mid-plane (bricks_from_points.cpp, place()): h must bound the prepared splat's box, rounded
+// outward to float, on every axis, for any normal, at any scale, radii from tiny to huge.
+TEST(SplatOctree, BoxBoundHoldsThePreparedSplatsBox) {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+    std::uniform_real_distribution<double> exponent(-30.0, 30.0);
+    const float axis_normals[][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, 0, 0}};
+    std::size_t tested = 0;
+    for (int i = 0; i < 200000; ++i) {
+        const double scale = std::exp2(exponent(rng));
+        const prt::pool::Float3 p{float(unit(rng) * scale), float(unit(rng) * scale),
+                                  float(unit(rng) * scale)};
+        const float r = float(std::exp2(exponent(rng)) * (i % 3 == 0 ? scale : 1.0));
+        prt::pool::Float3 n{unit(rng), unit(rng), unit(rng)};
+        if (i % 5 == 0) {  // axis-aligned normals: the box is flat on that axis, widest on the others
+            const float* a = axis_normals[i / 5 % 3];
+            n = {a[0] * (i % 2 ? -1.0f : 1.0f), a[1], a[2]};
+        }
+        prt::pre::BuildSplat s;
+        if (!prt::pre::prepare_build_splat(p, n, r, s)) continue;
+        ++tested;
+        const double c[3] = {p.x, p.y, p.z};
+        for (int a = 0; a < 3; ++a) {
+            const double h = prt::pre::build_splat_box_bound(c[a], r);
+            ASSERT_GE(double(s.box_lo[a]), c[a] - h) << "point " << i << " axis " << a;
+            ASSERT_LE(double(s.box_hi[a]), c[a] + h) << "point " << i << " axis " << a;
+        }
+    }
+    EXPECT_GT(tested, 190000u);
+}
