@@ -14,11 +14,13 @@
 //                (estimated from the histogram); an inner cell must hold more than 2 x brick_splats
 //                centres, so the whole cut makes it an inner top node (culling keeps every centre)
 //   4. count     one pass: each point classified down the partition as build_octree classifies it
-//                (child_overlap_mask), counting points per cell and chunk; each inner cell's exact
-//                count and radius sum checks that build_octree splits it (octree_splits_node)
-//   5. scatter   one pass: each point's record into its cells' ranges of a spill file, in input
-//                order within each cell (chunks write disjoint ranges, so in parallel); a point the
-//                count pass found in one cell only is not classified again
+//                (child_overlap_mask; most points from their centre alone, place()), counting
+//                points per cell and chunk; each inner cell's exact count and radius sum checks
+//                that build_octree splits it (octree_splits_node)
+//   5. scatter   one pass: each point's record into its cells' ranges of the spill files (a file
+//                per run of whole cells), in input order within each cell (chunks write disjoint
+//                ranges, so in parallel); a point the count pass found in one cell only is not
+//                classified again
 //   6. cells     in depth-first (Morton) order: build_octree_cell, cull_octree over the part (a
 //                leaf's probes depend on its cell only), build_brick_part; the payloads appended to
 //                a spill file
