@@ -396,9 +396,7 @@ CulledCell build_culled_cell(std::span<const pool::Float3> positions, std::span<
     }
 #ifdef PRT_HAVE_CUDA
     check_params(culling);
-    OctreeStats stats;
-    const pre::LargeVector<BuildSplat> splats =
-        cell_build_splats(positions, normals, radii, root, cell, octree, stats);
+    check_cell_build(octree, positions.size(), cell);
     const std::vector<ProbeDirection> directions =
         make_probe_directions(culling.directions, k_direction_sets, culling.seed);
     cuda::OctreeCudaParams op;
@@ -408,13 +406,16 @@ CulledCell build_culled_cell(std::span<const pool::Float3> positions, std::span<
     op.min_cell_ratio = octree.min_cell_ratio;
     op.split_by_centres = octree.split_by_centres;
     cuda::OctreeCudaResult r;
-    cuda::build_cull_octree_cuda(std::span<const BuildSplat>(splats.data(), splats.size()), root.root_min,
-                                 root.root_size, cell.level, cell.cell, op, probe_view(culling, directions),
+    // The build records are made on the device (thesis 3.1 there: the same records, the same order).
+    cuda::build_cull_octree_cuda(cuda::CellPoints{positions, normals, radii}, root.root_min, root.root_size,
+                                 cell.level, cell.cell, op, probe_view(culling, directions),
                                  check_octree_limits, r);
     out.octree.nodes = std::move(r.nodes);
     out.octree.leaf_info = std::move(r.leaf_info);
     out.octree.splats = std::move(r.splats);
-    describe_octree(out.octree, root, octree, splats.size(), r.depth, r.empty_leaves, r.max_leaf, stats);
+    OctreeStats stats;
+    stats.skipped_splats = positions.size() - r.usable;
+    describe_octree(out.octree, root, octree, r.usable, r.depth, r.empty_leaves, r.max_leaf, stats);
     out.octree.info.flags |= pool::k_octree_culled;  // cull_octree's header
     out.stored = r.stored;
     out.on_device = true;

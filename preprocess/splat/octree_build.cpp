@@ -446,37 +446,11 @@ void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint
 
 namespace {
 
-/// thesis 3.1: whether point (p, n, r) can be a splat: a finite positive radius, a finite position
-/// and a finite non-zero normal; `len` gets the normal's length.
+/// thesis 3.1: the point's usability and build record (prt/core/disk_box.h, shared with the GPU).
 bool usable_splat(const pool::Float3& p, const pool::Float3& n, float r, double& len) {
-    len = std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
-    return r > 0 && std::isfinite(r) && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
-           len > 0 && std::isfinite(len);
+    return core::usable_build_point(p, n, r, len);
 }
-
-/// The build record of a usable point: the unit normal (normalised in double, then rounded) and
-/// the disk's bounding box, rounded outward.
-BuildSplat make_build_splat(const pool::Float3& p, const pool::Float3& nrm, float r, double len,
-                            std::uint32_t point) {
-    const double c[3] = {p.x, p.y, p.z};
-    const double n[3] = {nrm.x / len, nrm.y / len, nrm.z / len};
-    BuildSplat s{};
-    for (int a = 0; a < 3; ++a) {
-        s.c[a] = static_cast<float>(c[a]);
-        s.n[a] = static_cast<float>(n[a]);
-    }
-    s.r = r;
-    s.point = point;
-    for (int a = 0; a < 3; ++a) {
-        // the exact test uses the stored float normal: bound the box with it, renormalised
-        const double na = double(s.n[a]);
-        // + 1e-6 r: the stored normal is unit only to float precision; the box must stay a superset
-        const double e = disk_half_extent(double(r), std::min(1.0, std::fabs(na))) + 1e-6 * double(r);
-        s.box_lo[a] = round_down(c[a] - e);
-        s.box_hi[a] = round_up(c[a] + e);
-    }
-    return s;
-}
+using core::make_build_splat;
 
 void check_params(const OctreeParams& params, std::size_t points) {
     if (params.max_leaf_splats == 0) throw Error("octree build: the leaf size (X) must be at least 1");
@@ -539,13 +513,9 @@ void sort_by_morton(pre::LargeVector<BuildSplat>& splats, const pool::OctreeInfo
     pre::Buffer<MortonKey> keys(splats.size());  // first touched by the workers
     const double scale = 2097151.0 / double(info.root_size);
     parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
-        for (std::size_t i = b; i < e; ++i) {
-            std::uint32_t q[3];
-            for (int a = 0; a < 3; ++a)
-                q[a] = static_cast<std::uint32_t>(
-                    std::clamp((double(splats[i].c[a]) - info.root_min[a]) * scale, 0.0, 2097151.0));
-            keys[i] = MortonKey{pre::morton3(q[0], q[1], q[2]), static_cast<std::uint32_t>(i)};
-        }
+        for (std::size_t i = b; i < e; ++i)
+            keys[i] = MortonKey{core::build_splat_morton_key(splats[i].c, info.root_min, scale),
+                                static_cast<std::uint32_t>(i)};
     });
     // Stable by key on pairs made in index order: the order std::sort of the pairs gives.
     pre::radix_sort_by(keys, 63, threads, [](const MortonKey& k) { return k.key; });
@@ -692,19 +662,29 @@ SplatOctree build_octree(std::span<const pool::Float3> positions, std::span<cons
     return octree;
 }
 
+void check_cell_build(const OctreeParams& params, std::size_t points, NodeCell cell) {
+    check_params(params, points);
+    if (cell.level > params.max_depth)
+        throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
+}
+
+namespace {
+
+/// build_octree_cell's first steps (thesis 3.1): the usable points' build records, Morton-sorted
+/// (stats gets the skipped points), after check_cell_build.
 pre::LargeVector<BuildSplat> cell_build_splats(std::span<const pool::Float3> positions,
                                                std::span<const pool::Float3> normals,
                                                std::span<const float> radii, const pool::OctreeInfo& root,
                                                NodeCell cell, const OctreeParams& params,
                                                OctreeStats& stats) {
-    check_params(params, positions.size());
-    if (cell.level > params.max_depth)
-        throw Error("octree build: cell level " + std::to_string(cell.level) + " exceeds the maximum depth");
+    check_cell_build(params, positions.size(), cell);
     const unsigned threads = resolve_threads(params.threads);
     pre::LargeVector<BuildSplat> splats = build_splats(positions, normals, radii, stats, nullptr, threads);
     sort_by_morton(splats, root, threads);
     return splats;
 }
+
+}  // namespace
 
 SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span<const pool::Float3> normals,
                               std::span<const float> radii, const pool::OctreeInfo& root, NodeCell cell,

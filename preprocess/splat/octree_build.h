@@ -123,13 +123,10 @@ SplatOctree build_octree_cell(std::span<const pool::Float3> positions, std::span
 /// any number of nodes (the out-of-core brick build walks each point down its partition twice).
 using BuildSplat = core::BuildSplat;
 
-/// build_octree_cell's first steps (thesis 3.1), for a caller that builds the tree itself
-/// (cull_build.h, build_culled_cell): the usable points' build records, Morton-sorted (stats gets
-/// the skipped points). Checks the parameters and the cell as build_octree_cell does.
-pre::LargeVector<BuildSplat> cell_build_splats(std::span<const pool::Float3> positions,
-                                               std::span<const pool::Float3> normals,
-                                               std::span<const float> radii, const pool::OctreeInfo& root,
-                                               NodeCell cell, const OctreeParams& params, OctreeStats& stats);
+/// The checks build_octree_cell makes of its parameters, its `points` and `cell` (throws
+/// prt::Error), for a caller that builds the tree itself (cull_build.h, build_culled_cell, whose GPU
+/// path makes the build records on the device).
+void check_cell_build(const OctreeParams& params, std::size_t points, NodeCell cell);
 
 /// The header and the statistics of a built octree (its nodes, leaf ranges and splats set), from
 /// either builder: the root cube `root`, `unique` usable points, the deepest leaf's level, the empty

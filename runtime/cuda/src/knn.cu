@@ -34,6 +34,7 @@
 
 #include "cuda_check.h"
 #include "device_buffer.h"
+#include "prt/core/morton.h"
 #include "prt/cuda/device.h"
 #include "prt/cuda/knn_cuda.h"
 
@@ -95,17 +96,6 @@ __global__ void bounds_kernel(const float* xyz, std::uint64_t n, std::uint32_t* 
     }
 }
 
-/// 21 bits spread to every third bit of 63.
-__device__ inline std::uint64_t spread21(std::uint32_t v) {
-    std::uint64_t x = v & 0x1fffffu;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
-
 __global__ void morton_kernel(const float* xyz, std::uint64_t n, float3 lo, float scale, std::uint64_t* keys,
                               std::uint32_t* values) {
     const std::uint64_t i = std::uint64_t(blockIdx.x) * blockDim.x + threadIdx.x;
@@ -114,7 +104,7 @@ __global__ void morton_kernel(const float* xyz, std::uint64_t n, float3 lo, floa
     std::uint64_t key = 0;
     for (int a = 0; a < 3; ++a) {
         const float c = fminf(fmaxf((xyz[3 * i + a] - o[a]) * scale, 0.0f), 2097151.0f);
-        key |= spread21(static_cast<std::uint32_t>(c)) << a;
+        key |= core::spread_bits21(static_cast<std::uint32_t>(c)) << a;
     }
     keys[i] = key;
     values[i] = static_cast<std::uint32_t>(i);

@@ -19,9 +19,13 @@
 // leaf's CullLeaf (node word, level, cell) and the initial keep flags (centre splats first in each
 // leaf: exactly cull_build.cpp's centre_flags), the leaves are culled by cull.cu's kernel (thesis
 // 3.4, cull_on_stream), and the kept splats are compacted by a scan of the flags, in leaf order
-// (cull_build.cpp's cull_octree); only the culled sections come down.
+// (cull_build.cpp's cull_octree); only the culled sections come down. It also makes the cell's
+// build records itself (thesis 3.1, as the CPU's build_splats then sort_by_morton: the usable points,
+// core::make_build_splat in the Morton order of their centres, ties in input order, by a stable radix
+// sort), so a cell's points go up as they are and the CPU workers keep their time for the bricks.
 #include <cuda_runtime.h>
 
+#include <cub/device/device_radix_sort.cuh>
 #include <cub/device/device_scan.cuh>
 #include <vector>
 
@@ -364,6 +368,90 @@ T read_back(const T* device, cudaStream_t stream) {
     return v;
 }
 
+// ---- A cell's build records (thesis 3.1) ----------------------------------------------------------
+
+/// The key of a point the builder skips: after every usable point's (a Morton code of 63 bits).
+constexpr std::uint64_t k_unusable_key = ~std::uint64_t{0};
+
+/// Per point: its Morton key (core::build_splat_morton_key, or k_unusable_key) and its index; `usable`
+/// counts the usable points (a warp's count added by its first lane).
+__global__ void point_keys_kernel(std::uint64_t n, const pool::Float3* __restrict__ positions,
+                                  const pool::Float3* __restrict__ normals, const float* __restrict__ radii,
+                                  RootCube root, double scale, std::uint64_t* __restrict__ keys,
+                                  std::uint32_t* __restrict__ index, unsigned long long* usable) {
+    const std::uint64_t i = thread_index();
+    bool ok = false;
+    if (i < n) {
+        const pool::Float3 p = positions[i];
+        double len;
+        ok = core::usable_build_point(p, normals[i], radii[i], len);
+        const float c[3] = {p.x, p.y, p.z};
+        keys[i] = ok ? core::build_splat_morton_key(c, root.min, scale) : k_unusable_key;
+        index[i] = static_cast<std::uint32_t>(i);
+    }
+    const unsigned ballot = __ballot_sync(0xffffffffu, ok);  // the grid is whole warps (k_block)
+    if ((threadIdx.x & 31u) == 0u && ballot != 0u)
+        atomicAdd(usable, static_cast<unsigned long long>(__popc(ballot)));
+}
+
+/// The build records in sorted order: record j is point order[j]'s (core::make_build_splat).
+__global__ void build_splats_kernel(std::uint64_t count, const std::uint32_t* __restrict__ order,
+                                    const pool::Float3* __restrict__ positions,
+                                    const pool::Float3* __restrict__ normals, const float* __restrict__ radii,
+                                    core::BuildSplat* __restrict__ out) {
+    const std::uint64_t j = thread_index();
+    if (j >= count) return;
+    const std::uint32_t i = order[j];
+    double len;
+    core::usable_build_point(positions[i], normals[i], radii[i], len);
+    out[j] = core::make_build_splat(positions[i], normals[i], radii[i], len, i);
+}
+
+/// thesis 3.1 on the device: the usable points of `points` as build records in the CPU builder's
+/// order (build_splats, then sort_by_morton: Morton order of the centres in the root cube, ties in
+/// input order; the radix sort of (key, index) pairs made in index order is stable) into `out`.
+/// Returns how many.
+std::uint64_t device_build_splats(const CellPoints& points, const RootCube& root, cudaStream_t st,
+                                  AsyncBuffer<core::BuildSplat>& out) {
+    const std::uint64_t n = points.positions.size();
+    if (points.normals.size() != n || points.radii.size() != n)
+        throw Error("build_cull_octree_cuda: " + std::to_string(n) + " positions but " +
+                    std::to_string(points.normals.size()) + " normals and " +
+                    std::to_string(points.radii.size()) + " radii");
+    if (n == 0) return 0;
+    AsyncBuffer<pool::Float3> positions(st), normals(st);
+    AsyncBuffer<float> radii(st);
+    positions.upload(points.positions.data(), n);
+    normals.upload(points.normals.data(), n);
+    radii.upload(points.radii.data(), n);
+    AsyncBuffer<std::uint64_t> keys(st), sorted_keys(st);
+    AsyncBuffer<std::uint32_t> index(st), order(st);
+    AsyncBuffer<unsigned long long> usable(st);
+    keys.resize(n);
+    sorted_keys.resize(n);
+    index.resize(n);
+    order.resize(n);
+    usable.resize(1);
+    PRT_CUDA_CHECK(cudaMemsetAsync(usable.data(), 0, usable.bytes(), st));
+    const double scale = double(core::k_morton_max) / double(root.size);  // sort_by_morton's
+    launch_kernel(launch_1d(n, k_block, st), point_keys_kernel, n, positions.data(), normals.data(),
+                  radii.data(), root, scale, keys.data(), index.data(), usable.data());
+    AsyncBuffer<std::uint8_t> temp(st);
+    std::size_t bytes = 0;
+    const auto items = static_cast<std::int64_t>(n);
+    PRT_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(nullptr, bytes, keys.data(), sorted_keys.data(),
+                                                   index.data(), order.data(), items, 0, 64, st));
+    temp.reserve(bytes);
+    PRT_CUDA_CHECK(cub::DeviceRadixSort::SortPairs(temp.data(), bytes, keys.data(), sorted_keys.data(),
+                                                   index.data(), order.data(), items, 0, 64, st));
+    const std::uint64_t count = read_back(usable.data(), st);
+    out.resize(count);
+    if (count)
+        launch_kernel(launch_1d(count, k_block, st), build_splats_kernel, count, order.data(),
+                      positions.data(), normals.data(), radii.data(), out.data());
+    return count;
+}
+
 /// A subtree built on the device (build_levels), its sections still there.
 struct DeviceTree {
     explicit DeviceTree(cudaStream_t s) : nodes(s), leaf_info(s), splats(s), leaves(s), keep(s) {}
@@ -574,9 +662,9 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
     out.stored = t.stored;
 }
 
-void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3],
-                            float root_size, std::uint32_t level0, const std::uint32_t cell[3],
-                            const OctreeCudaParams& params, const core::CullView& probes,
+void build_cull_octree_cuda(const CellPoints& points, const float root_min[3], float root_size,
+                            std::uint32_t level0, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                            const core::CullView& probes,
                             const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
                             OctreeCudaResult& out, core::CullCounters* counters) {
     if (!params.replicate) throw Error("build_cull_octree_cuda: culling needs a replicated octree");
@@ -585,7 +673,16 @@ void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const floa
     OwnedStream stream;
     const cudaStream_t st = stream.get();
     DeviceTree t(st);
-    build_tree(splats, root_min, root_size, level0, cell, params, check, true, st, t);
+    const RootCube root{{root_min[0], root_min[1], root_min[2]}, root_size};
+    {
+        AsyncBuffer<core::BuildSplat> splats(st);
+        out.usable = device_build_splats(points, root, st, splats);
+        if (out.usable == 0)  // as the CPU's build_splats
+            throw Error("octree build: no point has a finite positive radius and a normal (" +
+                        std::to_string(points.positions.size()) + " points)");
+        check(1, 0, out.usable);
+        build_levels(splats.data(), out.usable, root, level0, cell, params, check, true, st, t);
+    }
 
     // Culling (thesis 3.4) over the tree as the CPU path sees it (cull_build.cpp, octree_view).
     pool::OctreeInfo info{};
@@ -596,7 +693,7 @@ void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const floa
     info.node_count = static_cast<std::uint32_t>(t.node_count);
     info.filled_leaves = static_cast<std::uint32_t>(t.filled);
     info.splat_count = t.stored;
-    info.unique_splats = splats.size();
+    info.unique_splats = out.usable;
     info.flags = pool::k_octree_replicated;
     AsyncBuffer<core::ProbeDirection> d_dirs(st);
     d_dirs.upload(probes.directions, std::size_t(probes.direction_sets) * probes.directions_per_set);

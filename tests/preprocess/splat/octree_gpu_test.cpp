@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -185,10 +186,33 @@ TEST(OctreeGpu, CellsOfAnOutOfCoreBuildEqualTheCpuBuilders) {
     EXPECT_GE(cells, 6);
 }
 
+/// `s` with points the builder skips slipped in at the front, the middle and the back (a zero
+/// normal, a zero, an infinite and a NaN radius, a NaN position), each beside a copy of a usable
+/// point's position so that it would share its Morton key: the records made on the device must skip
+/// them and keep the usable points' input order exactly as the CPU does.
+test::SplatSet with_unusable_points(test::SplatSet s) {
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    const std::size_t n = s.positions.size();
+    for (const std::size_t at : {std::size_t(0), n / 2, n}) {
+        const pool::Float3 p = s.positions[at < n ? at : n - 1];
+        const pool::Float3 nz = s.normals[at < n ? at : n - 1];
+        const float r = s.radii[at < n ? at : n - 1];
+        const pool::Float3 ps[5] = {p, p, p, p, {nan, p.y, p.z}};
+        const pool::Float3 ns[5] = {{0, 0, 0}, nz, nz, nz, nz};
+        const float rs[5] = {r, 0.0f, inf, nan, r};
+        s.positions.insert(s.positions.begin() + std::ptrdiff_t(at), ps, ps + 5);
+        s.normals.insert(s.normals.begin() + std::ptrdiff_t(at), ns, ns + 5);
+        s.radii.insert(s.radii.begin() + std::ptrdiff_t(at), rs, rs + 5);
+    }
+    return s;
+}
+
 /// The out-of-core build's cells built, culled and compacted on the GPU (cull_build.h,
-/// build_culled_cell over build_cull_octree_cuda) against build_octree_cell then cull_octree on the
-/// CPU: the same header, nodes, culled leaf ranges and kept splats, for both probe policies that
-/// keep replicas one by one.
+/// build_culled_cell over build_cull_octree_cuda, the build records made on the device) against
+/// build_octree_cell then cull_octree on the CPU: the same header, nodes, culled leaf ranges and
+/// kept splats (whose point indices say the records' order), for both probe policies that keep
+/// replicas one by one, with points the builder skips among the cell's.
 TEST(OctreeGpu, CellsBuiltAndCulledOnTheDeviceEqualTheCpuSteps) {
     std::string why;
     if (!usable(why)) GTEST_SKIP() << why;
@@ -201,7 +225,7 @@ TEST(OctreeGpu, CellsBuiltAndCulledOnTheDeviceEqualTheCpuSteps) {
     for (const pre::NodeCell cell : {pre::NodeCell{1, {0, 0, 0}}, pre::NodeCell{2, {0, 1, 3}},
                                      pre::NodeCell{2, {3, 3, 3}}, pre::NodeCell{3, {0, 2, 5}}}) {
         for (Variant v : {variants()[0], variants()[1], variants()[5]}) {
-            const test::SplatSet pts = cell_points(model, root, cell, true);
+            const test::SplatSet pts = with_unusable_points(cell_points(model, root, cell, true));
             if (pts.positions.size() < 200) continue;
             for (const pre::CullPolicy policy : {pre::CullPolicy::greedy, pre::CullPolicy::votes}) {
                 SCOPED_TRACE("cell " + std::to_string(cell.level) + " (" + std::to_string(cell.cell[0]) +
@@ -227,6 +251,11 @@ TEST(OctreeGpu, CellsBuiltAndCulledOnTheDeviceEqualTheCpuSteps) {
                 const pre::CulledCell gpu =
                     pre::build_culled_cell(pts.positions, pts.normals, pts.radii, root, cell, v.params, cp);
                 EXPECT_TRUE(gpu.on_device);
+                pre::OctreeStats built_stats;
+                pre::build_octree_cell(pts.positions, pts.normals, pts.radii, root, cell, v.params,
+                                       &built_stats);
+                EXPECT_EQ(15u, built_stats.skipped_splats);
+                EXPECT_EQ(pts.positions.size() - 15, built.info.unique_splats);
                 EXPECT_EQ(built.splats.size(), gpu.stored);
                 EXPECT_EQ(built.splats.size(), steps.stored);
                 EXPECT_LT(cpu.splats.size(), built.splats.size());  // culling removed replicas

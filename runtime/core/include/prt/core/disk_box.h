@@ -31,6 +31,9 @@
 #include <cstdint>
 
 #include "prt/core/config.h"
+#include "prt/core/float_round.h"
+#include "prt/core/morton.h"
+#include "prt/formats/pool_layout.h"
 
 namespace prt::core {
 
@@ -137,8 +140,8 @@ PRT_HD inline double disk_half_extent(double r, double n_i) {
 
 /// A point as the octree builder classifies it (thesis 3.1, 3.4): the disk (centre, radius, unit
 /// normal rounded to float) and its bounding box rounded outward to float, so that rejecting a
-/// child by the box is always safe. Made on the host (preprocess/splat/octree_build.h,
-/// prepare_build_splat).
+/// child by the box is always safe. Made by make_build_splat, on the host (preprocess/splat/
+/// octree_build.h) or on the GPU (runtime/cuda/src/octree_build.cu: the out-of-core build's cells).
 struct BuildSplat {
     float c[3];
     float r;
@@ -147,6 +150,51 @@ struct BuildSplat {
     float box_lo[3];
     float box_hi[3];
 };
+
+/// thesis 3.1: whether point (p, n, r) can be a splat: a finite positive radius, a finite position
+/// and a finite non-zero normal; `len` gets the normal's length (in double).
+PRT_HD PRT_INLINE bool usable_build_point(const pool::Float3& p, const pool::Float3& n, float r,
+                                          double& len) {
+    len = sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z);
+    const auto finite = [](float v) { return v - v == 0.0f; };  // false for NaN and +-Inf
+    return r > 0 && finite(r) && finite(p.x) && finite(p.y) && finite(p.z) && len > 0 && len - len == 0.0;
+}
+
+/// The build record of a usable point (usable_build_point, whose `len` it takes): the unit normal
+/// (normalised in double, then rounded) and the disk's bounding box, rounded outward.
+PRT_HD PRT_INLINE BuildSplat make_build_splat(const pool::Float3& p, const pool::Float3& nrm, float r,
+                                              double len, std::uint32_t point) {
+    const double c[3] = {p.x, p.y, p.z};
+    const double n[3] = {nrm.x / len, nrm.y / len, nrm.z / len};
+    BuildSplat s{};
+    for (int a = 0; a < 3; ++a) {
+        s.c[a] = static_cast<float>(c[a]);
+        s.n[a] = static_cast<float>(n[a]);
+    }
+    s.r = r;
+    s.point = point;
+    for (int a = 0; a < 3; ++a) {
+        // the exact test uses the stored float normal: bound the box with it, renormalised
+        const double na = double(s.n[a]);
+        // + 1e-6 r: the stored normal is unit only to float precision; the box must stay a superset
+        const double e = disk_half_extent(double(r), exact_min(1.0, fabs(na))) + 1e-6 * double(r);
+        s.box_lo[a] = round_down(c[a] - e);
+        s.box_hi[a] = round_up(c[a] + e);
+    }
+    return s;
+}
+
+/// The builders' order of their records (sort_by_morton on the CPU, the GPU's cells): the Morton
+/// code of the centre's cell at 21 bits per axis of the root cube, `scale` = 2097151 / root_size
+/// in double, ties kept in input order by a stable sort.
+PRT_HD PRT_INLINE std::uint64_t build_splat_morton_key(const float c[3], const float root_min[3],
+                                                       double scale) {
+    std::uint32_t q[3];
+    for (int a = 0; a < 3; ++a)
+        q[a] = static_cast<std::uint32_t>(
+            exact_clamp((double(c[a]) - root_min[a]) * scale, 0.0, double(k_morton_max)));
+    return morton3(q[0], q[1], q[2]);
+}
 
 /// The closed box of the octree node at `level` with integer cell coordinates `cell` (each <
 /// 2^level) of the root cube (root_min, root_size): root_min + root_size * cell / 2^level in double

@@ -39,6 +39,16 @@ struct OctreeCudaResult {
     std::uint64_t max_leaf = 0;  ///< most splats in one leaf
     /// Splats stored before culling (build_cull_octree_cuda); splats.size() otherwise.
     std::uint64_t stored = 0;
+    /// build_cull_octree_cuda: the usable points (the build records made on the device).
+    std::uint64_t usable = 0;
+};
+
+/// One cell's points as the out-of-core build gathers them (any points: those the builder skips,
+/// preprocess/splat/octree_build.h's octree_uses_point, are skipped here too).
+struct CellPoints {
+    std::span<const pool::Float3> positions;
+    std::span<const pool::Float3> normals;
+    std::span<const float> radii;
 };
 
 /// Builds the subtree below node (level, cell) of the octree whose root cube is (root_min,
@@ -50,7 +60,9 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
                        const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
                        OctreeCudaResult& out);
 
-/// build_octree_cuda, then the subtree culled on the device (thesis 3.4; runtime/cuda/src/cull.cu,
+/// build_octree_cuda over the build records of `points` made on the device (the usable points,
+/// core::make_build_splat, in the CPU builder's Morton order; out.usable gets how many), then the
+/// subtree culled on the device (thesis 3.4; runtime/cuda/src/cull.cu,
 /// the per-leaf function prt-cull runs) and its kept splats compacted there, so the replicated
 /// splats (several per point) never come down to the host: the out-of-core brick build's cells
 /// (issue 17). `probes` gives the probes' settings (directions in host memory, their sets, grid,
@@ -58,9 +70,9 @@ void build_octree_cuda(std::span<const core::BuildSplat> splats, const float roo
 /// by culling), the culled leaf ranges and splats, as preprocess/splat/cull_build.h's cull_octree
 /// gives them over OctreePart{(level, cell)}; out.stored the splats stored before culling. `counters` (if
 /// given) gets culling's counters. Requires params.replicate. Throws prt::Error on a CUDA error.
-void build_cull_octree_cuda(std::span<const core::BuildSplat> splats, const float root_min[3],
-                            float root_size, std::uint32_t level, const std::uint32_t cell[3],
-                            const OctreeCudaParams& params, const core::CullView& probes,
+void build_cull_octree_cuda(const CellPoints& points, const float root_min[3], float root_size,
+                            std::uint32_t level, const std::uint32_t cell[3], const OctreeCudaParams& params,
+                            const core::CullView& probes,
                             const std::function<void(std::uint64_t, std::uint64_t, std::uint64_t)>& check,
                             OctreeCudaResult& out, core::CullCounters* counters = nullptr);
 
