@@ -23,7 +23,7 @@
 //                classified again
 //   6. cells     in depth-first (Morton) order: build_octree_cell, cull_octree over the part (a
 //                leaf's probes depend on its cell only), build_brick_part; the payloads appended to
-//                a spill file
+//                a spill file; each part of the records closed (SpillReleaser) once its cells are built
 //   7. assemble  the top tree breadth first over the partition and the cells' top trees (the
 //                numbering cut_top_tree gives), the table in that brick order, the LOD discs above the
 //                bricks (finish_bricks); the payloads are copied into the pool as it is written
@@ -37,6 +37,7 @@
 #include <cstring>
 #include <exception>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <random>
 #include <string>
@@ -211,6 +212,7 @@ struct PayloadSource {
         std::uint64_t offset, size, checksum;
     };
     AppendFile payloads;            // the whole build in one process
+    std::shared_ptr<SpillReleaser> releaser;  // closing the point records' files, while the pool is written
     std::vector<MappedFile> parts;  // the staged build's parts (then `payloads` is empty)
     std::vector<Brick> bricks;      // in table order
     std::function<void(const char*, std::uint64_t, std::uint64_t)> progress;
@@ -347,10 +349,16 @@ public:
         std::atomic<std::uint32_t> next{first};
         std::atomic<std::uint64_t> done{0};
         std::exception_ptr failure;
+        // With a releaser (the whole build in one process), each part of the records is closed on its
+        // thread once its cells are built (cells go in order, parts are runs of them).
+        std::vector<std::atomic<std::uint32_t>> cells_left(m_releaser ? m_record_parts.size() : 0);
+        for (std::uint32_t c = first; m_releaser && c < last; ++c) ++cells_left[m_cell_part[c]];
         auto work = [&] {
             try {
                 for (std::uint32_t c = next++; c < last; c = next++) {
                     build_cell(c, part, append, stats, threads);
+                    if (m_releaser && cells_left[m_cell_part[c]].fetch_sub(1) == 1)
+                        m_releaser->release(std::move(m_record_parts[m_cell_part[c]]));
                     const std::uint64_t d = done.fetch_add(m_cell_begin[c + 1] - m_cell_begin[c]) +
                                             (m_cell_begin[c + 1] - m_cell_begin[c]);
                     const std::lock_guard<std::mutex> lock(m_mutex);
@@ -377,13 +385,15 @@ public:
         const double start = tool::now_seconds();
         plan(stats);
         m_payloads = AppendFile(m_params.spill_folder, "the brick payloads");
+        m_releaser = std::make_shared<SpillReleaser>();
         build(
             0, cell_count(), 0,
             [&](std::span<const std::byte> b) { return m_payloads.append(b.data(), b.size()); }, stats);
-        m_record_parts.clear();
+        m_record_parts.clear();  // released part by part already
         const double assembly = tool::now_seconds();
         auto source = std::make_shared<PayloadSource>();
         source->payloads = std::move(m_payloads);
+        source->releaser = std::move(m_releaser);
         PointBricks out = assemble(stats, std::move(source));
         stats.seconds = tool::now_seconds() - start;
         stats.assemble_seconds = stats.seconds - (assembly - start);
@@ -1145,6 +1155,7 @@ private:
     // record m_cell_begin[c] - m_part_first[part]. Spill files of the build in this process
     // (m_record_parts), else the staged build's one records file.
     std::vector<SpillFile> m_record_parts;
+    std::shared_ptr<SpillReleaser> m_releaser;  // run(): closes each part of the records once built
     std::vector<std::span<const Record>> m_part_views;
     std::vector<std::uint64_t> m_part_first;  // part -> its first record
     std::vector<std::uint32_t> m_cell_part;   // cell -> its part

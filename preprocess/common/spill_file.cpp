@@ -153,6 +153,38 @@ SpillFile::~SpillFile() {
     release();
 }
 
+SpillReleaser::SpillReleaser() : m_thread([this] { run(); }) {}
+
+SpillReleaser::~SpillReleaser() {
+    {
+        const std::lock_guard<std::mutex> lock(m_mutex);
+        m_stop = true;
+    }
+    m_ready.notify_one();
+    m_thread.join();
+}
+
+void SpillReleaser::release(SpillFile&& file) {
+    {
+        const std::lock_guard<std::mutex> lock(m_mutex);
+        m_queue.push_back(std::move(file));
+    }
+    m_ready.notify_one();
+}
+
+void SpillReleaser::run() {
+    std::unique_lock<std::mutex> lock(m_mutex);
+    for (;;) {  // ends when stopped with nothing left to close
+        m_ready.wait(lock, [this] { return m_stop || !m_queue.empty(); });
+        if (m_queue.empty()) return;
+        std::vector<SpillFile> files = std::move(m_queue);
+        m_queue.clear();
+        lock.unlock();
+        files.clear();  // the closes, outside the lock
+        lock.lock();
+    }
+}
+
 void SpillFile::release() {
     if (m_data) ::munmap(m_data, m_size);
     if (m_fd >= 0) ::close(m_fd);

@@ -1,6 +1,7 @@
 // The shared algorithm layer (issue 16): prt/parallel.h's fork-join, the Morton codes (morton.h),
 // the radix sort (radix_sort.h), the exact kd-tree (kd_tree.h) and the outward float rounding
-// (float_round.h), each against a brute-force or standard-library reference.
+// (float_round.h), each against a brute-force or standard-library reference; the spill files'
+// background releaser (spill_file.h).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,11 +9,13 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <numeric>
 #include <random>
 #include <set>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "buffer.h"
@@ -22,6 +25,7 @@
 #include "point_cloud.h"
 #include "prt/parallel.h"
 #include "radix_sort.h"
+#include "spill_file.h"
 
 namespace {
 
@@ -396,6 +400,40 @@ TEST(Clean, ParallelCleanKeepsTheFirstOccurrencesASerialPassKeeps) {
         ASSERT_NEAR(std::sqrt(double(n.x) * n.x + double(n.y) * n.y + double(n.z) * n.z), 1.0, 1e-6);
     }
     EXPECT_EQ(pre::position_hash({0.0, -0.0, 1.0}), pre::position_hash({-0.0, 0.0, 1.0}));
+}
+
+/// Open file descriptors of this process (/proc/self/fd).
+std::size_t open_files() {
+    std::size_t n = 0;
+    for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator("/proc/self/fd")) ++n;
+    return n;
+}
+
+/// SpillReleaser closes what it is handed, from any thread, and its destructor waits for it; the
+/// files' contents stay readable until they are handed over.
+TEST(SpillReleaser, ClosesEveryFileHandedOverByTheTimeItIsGone) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path();
+    const std::size_t before = open_files();
+    {
+        pre::SpillReleaser releaser;
+        std::vector<pre::SpillFile> files;
+        for (int k = 0; k < 6; ++k) {
+            files.emplace_back(dir, 1u << 20, "a test's records");
+            std::memset(files.back().data(), k + 1, 1u << 20);
+        }
+        EXPECT_EQ(before + 6, open_files()) << "a descriptor per spill file";
+        std::vector<std::thread> handers;
+        for (int t = 0; t < 2; ++t)
+            handers.emplace_back([&, t] {
+                for (int k = t; k < 6; k += 2) {
+                    EXPECT_EQ(std::byte(k + 1), files[std::size_t(k)].data()[(1u << 20) - 1]);
+                    releaser.release(std::move(files[std::size_t(k)]));
+                    EXPECT_EQ(nullptr, files[std::size_t(k)].data());
+                }
+            });
+        for (std::thread& h : handers) h.join();
+    }
+    EXPECT_EQ(before, open_files());
 }
 
 }  // namespace
