@@ -30,6 +30,7 @@
 #include <cstring>
 #include <cub/device/device_radix_sort.cuh>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 #include "cuda_check.h"
@@ -372,21 +373,28 @@ void run_stored_clamp(const DeviceBuffer<float4>& pts, const DeviceBuffer<std::u
     PRT_CUDA_CHECK(cudaDeviceSynchronize());
 }
 
+/// Calls run(std::integral_constant<int, KMAX>) with the kernels' register width for k: the
+/// smallest of 8, 16 and 32 that holds k neighbours (k <= 32 was checked before).
+template <class Run>
+void with_width(std::uint32_t k, Run&& run) {
+    if (k <= 8)
+        run(std::integral_constant<int, 8>{});
+    else if (k <= 16)
+        run(std::integral_constant<int, 16>{});
+    else
+        run(std::integral_constant<int, 32>{});
+}
+
 void search(std::uint32_t k, const DeviceBuffer<float4>& pts, const DeviceBuffer<float4>& lo,
             const DeviceBuffer<float4>& hi, std::uint32_t first_leaf, std::uint64_t n, bool clamp_pass,
             DeviceBuffer<float>& raw, float factor, DeviceBuffer<float>& out,
             DeviceBuffer<unsigned long long>& clamped, std::uint32_t* neighbours,
             const std::function<void(std::uint64_t)>& progress, std::uint64_t done_before,
             std::uint64_t weight) {
-    if (k <= 8)
-        run_search<8>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
-                      progress, done_before, weight);
-    else if (k <= 16)
-        run_search<16>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
-                       progress, done_before, weight);
-    else
-        run_search<32>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out, clamped, neighbours,
-                       progress, done_before, weight);
+    with_width(k, [&](auto width) {
+        run_search<decltype(width)::value>(pts, lo, hi, first_leaf, n, k, clamp_pass, raw, factor, out,
+                                           clamped, neighbours, progress, done_before, weight);
+    });
 }
 
 /// The local clamp from the neighbours the search stored (the same radii and count as the second
@@ -394,12 +402,9 @@ void search(std::uint32_t k, const DeviceBuffer<float4>& pts, const DeviceBuffer
 void stored_clamp(const DeviceBuffer<float4>& pts, const DeviceBuffer<std::uint32_t>& neighbours,
                   std::uint64_t n, std::uint32_t k, const DeviceBuffer<float>& raw, float factor,
                   DeviceBuffer<float>& out, DeviceBuffer<unsigned long long>& clamped) {
-    if (k <= 8)
-        run_stored_clamp<8>(pts, neighbours, n, k, raw, factor, out, clamped);
-    else if (k <= 16)
-        run_stored_clamp<16>(pts, neighbours, n, k, raw, factor, out, clamped);
-    else
-        run_stored_clamp<32>(pts, neighbours, n, k, raw, factor, out, clamped);
+    with_width(k, [&](auto width) {
+        run_stored_clamp<decltype(width)::value>(pts, neighbours, n, k, raw, factor, out, clamped);
+    });
 }
 
 std::uint32_t leaf_level(std::uint64_t n) {
