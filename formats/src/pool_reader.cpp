@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -214,7 +215,7 @@ void PoolFile::validate_sections(std::uint64_t table_bytes) const {
     // serial, and one after the other they were most of opening a large pool (the 500M room's
     // 14 GB of points about 2.5 s on the GPU host). Reported in table order.
     std::vector<std::size_t> order(hashed.size());
-    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::iota(order.begin(), order.end(), std::size_t{0});
     std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
         return table[hashed[a]].size > table[hashed[b]].size;
     });

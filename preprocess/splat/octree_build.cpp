@@ -446,11 +446,9 @@ void node_box(const pool::OctreeInfo& info, std::uint32_t level, const std::uint
 
 namespace {
 
-/// thesis 3.1: the point's usability and build record (prt/core/disk_box.h, shared with the GPU).
-bool usable_splat(const pool::Float3& p, const pool::Float3& n, float r, double& len) {
-    return core::usable_build_point(p, n, r, len);
-}
+// thesis 3.1: a point's usability and build record (prt/core/disk_box.h, shared with the GPU).
 using core::make_build_splat;
+using core::usable_build_point;
 
 void check_params(const OctreeParams& params, std::size_t points) {
     if (params.max_leaf_splats == 0) throw Error("octree build: the leaf size (X) must be at least 1");
@@ -476,13 +474,13 @@ pre::LargeVector<BuildSplat> build_splats(std::span<const pool::Float3> position
     const std::size_t n = positions.size();
     auto usable = [&](std::size_t i) {
         double len;
-        return usable_splat(positions[i], normals[i], radii[i], len);
+        return usable_build_point(positions[i], normals[i], radii[i], len);
     };
     pre::LargeVector<BuildSplat> splats;
     pre::resize_prefaulted(splats, n, threads);
     const std::size_t kept = parallel_select(n, threads, usable, [&](std::size_t rank, std::size_t i) {
         double len;
-        usable_splat(positions[i], normals[i], radii[i], len);
+        usable_build_point(positions[i], normals[i], radii[i], len);
         splats[rank] = make_build_splat(positions[i], normals[i], radii[i], len, static_cast<std::uint32_t>(i));
     });
     splats.resize(kept);
@@ -511,7 +509,7 @@ void sort_by_morton(pre::LargeVector<BuildSplat>& splats, const pool::OctreeInfo
         std::uint32_t index;
     };
     pre::Buffer<MortonKey> keys(splats.size());  // first touched by the workers
-    const double scale = 2097151.0 / double(info.root_size);
+    const double scale = core::build_splat_morton_scale(info.root_size);
     parallel_chunks(splats.size(), 1u << 16, threads, [&](std::size_t b, std::size_t e, unsigned) {
         for (std::size_t i = b; i < e; ++i)
             keys[i] = MortonKey{core::build_splat_morton_key(splats[i].c, info.root_min, scale),
@@ -592,7 +590,7 @@ std::string resolve_octree_backend(const std::string& name, std::string* why) {
 
 bool octree_uses_point(const pool::Float3& position, const pool::Float3& normal, float radius) {
     double len;
-    return usable_splat(position, normal, radius, len);
+    return usable_build_point(position, normal, radius, len);
 }
 
 RootBounds::RootBounds() {
@@ -604,7 +602,7 @@ RootBounds::RootBounds() {
 
 bool RootBounds::add(const pool::Float3& position, const pool::Float3& normal, float radius) {
     double len;
-    if (!usable_splat(position, normal, radius, len)) {
+    if (!usable_build_point(position, normal, radius, len)) {
         ++m_skipped;
         return false;
     }
@@ -711,7 +709,7 @@ double build_splat_box_bound(double c, float radius) {
 bool prepare_build_splat(const pool::Float3& position, const pool::Float3& normal, float radius,
                          BuildSplat& out) {
     double len;
-    if (!usable_splat(position, normal, radius, len)) return false;
+    if (!usable_build_point(position, normal, radius, len)) return false;
     out = make_build_splat(position, normal, radius, len, 0);
     return true;
 }

@@ -433,7 +433,7 @@ std::uint64_t device_build_splats(const CellPoints& points, const RootCube& root
     order.resize(n);
     usable.resize(1);
     PRT_CUDA_CHECK(cudaMemsetAsync(usable.data(), 0, usable.bytes(), st));
-    const double scale = double(core::k_morton_max) / double(root.size);  // sort_by_morton's
+    const double scale = core::build_splat_morton_scale(root.size);
     launch_kernel(launch_1d(n, k_block, st), point_keys_kernel, n, positions.data(), normals.data(),
                   radii.data(), root, scale, keys.data(), index.data(), usable.data());
     AsyncBuffer<std::uint8_t> temp(st);

@@ -184,9 +184,15 @@ PRT_HD PRT_INLINE BuildSplat make_build_splat(const pool::Float3& p, const pool:
     return s;
 }
 
+/// The scale build_splat_morton_key takes for a root cube of edge `root_size` (2^21 - 1 cells per
+/// edge), computed once per build.
+PRT_HD PRT_INLINE double build_splat_morton_scale(float root_size) {
+    return double(k_morton_max) / double(root_size);
+}
+
 /// The builders' order of their records (sort_by_morton on the CPU, the GPU's cells): the Morton
-/// code of the centre's cell at 21 bits per axis of the root cube, `scale` = 2097151 / root_size
-/// in double, ties kept in input order by a stable sort.
+/// code of the centre's cell at 21 bits per axis of the root cube, `scale` from
+/// build_splat_morton_scale, ties kept in input order by a stable sort.
 PRT_HD PRT_INLINE std::uint64_t build_splat_morton_key(const float c[3], const float root_min[3],
                                                        double scale) {
     std::uint32_t q[3];
