@@ -95,7 +95,13 @@ def test_a_killed_worker_loses_nothing(tmp_path):
                     os.kill(worker, signal.SIGKILL)  # the worker running a cells task
                     killed = cells[0]
             time.sleep(0.01)
-        stdout, stderr = p.communicate(timeout=240)
+        try:
+            stdout, stderr = p.communicate(timeout=240)
+        except subprocess.TimeoutExpired:  # say where it hung: the run's output so far
+            p.kill()
+            stdout, stderr = p.communicate()
+            raise AssertionError("prt-bricks-dask did not finish in 240 s after the kill of %s:\n%s%s" % (
+                killed, stdout.decode(), stderr.decode()))
     finally:
         if p.poll() is None:
             p.kill()
