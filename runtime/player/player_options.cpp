@@ -57,6 +57,12 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
         "--iso-float", o.iso_float,
         "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
         "pool has both");
+    app.add_option("--empty-space", o.empty_space,
+                   "Splat octrees: how a ray passes empty space, for comparisons: regions (an empty leaf "
+                   "is left through a box of free cells grown around it: macro-regions), boxes "
+                   "(a node whose disks the ray misses is stepped over: node boxes), both, or none; the "
+                   "image is the same (default: regions)")
+        ->check(CLI::IsMember({"regions", "boxes", "both", "none"}));
     app.add_flag("--bricks", o.bricks,
                  "Splats: trace a pool's bricks (prt-bricks, issue 17) even when it kept its float octree "
                  "(--keep-float); a pool with bricks only always traces them (default: off)");
@@ -104,6 +110,7 @@ rt::LoadOptions load_options(const RenderOverrides& o) {
     l.surface = o.surface;
     l.iso_float = o.iso_float;
     l.bricks = o.bricks;
+    l.empty_space = o.empty_space;
     scene::PointColors pc{};
     if (!o.point_colors.empty() && scene::parse_point_colors(o.point_colors, pc)) l.point_colors = pc;
     return l;

@@ -39,6 +39,7 @@ struct RenderOverrides {
     std::string point_colors;            ///< rt::LoadOptions::point_colors ("" keeps the materials')
     bool iso_float = false;              ///< rt::LoadOptions::iso_float
     bool bricks = false;                 ///< rt::LoadOptions::bricks
+    std::string empty_space;             ///< rt::LoadOptions::empty_space ("": the default)
     float iso_samples = 0;               ///< core::IsoParams::samples
     int iso_refine = -1;                 ///< core::IsoParams::refine_steps
     std::uint32_t mls_samples = 0;       ///< core::MlsParams::samples (k)

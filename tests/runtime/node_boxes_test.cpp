@@ -14,7 +14,10 @@
 #include <random>
 
 #include "prt/core/splat.h"
+#include "prt/cpu/cpu_backend.h"
+#include "prt/error.h"
 #include "prt/runtime/leaf_bounds.h"
+#include "prt/runtime/render_scene.h"
 #include "test_scene.h"
 
 namespace prt::test {
@@ -54,6 +57,47 @@ core::Vec3 random_dir(std::mt19937& rng) {
     }
 }
 
+/// Walks `rays` random rays through views `a` and `b` of one model of size `scale` and checks that
+/// their closest hits (bit for bit) and any hits agree: origins inside the room, on its walls' side,
+/// outside up to 4 sizes away, and 60 sizes away aimed into the room (the node boxes' margin grows
+/// with the origin's distance); short and unbounded, inside and outside rays, deep blending or not.
+/// Returns the closest hits and the occluded rays found.
+std::pair<std::size_t, std::size_t> same_hits(const core::OctreeView& a, const core::OctreeView& b,
+                                              float scale, unsigned seed, core::WalkStats& a_stats,
+                                              core::WalkStats& b_stats) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
+    const float s = scale;
+    std::size_t hits = 0, occluded = 0;
+    for (int i = 0; i < 6000; ++i) {
+        const float reach = i % 3 == 0 ? 0.9f : i % 3 == 1 ? 1.2f : 4.0f;
+        core::Vec3 o{u(rng) * reach * s, u(rng) * reach * s, u(rng) * reach * s};
+        core::Vec3 d = random_dir(rng) * (i % 5 == 0 ? 3.0f : 1.0f);
+        if (i % 5 == 4) {
+            o = random_dir(rng) * (60.0f * s);
+            d = core::normalize(core::Vec3{u(rng) * s, u(rng) * s, u(rng) * s} - o);
+        }
+        const float t_max = i % 4 == 0 ? u01(rng) * 2.0f * s : core::k_inf;
+        const bool inside = i % 7 == 0;
+        core::BlendOptions blend;
+        blend.deep = i % 2 == 0;
+        blend.window = i % 2 == 0 ? 2.0f : 1.0f;
+        core::SplatSample ha{}, hb{};
+        const bool fa = core::closest_hit_splats(a, nullptr, o, d, inside, t_max, blend, 4096, ha, a_stats);
+        const bool fb = core::closest_hit_splats(b, nullptr, o, d, inside, t_max, blend, 4096, hb, b_stats);
+        EXPECT_EQ(fa, fb) << "ray " << i;
+        if (fa && fb) {
+            ++hits;
+            EXPECT_EQ(0, std::memcmp(&ha, &hb, sizeof ha)) << "ray " << i << ": t " << ha.t << " vs " << hb.t;
+        }
+        const bool oa = core::any_hit_splats(a, o, d, inside, t_max, 4096, a_stats);
+        const bool ob = core::any_hit_splats(b, o, d, inside, t_max, 4096, b_stats);
+        EXPECT_EQ(oa, ob) << "ray " << i;
+        occluded += oa;
+    }
+    return {hits, occluded};
+}
+
 class NodeBoxes : public ::testing::TestWithParam<BoxCase> {};
 
 TEST_P(NodeBoxes, HitsAreBitIdenticalAndFewerLeavesAreVisited) {
@@ -70,41 +114,9 @@ TEST_P(NodeBoxes, HitsAreBitIdenticalAndFewerLeavesAreVisited) {
         boxed.node_boxes = nb.boxes.data();
         boxed.node_box_mask = mask;
 
-        std::mt19937 rng(11);
-        std::uniform_real_distribution<float> u(-1.0f, 1.0f), u01(0.0f, 1.0f);
-        const float s = static_cast<float>(c.scale);
         core::WalkStats a_stats, b_stats;
-        std::size_t hits = 0, occluded = 0;
-        for (int i = 0; i < 6000; ++i) {
-            // Origins inside the room, on its walls' side, outside up to 4 sizes away, and 60 sizes
-            // away aimed into the room (the boxes' margin grows with the origin's distance).
-            const float reach = i % 3 == 0 ? 0.9f : i % 3 == 1 ? 1.2f : 4.0f;
-            core::Vec3 o{u(rng) * reach * s, u(rng) * reach * s, u(rng) * reach * s};
-            core::Vec3 d = random_dir(rng) * (i % 5 == 0 ? 3.0f : 1.0f);
-            if (i % 5 == 4) {
-                o = random_dir(rng) * (60.0f * s);
-                d = core::normalize(core::Vec3{u(rng) * s, u(rng) * s, u(rng) * s} - o);
-            }
-            const float t_max = i % 4 == 0 ? u01(rng) * 2.0f * s : core::k_inf;
-            const bool inside = i % 7 == 0;
-            core::BlendOptions blend;
-            blend.deep = i % 2 == 0;
-            blend.window = i % 2 == 0 ? 2.0f : 1.0f;
-            core::SplatSample a{}, b{};
-            const bool ha =
-                core::closest_hit_splats(plain, nullptr, o, d, inside, t_max, blend, 4096, a, a_stats);
-            const bool hb =
-                core::closest_hit_splats(boxed, nullptr, o, d, inside, t_max, blend, 4096, b, b_stats);
-            ASSERT_EQ(ha, hb) << "ray " << i;
-            if (ha) {
-                ++hits;
-                EXPECT_EQ(0, std::memcmp(&a, &b, sizeof a)) << "ray " << i << ": t " << a.t << " vs " << b.t;
-            }
-            const bool oa = core::any_hit_splats(plain, o, d, inside, t_max, 4096, a_stats);
-            const bool ob = core::any_hit_splats(boxed, o, d, inside, t_max, 4096, b_stats);
-            ASSERT_EQ(oa, ob) << "ray " << i;
-            occluded += oa;
-        }
+        const auto [hits, occluded] =
+            same_hits(plain, boxed, static_cast<float>(c.scale), 11, a_stats, b_stats);
         EXPECT_GT(hits, 1000u);
         EXPECT_GT(occluded, 1000u);
         EXPECT_EQ(a_stats.truncated, 0u);
@@ -217,6 +229,130 @@ TEST(NodeBoxes, ANodePoolLaidOutOtherwiseGetsNone) {
     EXPECT_TRUE(rt::build_node_boxes(v, 1).boxes.empty());
     nodes[9] = core::k_empty_leaf_node;
     EXPECT_FALSE(rt::build_node_boxes(v, 1).boxes.empty());
+}
+
+// Macro-regions (core::MacroRegion, rt::build_macro_regions): an empty leaf is left through a box of
+// free cells around it. The hits are bit-identical with and without them (with and without node
+// boxes), fewer leaves are visited, and every region holds no leaf with splats and stays in the root.
+TEST_P(NodeBoxes, MacroRegionsKeepTheHitsAndSpareLeaves) {
+    const BoxCase& c = GetParam();
+    const TestModel m = make_model(room_with_ball(c.scale, {0, 0, 0}), {0, 0, 0}, 24, 10, c.replicate);
+    const core::OctreeView plain = m.octree.view();
+    const rt::MacroRegions mr = rt::build_macro_regions(plain, 2);
+    ASSERT_EQ(mr.nodes.size(), plain.node_count);
+    ASSERT_GT(mr.regions.size(), 100u);
+    const rt::NodeBoxes nb = rt::build_node_boxes(plain, 2);
+    for (bool boxes : {false, true}) {
+        core::OctreeView a_view = plain;
+        if (boxes) {
+            a_view.node_boxes = nb.boxes.data();
+            a_view.node_box_mask = nb.mask.data();
+        }
+        core::OctreeView b_view = a_view;
+        b_view.nodes = mr.nodes.data();
+        b_view.macro_regions = mr.regions.data();
+        b_view.macro_region_count = static_cast<std::uint32_t>(mr.regions.size());
+        core::WalkStats a_stats, b_stats;
+        const std::size_t hits =
+            same_hits(a_view, b_view, static_cast<float>(c.scale), 23, a_stats, b_stats).first;
+        EXPECT_GT(hits, 1000u);
+        EXPECT_EQ(b_stats.truncated, 0u);
+        EXPECT_LT(b_stats.leaves, a_stats.leaves * 9 / 10) << "the regions spared under 10 % of the leaves";
+        std::printf("%s, node boxes %s: leaves %u -> %u with macro-regions\n", c.name, boxes ? "on" : "off",
+                    a_stats.leaves, b_stats.leaves);
+    }
+    // Every region: inside the root, and no leaf holding splats meets its interior (checked by
+    // walking the tree down, in the cells of the leaf's level).
+    std::vector<std::array<std::uint32_t, 4>> cell(plain.node_count, {0u, 0u, 0u, 0u});  // x, y, z, level
+    for (std::uint32_t i = 0; i < plain.node_count; ++i)
+        if (core::node_is_internal(plain.nodes[i]))
+            for (std::uint32_t k = 0; k < 8; ++k)
+                cell[core::node_addr(plain.nodes[i]) + k] = {2 * cell[i][0] + (k & 1),
+                                                             2 * cell[i][1] + ((k >> 1) & 1),
+                                                             2 * cell[i][2] + ((k >> 2) & 1), cell[i][3] + 1};
+    std::size_t grown = 0;
+    for (std::uint32_t i = 0; i < plain.node_count; ++i) {
+        if (mr.nodes[i] == plain.nodes[i]) continue;  // no region: the pool's word
+        ASSERT_FALSE(core::node_is_internal(plain.nodes[i]) || core::node_is_filled(plain.nodes[i])) << i;
+        ASSERT_FALSE(core::node_is_internal(mr.nodes[i]) || core::node_is_filled(mr.nodes[i])) << i;
+        ASSERT_LT(core::node_addr(mr.nodes[i]), mr.regions.size()) << i;
+        const core::MacroRegion& r = mr.regions[core::node_addr(mr.nodes[i])];
+        ASSERT_TRUE(r.below[0] | r.below[1] | r.below[2] | r.above[0] | r.above[1] | r.above[2]) << i;
+        ++grown;
+        const std::uint32_t l = cell[i][3];
+        double lo[3], hi[3];  // the region in root units
+        for (int a = 0; a < 3; ++a) {
+            ASSERT_LE(r.below[a], cell[i][a]);
+            ASSERT_LT(cell[i][a] + r.above[a], 1u << l);
+            lo[a] = std::ldexp(double(cell[i][a] - r.below[a]), -int(l));
+            hi[a] = std::ldexp(double(cell[i][a] + r.above[a] + 1), -int(l));
+        }
+        for (std::uint32_t j = 0; j < plain.node_count; ++j) {
+            if (!core::node_is_filled(plain.nodes[j])) continue;
+            std::uint32_t b, e;
+            core::leaf_splats(plain, plain.nodes[j], b, e);
+            if (b == e) continue;
+            bool meets = true;
+            for (int a = 0; a < 3; ++a) {
+                const double clo = std::ldexp(double(cell[j][a]), -int(cell[j][3]));
+                const double chi = std::ldexp(double(cell[j][a] + 1), -int(cell[j][3]));
+                meets = meets && clo < hi[a] && chi > lo[a];
+            }
+            ASSERT_FALSE(meets) << "the region of node " << i << " meets filled leaf " << j;
+        }
+        if (grown > 400) break;  // brute force: enough of them
+    }
+    EXPECT_GT(grown, 100u);
+}
+
+// rt::LoadOptions::empty_space (prt-play and prt-bench --empty-space): every way to pass empty space
+// renders the same image, bit for bit, on a mirror room with a ball (shadows and four bounces);
+// macro-regions and node boxes each visit fewer leaves than neither; an unknown name is an error.
+TEST(EmptySpace, EveryWalkRendersTheSameImage) {
+    scene::Scene sc;
+    sc.materials.push_back(scene::Material{});
+    sc.materials[0].reflectivity = 0.4f;
+    sc.materials[0].diffuse_reflectance = 0.6f;
+    sc.camera.position = {0.5, 0.3, 0.8};
+    sc.camera.look_at = {-1, -1, -1};
+    sc.camera.fov_y_degrees = 70;
+    scene::PointLight pl;
+    pl.position = {0.3, 0.8, 0.2};
+    sc.point_lights.push_back(pl);
+    sc.render.max_bounces = 4;
+    const auto pool = make_pool(make_model(room_with_ball(1.0, {0, 0, 0}), {0, 0, 0}, 24, 10, true));
+    auto backend = cpu::make_cpu_backend(2);
+    std::vector<std::uint32_t> ref;
+    std::uint64_t leaves[4] = {};
+    const char* walks[4] = {"none", "boxes", "regions", "both"};
+    for (int k = 0; k < 4; ++k) {
+        rt::LoadOptions lo;
+        lo.empty_space = walks[k];
+        const rt::RenderScene rs = rt::RenderScene::from_pools(sc, {pool}, lo);
+        EXPECT_EQ(rs.models()[0].view.octree.node_boxes != nullptr, k == 1 || k == 3) << walks[k];
+        EXPECT_EQ(rs.models()[0].view.octree.macro_regions != nullptr, k >= 2) << walks[k];
+        backend->set_scene(rs.view());
+        rt::FrameRequest req;
+        scene::Camera c = rs.scene().camera;
+        c.width = c.height = 96;
+        req.camera = rs.camera(c);
+        req.params = rs.params();
+        req.width = req.height = 96;
+        rt::Image img;
+        const rt::FrameStats st = backend->render(req, img);
+        leaves[k] = st.leaves;
+        if (k == 0)
+            ref = img.rgba8;
+        else
+            EXPECT_TRUE(img.rgba8 == ref) << walks[k] << ": the image differs from the plain walk's";
+    }
+    EXPECT_LT(leaves[1], leaves[0]);
+    EXPECT_LT(leaves[2], leaves[0] * 3 / 4) << "macro-regions spared under a quarter of the leaves";
+    std::printf("leaves: none %llu, boxes %llu, regions %llu, both %llu\n", (unsigned long long)leaves[0],
+                (unsigned long long)leaves[1], (unsigned long long)leaves[2], (unsigned long long)leaves[3]);
+    rt::LoadOptions bad;
+    bad.empty_space = "everything";
+    EXPECT_THROW(rt::RenderScene::from_pools(sc, {pool}, bad), Error);
 }
 
 }  // namespace

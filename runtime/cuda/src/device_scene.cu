@@ -82,6 +82,7 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(o.leaf_bounds, std::size_t{o.filled_leaves} * sizeof(core::LeafBounds));
     f(o.node_boxes, o.node_boxes ? (std::size_t{o.node_count} / 8 + 1) * sizeof(core::NodeBox) : 0);
     f(o.node_box_mask, o.node_box_mask ? std::size_t{o.node_count} / 8 + 1 : 0);
+    f(o.macro_regions, o.macro_regions ? std::size_t{o.macro_region_count} * sizeof(core::MacroRegion) : 0);
     // Bricks (issue 17), in core: every brick uploaded, so the resident table and the request
     // flags are dropped (null: every brick at data + offset). Streamed bricks (a host resident
     // table: rt::BrickStream): only the top tree, table, LOD discs and prefixes here; brick data, leaf bounds

@@ -136,6 +136,143 @@ NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
     return out;
 }
 
+MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
+    if (v.node_count < 9 || v.nodes == nullptr) return {};
+    // Levels and cells from the root down (the layout build_node_boxes checks: children blocks
+    // behind their parents).
+    std::vector<std::uint8_t> level(v.node_count, 0);
+    std::vector<std::array<std::uint32_t, 3>> cell(v.node_count, {0u, 0u, 0u});
+    std::uint32_t depth = 0;
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        const std::uint32_t node = v.nodes[i];
+        if (!core::node_is_internal(node)) continue;
+        const std::uint32_t addr = core::node_addr(node);
+        if (addr <= i || (addr - 1u) % 8u != 0u || addr >= v.node_count || v.node_count - addr < 8u ||
+            level[i] >= core::k_fixed_bits)
+            return {};
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            level[addr + c] = static_cast<std::uint8_t>(level[i] + 1);
+            for (int a = 0; a < 3; ++a) cell[addr + c][a] = 2u * cell[i][a] + ((c >> a) & 1u);
+        }
+        depth = std::max<std::uint32_t>(depth, level[i] + 1u);
+    }
+    auto holds_splats = [&](std::uint32_t node) {
+        if (!core::node_is_filled(node)) return false;
+        std::uint32_t b, e;
+        core::leaf_splats(v, node, b, e);
+        return b < e || core::node_addr(node) >= v.filled_leaves;
+    };
+    // The grid at level g: 3D prefix sums of the cells a leaf holding splats reaches.
+    const std::uint32_t g = std::min(depth, k_macro_region_levels);
+    const std::size_t n = std::size_t{1} << g, m = n + 1;
+    std::vector<std::uint32_t> sum(m * m * m, 0u);
+    auto at = [m](std::size_t x, std::size_t y, std::size_t z) { return (x * m + y) * m + z; };
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        if (!holds_splats(v.nodes[i])) continue;
+        std::size_t lo[3], hi[3];  // grid cells [lo, hi)
+        for (int a = 0; a < 3; ++a) {
+            if (level[i] <= g) {
+                lo[a] = std::size_t{cell[i][a]} << (g - level[i]);
+                hi[a] = std::size_t{cell[i][a] + 1u} << (g - level[i]);
+            } else {
+                lo[a] = cell[i][a] >> (level[i] - g);
+                hi[a] = lo[a] + 1;
+            }
+        }
+        for (std::size_t x = lo[0]; x < hi[0]; ++x)
+            for (std::size_t y = lo[1]; y < hi[1]; ++y)
+                for (std::size_t z = lo[2]; z < hi[2]; ++z) sum[at(x + 1, y + 1, z + 1)] = 1u;
+    }
+    // Prefix sums axis by axis (z, then y, then x), each pass's rows in parallel.
+    const unsigned workers = resolve_threads(threads);
+    parallel_chunks(m - 1, 1, workers, [&](std::size_t first, std::size_t last, unsigned) {
+        for (std::size_t x = first + 1; x <= last; ++x) {
+            for (std::size_t y = 1; y < m; ++y)
+                for (std::size_t z = 1; z < m; ++z) sum[at(x, y, z)] += sum[at(x, y, z - 1)];
+            for (std::size_t y = 1; y < m; ++y)
+                for (std::size_t z = 1; z < m; ++z) sum[at(x, y, z)] += sum[at(x, y - 1, z)];
+        }
+    });
+    parallel_chunks(m - 1, 1, workers, [&](std::size_t first, std::size_t last, unsigned) {
+        for (std::size_t y = first + 1; y <= last; ++y)
+            for (std::size_t x = 1; x < m; ++x)
+                for (std::size_t z = 1; z < m; ++z) sum[at(x, y, z)] += sum[at(x - 1, y, z)];
+    });
+    // Whether cells [lo, hi] (inclusive) at level l <= g hold no splat.
+    auto free_box = [&](std::uint32_t l, const std::uint32_t lo[3], const std::uint32_t hi[3]) {
+        const std::uint32_t k = g - l;
+        const std::size_t x0 = std::size_t{lo[0]} << k, y0 = std::size_t{lo[1]} << k,
+                          z0 = std::size_t{lo[2]} << k;
+        const std::size_t x1 = std::size_t{hi[0] + 1u} << k, y1 = std::size_t{hi[1] + 1u} << k,
+                          z1 = std::size_t{hi[2] + 1u} << k;
+        const std::uint32_t s = sum[at(x1, y1, z1)] - sum[at(x0, y1, z1)] - sum[at(x1, y0, z1)] -
+                                sum[at(x1, y1, z0)] + sum[at(x0, y0, z1)] + sum[at(x0, y1, z0)] +
+                                sum[at(x1, y0, z0)] - sum[at(x0, y0, z0)];
+        return s == 0u;
+    };
+    std::vector<core::MacroRegion> region(v.node_count, core::MacroRegion{});
+    std::vector<std::uint8_t> grown(v.node_count, 0);
+    parallel_chunks(v.node_count, 4096, workers, [&](std::size_t first, std::size_t last, unsigned) {
+        for (std::size_t i = first; i < last; ++i) {
+            const std::uint32_t node = v.nodes[i];
+            const std::uint32_t l = level[i];
+            if (core::node_is_internal(node) || holds_splats(node) || l == 0 || l > g) continue;
+            const std::uint32_t top = (1u << l) - 1u;
+            std::uint32_t lo[3] = {cell[i][0], cell[i][1], cell[i][2]}, hi[3] = {lo[0], lo[1], lo[2]};
+            std::uint32_t step[6] = {1, 1, 1, 1, 1, 1};
+            bool open[6] = {true, true, true, true, true, true};
+            for (bool grew = true; grew;) {
+                grew = false;
+                for (int dir = 0; dir < 6; ++dir) {
+                    if (!open[dir]) continue;
+                    const int a = dir / 2;
+                    const bool up = (dir & 1) != 0;
+                    const std::uint32_t c = cell[i][a];
+                    const std::uint32_t room =
+                        up ? std::min(top - hi[a], 255u - (hi[a] - c)) : std::min(lo[a], 255u - (c - lo[a]));
+                    const std::uint32_t k = std::min(step[dir], room);
+                    if (k == 0) {
+                        open[dir] = false;
+                        continue;
+                    }
+                    std::uint32_t slo[3] = {lo[0], lo[1], lo[2]}, shi[3] = {hi[0], hi[1], hi[2]};
+                    if (up) {
+                        slo[a] = hi[a] + 1u;
+                        shi[a] = hi[a] + k;
+                    } else {
+                        slo[a] = lo[a] - k;
+                        shi[a] = lo[a] - 1u;
+                    }
+                    if (free_box(l, slo, shi)) {
+                        (up ? hi[a] : lo[a]) = up ? shi[a] : slo[a];
+                        step[dir] = 2u * k;
+                        grew = true;
+                    } else {
+                        open[dir] = false;
+                    }
+                }
+            }
+            core::MacroRegion& r = region[i];
+            for (int a = 0; a < 3; ++a) {
+                r.below[a] = static_cast<std::uint8_t>(cell[i][a] - lo[a]);
+                r.above[a] = static_cast<std::uint8_t>(hi[a] - cell[i][a]);
+                grown[i] |= static_cast<std::uint8_t>(r.below[a] != 0 || r.above[a] != 0);
+            }
+        }
+    });
+    MacroRegions out;
+    out.nodes.assign(v.nodes, v.nodes + v.node_count);
+    out.regions.assign(1, core::MacroRegion{});
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        if (!grown[i]) continue;
+        if (out.regions.size() > pool::k_node_address_max) break;  // no address left: the rest go without
+        out.nodes[i] =
+            pool::make_node(pool::NodeType::empty_leaf, static_cast<std::uint32_t>(out.regions.size()));
+        out.regions.push_back(region[i]);
+    }
+    return out;
+}
+
 namespace {
 
 /// The compact leaf bounds of a brick opened by core::open_brick, over its splats decoded once.

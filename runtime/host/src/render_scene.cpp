@@ -88,7 +88,7 @@ core::SurfaceKind choose_surface(const pool::PoolFile& pf, std::optional<core::S
 /// node boxes.
 /// PoolFile::open checked the octree (formats/POOL.md, "Validation"); what is left is the renderer's
 /// own limit of 32-bit counts.
-void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
+void load_splats(const pool::PoolFile& pf, LoadedModel& lm, bool node_boxes, bool macro_regions) {
     const pool::SplatOctreeSections s = pool::splat_octree(pf, "prt-play (build the octree with prt-octree)");
     if (s.nodes.size() > 0xffffffffull || s.splats.size() > 0xffffffffull)
         pf.fail(nullptr, "more than 2^32 - 1 nodes or splats: not supported by the renderer");
@@ -96,14 +96,26 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm) {
     o = core::make_octree_view(s.info, s.nodes.data(), s.leaf_info.data(), s.splats.data());
     lm.leaf_bounds = build_leaf_bounds(o);
     o.leaf_bounds = lm.leaf_bounds.data();  // a vector's buffer survives the moves of LoadedModel
-    NodeBoxes nb = build_node_boxes(o);
+    NodeBoxes nb = node_boxes ? build_node_boxes(o) : NodeBoxes{};
     lm.node_boxes = std::move(nb.boxes);
     lm.node_box_mask = std::move(nb.mask);
     o.node_boxes = lm.node_boxes.empty() ? nullptr : lm.node_boxes.data();
     o.node_box_mask = lm.node_boxes.empty() ? nullptr : lm.node_box_mask.data();
+    if (macro_regions) {
+        MacroRegions mr = build_macro_regions(o);
+        lm.region_nodes = std::move(mr.nodes);
+        lm.macro_regions = std::move(mr.regions);
+    }
+    if (!lm.macro_regions.empty()) {
+        o.nodes = lm.region_nodes.data();
+        o.macro_regions = lm.macro_regions.data();
+        o.macro_region_count = static_cast<std::uint32_t>(lm.macro_regions.size());
+    }
     lm.bytes = s.nodes.size_bytes() + s.leaf_info.size_bytes() + s.splats.size_bytes() +
                lm.leaf_bounds.size() * sizeof(core::LeafBounds) +
-               lm.node_boxes.size() * sizeof(core::NodeBox);
+               lm.node_boxes.size() * sizeof(core::NodeBox) +
+               lm.macro_regions.size() * sizeof(core::MacroRegion);
+    // (region_nodes replaces the pool's node words on the device: the same bytes as s.nodes)
 }
 
 /// The brick sections (issue 17, prt-bricks) of a pool into the model's brick view, every brick
@@ -311,6 +323,14 @@ void RenderScene::apply_load_options(const LoadOptions& options) {
     m_iso_float = options.iso_float;
     m_bricks = options.bricks;
     m_defer_bricks = options.defer_bricks;
+    // The default: runtime/README.md, "Macro-regions" (measured in
+    // preprocess/bench/results/h100-2026-12-05-issue19-macro-regions).
+    const std::string e =
+        options.empty_space.empty() ? std::string(k_default_empty_space) : options.empty_space;
+    if (e != "regions" && e != "boxes" && e != "both" && e != "none")
+        throw Error("unknown empty-space walk \"" + e + "\" (expected regions, boxes, both or none)");
+    m_node_boxes = e == "boxes" || e == "both";
+    m_macro_regions = e == "regions" || e == "both";
     m_point_colors_override = options.point_colors;
 }
 
@@ -662,7 +682,7 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
                 if (pool::has_bricks(pf) && (m_bricks || !has_float_splats(pf)))
                     load_bricks(pf, lm, m_warnings, m_defer_bricks);
                 else
-                    load_splats(pf, lm);
+                    load_splats(pf, lm, m_node_boxes, m_macro_regions);
                 break;
             case core::SurfaceKind::iso: {
                 v.iso = load_iso_view(pf, !m_iso_float);

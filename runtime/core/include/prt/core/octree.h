@@ -12,6 +12,9 @@
 //                 deepest node that path shares with the next cell (the level above the highest
 //                 fixed-point bit that changed) instead of at the root: the same leaf, with fewer
 //                 dependent memory reads (measured: see runtime/README.md).
+//   addition (macro-regions, Devillers 1989): an empty leaf may carry a box of free cells around
+//                 it (MacroRegion); the walk then leaves it through that box's exit face, passing
+//                 in one step the empty leaves it would have visited one by one.
 //
 // Robustness (DESIGN.md, numerical robustness): the thesis nudges the exit point by a small
 // epsilon; here there is none. The current point is held in 30-bit fixed point per axis
@@ -91,6 +94,18 @@ struct alignas(8) NodeBox {
 };
 static_assert(sizeof(NodeBox) == 24);
 
+/// The macro-region of an empty leaf (Devillers 1989, "The macro-regions: an efficient space
+/// subdivision structure for ray tracing"; an addition to thesis 2.2.1): a box of cells at the
+/// leaf's level around the leaf's cell, `below[a]` cells below it and `above[a]` above it on axis a,
+/// in which no leaf holds a disk the ray can hit (empty leaves, and filled ones with no splat). The
+/// walk leaves an empty leaf through its macro-region's exit face instead of its cell's: it passes
+/// only leaves it would have found nothing in, so the hits are the same. All zero: the cell alone.
+struct alignas(8) MacroRegion {
+    std::uint8_t below[3], above[3];
+    std::uint16_t unused;
+};
+static_assert(sizeof(MacroRegion) == 8);
+
 /// A non-owning view of a model's octree sections (pool section types 16-19).
 struct OctreeView {
     const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words
@@ -113,6 +128,11 @@ struct OctreeView {
     /// worth a test (rt::build_node_boxes: an internal child whose box a line through its cell
     /// meets with a chance under k_node_box_test_below).
     const std::uint8_t* node_box_mask = nullptr;
+    /// The empty leaves' macro-regions (rt::build_macro_regions), or null: the walk then steps out
+    /// of each empty leaf through its own cell. With them, `nodes` is the renderer's copy of the node
+    /// pool in which an empty leaf's address bits (0 in the pool) index this table: 0 for none.
+    const MacroRegion* macro_regions = nullptr;
+    std::uint32_t macro_region_count = 0;  ///< entries of macro_regions (entry 0 unused)
 };
 
 /// The view over splat-octree arrays (a pool's sections, checked when the pool was opened and read
@@ -392,20 +412,36 @@ PRT_HD PRT_INLINE std::uint32_t find_leaf(const OctreeView& v, const Fixed3& p, 
 /// the leaf's cell and t range into `leaf`, then the point moved into the neighbour across the exit
 /// face. Returns true (the leaf is valid); the walk is left inactive when the ray leaves the root or
 /// passes t_end. Shared by walk_next and the bricked walk (bricks.h), which descend differently.
-PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uint32_t level,
-                                     OctreeLeaf& leaf) {
+/// With a macro-region `r` (an empty leaf's, MacroRegion), the walk leaves through the region's exit
+/// face instead of the cell's (the leaf's own cell, level and t0 are reported as before; its t1 is
+/// the region's exit). The builder keeps the region inside the root; the clamps here keep a region
+/// that is not from leaving it all the same.
+PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uint32_t level, OctreeLeaf& leaf,
+                                     MacroRegion r = MacroRegion{}) {
     const std::uint32_t shift = k_fixed_bits - level;
     const Fixed3 cell{w.p.x >> shift, w.p.y >> shift, w.p.z >> shift};
     const float size = exp2_neg(level);
-    // Where the ray leaves the cell: the nearest of the three axis-plane crossings.
+    // The cells at this level the step leaves: [first, last] per axis (the leaf's cell, or its
+    // macro-region).
+    const std::uint32_t cells = 1u << level;
+    Fixed3 first = cell, last = cell;
+    PRT_UNROLL
+    for (int a = 0; a < 3; ++a) {
+        const std::uint32_t c = fixed_get(cell, a);
+        fixed_set(first, a, c - (r.below[a] < c ? r.below[a] : c));
+        const std::uint32_t room = cells - 1u - c;
+        fixed_set(last, a, c + (r.above[a] < room ? r.above[a] : room));
+    }
+    // Where the ray leaves the cells: the nearest of the three axis-plane crossings.
     float t1 = k_inf;
     int axis = 0;
     PRT_UNROLL
     for (int a = 0; a < 3; ++a) {
         const float d = component(w.d, a);
         if (d == 0.0f) continue;
-        const float c = static_cast<float>(fixed_get(cell, a));
-        const float plane = (d > 0.0f ? c + 1.0f : c) * size;
+        const float plane = (d > 0.0f ? static_cast<float>(fixed_get(last, a)) + 1.0f
+                                      : static_cast<float>(fixed_get(first, a))) *
+                            size;
 #if !PRT_WALK_RCP
         const float ta = (plane - component(w.o, a)) / d;
 #else
@@ -433,15 +469,15 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
     }
     // Step into the neighbour across the exit face by integer arithmetic.
     const Fixed3 old = w.p;
-    const std::uint32_t ca = fixed_get(cell, axis);
     if (component(w.d, axis) > 0.0f) {
-        const std::uint32_t next = (ca + 1u) << shift;  // level 0: 1 << 30 = outside
+        const std::uint32_t next = (fixed_get(last, axis) + 1u) << shift;  // level 0: 1 << 30 = outside
         if (level == 0 || next > k_fixed_max) {
             w.active = false;
             return true;
         }
         fixed_set(w.p, axis, next);
     } else {
+        const std::uint32_t ca = fixed_get(first, axis);
         if (ca == 0u) {
             w.active = false;
             return true;
@@ -455,8 +491,8 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
         if (d == 0.0f) continue;  // axis-parallel: the coordinate never changes
         std::uint32_t f = to_fixed(component(w.o, b) + d * t1);
         const std::uint32_t old = fixed_get(w.p, b);
-        const std::uint32_t lo = fixed_get(cell, b) << shift;
-        const std::uint32_t hi = lo + ((k_fixed_one >> level) - 1u);
+        const std::uint32_t lo = fixed_get(first, b) << shift;
+        const std::uint32_t hi = ((fixed_get(last, b) + 1u) << shift) - 1u;  // level 0: 2^30 - 1
         if (d > 0.0f) {
             f = f < old ? old : f;  // never backwards along the ray
             f = f > hi ? hi : f;    // stay within the current cell's extent
@@ -478,8 +514,23 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
 /// thesis 2.2.1: one step of a walk: the bound on steps, then `descend(level)` (from level =
 /// w.restart, returning the leaf's node word and setting its level), then walk_step_out. Shared by
 /// walk_next and the bricked walk (bricks.h), which descend differently.
+/// Reads a macro-region (one 8-byte read-only load on the GPU).
+PRT_HD PRT_INLINE MacroRegion load_macro_region(const MacroRegion* p) {
+#if PRT_DEVICE_CODE
+    const uint2 a = __ldg(reinterpret_cast<const uint2*>(p));
+    MacroRegion r;
+    memcpy(&r, &a, sizeof(a));
+    return r;
+#else
+    return *p;
+#endif
+}
+
+/// `regions` (OctreeView::macro_regions, or null): an empty leaf whose word carries an address a > 0
+/// is left through regions[a].
 template <class Descend>
-PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& descend) {
+PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& descend,
+                                 const MacroRegion* regions = nullptr) {
     if (!w.active) return false;
     if (w.steps_left == 0) {
         w.active = false;
@@ -489,7 +540,10 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
     --w.steps_left;
     std::uint32_t level = w.restart;
     const std::uint32_t node = descend(level);
-    return walk_step_out(w, node, level, leaf);
+    MacroRegion r{};
+    if (regions != nullptr && node_addr(node) != 0u && !node_is_filled(node))
+        r = load_macro_region(regions + node_addr(node));
+    return walk_step_out(w, node, level, leaf, r);
 }
 
 /// thesis 2.2.1: the next leaf along the walk (front to back), or false when the ray has left the
@@ -499,8 +553,11 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
 /// walks (63 % of a CPU frame's samples). With the view's node boxes, descend_boxed.
 PRT_HD PRT_INLINE bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
     if (v.node_boxes != nullptr)
-        return walk_step(w, leaf, [&](std::uint32_t& level) { return descend_boxed(v, w, w.path, level); });
-    return walk_step(w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); });
+        return walk_step(
+            w, leaf, [&](std::uint32_t& level) { return descend_boxed(v, w, w.path, level); },
+            v.macro_regions);
+    return walk_step(
+        w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); }, v.macro_regions);
 }
 
 /// The splat index range [begin, end) of a filled leaf, clamped to the arrays (empty if invalid).

@@ -41,6 +41,27 @@ struct NodeBoxes {
 /// then renders without node boxes. Uses up to `threads` threads (0: all).
 NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads = 0);
 
+/// Macro-regions (core::MacroRegion) of the empty leaves at levels 1 .. k_macro_region_levels:
+/// deeper leaves (and every other node) get none, all zero. The regions are grown on a grid of cells
+/// at level min(depth, k_macro_region_levels) marked where a leaf holding splats reaches (3D prefix
+/// sums: a box of cells is free when its count is 0; a free box at a level no deeper than the
+/// grid's is exactly one that no such leaf meets).
+inline constexpr std::uint32_t k_macro_region_levels = 8;
+
+/// core::OctreeView::macro_regions and the node pool that indexes it (both empty: none).
+struct MacroRegions {
+    std::vector<std::uint32_t> nodes;        ///< the node pool, empty leaves' address = their region
+    std::vector<core::MacroRegion> regions;  ///< regions[0] unused (all zero)
+};
+
+/// The macro-regions of `v`'s empty leaves (core::MacroRegion): each empty leaf's cell grown
+/// greedily, axis by axis in turn (x-, x+, y-, y+, z-, z+), by doubling steps of cells at its level
+/// while the box stays free (the first step that fails ends that direction), up to 255 cells each
+/// way and inside the root. Only leaves whose region is more than their cell get one (an address in
+/// `nodes`); the pool's own words stay as they are. Empty when the node pool is not laid out as
+/// build_node_boxes requires, or the tree is a single leaf. Uses up to `threads` threads (0: all).
+MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads = 0);
+
 /// The compact bounds (core::BrickLeafBounds, 16 bytes: the same cone and slab about an integer
 /// axis, no splat range) of every filled leaf of every brick of a bricked pool (issue 17), over each
 /// brick's decoded splats (the ones the core intersects); brick b's leaves start at `first[b]`

@@ -36,6 +36,8 @@ struct LoadedModel {
     std::vector<core::LeafBounds> leaf_bounds;
     std::vector<core::NodeBox> node_boxes;    ///< the octree's internal nodes' (view.octree.node_boxes)
     std::vector<std::uint8_t> node_box_mask;  ///< view.octree.node_box_mask
+    std::vector<core::MacroRegion> macro_regions;  ///< the empty leaves' (view.octree.macro_regions)
+    std::vector<std::uint32_t> region_nodes;       ///< the node pool indexing them (view.octree.nodes)
     /// Bricked pools: per filled leaf of every brick, the compact bounds (core::BrickLeafBounds).
     std::vector<core::BrickLeafBounds> brick_leaf_bounds;
     /// Bricked pools: brick b's first leaf in brick_leaf_bounds (core::BrickView::leaf_bounds_first).
@@ -51,6 +53,9 @@ struct LoadedModel {
     std::uint64_t bytes = 0;     ///< bytes of the sections the renderer reads, leaf bounds included
 };
 
+/// LoadOptions::empty_space's default.
+inline constexpr const char* k_default_empty_space = "regions";
+
 /// How models are loaded (override the scene file).
 struct LoadOptions {
     /// Surface of every model: "" keeps each model's (SCENE.md models[].surface), "auto" takes what
@@ -64,6 +69,9 @@ struct LoadOptions {
     /// Bricked models: validate only the brick index (pool::validate_brick_index) and leave the
     /// payloads unread, for rt::BrickStream to stream them or load them all (in core).
     bool defer_bricks = false;
+    /// Splat octrees: how the walk passes empty space: "regions" (macro-regions), "boxes" (node
+    /// boxes), "both", "none", or "" (k_default_empty_space; runtime/README.md). The image is the same.
+    std::string empty_space;
     /// Replaces every material's point_colors (SCENE.md; prt-play --point-colors) when set.
     std::optional<scene::PointColors> point_colors;
 };
@@ -185,6 +193,7 @@ private:
     bool m_iso_float = false;
     bool m_bricks = false;
     bool m_defer_bricks = false;
+    bool m_node_boxes = false, m_macro_regions = true;  ///< LoadOptions::empty_space (apply_load_options)
     core::RenderParams m_params;
     DVec3 m_origin{0, 0, 0};
     DVec3 m_world_min{0, 0, 0}, m_world_max{0, 0, 0};
