@@ -511,9 +511,6 @@ PRT_HD PRT_INLINE bool walk_step_out(OctreeWalk& w, std::uint32_t node, std::uin
     return true;
 }
 
-/// thesis 2.2.1: one step of a walk: the bound on steps, then `descend(level)` (from level =
-/// w.restart, returning the leaf's node word and setting its level), then walk_step_out. Shared by
-/// walk_next and the bricked walk (bricks.h), which descend differently.
 /// Reads a macro-region (one 8-byte read-only load on the GPU).
 PRT_HD PRT_INLINE MacroRegion load_macro_region(const MacroRegion* p) {
 #if PRT_DEVICE_CODE
@@ -526,8 +523,11 @@ PRT_HD PRT_INLINE MacroRegion load_macro_region(const MacroRegion* p) {
 #endif
 }
 
-/// `regions` (OctreeView::macro_regions, or null): an empty leaf whose word carries an address a > 0
-/// is left through regions[a].
+/// thesis 2.2.1: one step of a walk: the bound on steps, then `descend(level)` (from level =
+/// w.restart, returning the leaf's node word and setting its level), then walk_step_out. Shared by
+/// walk_next and the bricked walk (bricks.h), which descend differently. `regions`
+/// (OctreeView::macro_regions, or null): an empty leaf whose word carries an address a > 0 is left
+/// through regions[a].
 template <class Descend>
 PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& descend,
                                  const MacroRegion* regions = nullptr) {
@@ -550,7 +550,8 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
 /// root, passed t_max or used up its steps. Top-down descent (thesis 2.2.2), from the deepest node
 /// the previous leaf's path shares with this cell rather than from the root: the same leaf, found
 /// with fewer dependent reads. Always inlined: g++ once left it a call per step in the host's splat
-/// walks (63 % of a CPU frame's samples). With the view's node boxes, descend_boxed.
+/// walks (63 % of a CPU frame's samples). With the view's node boxes, descend_boxed; with its
+/// macro-regions, an empty leaf that has one is left through it.
 PRT_HD PRT_INLINE bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
     if (v.node_boxes != nullptr)
         return walk_step(
