@@ -10,6 +10,39 @@
 
 namespace prt::rt {
 
+namespace {
+
+/// Each node's level (the root 0, held at 31 and below) and cell (its integer coordinates at that
+/// level), from the root down, and the tree's depth; false when the node pool is not laid out as the
+/// walk's index assumes: children blocks of 8 after the root, each behind its parent (so one pass
+/// from the last slot back sees children before parents). Pools from prt-octree are laid out so.
+struct NodeCells {
+    std::vector<std::uint8_t> level;
+    std::vector<std::array<std::uint32_t, 3>> cell;
+    std::uint32_t depth = 0;
+};
+
+bool node_cells(const core::OctreeView& v, NodeCells& out) {
+    out.level.assign(v.node_count, 0);
+    out.cell.assign(v.node_count, {0u, 0u, 0u});
+    out.depth = 0;
+    for (std::uint32_t i = 0; i < v.node_count; ++i) {
+        const std::uint32_t node = v.nodes[i];
+        if (!core::node_is_internal(node)) continue;
+        const std::uint32_t addr = core::node_addr(node);
+        if (addr <= i || (addr - 1u) % 8u != 0u || addr >= v.node_count || v.node_count - addr < 8u)
+            return false;
+        for (std::uint32_t c = 0; c < 8; ++c) {
+            out.level[addr + c] = static_cast<std::uint8_t>(std::min(out.level[i] + 1, 31));
+            for (int a = 0; a < 3; ++a) out.cell[addr + c][a] = 2u * out.cell[i][a] + ((c >> a) & 1u);
+        }
+        out.depth = std::max<std::uint32_t>(out.depth, out.level[i] + 1u);
+    }
+    return true;
+}
+
+}  // namespace
+
 std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsigned threads) {
     std::vector<core::LeafBounds> out(v.filled_leaves);
     if (v.filled_leaves == 0 || v.leaf_info == nullptr || v.splats == nullptr) return out;
@@ -29,16 +62,11 @@ std::vector<core::LeafBounds> build_leaf_bounds(const core::OctreeView& v, unsig
 
 NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
     if (v.node_count == 0 || v.nodes == nullptr || v.leaf_info == nullptr || v.splats == nullptr) return {};
-    // The layout the walk's index assumes: children blocks of 8 after the root, each behind its
-    // parent (so one pass from the last slot back sees children before parents). Pools from
-    // prt-octree are laid out so; any other layout renders without node boxes.
-    for (std::uint32_t i = 0; i < v.node_count; ++i) {
-        const std::uint32_t node = v.nodes[i];
-        if (!core::node_is_internal(node)) continue;
-        const std::uint32_t addr = core::node_addr(node);
-        if (addr <= i || (addr - 1u) % 8u != 0u || addr >= v.node_count || v.node_count - addr < 8u)
-            return {};
-    }
+    // Any layout but the walk index's renders without node boxes.
+    NodeCells nc;
+    if (!node_cells(v, nc)) return {};
+    const std::vector<std::uint8_t>& level = nc.level;
+    const std::vector<std::array<std::uint32_t, 3>>& cell = nc.cell;
     constexpr float finf = std::numeric_limits<float>::infinity();
     const core::NodeBox empty{{finf, finf, finf}, {-finf, -finf, -finf}};
     const core::NodeBox open{{-finf, -finf, -finf}, {finf, finf, finf}};
@@ -109,8 +137,6 @@ NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
     // tested when a line through its cell meets its box with a chance under k_node_box_test_below
     // (Cauchy-Crofton: the surface area of the box inside the cell over the cell's).
     out.mask.assign(v.node_count / 8 + 1, 0);
-    std::vector<std::uint8_t> level(v.node_count, 0);
-    std::vector<std::array<std::uint32_t, 3>> cell(v.node_count, {0u, 0u, 0u});
     for (std::uint32_t i = 0; i < v.node_count; ++i) {
         const std::uint32_t node = v.nodes[i];
         if (!core::node_is_internal(node)) continue;
@@ -118,8 +144,6 @@ NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
         std::uint8_t bits = 0;
         for (std::uint32_t c = 0; c < 8; ++c) {
             const std::uint32_t k = addr + c;
-            level[k] = static_cast<std::uint8_t>(std::min(level[i] + 1, 31));
-            for (int a = 0; a < 3; ++a) cell[k][a] = 2u * cell[i][a] + ((c >> a) & 1u);
             if (!core::node_is_internal(v.nodes[k])) continue;
             const double size = std::ldexp(1.0, -int(level[k]));
             const core::NodeBox& b = slot[k];
@@ -138,24 +162,12 @@ NodeBoxes build_node_boxes(const core::OctreeView& v, unsigned threads) {
 
 MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
     if (v.node_count < 9 || v.nodes == nullptr) return {};
-    // Levels and cells from the root down (the layout build_node_boxes checks: children blocks
-    // behind their parents).
-    std::vector<std::uint8_t> level(v.node_count, 0);
-    std::vector<std::array<std::uint32_t, 3>> cell(v.node_count, {0u, 0u, 0u});
-    std::uint32_t depth = 0;
-    for (std::uint32_t i = 0; i < v.node_count; ++i) {
-        const std::uint32_t node = v.nodes[i];
-        if (!core::node_is_internal(node)) continue;
-        const std::uint32_t addr = core::node_addr(node);
-        if (addr <= i || (addr - 1u) % 8u != 0u || addr >= v.node_count || v.node_count - addr < 8u ||
-            level[i] >= core::k_fixed_bits)
-            return {};
-        for (std::uint32_t c = 0; c < 8; ++c) {
-            level[addr + c] = static_cast<std::uint8_t>(level[i] + 1);
-            for (int a = 0; a < 3; ++a) cell[addr + c][a] = 2u * cell[i][a] + ((c >> a) & 1u);
-        }
-        depth = std::max<std::uint32_t>(depth, level[i] + 1u);
-    }
+    // Trees deeper than the walk resolves would overflow the cells: none.
+    NodeCells nc;
+    if (!node_cells(v, nc) || nc.depth > core::k_fixed_bits) return {};
+    const std::vector<std::uint8_t>& level = nc.level;
+    const std::vector<std::array<std::uint32_t, 3>>& cell = nc.cell;
+    const std::uint32_t depth = nc.depth;
     auto holds_splats = [&](std::uint32_t node) {
         if (!core::node_is_filled(node)) return false;
         std::uint32_t b, e;
@@ -211,7 +223,6 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
         return s == 0u;
     };
     std::vector<core::MacroRegion> region(v.node_count, core::MacroRegion{});
-    std::vector<std::uint8_t> grown(v.node_count, 0);
     parallel_chunks(v.node_count, 4096, workers, [&](std::size_t first, std::size_t last, unsigned) {
         for (std::size_t i = first; i < last; ++i) {
             const std::uint32_t node = v.nodes[i];
@@ -256,7 +267,6 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
             for (int a = 0; a < 3; ++a) {
                 r.below[a] = static_cast<std::uint8_t>(cell[i][a] - lo[a]);
                 r.above[a] = static_cast<std::uint8_t>(hi[a] - cell[i][a]);
-                grown[i] |= static_cast<std::uint8_t>(r.below[a] != 0 || r.above[a] != 0);
             }
         }
     });
@@ -264,11 +274,12 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
     out.nodes.assign(v.nodes, v.nodes + v.node_count);
     out.regions.assign(1, core::MacroRegion{});
     for (std::uint32_t i = 0; i < v.node_count; ++i) {
-        if (!grown[i]) continue;
+        const core::MacroRegion& r = region[i];
+        if ((r.below[0] | r.below[1] | r.below[2] | r.above[0] | r.above[1] | r.above[2]) == 0) continue;
         if (out.regions.size() > pool::k_node_address_max) break;  // no address left: the rest go without
         out.nodes[i] =
             pool::make_node(pool::NodeType::empty_leaf, static_cast<std::uint32_t>(out.regions.size()));
-        out.regions.push_back(region[i]);
+        out.regions.push_back(r);
     }
     return out;
 }
