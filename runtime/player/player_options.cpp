@@ -58,10 +58,10 @@ void add_render_options(CLI::App& app, RenderOverrides& o) {
         "ISO: trace the float leaves (160 B) instead of the quantized ones (56 B, thesis 4.4) when the "
         "pool has both");
     app.add_option("--empty-space", o.empty_space,
-                   "Splat octrees: how a ray passes empty space, for comparisons: regions (an empty leaf "
-                   "is left through a box of free cells grown around it: macro-regions), boxes "
-                   "(a node whose disks the ray misses is stepped over: node boxes), both, or none; the "
-                   "image is the same (default: regions)")
+                   "Splat octrees and ISOs: how a ray passes empty space, for comparisons: regions (an "
+                   "empty leaf is left through a box of free cells grown around it: macro-regions), boxes "
+                   "(splats only: a node whose disks the ray misses is stepped over: node boxes), both, or "
+                   "none; the image is the same (default: regions)")
         ->check(CLI::IsMember({"regions", "boxes", "both", "none"}));
     app.add_flag("--bricks", o.bricks,
                  "Splats: trace a pool's bricks (prt-bricks, issue 17) even when it kept its float octree "

@@ -108,6 +108,8 @@ void visit_model_arrays(core::ModelView& mv, F&& f) {
     f(b.prefix_used, 0);
     core::IsoView& iso = mv.iso;
     f(iso.tree.nodes, std::size_t{iso.tree.node_count} * 4);
+    f(iso.tree.macro_regions,
+      iso.tree.macro_regions ? std::size_t{iso.tree.macro_region_count} * sizeof(core::MacroRegion) : 0);
     f(iso.leaves_q8, std::size_t{iso.leaf_count} * sizeof(pool::IsoLeafQ8));
     f(iso.leaves_f32, std::size_t{iso.leaf_count} * sizeof(pool::IsoLeafF32));
     core::MlsView& mls = mv.mls;

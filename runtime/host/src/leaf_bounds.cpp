@@ -168,8 +168,12 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
     const std::vector<std::uint8_t>& level = nc.level;
     const std::vector<std::array<std::uint32_t, 3>>& cell = nc.cell;
     const std::uint32_t depth = nc.depth;
+    // A splat tree's leaves stand in the way where they hold splats; an ISO tree's (no leaf_info:
+    // core::IsoView::tree) wherever they are filled, since every filled ISO leaf holds a surface.
+    const bool splat_tree = v.leaf_info != nullptr;
     auto holds_splats = [&](std::uint32_t node) {
         if (!core::node_is_filled(node)) return false;
+        if (!splat_tree) return true;
         std::uint32_t b, e;
         core::leaf_splats(v, node, b, e);
         return b < e || core::node_addr(node) >= v.filled_leaves;
@@ -275,6 +279,10 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
     out.regions.assign(1, core::MacroRegion{});
     for (std::uint32_t i = 0; i < v.node_count; ++i) {
         const core::MacroRegion& r = region[i];
+        // An empty leaf's address is 0 in a valid pool (walk_step reads a region for any other):
+        // kept so for those without a region whatever the words said.
+        if ((v.nodes[i] & ~pool::k_node_address_max) == core::k_empty_leaf_node)
+            out.nodes[i] = core::k_empty_leaf_node;
         if ((r.below[0] | r.below[1] | r.below[2] | r.above[0] | r.above[1] | r.above[2]) == 0) continue;
         if (out.regions.size() > pool::k_node_address_max) break;  // no address left: the rest go without
         out.nodes[i] =

@@ -84,8 +84,22 @@ core::SurfaceKind choose_surface(const pool::PoolFile& pf, std::optional<core::S
     return k;
 }
 
-/// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds and
-/// node boxes.
+/// The macro-regions of a tree's empty leaves (rt::build_macro_regions) into the model, and `tree`
+/// pointed at them and at the node words that index them (the same bytes as the pool's words, which
+/// they replace on the device). None when the tree's layout does not allow them.
+void load_macro_regions(core::OctreeView& tree, LoadedModel& lm) {
+    MacroRegions mr = build_macro_regions(tree);
+    if (mr.regions.empty()) return;
+    lm.region_nodes = std::move(mr.nodes);
+    lm.macro_regions = std::move(mr.regions);
+    tree.nodes = lm.region_nodes.data();  // a vector's buffer survives the moves of LoadedModel
+    tree.macro_regions = lm.macro_regions.data();
+    tree.macro_region_count = static_cast<std::uint32_t>(lm.macro_regions.size());
+    lm.bytes += lm.macro_regions.size() * sizeof(core::MacroRegion);
+}
+
+/// The splat sections (thesis 3.2) of a pool into the model's octree view, with its leaf bounds,
+/// node boxes and macro-regions.
 /// PoolFile::open checked the octree (formats/POOL.md, "Validation"); what is left is the renderer's
 /// own limit of 32-bit counts.
 void load_splats(const pool::PoolFile& pf, LoadedModel& lm, bool node_boxes, bool macro_regions) {
@@ -101,21 +115,10 @@ void load_splats(const pool::PoolFile& pf, LoadedModel& lm, bool node_boxes, boo
     lm.node_box_mask = std::move(nb.mask);
     o.node_boxes = lm.node_boxes.empty() ? nullptr : lm.node_boxes.data();
     o.node_box_mask = lm.node_boxes.empty() ? nullptr : lm.node_box_mask.data();
-    if (macro_regions) {
-        MacroRegions mr = build_macro_regions(o);
-        lm.region_nodes = std::move(mr.nodes);
-        lm.macro_regions = std::move(mr.regions);
-    }
-    if (!lm.macro_regions.empty()) {
-        o.nodes = lm.region_nodes.data();
-        o.macro_regions = lm.macro_regions.data();
-        o.macro_region_count = static_cast<std::uint32_t>(lm.macro_regions.size());
-    }
     lm.bytes = s.nodes.size_bytes() + s.leaf_info.size_bytes() + s.splats.size_bytes() +
                lm.leaf_bounds.size() * sizeof(core::LeafBounds) +
-               lm.node_boxes.size() * sizeof(core::NodeBox) +
-               lm.macro_regions.size() * sizeof(core::MacroRegion);
-    // (region_nodes replaces the pool's node words on the device: the same bytes as s.nodes)
+               lm.node_boxes.size() * sizeof(core::NodeBox);
+    if (macro_regions) load_macro_regions(o, lm);
 }
 
 /// The brick sections (issue 17, prt-bricks) of a pool into the model's brick view, every brick
@@ -692,6 +695,9 @@ void RenderScene::build(std::vector<std::shared_ptr<const pool::PoolFile>> pools
                     v.iso.leaves_q8 = nullptr;
                 const std::size_t leaf = v.iso.use_q8 ? sizeof(pool::IsoLeafQ8) : sizeof(pool::IsoLeafF32);
                 lm.bytes = std::size_t{v.iso.tree.node_count} * 4 + std::size_t{v.iso.leaf_count} * leaf;
+                // The ISO walk is the splat walk over the ISO's tree: its empty leaves get
+                // macro-regions the same way (node boxes need splats: none here).
+                if (m_macro_regions) load_macro_regions(v.iso.tree, lm);
                 break;
             }
             case core::SurfaceKind::mls:

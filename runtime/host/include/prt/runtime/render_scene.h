@@ -69,8 +69,9 @@ struct LoadOptions {
     /// Bricked models: validate only the brick index (pool::validate_brick_index) and leave the
     /// payloads unread, for rt::BrickStream to stream them or load them all (in core).
     bool defer_bricks = false;
-    /// Splat octrees: how the walk passes empty space: "regions" (macro-regions), "boxes" (node
-    /// boxes), "both", "none", or "" (k_default_empty_space; runtime/README.md). The image is the same.
+    /// Splat octrees and ISOs: how the walk passes empty space: "regions" (macro-regions; ISOs too),
+    /// "boxes" (node boxes; splats only), "both", "none", or "" (k_default_empty_space;
+    /// runtime/README.md). The image is the same.
     std::string empty_space;
     /// Replaces every material's point_colors (SCENE.md; prt-play --point-colors) when set.
     std::optional<scene::PointColors> point_colors;
