@@ -168,23 +168,23 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
     const std::vector<std::uint8_t>& level = nc.level;
     const std::vector<std::array<std::uint32_t, 3>>& cell = nc.cell;
     const std::uint32_t depth = nc.depth;
-    // A splat tree's leaves stand in the way where they hold splats; an ISO tree's (no leaf_info:
+    // Occupied leaves: a splat tree's where they hold splats; an ISO tree's (no leaf_info:
     // core::IsoView::tree) wherever they are filled, since every filled ISO leaf holds a surface.
     const bool splat_tree = v.leaf_info != nullptr;
-    auto holds_splats = [&](std::uint32_t node) {
+    auto occupied = [&](std::uint32_t node) {
         if (!core::node_is_filled(node)) return false;
         if (!splat_tree) return true;
         std::uint32_t b, e;
         core::leaf_splats(v, node, b, e);
         return b < e || core::node_addr(node) >= v.filled_leaves;
     };
-    // The grid at level g: 3D prefix sums of the cells a leaf holding splats reaches.
+    // The grid at level g: 3D prefix sums of the cells an occupied leaf reaches.
     const std::uint32_t g = std::min(depth, k_macro_region_levels);
     const std::size_t n = std::size_t{1} << g, m = n + 1;
     std::vector<std::uint32_t> sum(m * m * m, 0u);
     auto at = [m](std::size_t x, std::size_t y, std::size_t z) { return (x * m + y) * m + z; };
     for (std::uint32_t i = 0; i < v.node_count; ++i) {
-        if (!holds_splats(v.nodes[i])) continue;
+        if (!occupied(v.nodes[i])) continue;
         std::size_t lo[3], hi[3];  // grid cells [lo, hi)
         for (int a = 0; a < 3; ++a) {
             if (level[i] <= g) {
@@ -231,7 +231,7 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
         for (std::size_t i = first; i < last; ++i) {
             const std::uint32_t node = v.nodes[i];
             const std::uint32_t l = level[i];
-            if (core::node_is_internal(node) || holds_splats(node) || l == 0 || l > g) continue;
+            if (core::node_is_internal(node) || occupied(node) || l == 0 || l > g) continue;
             const std::uint32_t top = (1u << l) - 1u;
             std::uint32_t lo[3] = {cell[i][0], cell[i][1], cell[i][2]}, hi[3] = {lo[0], lo[1], lo[2]};
             std::uint32_t step[6] = {1, 1, 1, 1, 1, 1};
