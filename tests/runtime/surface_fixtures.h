@@ -116,6 +116,33 @@ inline std::filesystem::path sphere_patch_file(const std::filesystem::path& dir,
     return p;
 }
 
+/// Two spheres of `pool` (the unit sphere) as surface `kind` reflecting each other: one glossy, one
+/// a pure mirror (diffuse reflectance 0: shaded black), a light with shadow rays and one without,
+/// the camera on both (the shared-walk tests: surfaces_test.cpp, backend_gpu_test.cpp).
+inline scene::Scene mirror_spheres_scene(const std::filesystem::path& pool, scene::SurfaceKind kind) {
+    scene::Scene sc;
+    scene::Material glossy, pure;
+    glossy.reflectivity = 0.5f;
+    glossy.diffuse_reflectance = 0.5f;
+    pure.reflectivity = 0.9f;
+    pure.diffuse_reflectance = 0.0f;
+    sc.materials = {glossy, pure};
+    scene::Model a, b;
+    a.pool = b.pool = pool;
+    a.surface = b.surface = kind;
+    b.material = 1;
+    b.transform.translate = {2.3, 0.4, 0};
+    sc.models = {a, b};
+    sc.camera.position = {1.2, 1.0, 4.5};
+    sc.camera.look_at = {1.1, 0.1, 0};
+    scene::PointLight shadowed, unshadowed;
+    shadowed.position = {4, 3, 1};
+    unshadowed.position = {-3, 2, 2};
+    unshadowed.casts_shadows = false;
+    sc.point_lights = {shadowed, unshadowed};
+    return sc;
+}
+
 /// Writes a test model's points only (model info, positions, normals, radii, colors): no octree, as
 /// a scan traced only as ISO or MLS comes.
 inline void write_points_pool(const TestModel& m, const std::filesystem::path& path) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <vector>
 
@@ -193,6 +194,48 @@ TEST_F(SurfacesTest, ShadowsFallFromEverySurface) {
         EXPECT_TRUE(core::occluded(s, ray_up(0), c));
         EXPECT_FALSE(core::occluded(s, ray_up(3), c));
         EXPECT_GT(c.leaves, 0u);
+    }
+}
+
+TEST_F(SurfacesTest, IsoSharedWalkTracesTheSameRaysAsTraceRay) {
+    ASSERT_FALSE(HasFatalFailure());
+    // The ISO-only kernels with secondary rays trace with trace_ray_shared (render.h: closest hits
+    // and shadow rays from one call site); the CPU and every other kernel with trace_ray. Both must
+    // give the same image bit for bit and count the same rays: two ISO spheres reflecting each other
+    // (one a pure mirror, shaded black), a light with shadow rays and one without.
+    const scene::Scene sc = mirror_spheres_scene(s_sphere, scene::SurfaceKind::iso);
+    rt::RenderScene rs = rt::RenderScene::load(sc);
+    constexpr std::uint32_t w = 96, h = 72;
+    scene::Camera cam_desc = rs.scene().camera;
+    cam_desc.width = w;
+    cam_desc.height = h;
+    const core::PinholeCamera cam = rs.camera(cam_desc);
+    constexpr std::uint32_t k_iso = core::k_mask_iso | core::k_mask_secondary;
+    static_assert(core::k_shared_walk<k_iso> && !core::k_shared_walk<core::k_mask_all> &&
+                  !core::k_shared_walk<core::k_mask_iso>);
+    for (const std::uint32_t bounces : {1u, 4u}) {
+        SCOPED_TRACE("bounces " + std::to_string(bounces));
+        core::SceneView s = rs.view();
+        s.params.max_bounces = bounces;
+        core::RayCounters ca, cb;
+        std::size_t differ = 0, lit = 0;
+        for (std::uint32_t y = 0; y < h; ++y) {
+            for (std::uint32_t x = 0; x < w; ++x) {
+                const core::Vec3 ref = core::render_pixel<core::k_mask_all>(s, cam, x, y, w, h, ca);
+                const core::Vec3 got = core::render_pixel<k_iso>(s, cam, x, y, w, h, cb);
+                if (std::memcmp(&ref, &got, sizeof ref) != 0) ++differ;
+                if (ref.x > 0.0f) ++lit;
+            }
+        }
+        EXPECT_EQ(differ, 0u);
+        EXPECT_GT(lit, w * h / 10);
+        EXPECT_GT(ca.secondary, 1000u);
+        EXPECT_GT(ca.shadow, 500u);
+        EXPECT_EQ(ca.secondary, cb.secondary);
+        EXPECT_EQ(ca.shadow, cb.shadow);
+        EXPECT_EQ(ca.leaves, cb.leaves);
+        EXPECT_EQ(ca.primary, cb.primary);
+        EXPECT_EQ(ca.dropped, cb.dropped);
     }
 }
 

@@ -233,16 +233,20 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// frames with that surface kind alone (without the other surfaces' registers), each twice: with
 /// reflected and refracted rays (k_secondary) and without, for frames that spawn none
 /// (core::spawns_secondary: no bounces, or no reflective or transmissive material). ISO has its own
-/// kernel for those frames only; MLS has its own at 2 blocks per SM, with and without secondary
-/// rays; everything else (mixed surfaces, spp > 1, path tracing, ISO with secondary rays) runs the
-/// general kernel. sm_90 local memory (stack frame, spill stores):
-/// splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO (3 blocks per SM)
-/// 248 / 156 B against the general kernel's 4960 / 7542 B. On an H200 (1024^2, Grays/s,
+/// two at 3 blocks per SM; MLS has its own at 2 blocks per SM, with and without secondary rays;
+/// everything else (mixed surfaces, spp > 1, path tracing) runs the general kernel. sm_90 local memory (stack
+/// frame, spill stores): splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO (3
+/// blocks per SM) 248 / 156 B against the general kernel's 4960 / 7542 B. On an H200 (1024^2, Grays/s,
 /// preprocess/bench/results/h200-2026-12-02-issue19-kernels), primary / shadow: prt-bench's room
 /// 1.00 / 1.56 -> 1.16 / 1.78, the culled 10M sphere 1.15 / 1.31 -> 1.37 / 1.49, bricked splats
 /// (culled room) 1.18 / 1.10 -> 1.32 / 1.14, ISO (culled room) 1.02 / 1.06 -> 1.57 / 1.36, teapot
 /// 1.24 / 0.75 -> 1.42 / 0.82. An ISO kernel with secondary rays was slower than the general one on
-/// full4 (0.535 against 0.731), so it is not compiled. MLS kernels at 4 blocks per SM were slower
+/// full4 (0.535 against 0.731; its closest-hit and shadow walks took turns within a warp) until its
+/// rays shared one walk loop (core::trace_ray_shared): then H100, 2026-12-06, the general kernel ->
+/// this one, reflect4 / full4 Grays/s: the culled room's ISO from outside 0.99 / 0.70 -> 1.34 / 1.34,
+/// from bench_room.json's camera 1.05 / 1.07 -> 1.47 / 2.07, the culled 10M sphere's full4 0.95 ->
+/// 1.75 (4 blocks per SM: 1.34-1.35 / 1.37, 1.42 / 2.01-2.02, 1.56;
+/// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared). MLS kernels at 4 blocks per SM were slower
 /// than the general kernel (primary 0.034 against 0.037), but at 2 (128 registers: the four sample
 /// lanes' sums, no spills) much faster: the culled room's primary / shadow 0.036 / 0.033 -> 0.097 /
 /// 0.078 Grays/s (1 block: 0.077 / 0.060, 3: 0.064 / 0.051, 4: 0.034 / 0.030), and 0.129 / 0.096 with
@@ -258,15 +262,15 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// and bricked splat models takes the general kernel): 740 B of spills at 3 blocks against 824, and
 /// on an H200 shadow rays 5-7 % faster, full4 5-6 %, primary under 1 %; 4 blocks were 6-8 % slower on
 /// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
-/// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4;
-/// without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the CMake
-/// option PRT_CUDA_TUNING_KERNELS, so a default build compiles 16 megakernels instead of 50.
+/// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4; ISO 2,
+/// 4; without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the
+/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 11 megakernels instead of 33.
 const Megakernel k_megakernels[] = {
     // clang-format off
     megakernel<core::k_mask_splats, 4>(),  megakernel<core::k_mask_splats | k_secondary, 4>(),
     megakernel<core::k_mask_bricks, 3>(),  megakernel<core::k_mask_bricks | k_secondary, 3>(),
     megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
-    megakernel<core::k_mask_iso, 3>(),
+    megakernel<core::k_mask_iso, 3>(),     megakernel<core::k_mask_iso | k_secondary, 3>(),
     megakernel<core::k_mask_mls, 2>(),     megakernel<core::k_mask_mls | k_secondary, 2>(),
     megakernel<core::k_mask_all, 4>(),     // every surface, sampling, secondary rays
 #if PRT_CUDA_TUNING_KERNELS
@@ -287,6 +291,8 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_iso, 2>(),
     megakernel<core::k_mask_iso, 4>(),
     megakernel<core::k_mask_iso, 5>(),
+    megakernel<core::k_mask_iso | k_secondary, 2>(),
+    megakernel<core::k_mask_iso | k_secondary, 4>(),
     megakernel<core::k_mask_mls, 1>(),
     megakernel<core::k_mask_mls, 3>(),
     megakernel<core::k_mask_mls, 4>(),
@@ -303,9 +309,8 @@ std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool second
         case core::k_mask_bricks:
         case core::k_mask_patches:
         case core::k_mask_mls:
-            return secondary ? surface_mask | k_secondary : surface_mask;
         case core::k_mask_iso:
-            return secondary ? std::uint32_t{core::k_mask_all} : surface_mask;
+            return secondary ? surface_mask | k_secondary : surface_mask;
         default:
             return core::k_mask_all;  // mixed surfaces
     }

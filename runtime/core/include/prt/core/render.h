@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <type_traits>
 
 #include "prt/core/camera.h"
 #include "prt/core/iso.h"
@@ -427,6 +428,72 @@ PRT_HD inline bool occluded(const SceneView& s, const Ray& r, RayCounters& c) {
         s, r, [&](auto surface, const ModelRay& q) { return occluded_on(surface, s, q, c); });
 }
 
+/// The scene hit of ray r from model `model`'s closest sample: position, world normal, material and
+/// base color: closest_hit_scene's ending, for query_scene (closest_hit_scene keeps it written out,
+/// as shade_hit does its pieces below: the other kernels' code stays as it was).
+PRT_HD PRT_INLINE void scene_hit(const SceneView& s, const Ray& r, std::uint32_t model,
+                                 const ModelHit& sample, SurfaceHit& hit) {
+    const ModelView& mv = s.models[model];
+    const std::uint32_t mat = hit_material(s, mv, sample.point);
+    hit.t = sample.t;
+    hit.position = ray_at(r, sample.t);
+    hit.normal = normalize(mv.rotation * sample.normal);
+    hit.material = mat;
+    hit.model = model;
+    hit.prim = sample.prim;
+    hit.u = sample.u;
+    hit.v = sample.v;
+    const bool colors = s.material_count > 0 && s.materials[mat].use_point_colors != 0;
+    hit.base_color = colors ? srgb_to_linear(sample.color) : Vec3{1, 1, 1};
+}
+
+/// One query, closest hit or shadow ray (`any`), from one call site: what trace_ray's shared loop
+/// (ISO-only kernels with secondary rays) calls for both, so a warp's lanes tracing shadow rays and
+/// lanes tracing closest hits run the same walk code together. ISO's walk takes the choice as an
+/// argument (iso_walk); the other surfaces answer with their own two queries.
+template <class Tag>
+PRT_HD PRT_INLINE bool query_on(Tag surface, const SceneView& s, const ModelRay& q, bool any, float t_max,
+                                ModelHit& out, RayCounters& c) {
+    return any ? occluded_on(surface, s, q, c) : closest_on(surface, s, q, t_max, out, c);
+}
+PRT_HD PRT_INLINE bool query_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q, bool any,
+                                float t_max, ModelHit& out, RayCounters& c) {
+    IsoHit h;
+    IsoStats st;
+    // A shadow ray stops at its first hit, so t_max is still its own (occluded_on's q.ray.t_max).
+    const bool hit = iso_walk(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), any, h, st);
+    add_stats(c, st);
+    if (hit && !any)
+        out = ModelHit{h.t, h.normal, (q.mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1}};
+    return hit;
+}
+
+/// closest_hit_scene (any = false: `hit` set on a hit) or occluded (any = true: `hit` untouched), the
+/// same answers, through query_on.
+template <std::uint32_t K>
+PRT_HD inline bool query_scene(const SceneView& s, const Ray& r, bool any, SurfaceHit& hit, RayCounters& c) {
+    float best = r.t_max;
+    bool found = false;
+    ModelHit sample;
+    std::uint32_t model = 0;
+    const bool blocked = for_each_surface<K>(s, r, [&](auto surface, const ModelRay& q) {
+        ModelHit cand;
+        if (!query_on(surface, s, q, any, best, cand, c)) return false;
+        if (any) return true;
+        if (cand.t < best || !found) {
+            best = cand.t;
+            sample = cand;
+            model = q.model;
+            found = true;
+        }
+        return false;
+    });
+    if (any) return blocked;
+    if (!found) return false;
+    scene_hit(s, r, model, sample, hit);
+    return true;
+}
+
 /// A ray leaving the surface point h (shadow, reflected, refracted): starts exactly at the hit,
 /// no offset (thesis 3.6), and remembers where it left (Ray::from_model).
 PRT_HD PRT_INLINE Ray leave_surface(const SurfaceHit& h, Vec3 dir, float t_max, std::uint32_t flags) {
@@ -449,6 +516,47 @@ struct SceneOcclusion {
 /// The shading normal: the stored normal turned to face the incoming ray.
 PRT_HD PRT_INLINE Vec3 facing_normal(const SurfaceHit& h, const Ray& r) {
     return dot(h.normal, r.dir) < 0.0f ? h.normal : -h.normal;
+}
+
+/// shade_hit's pieces for trace_ray_shared, which shades a hit's lights across passes (the same
+/// arithmetic in the same order). shade_hit keeps them written out: called from it, they changed
+/// the code ptxas made of every kernel (sm_90: the splat kernel's spill stores 700 -> 680 B), and
+/// the one build measured so ran the splat kernels 1-2.5 % slower (with another change, not split;
+/// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared). Keep the two in step.
+///
+/// thesis 5.1 / 5.3 / 5.4.2: the hit's ambient term: the material's ambient times the base color, or
+/// where the model has them the precomputed global illumination, looked up in the model's local
+/// frame: the light map's indirect irradiance replaces the constant ambient term, the caustic
+/// irradiance adds; both reflect with the diffuse albedo. `n`: the facing normal.
+PRT_HD PRT_INLINE Vec3 ambient_term(const SceneView& s, const Material& m, const SurfaceHit& h, Vec3 n) {
+    Vec3 sum = m.ambient * h.base_color;
+    if (h.model < s.model_count) {
+        const ModelView& mv = s.models[h.model];
+        if (mv.light_map.tree.nodes != nullptr || mv.caustics.tree.nodes != nullptr) {
+            const Vec3 lp = mul_transpose(mv.rotation, h.position - mv.offset) * mv.inv_scale;
+            const Vec3 ln = mul_transpose(mv.rotation, n);
+            Vec3 e;
+            if (light_map_irradiance(mv.light_map, lp, ln, e)) sum = m.diffuse * h.base_color * e;
+            sum += m.diffuse * h.base_color * caustic_radiance(mv.caustics, lp, ln);
+        }
+    }
+    return sum;
+}
+
+/// The unit direction `l` and distance to a light from a hit, false when the light cannot light it
+/// (at the hit, not finite, or behind the facing normal `n`).
+PRT_HD PRT_INLINE bool light_direction(const PointLight& light, const SurfaceHit& h, Vec3 n, Vec3& l,
+                                       float& dist) {
+    const Vec3 to_light = light.position - h.position;
+    dist = length(to_light);
+    if (!(dist > 0.0f) || !is_finite(dist)) return false;
+    l = to_light * (1.0f / dist);
+    return dot(n, l) > 0.0f;
+}
+
+/// Whether a light's contribution waits on a shadow ray (thesis 5.2).
+PRT_HD PRT_INLINE bool casts_shadow_ray(const SceneView& s, const PointLight& light) {
+    return s.params.shadows != 0 && light.casts_shadows != 0;
 }
 
 /// thesis 5.1-5.2: local shading at a hit: ambient + sum over lights of Lambert + Phong, each
@@ -555,6 +663,105 @@ struct SceneTracer {
     }
 };
 
+/// Kernels whose rays share one walk loop (trace_ray_shared): ISO alone with secondary rays.
+template <std::uint32_t K>
+inline constexpr bool k_shared_walk = (K & ~k_mask_secondary) == k_mask_iso && (K & k_mask_secondary) != 0;
+
+/// trace_ray with the default tracer for ISO-only kernels with secondary rays: the same rays, the
+/// same sums in the same order (so the same image as trace_ray), but closest hits and shadow rays
+/// leave from one call site (query_scene) in one loop, one query per pass: a hit's lights are
+/// shaded across passes, each shadow ray a pass of its own. In trace_ray a warp whose lanes split
+/// between a shadow ray (in shade_hit) and a closest hit runs the two walks one after the other;
+/// here they are the same walk and run together (Aila and Laine 2009, 3: idle lanes are the cost).
+template <std::uint32_t K>
+PRT_HD inline Vec3 trace_ray_shared(const SceneView& s, const Ray& primary, RayCounters& c) {
+    PendingRay stack[k_max_bounces + 1];
+    std::uint32_t top = 0;
+    PendingRay cur{primary, Vec3{1, 1, 1}, 0};
+    Vec3 color{0, 0, 0};
+    SurfaceHit h;
+    Vec3 sum{0, 0, 0};        // the current hit's shading so far (shade_hit's sum)
+    std::uint32_t light = 0;  // its light whose shadow ray the pass traces
+    Ray q = primary;          // the pass's query: cur's closest hit, or light's shadow ray
+    bool any = false;
+    // Bounded: each pass answers one query; a hit asks at most light_count shadow rays and spawns
+    // at most two rays, only below the bounce limit (trace_ray's bound).
+    for (;;) {
+        const bool hit = query_scene<K>(s, q, any, h, c);
+        bool shading = any;   // cur's hit has lights left to shade
+        bool shaded = false;  // cur's hit is shaded: spawn its rays
+        if (!any) {
+            if (!hit) {
+                color += cur.weight * background(s.environment, cur.ray.dir);
+            } else {
+                const Material& m = s.materials[h.material];
+                if (!(m.diffuse_reflectance > 0.0f)) {
+                    color += cur.weight * Vec3{0, 0, 0};
+                    shaded = true;
+                } else {
+                    sum = ambient_term(s, m, h, facing_normal(h, cur.ray));
+                    light = 0;
+                    shading = true;
+                }
+            }
+        } else {
+            if (!hit) {
+                Vec3 l;
+                float dist;
+                const Vec3 n = facing_normal(h, cur.ray);
+                light_direction(s.lights[light], h, n, l, dist);
+                sum += lambert_phong(s.materials[h.material], h.base_color, n, l, cur.ray.dir,
+                                     s.lights[light].color);
+            }
+            ++light;
+        }
+        if (shading) {
+            // The lights left of this hit: shade those without a shadow ray, stop at the next one
+            // with a shadow ray (the next pass traces it).
+            const Material& m = s.materials[h.material];
+            const Vec3 n = facing_normal(h, cur.ray);
+            any = false;
+            for (; light < s.light_count; ++light) {
+                const PointLight& pl = s.lights[light];
+                Vec3 l;
+                float dist;
+                if (!light_direction(pl, h, n, l, dist)) continue;
+                if (casts_shadow_ray(s, pl)) {
+                    ++c.shadow;
+                    q = leave_surface(h, l, dist, cur.ray.flags);
+                    any = true;
+                    break;
+                }
+                sum += lambert_phong(m, h.base_color, n, l, cur.ray.dir, pl.color);
+            }
+            if (any) continue;
+            color += cur.weight * (sum * m.diffuse_reflectance);
+            shaded = true;
+        }
+        any = false;
+        if (shaded) {
+            PendingRay next[2];
+            const std::uint32_t n = spawn_secondary(s, cur, h, next);
+            c.secondary += n;
+            if (n == 2) {
+                if (top < k_max_bounces + 1)
+                    stack[top++] = next[1];
+                else
+                    ++c.dropped;
+            }
+            if (n > 0) {
+                cur = next[0];
+                q = cur.ray;
+                continue;
+            }
+        }
+        if (top == 0) break;
+        cur = stack[--top];
+        q = cur.ray;
+    }
+    return color;
+}
+
 /// Traces a primary ray and everything it spawns, iteratively: one branch continues in the
 /// loop, the other waits on a fixed stack (depth-first, so at most k_max_bounces + 1 entries).
 /// Misses see the background. Returns linear radiance. `tracer` answers the closest hits and
@@ -573,36 +780,40 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
         if (!tracer.closest(s, only, h, c)) return background(s.environment, primary.dir);
         return tracer.shade(s, only, h, c);
     }
-    PendingRay stack[k_max_bounces + 1];
-    std::uint32_t top = 0;
-    PendingRay cur{primary, Vec3{1, 1, 1}, 0};
-    Vec3 color{0, 0, 0};
-    // Bounded: each iteration traces one ray; a ray spawns at most two, only below the bounce
-    // limit, so at most 2^(k_max_bounces+1) rays; the weight cut-off keeps real counts small.
-    for (;;) {
-        SurfaceHit h;
-        if (!tracer.closest(s, cur, h, c)) {
-            color += cur.weight * background(s.environment, cur.ray.dir);
-        } else {
-            color += cur.weight * tracer.shade(s, cur, h, c);
-            PendingRay next[2];
-            const std::uint32_t n = spawn_secondary(s, cur, h, next);
-            c.secondary += n;
-            if (n == 2) {
-                if (top < k_max_bounces + 1)
-                    stack[top++] = next[1];
-                else
-                    ++c.dropped;
+    if constexpr (k_shared_walk<K> && std::is_same_v<Tracer, SceneTracer<K>>) {
+        return trace_ray_shared<K>(s, primary, c);
+    } else {
+        PendingRay stack[k_max_bounces + 1];
+        std::uint32_t top = 0;
+        PendingRay cur{primary, Vec3{1, 1, 1}, 0};
+        Vec3 color{0, 0, 0};
+        // Bounded: each iteration traces one ray; a ray spawns at most two, only below the bounce
+        // limit, so at most 2^(k_max_bounces+1) rays; the weight cut-off keeps real counts small.
+        for (;;) {
+            SurfaceHit h;
+            if (!tracer.closest(s, cur, h, c)) {
+                color += cur.weight * background(s.environment, cur.ray.dir);
+            } else {
+                color += cur.weight * tracer.shade(s, cur, h, c);
+                PendingRay next[2];
+                const std::uint32_t n = spawn_secondary(s, cur, h, next);
+                c.secondary += n;
+                if (n == 2) {
+                    if (top < k_max_bounces + 1)
+                        stack[top++] = next[1];
+                    else
+                        ++c.dropped;
+                }
+                if (n > 0) {
+                    cur = next[0];
+                    continue;
+                }
             }
-            if (n > 0) {
-                cur = next[0];
-                continue;
-            }
+            if (top == 0) break;
+            cur = stack[--top];
         }
-        if (top == 0) break;
-        cur = stack[--top];
+        return color;
     }
-    return color;
 }
 
 /// A pixel's radiance as it leaves the renderer: non-finite values become black and are counted.
