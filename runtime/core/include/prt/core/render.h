@@ -448,14 +448,10 @@ PRT_HD PRT_INLINE void scene_hit(const SceneView& s, const Ray& r, std::uint32_t
 }
 
 /// One query, closest hit or shadow ray (`any`), from one call site: what trace_ray's shared loop
-/// (ISO-only kernels with secondary rays) calls for both, so a warp's lanes tracing shadow rays and
-/// lanes tracing closest hits run the same walk code together. ISO's walk takes the choice as an
-/// argument (iso_walk); the other surfaces answer with their own two queries.
-template <class Tag>
-PRT_HD PRT_INLINE bool query_on(Tag surface, const SceneView& s, const ModelRay& q, bool any, float t_max,
-                                ModelHit& out, RayCounters& c) {
-    return any ? occluded_on(surface, s, q, c) : closest_on(surface, s, q, t_max, out, c);
-}
+/// (ISO-only kernels with secondary rays, k_shared_walk) calls for both, so a warp's lanes tracing
+/// shadow rays and lanes tracing closest hits run the same walk code together: ISO's walk takes
+/// the choice as an argument (iso_walk). Only ISO has one (splat-shared-walk.patch in
+/// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared: slower for splats).
 PRT_HD PRT_INLINE bool query_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q, bool any,
                                 float t_max, ModelHit& out, RayCounters& c) {
     IsoHit h;
