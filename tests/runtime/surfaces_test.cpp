@@ -199,10 +199,12 @@ TEST_F(SurfacesTest, ShadowsFallFromEverySurface) {
 
 TEST_F(SurfacesTest, IsoSharedWalkTracesTheSameRaysAsTraceRay) {
     ASSERT_FALSE(HasFatalFailure());
-    // The ISO-only kernels with secondary rays trace with trace_ray_shared (render.h: closest hits
-    // and shadow rays from one call site); the CPU and every other kernel with trace_ray. Both must
-    // give the same image bit for bit and count the same rays: two ISO spheres reflecting each other
-    // (one a pure mirror, shaded black), a light with shadow rays and one without.
+    // The ISO-only kernels with secondary rays, and those without them for frames with shadow rays
+    // (k_mask_shadow_walk), trace with trace_ray_shared (render.h: closest hits and shadow rays
+    // from one call site); the CPU and every other kernel with trace_ray. Both must give the same
+    // image bit for bit and count the same rays: two ISO spheres reflecting each other (one a pure
+    // mirror, shaded black), a light with shadow rays and one without; no bounce (the kernel
+    // without secondary rays), one and four.
     const scene::Scene sc = mirror_spheres_scene(s_sphere, scene::SurfaceKind::iso);
     rt::RenderScene rs = rt::RenderScene::load(sc);
     constexpr std::uint32_t w = 96, h = 72;
@@ -211,9 +213,11 @@ TEST_F(SurfacesTest, IsoSharedWalkTracesTheSameRaysAsTraceRay) {
     cam_desc.height = h;
     const core::PinholeCamera cam = rs.camera(cam_desc);
     constexpr std::uint32_t k_iso = core::k_mask_iso | core::k_mask_secondary;
-    static_assert(core::k_shared_walk<k_iso> && !core::k_shared_walk<core::k_mask_all> &&
-                  !core::k_shared_walk<core::k_mask_iso>);
-    for (const std::uint32_t bounces : {1u, 4u}) {
+    constexpr std::uint32_t k_iso_shadows = core::k_mask_iso | core::k_mask_shadow_walk;
+    static_assert(core::k_shared_walk<k_iso> && core::k_shared_walk<k_iso_shadows> &&
+                  !core::k_shared_walk<core::k_mask_all> && !core::k_shared_walk<core::k_mask_iso> &&
+                  !core::k_shared_walk<core::k_mask_splats | core::k_mask_shadow_walk>);
+    for (const std::uint32_t bounces : {0u, 1u, 4u}) {
         SCOPED_TRACE("bounces " + std::to_string(bounces));
         core::SceneView s = rs.view();
         s.params.max_bounces = bounces;
@@ -222,14 +226,16 @@ TEST_F(SurfacesTest, IsoSharedWalkTracesTheSameRaysAsTraceRay) {
         for (std::uint32_t y = 0; y < h; ++y) {
             for (std::uint32_t x = 0; x < w; ++x) {
                 const core::Vec3 ref = core::render_pixel<core::k_mask_all>(s, cam, x, y, w, h, ca);
-                const core::Vec3 got = core::render_pixel<k_iso>(s, cam, x, y, w, h, cb);
+                const core::Vec3 got = bounces == 0
+                                           ? core::render_pixel<k_iso_shadows>(s, cam, x, y, w, h, cb)
+                                           : core::render_pixel<k_iso>(s, cam, x, y, w, h, cb);
                 if (std::memcmp(&ref, &got, sizeof ref) != 0) ++differ;
                 if (ref.x > 0.0f) ++lit;
             }
         }
         EXPECT_EQ(differ, 0u);
         EXPECT_GT(lit, w * h / 10);
-        EXPECT_GT(ca.secondary, 1000u);
+        if (bounces > 0) EXPECT_GT(ca.secondary, 1000u);
         EXPECT_GT(ca.shadow, 500u);
         EXPECT_EQ(ca.secondary, cb.secondary);
         EXPECT_EQ(ca.shadow, cb.shadow);

@@ -233,7 +233,8 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// frames with that surface kind alone (without the other surfaces' registers), each twice: with
 /// reflected and refracted rays (k_secondary) and without, for frames that spawn none
 /// (core::spawns_secondary: no bounces, or no reflective or transmissive material). ISO has its own
-/// two at 3 blocks per SM; MLS has its own at 2 blocks per SM, with and without secondary rays;
+/// three at 3 blocks per SM (the third for frames with shadow rays and no secondary ray,
+/// core::k_mask_shadow_walk); MLS has its own at 2 blocks per SM, with and without secondary rays;
 /// everything else (mixed surfaces, spp > 1, path tracing) runs the general kernel. sm_90 local memory (stack
 /// frame, spill stores): splats 328 / 440 B without secondary rays against 1648 / 708 B with them, ISO (3
 /// blocks per SM) 248 / 156 B against the general kernel's 4960 / 7542 B. On an H200 (1024^2, Grays/s,
@@ -264,13 +265,14 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
 /// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4; ISO 2,
 /// 4; without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the
-/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 11 megakernels instead of 33.
+/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 12 megakernels instead of 34.
 const Megakernel k_megakernels[] = {
     // clang-format off
     megakernel<core::k_mask_splats, 4>(),  megakernel<core::k_mask_splats | k_secondary, 4>(),
     megakernel<core::k_mask_bricks, 3>(),  megakernel<core::k_mask_bricks | k_secondary, 3>(),
     megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
     megakernel<core::k_mask_iso, 3>(),     megakernel<core::k_mask_iso | k_secondary, 3>(),
+    megakernel<core::k_mask_iso | core::k_mask_shadow_walk, 3>(),
     megakernel<core::k_mask_mls, 2>(),     megakernel<core::k_mask_mls | k_secondary, 2>(),
     megakernel<core::k_mask_all, 4>(),     // every surface, sampling, secondary rays
 #if PRT_CUDA_TUNING_KERNELS
@@ -301,15 +303,19 @@ const Megakernel k_megakernels[] = {
 };
 
 /// The code a frame's kernel carries (k_megakernels): `surface_mask` is core::scene_mask() without
-/// k_mask_sampling; `sampling`: spp > 1 or path tracing; `secondary`: core::spawns_secondary().
-std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary) {
+/// k_mask_sampling; `sampling`: spp > 1 or path tracing; `secondary`: core::spawns_secondary();
+/// `shadows`: the frame traces shadow rays (ISO frames without secondary rays then take the kernel
+/// whose closest hits and shadow rays share one walk loop, core::k_mask_shadow_walk).
+std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary, bool shadows) {
     if (sampling) return core::k_mask_all;
     switch (surface_mask) {
+        case core::k_mask_iso:
+            if (!secondary && shadows) return surface_mask | core::k_mask_shadow_walk;
+            [[fallthrough]];
         case core::k_mask_splats:
         case core::k_mask_bricks:
         case core::k_mask_patches:
         case core::k_mask_mls:
-        case core::k_mask_iso:
             return secondary ? surface_mask | k_secondary : surface_mask;
         default:
             return core::k_mask_all;  // mixed surfaces
@@ -323,9 +329,10 @@ std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool second
 /// 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27 at 2, 0.86 / 0.61 / 0.26 at 1. The general kernel exists
 /// at its default occupancy only; a tuning variant with secondary rays serves frames without them
 /// where the build has none without. Throws prt::Error (one line) when this build lacks the variant.
-const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, bool secondary, int asked) {
-    const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary);
-    const std::uint32_t kind = mask & ~k_secondary;
+const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, bool secondary, bool shadows,
+                                  int asked) {
+    const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary, shadows);
+    const std::uint32_t kind = mask & ~(k_secondary | core::k_mask_shadow_walk);
     if (asked < 1 || asked > 6) asked = 0;
     int blocks = 4;  // the splat kernel's default; the general kernel's only occupancy
     if (kind == core::k_mask_patches)
@@ -338,7 +345,8 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, boo
         blocks = asked;
     else if (kind == core::k_mask_mls)
         blocks = asked == 0 ? 2 : asked;  // variants 1, 2, 3 and 4
-    for (const std::uint32_t m : {mask, mask | k_secondary})
+    const std::uint32_t plain = mask & ~std::uint32_t{core::k_mask_shadow_walk};
+    for (const std::uint32_t m : {mask, plain, plain | k_secondary})
         for (const Megakernel& k : k_megakernels)
             if (k.mask == m && k.min_blocks == blocks) return k;
     throw Error(
@@ -499,10 +507,12 @@ public:
 
     rt::UploadStats set_scene(const core::SceneView& host) override {
         const std::uint32_t mask = core::scene_mask(host) & ~std::uint32_t{core::k_mask_sampling};
-        find_megakernel(mask, false, true, m_options.cuda_min_blocks);  // a variant this build lacks: fail now
+        find_megakernel(mask, false, true, false,
+                        m_options.cuda_min_blocks);  // a variant this build lacks: fail now
         const rt::UploadStats stats = m_device_scene.upload(host, m_stream);
         m_surface_mask = mask;
         m_secondary_materials = core::secondary_materials(host.materials, host.material_count);
+        m_shadow_lights = core::casts_any_shadow(host.lights, host.light_count);
         m_scene = m_device_scene.view();
         warm_megakernels();
         return stats;
@@ -663,9 +673,9 @@ private:
     /// orbit's first pass rendered in 14 ms with this, 44-72 ms without (the next pass: 3-4 ms).
     void warm_megakernels() {
         if (m_options.cuda_wavefront) return;
-        for (const bool secondary : {false, true}) {
+        for (const int variant : {0, 1, 2}) {  // no secondary ray, with shadow rays, secondary rays
             const Megakernel& k =
-                find_megakernel(m_surface_mask, false, secondary, m_options.cuda_min_blocks);
+                find_megakernel(m_surface_mask, false, variant == 2, variant == 1, m_options.cuda_min_blocks);
             const RenderKernel kernel = m_options.cuda_linear_mapping ? k.linear : k.zorder;
             const std::uint32_t blocks = m_options.cuda_persistent ? resident_blocks(kernel) * m_sm_count : 1;
             launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, m_scene,
@@ -709,9 +719,9 @@ private:
                           tiles_x, order);
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
-        const Megakernel& k = find_megakernel(m_surface_mask, sampling,
-                                              core::spawns_secondary(scene.params, m_secondary_materials),
-                                              m_options.cuda_min_blocks);
+        const Megakernel& k = find_megakernel(
+            m_surface_mask, sampling, core::spawns_secondary(scene.params, m_secondary_materials),
+            scene.params.shadows != 0 && m_shadow_lights, m_options.cuda_min_blocks);
         launch(z ? k.zorder : k.linear);
         PRT_CUDA_CHECK_LAUNCH();
     }
@@ -766,6 +776,7 @@ private:
     DeviceScene m_device_scene;
     std::uint32_t m_surface_mask = core::k_mask_splats;  ///< surfaces of the scene (core::scene_mask)
     core::SecondaryMaterials m_secondary_materials;      ///< whether its materials reflect, refract
+    bool m_shadow_lights = false;                        ///< whether a light casts shadows
     core::SceneView m_scene;                             ///< m_device_scene's view
     DeviceBuffer<unsigned long long> m_counters;         ///< [order slot 0, counters, queue, order slot 1]
     DeviceBuffer<std::uint32_t> m_order_heavy[2];        ///< ItemOrder's heavy lists, by frame parity

@@ -159,6 +159,10 @@ enum KernelMask : std::uint32_t {
     /// spawns_secondary()).
     k_mask_secondary = k_mask_bricks << 1,
     k_mask_all = (k_mask_secondary << 1) - 1,
+    /// ISO kernels without secondary rays for frames that trace shadow rays: closest hits and
+    /// shadow rays share one walk loop (trace_ray_shared), as ISO kernels with secondary rays
+    /// always do. Not in k_mask_all: it picks a code shape, not code a scene needs.
+    k_mask_shadow_walk = k_mask_secondary << 1,
 };
 
 /// Which materials of a scene could spawn secondary rays (spawn_secondary): the frame's parameters
@@ -182,6 +186,14 @@ inline SecondaryMaterials secondary_materials(const Material* materials, std::ui
 /// that cannot run kernels without k_mask_secondary; their images are the same.
 inline bool spawns_secondary(const RenderParams& p, SecondaryMaterials m) {
     return p.max_bounces > 0 && ((p.reflections != 0 && m.reflective) || (p.refractions != 0 && m.transmissive));
+}
+
+/// Whether some light of a scene casts shadows: frames with shadows on then trace shadow rays
+/// (shade_hit), which k_mask_shadow_walk kernels serve.
+inline bool casts_any_shadow(const PointLight* lights, std::uint32_t count) {
+    for (std::uint32_t i = 0; i < count; ++i)
+        if (lights[i].casts_shadows != 0) return true;
+    return false;
 }
 
 /// The mask a scene needs (k_mask_secondary aside: that bit depends on the frame, spawns_secondary).
@@ -659,16 +671,22 @@ struct SceneTracer {
     }
 };
 
-/// Kernels whose rays share one walk loop (trace_ray_shared): ISO alone with secondary rays.
+/// Kernels whose rays share one walk loop (trace_ray_shared): ISO alone with secondary rays, or
+/// without them for frames that trace shadow rays (k_mask_shadow_walk). Frames with neither trace
+/// one closest hit per pixel and run trace_ray's plain path: the shared loop made those 6-10 %
+/// slower and shadow frames 13-24 % faster (H100, 2026-12-06,
+/// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared, s4.txt).
 template <std::uint32_t K>
-inline constexpr bool k_shared_walk = (K & ~k_mask_secondary) == k_mask_iso && (K & k_mask_secondary) != 0;
+inline constexpr bool k_shared_walk = (K & ~(k_mask_secondary | k_mask_shadow_walk)) == k_mask_iso &&
+                                      (K & (k_mask_secondary | k_mask_shadow_walk)) != 0;
 
-/// trace_ray with the default tracer for ISO-only kernels with secondary rays: the same rays, the
+/// trace_ray with the default tracer for ISO-only kernels (k_shared_walk): the same rays, the
 /// same sums in the same order (so the same image as trace_ray), but closest hits and shadow rays
 /// leave from one call site (query_scene) in one loop, one query per pass: a hit's lights are
 /// shaded across passes, each shadow ray a pass of its own. In trace_ray a warp whose lanes split
 /// between a shadow ray (in shade_hit) and a closest hit runs the two walks one after the other;
 /// here they are the same walk and run together (Aila and Laine 2009, 3: idle lanes are the cost).
+/// Without k_mask_secondary no ray is spawned: the loop ends with the primary hit's last light.
 template <std::uint32_t K>
 PRT_HD inline Vec3 trace_ray_shared(const SceneView& s, const Ray& primary, RayCounters& c) {
     PendingRay stack[k_max_bounces + 1];
@@ -735,7 +753,7 @@ PRT_HD inline Vec3 trace_ray_shared(const SceneView& s, const Ray& primary, RayC
             shaded = true;
         }
         any = false;
-        if (shaded) {
+        if ((K & k_mask_secondary) != 0 && shaded) {
             PendingRay next[2];
             const std::uint32_t n = spawn_secondary(s, cur, h, next);
             c.secondary += n;
@@ -766,7 +784,9 @@ template <std::uint32_t K = k_mask_all, class Tracer = SceneTracer<K>>
 PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters& c,
                              const Tracer& tracer = Tracer{}) {
     ++c.primary;
-    if constexpr ((K & k_mask_secondary) == 0) {
+    if constexpr (k_shared_walk<K> && std::is_same_v<Tracer, SceneTracer<K>>) {
+        return trace_ray_shared<K>(s, primary, c);
+    } else if constexpr ((K & k_mask_secondary) == 0) {
         // A frame that spawns no secondary ray (spawns_secondary): the loop below would end after
         // its first ray; without the stack of pending rays the kernel keeps fewer registers and a
         // fifth of the local memory (splat kernel, sm_90: 328 B stack and 440 B of spills against
@@ -775,9 +795,6 @@ PRT_HD inline Vec3 trace_ray(const SceneView& s, const Ray& primary, RayCounters
         SurfaceHit h;
         if (!tracer.closest(s, only, h, c)) return background(s.environment, primary.dir);
         return tracer.shade(s, only, h, c);
-    }
-    if constexpr (k_shared_walk<K> && std::is_same_v<Tracer, SceneTracer<K>>) {
-        return trace_ray_shared<K>(s, primary, c);
     } else {
         PendingRay stack[k_max_bounces + 1];
         std::uint32_t top = 0;
