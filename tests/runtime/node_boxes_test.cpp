@@ -233,7 +233,8 @@ TEST(NodeBoxes, ANodePoolLaidOutOtherwiseGetsNone) {
 
 // Macro-regions (core::MacroRegion, rt::build_macro_regions): an empty leaf is left through a box of
 // free cells around it. The hits are bit-identical with and without them (with and without node
-// boxes), fewer leaves are visited, and every region holds no leaf with splats and stays in the root.
+// boxes), fewer leaves are visited, and every region (each of an empty leaf's k_region_axes) holds no
+// leaf with splats and stays in the root.
 TEST_P(NodeBoxes, MacroRegionsKeepTheHitsAndSpareLeaves) {
     const BoxCase& c = GetParam();
     const TestModel m = make_model(room_with_ball(c.scale, {0, 0, 0}), {0, 0, 0}, 24, 10, c.replicate);
@@ -271,34 +272,43 @@ TEST_P(NodeBoxes, MacroRegionsKeepTheHitsAndSpareLeaves) {
                                                              2 * cell[i][1] + ((k >> 1) & 1),
                                                              2 * cell[i][2] + ((k >> 2) & 1), cell[i][3] + 1};
     std::size_t grown = 0;
+    ASSERT_EQ(mr.regions.size() % core::k_region_axes, 0u);
     for (std::uint32_t i = 0; i < plain.node_count; ++i) {
         if (mr.nodes[i] == plain.nodes[i]) continue;  // no region: the pool's word
         ASSERT_FALSE(core::node_is_internal(plain.nodes[i]) || core::node_is_filled(plain.nodes[i])) << i;
         ASSERT_FALSE(core::node_is_internal(mr.nodes[i]) || core::node_is_filled(mr.nodes[i])) << i;
-        ASSERT_LT(core::node_addr(mr.nodes[i]), mr.regions.size()) << i;
-        const core::MacroRegion& r = mr.regions[core::node_addr(mr.nodes[i])];
-        ASSERT_TRUE(r.below[0] | r.below[1] | r.below[2] | r.above[0] | r.above[1] | r.above[2]) << i;
+        ASSERT_NE(core::node_addr(mr.nodes[i]), 0u) << i;
+        ASSERT_LT(core::node_addr(mr.nodes[i]), mr.regions.size() / core::k_region_axes) << i;
+        const core::MacroRegion* rs = &mr.regions[core::k_region_axes * core::node_addr(mr.nodes[i])];
+        bool some = false;
+        for (std::uint32_t axis = 0; axis < core::k_region_axes; ++axis)
+            some = some || (rs[axis].below[0] | rs[axis].below[1] | rs[axis].below[2] | rs[axis].above[0] |
+                            rs[axis].above[1] | rs[axis].above[2]) != 0;
+        ASSERT_TRUE(some) << i;
         ++grown;
-        const std::uint32_t l = cell[i][3];
-        double lo[3], hi[3];  // the region in root units
-        for (int a = 0; a < 3; ++a) {
-            ASSERT_LE(r.below[a], cell[i][a]);
-            ASSERT_LT(cell[i][a] + r.above[a], 1u << l);
-            lo[a] = std::ldexp(double(cell[i][a] - r.below[a]), -int(l));
-            hi[a] = std::ldexp(double(cell[i][a] + r.above[a] + 1), -int(l));
-        }
-        for (std::uint32_t j = 0; j < plain.node_count; ++j) {
-            if (!core::node_is_filled(plain.nodes[j])) continue;
-            std::uint32_t b, e;
-            core::leaf_splats(plain, plain.nodes[j], b, e);
-            if (b == e) continue;
-            bool meets = true;
+        for (std::uint32_t axis = 0; axis < core::k_region_axes; ++axis) {
+            const core::MacroRegion& r = rs[axis];
+            const std::uint32_t l = cell[i][3];
+            double lo[3], hi[3];  // the region in root units
             for (int a = 0; a < 3; ++a) {
-                const double clo = std::ldexp(double(cell[j][a]), -int(cell[j][3]));
-                const double chi = std::ldexp(double(cell[j][a] + 1), -int(cell[j][3]));
-                meets = meets && clo < hi[a] && chi > lo[a];
+                ASSERT_LE(r.below[a], cell[i][a]);
+                ASSERT_LT(cell[i][a] + r.above[a], 1u << l);
+                lo[a] = std::ldexp(double(cell[i][a] - r.below[a]), -int(l));
+                hi[a] = std::ldexp(double(cell[i][a] + r.above[a] + 1), -int(l));
             }
-            ASSERT_FALSE(meets) << "the region of node " << i << " meets filled leaf " << j;
+            for (std::uint32_t j = 0; j < plain.node_count; ++j) {
+                if (!core::node_is_filled(plain.nodes[j])) continue;
+                std::uint32_t b, e;
+                core::leaf_splats(plain, plain.nodes[j], b, e);
+                if (b == e) continue;
+                bool meets = true;
+                for (int a = 0; a < 3; ++a) {
+                    const double clo = std::ldexp(double(cell[j][a]), -int(cell[j][3]));
+                    const double chi = std::ldexp(double(cell[j][a] + 1), -int(cell[j][3]));
+                    meets = meets && clo < hi[a] && chi > lo[a];
+                }
+                ASSERT_FALSE(meets) << "region " << axis << " of node " << i << " meets filled leaf " << j;
+            }
         }
         if (grown > 400) break;  // brute force: enough of them
     }

@@ -226,21 +226,23 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
                                 sum[at(x1, y0, z0)] - sum[at(x0, y0, z0)];
         return s == 0u;
     };
-    std::vector<core::MacroRegion> region(v.node_count, core::MacroRegion{});
-    parallel_chunks(v.node_count, 4096, workers, [&](std::size_t first, std::size_t last, unsigned) {
-        for (std::size_t i = first; i < last; ++i) {
-            const std::uint32_t node = v.nodes[i];
-            const std::uint32_t l = level[i];
-            if (core::node_is_internal(node) || occupied(node) || l == 0 || l > g) continue;
-            const std::uint32_t top = (1u << l) - 1u;
-            std::uint32_t lo[3] = {cell[i][0], cell[i][1], cell[i][2]}, hi[3] = {lo[0], lo[1], lo[2]};
-            std::uint32_t step[6] = {1, 1, 1, 1, 1, 1};
-            bool open[6] = {true, true, true, true, true, true};
-            for (bool grew = true; grew;) {
+    // The box of free cells around empty leaf i's cell, at its level: the directions of axis
+    // `first_axis` grown as far as they go first, then all six in turn (x-, x+, y-, y+, z-, z+),
+    // each by doubling steps while the box stays free and, once a step fails, by halving ones (a
+    // binary search for the last free slab), up to 255 cells each way and inside the root.
+    auto grow = [&](std::size_t i, int first_axis) {
+        const std::uint32_t l = level[i];
+        const std::uint32_t top = (1u << l) - 1u;
+        std::uint32_t lo[3] = {cell[i][0], cell[i][1], cell[i][2]}, hi[3] = {lo[0], lo[1], lo[2]};
+        std::uint32_t step[6] = {1, 1, 1, 1, 1, 1};
+        bool open[6] = {true, true, true, true, true, true};
+        bool refining[6] = {false, false, false, false, false, false};
+        for (int phase = 0; phase < 2; ++phase) {
+            for (bool grew = true; grew;) {  // bounded: each pass grows a box or halves a step
                 grew = false;
                 for (int dir = 0; dir < 6; ++dir) {
-                    if (!open[dir]) continue;
                     const int a = dir / 2;
+                    if (!open[dir] || (phase == 0 && a != first_axis)) continue;
                     const bool up = (dir & 1) != 0;
                     const std::uint32_t c = cell[i][a];
                     const std::uint32_t room =
@@ -260,34 +262,56 @@ MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads) {
                     }
                     if (free_box(l, slo, shi)) {
                         (up ? hi[a] : lo[a]) = up ? shi[a] : slo[a];
-                        step[dir] = 2u * k;
+                        step[dir] = refining[dir] ? k / 2u : 2u * k;
+                        grew = true;
+                    } else if (k > 1u) {
+                        step[dir] = k / 2u;
+                        refining[dir] = true;
                         grew = true;
                     } else {
                         open[dir] = false;
                     }
                 }
             }
-            core::MacroRegion& r = region[i];
-            for (int a = 0; a < 3; ++a) {
-                r.below[a] = static_cast<std::uint8_t>(cell[i][a] - lo[a]);
-                r.above[a] = static_cast<std::uint8_t>(hi[a] - cell[i][a]);
-            }
         }
+        core::MacroRegion r{};
+        for (int a = 0; a < 3; ++a) {
+            r.below[a] = static_cast<std::uint8_t>(cell[i][a] - lo[a]);
+            r.above[a] = static_cast<std::uint8_t>(hi[a] - cell[i][a]);
+        }
+        return r;
+    };
+    // The empty leaves that may get regions, then their three boxes (core::k_region_axes) in parallel.
+    std::vector<std::uint32_t> empty;
+    for (std::uint32_t i = 0; i < v.node_count; ++i)
+        if (!core::node_is_internal(v.nodes[i]) && !occupied(v.nodes[i]) && level[i] != 0 && level[i] <= g)
+            empty.push_back(i);
+    std::vector<core::MacroRegion> region(empty.size() * core::k_region_axes, core::MacroRegion{});
+    parallel_chunks(empty.size(), 1024, workers, [&](std::size_t first, std::size_t last, unsigned) {
+        for (std::size_t e = first; e < last; ++e)
+            for (std::uint32_t a = 0; a < core::k_region_axes; ++a)
+                region[e * core::k_region_axes + a] = grow(empty[e], static_cast<int>(a));
     });
     MacroRegions out;
     out.nodes.assign(v.nodes, v.nodes + v.node_count);
-    out.regions.assign(1, core::MacroRegion{});
-    for (std::uint32_t i = 0; i < v.node_count; ++i) {
-        const core::MacroRegion& r = region[i];
+    for (std::uint32_t i = 0; i < v.node_count; ++i)
         // An empty leaf's address is 0 in a valid pool (walk_step reads a region for any other):
         // kept so for those without a region whatever the words said.
         if ((v.nodes[i] & ~pool::k_node_address_max) == core::k_empty_leaf_node)
             out.nodes[i] = core::k_empty_leaf_node;
-        if ((r.below[0] | r.below[1] | r.below[2] | r.above[0] | r.above[1] | r.above[2]) == 0) continue;
-        if (out.regions.size() > pool::k_node_address_max) break;  // no address left: the rest go without
-        out.nodes[i] =
-            pool::make_node(pool::NodeType::empty_leaf, static_cast<std::uint32_t>(out.regions.size()));
-        out.regions.push_back(r);
+    out.regions.assign(core::k_region_axes, core::MacroRegion{});
+    for (std::size_t e = 0; e < empty.size(); ++e) {
+        const core::MacroRegion* r = &region[e * core::k_region_axes];
+        bool grown = false;
+        for (std::uint32_t a = 0; a < core::k_region_axes; ++a)
+            grown = grown || (r[a].below[0] | r[a].below[1] | r[a].below[2] | r[a].above[0] | r[a].above[1] |
+                              r[a].above[2]) != 0;
+        if (!grown) continue;
+        const std::size_t address = out.regions.size() / core::k_region_axes;
+        if (address > pool::k_node_address_max) break;  // no address left: the rest go without
+        out.nodes[empty[e]] =
+            pool::make_node(pool::NodeType::empty_leaf, static_cast<std::uint32_t>(address));
+        out.regions.insert(out.regions.end(), r, r + core::k_region_axes);
     }
     return out;
 }

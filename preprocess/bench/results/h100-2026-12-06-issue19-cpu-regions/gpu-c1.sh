@@ -3,9 +3,11 @@
 # Embree 3 on the culled 1M room since the macro-regions (2026-12-05; the walk's default), 16 threads
 # (512^2, 1024^2) and 2 threads pinned (512^2), two rounds; frames in turns, ours / Embree the median
 # frame pair (prt-bench-embree). Carried: build-ab/eb.tar.xz (prt-bench-embree, prt-bench and prt-cull
-# built on the dev VM without CUDA; Debian 12's libembree3.so.3 and libtbb.so.12).
+# built on the dev VM without CUDA; Debian 12's libembree3.so.3 and libtbb.so.12). NAME (default c1)
+# names the log and the JSON archive: later calls run this script on later trees.
 set -uo pipefail
-out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/c1.txt") 2>&1
+name=${NAME:-c1}
+out=${OUT:-/tmp/out}; mkdir -p "$out"; exec > >(tee "$out/$name.txt") 2>&1
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader; nproc; grep -m1 "model name" /proc/cpuinfo
 t0=$SECONDS; root=$PWD; w=/tmp/wc; rm -rf $w; mkdir -p $w/json
 python3 -c "import tarfile; tarfile.open('build-ab/eb.tar.xz').extractall('$w')"
@@ -22,5 +24,5 @@ run() {  # round, threads, size, taskset cpus
   echo
 }
 for r in 1 2; do run $r 16 512 ""; run $r 16 1024 ""; run $r 2 512 0,1; done
-tar czf $out/c1-embree-json.tgz -C $w json
+tar czf $out/$name-embree-json.tgz -C $w json
 echo "ALL_DONE $((SECONDS - t0)) s"

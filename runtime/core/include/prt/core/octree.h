@@ -13,7 +13,8 @@
 //                 fixed-point bit that changed) instead of at the root: the same leaf, with fewer
 //                 dependent memory reads (measured: see runtime/README.md).
 //   addition (macro-regions, Devillers 1989): an empty leaf may carry a box of free cells around
-//                 it (MacroRegion); the walk then leaves it through that box's exit face, passing
+//                 it (MacroRegion; three, each grown along one axis first, the ray's major axis
+//                 picking one); the walk then leaves it through that box's exit face, passing
 //                 in one step the empty leaves it would have visited one by one.
 //
 // Robustness (DESIGN.md, numerical robustness): the thesis nudges the exit point by a small
@@ -106,6 +107,20 @@ struct alignas(8) MacroRegion {
 };
 static_assert(sizeof(MacroRegion) == 8);
 
+/// Macro-regions come k_region_axes to an empty leaf, region a grown along axis a first (as far as
+/// it goes, then every way): a ray leaves the leaf through the region of its major axis
+/// (region_axis), the box longest along its path. One box grown every way in turn: the culled room
+/// (prt-bench's, bench_room.json) 7.6 region steps per primary ray, the 10M sphere's ISO 6.4; one
+/// per axis 5.7 and 5.0 (CPU counts, 256^2).
+inline constexpr std::uint32_t k_region_axes = 3;
+
+/// The axis along which `d` is longest (ties to the lower axis): which of an empty leaf's
+/// k_region_axes regions a ray of direction d leaves it through.
+PRT_HD PRT_INLINE std::uint32_t region_axis(Vec3 d) {
+    const float x = fabsf(d.x), y = fabsf(d.y), z = fabsf(d.z);
+    return x >= y ? (x >= z ? 0u : 2u) : (y >= z ? 1u : 2u);
+}
+
 /// A non-owning view of a model's octree sections (pool section types 16-19).
 struct OctreeView {
     const std::uint32_t* nodes = nullptr;  ///< octree_nodes, node_count words
@@ -130,9 +145,10 @@ struct OctreeView {
     const std::uint8_t* node_box_mask = nullptr;
     /// The empty leaves' macro-regions (rt::build_macro_regions), or null: the walk then steps out
     /// of each empty leaf through its own cell. With them, `nodes` is the renderer's copy of the node
-    /// pool in which an empty leaf's address bits (0 in the pool) index this table: 0 for none.
+    /// pool in which an empty leaf's address bits a (0 in the pool) index this table: its regions
+    /// are entries [a k_region_axes, (a + 1) k_region_axes), a = 0 for none.
     const MacroRegion* macro_regions = nullptr;
-    std::uint32_t macro_region_count = 0;  ///< entries of macro_regions (entry 0 unused)
+    std::uint32_t macro_region_count = 0;  ///< entries of macro_regions (the first k_region_axes unused)
 };
 
 /// The view over splat-octree arrays (a pool's sections, checked when the pool was opened and read
@@ -527,7 +543,7 @@ PRT_HD PRT_INLINE MacroRegion load_macro_region(const MacroRegion* p) {
 /// w.restart, returning the leaf's node word and setting its level), then walk_step_out. Shared by
 /// walk_next and the bricked walk (bricks.h), which descend differently. `regions`
 /// (OctreeView::macro_regions, or null): an empty leaf whose word carries an address a > 0 is left
-/// through regions[a].
+/// through regions[k_region_axes a + region_axis(w.d)].
 template <class Descend>
 PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& descend,
                                  const MacroRegion* regions = nullptr) {
@@ -542,7 +558,7 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
     const std::uint32_t node = descend(level);
     MacroRegion r{};
     if (regions != nullptr && node_addr(node) != 0u && !node_is_filled(node))
-        r = load_macro_region(regions + node_addr(node));
+        r = load_macro_region(regions + k_region_axes * node_addr(node) + region_axis(w.d));
     return walk_step_out(w, node, level, leaf, r);
 }
 

@@ -54,14 +54,16 @@ inline constexpr std::uint32_t k_macro_region_levels = 8;
 /// core::OctreeView::macro_regions and the node pool that indexes it (both empty: none).
 struct MacroRegions {
     std::vector<std::uint32_t> nodes;        ///< the node pool, empty leaves' address = their region
-    std::vector<core::MacroRegion> regions;  ///< regions[0] unused (all zero)
+    std::vector<core::MacroRegion> regions;  ///< k_region_axes per address; address 0's unused (all zero)
 };
 
-/// The macro-regions of `v`'s empty leaves (core::MacroRegion): each empty leaf's cell grown
-/// greedily, axis by axis in turn (x-, x+, y-, y+, z-, z+), by doubling steps of cells at its level
-/// while the box stays free (the first step that fails ends that direction), up to 255 cells each
-/// way and inside the root. Only leaves whose region is more than their cell get one (an address in
-/// `nodes`; other empty leaves' addresses are 0 there, other words are the pool's). Empty when the node pool
+/// The macro-regions of `v`'s empty leaves (core::MacroRegion), core::k_region_axes per leaf:
+/// region a is the leaf's cell grown greedily along axis a first (both ways, as far as it goes),
+/// then axis by axis in turn (x-, x+, y-, y+, z-, z+), by doubling steps of cells at its level while
+/// the box stays free and, once a step fails, by halving ones (a binary search for the last free
+/// slab), up to 255 cells each way and inside the root. Only leaves with a region more than their
+/// cell get them (an address in `nodes`; other empty leaves' addresses are 0 there, other words are
+/// the pool's). Empty when the node pool
 /// is not laid out as build_node_boxes requires, or the tree is a single leaf. Uses up to `threads` threads
 /// (0: all).
 MacroRegions build_macro_regions(const core::OctreeView& v, unsigned threads = 0);
