@@ -110,8 +110,9 @@ static_assert(sizeof(MacroRegion) == 8);
 /// Macro-regions come k_region_axes to an empty leaf, region a grown along axis a first (as far as
 /// it goes, then every way): a ray leaves the leaf through the region of its major axis
 /// (region_axis), the box longest along its path. One box grown every way in turn: the culled room
-/// (prt-bench's, bench_room.json) 7.6 region steps per primary ray, the 10M sphere's ISO 6.4; one
-/// per axis 5.7 and 5.0 (CPU counts, 256^2).
+/// (prt-bench's, bench_room.json) 8.3 region steps per primary ray, the 10M sphere's ISO 6.4 (7.6
+/// and 6.4 with the halving steps of rt::build_macro_regions); one per axis, halving, 5.7 and 5.0
+/// (CPU counts, 256^2; preprocess/bench/results/h100-2026-12-06-issue19-region-axes).
 inline constexpr std::uint32_t k_region_axes = 3;
 
 /// The axis along which `d` is longest (ties to the lower axis): which of an empty leaf's
