@@ -3,13 +3,15 @@
 # packed in build-ab/kall.tar.xz), on one GPU and its host in one call: prt-bench, 1024x1024,
 # median of 100 frames after 5, each scenario alone in its own process, two rounds; then the
 # preprocessing chain (scripts/bench-preprocess.sh, BACKEND=auto) on 2 and 16 cores, three runs
-# per step; then every GPU test program of that build, its tools beside it. Carried: build-ab/kall.tar.xz, build-ab/bezier.
+# per step; then every GPU test program of that build, its tools beside it.
+# Carried: build-ab/kall.tar.xz, build-ab/bezier.
 NAME=z1 TARS=kall.tar.xz
 source preprocess/bench/results/h100-2026-12-05-issue17-radii-neighbours/lib500.sh
 source preprocess/bench/results/h100-2026-12-06-issue19-region-axes/alone.sh
 x=$kall; q=--quiet
 lscpu | grep -E "Model name|^CPU\(s\)"
-# alone() with 100 frames: each scenario in its own process, Grays/s and leaves per ray.
+# alone() (alone.sh) with 100 frames and without leaves per ray: each scenario in its own
+# process, its Grays/s.
 al() {
   local label=$1 scs=$2; shift 2; local line="$label"
   for sc in ${scs//,/ }; do
