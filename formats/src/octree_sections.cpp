@@ -21,27 +21,28 @@ namespace {
 /// Internal nodes point forward to eight children in range; filled leaves address leaf_info in range.
 void check_octree_nodes(const PoolFile& pool, const SectionEntry* entry, std::span<const std::uint32_t> nodes,
                         std::uint32_t filled_leaves) {
-    for (std::size_t i = 0; i < nodes.size(); ++i) {
-        const std::uint32_t n = nodes[i];
-        const std::uint32_t a = node_address(n);
-        switch (node_type(n)) {
-            case NodeType::internal:
-                // children come after their parent (breadth first) and all 8 are in range
-                if (a <= i || std::uint64_t(a) + 8 > nodes.size())
-                    pool.fail(entry, "node " + std::to_string(i) + ": child address " + std::to_string(a) +
-                                         " out of range");
-                break;
+    const auto bad = [&](std::size_t i) {
+        const std::uint32_t a = node_address(nodes[i]);
+        switch (node_type(nodes[i])) {
+            case NodeType::internal:  // children come after their parent (breadth first), all 8 in range
+                return a <= i || std::uint64_t(a) + 8 > nodes.size();
             case NodeType::filled_leaf:
-                if (a >= filled_leaves)
-                    pool.fail(entry, "node " + std::to_string(i) + ": leaf address " + std::to_string(a) +
-                                         " out of range");
-                break;
+                return a >= filled_leaves;
             case NodeType::empty_leaf:
-                break;
+                return false;
             default:
-                pool.fail(entry, "node " + std::to_string(i) + ": invalid node type 3");
+                return true;
         }
-    }
+    };
+    const std::size_t i = first_bad(nodes.size(), bad);  // on every core: the same node a serial scan finds
+    if (i == nodes.size()) return;
+    const std::uint32_t a = node_address(nodes[i]);
+    const std::string node = "node " + std::to_string(i) + ": ";
+    if (node_type(nodes[i]) == NodeType::internal)
+        pool.fail(entry, node + "child address " + std::to_string(a) + " out of range");
+    if (node_type(nodes[i]) == NodeType::filled_leaf)
+        pool.fail(entry, node + "leaf address " + std::to_string(a) + " out of range");
+    pool.fail(entry, node + "invalid node type 3");
 }
 
 }  // namespace
@@ -71,11 +72,13 @@ void check_splat_octree(const PoolFile& pool, const ModelInfo& model) {
     if (!leaves.empty() && (leaves.front() != 0 || leaves.back() != sp->count))
         pool.fail(li, "leaf ranges do not cover the splats exactly");
     const auto splats = pool.array<Splat>(SectionType::splats);
-    if (model.point_count > 0)
-        for (std::size_t i = 0; i < splats.size(); ++i)
-            if (splats[i].point >= model.point_count)
-                pool.fail(sp, "splat " + std::to_string(i) + ": point index " +
-                                  std::to_string(splats[i].point) + " out of range");
+    if (model.point_count > 0) {
+        const std::size_t i =
+            first_bad(splats.size(), [&](std::size_t k) { return splats[k].point >= model.point_count; });
+        if (i < splats.size())
+            pool.fail(sp, "splat " + std::to_string(i) + ": point index " + std::to_string(splats[i].point) +
+                              " out of range");
+    }
 }
 
 }  // namespace detail

@@ -305,14 +305,25 @@ std::vector<std::uint8_t> cull_keep_flags(const OctreeSections& s, const CullPar
     stats.leaves = leaves.size();
     stats.unique_splats = s.info.unique_splats;
     stats.splats_before = s.splats.size();
-    for (std::size_t a = 0; a < leaves.size(); ++a) {
-        bool replicas = false;
-        for (std::uint32_t i = s.leaf_info[a]; i < s.leaf_info[a + 1]; ++i) {
-            const bool centre = keep[i] == k_keep_centre;
-            stats.centre_splats += centre;
-            replicas = replicas || !centre;
-        }
-        stats.leaves_with_replicas += replicas;
+    {
+        std::atomic<std::uint64_t> centre{0}, with_replicas{0};
+        parallel_chunks(leaves.size(), 4096, resolve_threads(params.threads),
+                        [&](std::size_t b, std::size_t e, unsigned) {
+                            std::uint64_t c = 0, r = 0;
+                            for (std::size_t a = b; a < e; ++a) {
+                                bool replicas = false;
+                                for (std::uint32_t i = s.leaf_info[a]; i < s.leaf_info[a + 1]; ++i) {
+                                    const bool is_centre = keep[i] == k_keep_centre;
+                                    c += is_centre;
+                                    replicas = replicas || !is_centre;
+                                }
+                                r += replicas;
+                            }
+                            centre += c;
+                            with_replicas += r;
+                        });
+        stats.centre_splats = centre;
+        stats.leaves_with_replicas = with_replicas;
     }
     stats.replicas_before = stats.splats_before - stats.centre_splats;
 
@@ -358,14 +369,30 @@ CulledOctree cull_octree(const OctreeSections& s, const CullParams& params, Cull
     CulledOctree out;
     out.info = s.info;
     out.leaf_info.resize(s.leaf_info.size());
-    std::size_t kept = 0;
-    for (const std::uint8_t k : keep) kept += k != k_keep_none;
-    out.splats.reserve(kept);
-    for (std::size_t a = 0; a + 1 < s.leaf_info.size(); ++a) {
-        out.leaf_info[a] = static_cast<std::uint32_t>(out.splats.size());
-        for (std::uint32_t i = s.leaf_info[a]; i < s.leaf_info[a + 1]; ++i)
-            if (keep[i] != k_keep_none) out.splats.push_back(s.splats[i]);
-    }
+    // The kept splats in leaf order, by chunks of leaves on every core: count each chunk's kept
+    // splats, then (after a prefix sum) write each chunk's leaf ranges and splats. One thread took
+    // 0.09 s for the 1M room's 4.5M splats (perf on the dev VM), a tenth of prt-cull's time on 16
+    // cores outside its probes.
+    const std::size_t leaves = s.leaf_info.size() - 1;
+    constexpr std::size_t k_leaves = 4096;
+    const std::size_t chunks = (leaves + k_leaves - 1) / k_leaves;
+    const unsigned threads = resolve_threads(params.threads);
+    std::vector<std::size_t> before(chunks + 1, 0);
+    parallel_chunks(leaves, k_leaves, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::size_t n = 0;
+        for (std::uint32_t i = s.leaf_info[b]; i < s.leaf_info[e]; ++i) n += keep[i] != k_keep_none;
+        before[b / k_leaves + 1] = n;
+    });
+    for (std::size_t c = 0; c < chunks; ++c) before[c + 1] += before[c];
+    out.splats.resize(before[chunks]);
+    parallel_chunks(leaves, k_leaves, threads, [&](std::size_t b, std::size_t e, unsigned) {
+        std::size_t at = before[b / k_leaves];
+        for (std::size_t a = b; a < e; ++a) {
+            out.leaf_info[a] = static_cast<std::uint32_t>(at);
+            for (std::uint32_t i = s.leaf_info[a]; i < s.leaf_info[a + 1]; ++i)
+                if (keep[i] != k_keep_none) out.splats[at++] = s.splats[i];
+        }
+    });
     out.leaf_info.back() = static_cast<std::uint32_t>(out.splats.size());
     out.info.splat_count = out.splats.size();
     out.info.flags |= pool::k_octree_culled;
