@@ -139,6 +139,13 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
         ->check(CLI::Range(0, 6));
     app.add_flag("--default-carveout", b.default_carveout,
                  "CUDA: leave the L1 / shared-memory split to the driver instead of preferring L1");
+    app.add_option("--iso-walk", b.iso_walk,
+                   "CUDA, ISO with macro-regions (--empty-space regions): auto (the first frames of each "
+                   "kind time the walk through the regions and the walk compiled without region code, "
+                   "and keep the faster, timing the other every 64th frame), regions or plain. The image "
+                   "is the same")
+        ->check(CLI::IsMember({"auto", "regions", "plain"}))
+        ->capture_default_str();
     app.add_option("--gpu-budget", b.gpu_budget,
                    "Memory the scene may take (bytes, or with K/M/G/T: 512M, 1.5G; 'unlimited'): a bricked "
                    "pool (prt-bricks) larger than this streams its bricks, least recently used ones "
@@ -208,6 +215,7 @@ rt::BackendOptions backend_options(const BackendChoice& b) {
     o.cuda_linear_mapping = b.mapping == "linear";
     o.cuda_min_blocks = b.min_blocks;
     o.cuda_max_l1 = !b.default_carveout;
+    o.cuda_iso_walk = b.iso_walk;
     return o;
 }
 

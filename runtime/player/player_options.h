@@ -77,6 +77,7 @@ struct BackendChoice {
     unsigned threads = 0;
     int min_blocks = 0;             ///< cuda megakernel occupancy hint (0: default)
     bool default_carveout = false;  ///< cuda: leave the L1/shared split to the driver
+    std::string iso_walk = "auto";  ///< cuda: rt::BackendOptions::cuda_iso_walk
     /// Streamed bricks (rt::BrickStream): --gpu-budget ("": the backend's default), --upload-per-frame,
     /// --frame-time (milliseconds).
     std::string gpu_budget;

@@ -293,9 +293,42 @@ TEST(GpuSurfaces, SpheresReflectingEachOtherMatchTheCpu) {
             rt::FrameStats scpu, sgpu;
             const rt::Image ref = render(*cpu, rs, 160, 120, &scpu, core::k_cull_slabs, bounces);
             const rt::Image img = render(*gpu, rs, 160, 120, &sgpu, core::k_cull_slabs, bounces);
-            if (bounces > 0) EXPECT_GT(scpu.secondary, 1000u);
+            if (bounces > 0) {
+                EXPECT_GT(scpu.secondary, 1000u);
+            }
             EXPECT_GT(scpu.shadow, 1000u);  // 160 x 120: about twice the CPU test's 96 x 72 count
             compare(ref, img, scpu, sgpu);
+            if (!iso) continue;
+            // The ISO walk with macro-regions and the one compiled without them (k_mask_plain_walk):
+            // the same leaves hold the hits, so the same image to the bit; "auto" runs both in its
+            // first frames (WalkChoice) and every frame is that image.
+            bool regions = false;
+            for (std::uint32_t m = 0; m < rs.view().model_count; ++m)
+                regions = regions || rs.view().models[m].iso.tree.macro_regions != nullptr;
+            EXPECT_TRUE(regions) << "the ISO has no macro-regions: nothing to choose";
+            for (const char* walk : {"regions", "plain", "auto"}) {
+                rt::BackendOptions o;
+                o.cuda_iso_walk = walk;
+                auto g = rt::make_backend("cuda", o);
+                g->set_scene(rs.view());
+                rt::FrameRequest req;
+                scene::Camera c = rs.scene().camera;
+                c.width = 160;
+                c.height = 120;
+                req.camera = rs.camera(c);
+                req.params = rs.params();
+                req.params.leaf_culling = core::k_cull_slabs;
+                req.params.max_bounces = bounces;
+                req.width = 160;
+                req.height = 120;
+                for (int frame = 0; frame < (std::string(walk) == "auto" ? 6 : 1); ++frame) {
+                    rt::Image other;
+                    const rt::FrameStats s = g->render(req, other);
+                    EXPECT_EQ(other.rgb, img.rgb) << "--iso-walk " << walk << ", frame " << frame;
+                    EXPECT_EQ(s.shadow, sgpu.shadow);
+                    EXPECT_EQ(s.secondary, sgpu.secondary);
+                }
+            }
         }
     }
 }

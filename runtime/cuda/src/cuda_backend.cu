@@ -24,6 +24,7 @@
 #include "prt/core/render.h"
 #include "prt/cuda/cuda_backend.h"
 #include "prt/cuda/device_scene.h"
+#include "prt/runtime/walk_choice.h"
 
 namespace prt::cuda {
 
@@ -227,6 +228,7 @@ Megakernel megakernel() {
 }
 
 constexpr std::uint32_t k_secondary = core::k_mask_secondary;
+constexpr std::uint32_t k_plain = core::k_mask_plain_walk;
 
 /// The megakernels compiled in: by default the ones the defaults (--min-blocks 0) and the GPU tests
 /// launch (kernel_mask() chooses). Splats, bricked splats and patches have their own kernels for
@@ -265,7 +267,8 @@ constexpr std::uint32_t k_secondary = core::k_mask_secondary;
 /// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
 /// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4; ISO 2,
 /// 4; without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the
-/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 12 megakernels instead of 34.
+/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 15 megakernels instead of 37.
+/// ISO's three come twice: also compiled without macro-region code (k_plain, WalkChoice).
 const Megakernel k_megakernels[] = {
     // clang-format off
     megakernel<core::k_mask_splats, 4>(),  megakernel<core::k_mask_splats | k_secondary, 4>(),
@@ -273,6 +276,8 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
     megakernel<core::k_mask_iso, 3>(),     megakernel<core::k_mask_iso | k_secondary, 3>(),
     megakernel<core::k_mask_iso | core::k_mask_shadow_walk, 3>(),
+    megakernel<core::k_mask_iso | k_plain, 3>(),  megakernel<core::k_mask_iso | k_secondary | k_plain, 3>(),
+    megakernel<core::k_mask_iso | core::k_mask_shadow_walk | k_plain, 3>(),
     megakernel<core::k_mask_mls, 2>(),     megakernel<core::k_mask_mls | k_secondary, 2>(),
     megakernel<core::k_mask_all, 4>(),     // every surface, sampling, secondary rays
 #if PRT_CUDA_TUNING_KERNELS
@@ -305,11 +310,14 @@ const Megakernel k_megakernels[] = {
 /// The code a frame's kernel carries (k_megakernels): `surface_mask` is core::scene_mask() without
 /// k_mask_sampling; `sampling`: spp > 1 or path tracing; `secondary`: core::spawns_secondary();
 /// `shadows`: the frame traces shadow rays (ISO frames without secondary rays then take the kernel
-/// whose closest hits and shadow rays share one walk loop, core::k_mask_shadow_walk).
-std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary, bool shadows) {
+/// whose closest hits and shadow rays share one walk loop, core::k_mask_shadow_walk); `plain`: ISO
+/// kernels walk without macro-region code (core::k_mask_plain_walk).
+std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool secondary, bool shadows,
+                          bool plain) {
     if (sampling) return core::k_mask_all;
     switch (surface_mask) {
         case core::k_mask_iso:
+            if (plain) return kernel_mask(surface_mask, false, secondary, shadows, false) | k_plain;
             if (!secondary && shadows) return surface_mask | core::k_mask_shadow_walk;
             [[fallthrough]];
         case core::k_mask_splats:
@@ -328,11 +336,12 @@ std::uint32_t kernel_mask(std::uint32_t surface_mask, bool sampling, bool second
 /// shadow / one reflection: 1.26 / 0.83 / 0.83 Grays/s at 2, 1.27 / 0.82 / 0.76 at 1, 0.76 / 0.53 /
 /// 0.49 at 4; Bigguy 0.76 / 0.54 / 0.27 at 2, 0.86 / 0.61 / 0.26 at 1. The general kernel exists
 /// at its default occupancy only; a tuning variant with secondary rays serves frames without them
-/// where the build has none without. Throws prt::Error (one line) when this build lacks the variant.
+/// where the build has none without; a plain ISO walk (`plain`) at an occupancy it is not compiled
+/// for gives the walk with regions. Throws prt::Error (one line) when this build lacks the variant.
 const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, bool secondary, bool shadows,
-                                  int asked) {
-    const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary, shadows);
-    const std::uint32_t kind = mask & ~(k_secondary | core::k_mask_shadow_walk);
+                                  int asked, bool plain = false) {
+    const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary, shadows, plain);
+    const std::uint32_t kind = mask & ~(k_secondary | core::k_mask_shadow_walk | k_plain);
     if (asked < 1 || asked > 6) asked = 0;
     int blocks = 4;  // the splat kernel's default; the general kernel's only occupancy
     if (kind == core::k_mask_patches)
@@ -345,10 +354,12 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, boo
         blocks = asked;
     else if (kind == core::k_mask_mls)
         blocks = asked == 0 ? 2 : asked;  // variants 1, 2, 3 and 4
-    const std::uint32_t plain = mask & ~std::uint32_t{core::k_mask_shadow_walk};
-    for (const std::uint32_t m : {mask, plain, plain | k_secondary})
-        for (const Megakernel& k : k_megakernels)
-            if (k.mask == m && k.min_blocks == blocks) return k;
+    for (const std::uint32_t walk : {mask, mask & ~k_plain}) {
+        const std::uint32_t no_shadow_walk = walk & ~std::uint32_t{core::k_mask_shadow_walk};
+        for (const std::uint32_t m : {walk, no_shadow_walk, no_shadow_walk | k_secondary})
+            for (const Megakernel& k : k_megakernels)
+                if (k.mask == m && k.min_blocks == blocks) return k;
+    }
     throw Error(
         std::string("CUDA: --min-blocks ") + std::to_string(asked) + " selects the " +
         (kind == core::k_mask_patches ? "patch"
@@ -487,6 +498,9 @@ public:
         // [order slot 0, the counters, the persistent megakernel's work queue, order slot 1]
         m_counters.resize(k_counters_at + k_counter_count + 1 + k_slot_words);
         m_sm_count = static_cast<std::uint32_t>(prop.multiProcessorCount);
+        const std::string& walk = m_options.cuda_iso_walk;
+        if (walk != "auto" && walk != "regions" && walk != "plain")
+            throw Error("CUDA: unknown ISO walk \"" + walk + "\" (expected auto, regions or plain)");
     }
     ~CudaBackend() override {
         if (m_stream) cudaStreamSynchronize(m_stream);
@@ -513,6 +527,11 @@ public:
         m_surface_mask = mask;
         m_secondary_materials = core::secondary_materials(host.materials, host.material_count);
         m_shadow_lights = core::casts_any_shadow(host.lights, host.light_count);
+        m_iso_regions = false;
+        for (std::uint32_t i = 0; i < host.model_count; ++i)
+            m_iso_regions = m_iso_regions || (host.models[i].surface == core::SurfaceKind::iso &&
+                                              host.models[i].iso.tree.macro_regions != nullptr);
+        m_walk_choice = rt::WalkChoice{};
         m_scene = m_device_scene.view();
         warm_megakernels();
         return stats;
@@ -539,10 +558,11 @@ public:
         const std::uint32_t order_frame =
             zero_counters(w, y0, y1, m_options.cuda_heavy_first && m_options.cuda_persistent && !wavefront);
         PRT_CUDA_CHECK(cudaEventRecord(m_start, m_stream));
+        bool timed_walk = false;  // WalkChoice waits for this frame's time
         if (wavefront) {
             render_wavefront(scene, req, w, h, y0, y1);
         } else {
-            render_megakernel(scene, req, w, h, y0, y1, order_frame);
+            timed_walk = render_megakernel(scene, req, w, h, y0, y1, order_frame);
         }
         PRT_CUDA_CHECK(cudaEventRecord(m_stop, m_stream));
         unsigned long long counters[k_counter_count];
@@ -563,6 +583,7 @@ public:
         float ms = 0;
         PRT_CUDA_CHECK(cudaEventElapsedTime(&ms, m_start, m_stop));
         stats.device_ms = ms;
+        if (timed_walk) m_walk_choice.record(ms * 1e6f / static_cast<float>(stats.pixels));  // ns per pixel
         stats.primary = counters[k_c_primary];
         stats.secondary = counters[k_c_secondary];
         stats.shadow = counters[k_c_shadow];
@@ -673,9 +694,11 @@ private:
     /// orbit's first pass rendered in 14 ms with this, 44-72 ms without (the next pass: 3-4 ms).
     void warm_megakernels() {
         if (m_options.cuda_wavefront) return;
-        for (const int variant : {0, 1, 2}) {  // no secondary ray, with shadow rays, secondary rays
-            const Megakernel& k =
-                find_megakernel(m_surface_mask, false, variant == 2, variant == 1, m_options.cuda_min_blocks);
+        // no secondary ray, with shadow rays, secondary rays; then the same walking ISO without regions
+        for (const int variant : {0, 1, 2, 3, 4, 5}) {
+            if (variant >= 3 && m_surface_mask != core::k_mask_iso) break;
+            const Megakernel& k = find_megakernel(m_surface_mask, false, variant % 3 == 2, variant % 3 == 1,
+                                                  m_options.cuda_min_blocks, variant >= 3);
             const RenderKernel kernel = m_options.cuda_linear_mapping ? k.linear : k.zorder;
             const std::uint32_t blocks = m_options.cuda_persistent ? resident_blocks(kernel) * m_sm_count : 1;
             launch_kernel(launch_grid(dim3(blocks), k_block, m_stream), kernel, m_scene,
@@ -686,8 +709,22 @@ private:
         PRT_CUDA_CHECK(cudaStreamSynchronize(m_stream));
     }
 
-    /// The megakernel over rows [y0, y1); `order_frame`: zero_counters()'s frame number.
-    void render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
+    /// Whether a frame of kernel mask `mask` (regions walked) and size w x h walks an ISO without
+    /// macro-region code (BackendOptions::cuda_iso_walk): always when no ISO model has regions (the
+    /// same leaves, less code); else "regions", "plain", or for "auto" WalkChoice's answer, `timed`
+    /// then set (the frame's time goes to WalkChoice::record). Only ISO-only kernels have the choice.
+    bool plain_iso_walk(std::uint32_t mask, std::uint32_t w, std::uint32_t h, bool& timed) {
+        timed = false;
+        if ((mask & ~(k_secondary | core::k_mask_shadow_walk)) != core::k_mask_iso) return false;
+        if (!m_iso_regions || m_options.cuda_iso_walk == "plain") return true;
+        if (m_options.cuda_iso_walk == "regions") return false;
+        timed = true;
+        return m_walk_choice.next({mask, w, h, 0}) == 1;
+    }
+
+    /// The megakernel over rows [y0, y1); `order_frame`: zero_counters()'s frame number. Returns
+    /// whether the frame's time goes to m_walk_choice (plain_iso_walk).
+    bool render_megakernel(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
                            std::uint32_t h, std::uint32_t y0, std::uint32_t y1, std::uint32_t order_frame) {
         const bool z = !m_options.cuda_linear_mapping;
         const std::uint32_t tiles_x = (w + k_tile - 1) / k_tile;
@@ -719,11 +756,16 @@ private:
                           tiles_x, order);
         };
         const bool sampling = scene.params.spp > 1 || scene.params.path_tracing != 0;
-        const Megakernel& k = find_megakernel(
-            m_surface_mask, sampling, core::spawns_secondary(scene.params, m_secondary_materials),
-            scene.params.shadows != 0 && m_shadow_lights, m_options.cuda_min_blocks);
+        const bool secondary = core::spawns_secondary(scene.params, m_secondary_materials);
+        const bool shadows = scene.params.shadows != 0 && m_shadow_lights;
+        bool timed = false;
+        const bool plain =
+            plain_iso_walk(kernel_mask(m_surface_mask, sampling, secondary, shadows, false), w, h, timed);
+        const Megakernel& k =
+            find_megakernel(m_surface_mask, sampling, secondary, shadows, m_options.cuda_min_blocks, plain);
         launch(z ? k.zorder : k.linear);
         PRT_CUDA_CHECK_LAUNCH();
+        return timed;
     }
 
     void render_wavefront(const core::SceneView& scene, const rt::FrameRequest& req, std::uint32_t w,
@@ -777,6 +819,8 @@ private:
     std::uint32_t m_surface_mask = core::k_mask_splats;  ///< surfaces of the scene (core::scene_mask)
     core::SecondaryMaterials m_secondary_materials;      ///< whether its materials reflect, refract
     bool m_shadow_lights = false;                        ///< whether a light casts shadows
+    bool m_iso_regions = false;                          ///< whether an ISO model has macro-regions
+    rt::WalkChoice m_walk_choice;                        ///< ISO walk per kind of frame (plain_iso_walk)
     core::SceneView m_scene;                             ///< m_device_scene's view
     DeviceBuffer<unsigned long long> m_counters;         ///< [order slot 0, counters, queue, order slot 1]
     DeviceBuffer<std::uint32_t> m_order_heavy[2];        ///< ItemOrder's heavy lists, by frame parity

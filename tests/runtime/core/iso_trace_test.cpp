@@ -389,7 +389,9 @@ TEST(IsoTrace, SeamlessFlagsAndOcclusion) {
 // Macro-regions over the ISO's tree (rt::build_macro_regions, the renderer's default way past
 // empty space, core::walk_step): every filled leaf counts as occupied, so the walk passes only empty
 // leaves faster and finds the same first hit, bit for bit, for rays from outside and inside, of
-// either flag, long and short, and the same occlusion; it visits fewer leaves.
+// either flag, long and short, and the same occlusion; it visits fewer leaves. The walk compiled
+// without region code (trace_iso<false>, the CUDA backend's plain ISO kernels) on the view with
+// regions reads the same tree leaf by leaf: the same hits and the same leaves as the view without.
 TEST(IsoTrace, MacroRegionsKeepTheHitsAndSpareLeaves) {
     for (const synth::Shape& shape : {sphere_shape(1.0), torus_shape(1.0, 0.4)}) {
         const PointSet s = synth_points(shape, 100000, 0.0005);
@@ -405,7 +407,7 @@ TEST(IsoTrace, MacroRegionsKeepTheHitsAndSpareLeaves) {
         std::mt19937 rng(5);
         std::normal_distribution<float> g(0.0f, 1.0f);
         std::uniform_real_distribution<float> u(-2.0f, 2.0f);
-        std::uint64_t leaves[2] = {}, hits = 0, differ = 0;
+        std::uint64_t leaves[2] = {}, hits = 0, differ = 0, plain_differ = 0;
         for (int i = 0; i < 8000; ++i) {
             const core::Vec3 o{u(rng), u(rng), u(rng)};
             core::Vec3 d{g(rng), g(rng), g(rng)};
@@ -420,6 +422,7 @@ TEST(IsoTrace, MacroRegionsKeepTheHitsAndSpareLeaves) {
             const bool fa = core::trace_iso(a, o, d, t_max, inside, core::IsoParams{}, ha, sa);
             const bool fb = core::trace_iso(b, o, d, t_max, inside, core::IsoParams{}, hb, sb);
             EXPECT_EQ(sb.truncated, 0u);
+            const std::uint64_t leaves_a = sa.leaves;  // sa is the occlusion walk's below
             leaves[0] += sa.leaves;
             leaves[1] += sb.leaves;
             hits += fa ? 1 : 0;
@@ -427,12 +430,19 @@ TEST(IsoTrace, MacroRegionsKeepTheHitsAndSpareLeaves) {
             const bool occ_a = core::iso_occluded(a, o, d, t_max, inside, core::IsoParams{}, sa);
             const bool occ_b = core::iso_occluded(b, o, d, t_max, inside, core::IsoParams{}, sb);
             if (!same || occ_a != occ_b) ++differ;
+            core::IsoHit hc;
+            core::IsoStats sc;
+            const bool fc = core::trace_iso<false>(b, o, d, t_max, inside, core::IsoParams{}, hc, sc);
+            const bool occ_c = core::iso_occluded<false>(b, o, d, t_max, inside, core::IsoParams{}, sb);
+            const bool same_c = fa == fc && (!fa || (std::memcmp(&ha, &hc, sizeof ha) == 0));
+            if (!same_c || occ_a != occ_c || sc.leaves != leaves_a) ++plain_differ;
         }
         std::printf("%s: %llu hits of 8000 rays, leaves %llu -> %llu with macro-regions, %llu rays differ\n",
                     synth::shape_name(shape.kind), (unsigned long long)hits, (unsigned long long)leaves[0],
                     (unsigned long long)leaves[1], (unsigned long long)differ);
         EXPECT_GT(hits, 1500u);
         EXPECT_EQ(differ, 0u) << synth::shape_name(shape.kind);
+        EXPECT_EQ(plain_differ, 0u) << synth::shape_name(shape.kind) << ": the walk without region code";
         EXPECT_LT(leaves[1], leaves[0] * 9 / 10) << "the regions spared under 10 % of the leaves";
     }
 }

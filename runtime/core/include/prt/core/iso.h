@@ -308,7 +308,9 @@ PRT_HD inline bool iso_intersect_leaf(const float c[8], Vec3 a, Vec3 b, float ta
 }
 
 /// The walk behind trace_iso and iso_occluded: the nearest accepted hit with t in [0, t_max)
-/// (`any`: the first one found, attributes not computed). Returns false on a miss.
+/// (`any`: the first one found, attributes not computed). Returns false on a miss. `k_regions`
+/// false: walk_next without its macro-region code (the same hits, leaf by leaf).
+template <bool k_regions = true>
 PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool inside, const IsoParams& p,
                             bool any, IsoHit& hit, IsoStats& stats) {
     stats = IsoStats{};
@@ -329,7 +331,7 @@ PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool 
     float prev_t1 = -k_inf, prev_edge = 0.0f;
     bool prev_outside = false, prev_valid = false;
     OctreeLeaf leaf;
-    while (walk_next(v.tree, w, leaf)) {  // bounded by max_steps
+    while (walk_next<k_regions>(v.tree, w, leaf)) {  // bounded by max_steps
         ++stats.leaves;
         const float edge = exp2_neg(leaf.level);  // leaf edge in root units (exact)
         const float margin = ext * edge / dlen;   // 4.5.1 widening, in t
@@ -427,9 +429,10 @@ PRT_HD inline bool iso_walk(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool 
 /// thesis 4.5: the nearest hit of the ray o + t d (model local frame; d need not be unit) with
 /// the ISO surface, t in [0, t_max), accepting faces as `p.faces` says for a ray whose seamless
 /// flag is `inside` (thesis 4.5.2). Returns false on a miss.
+template <bool k_regions = true>
 PRT_HD inline bool trace_iso(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool inside, const IsoParams& p,
                              IsoHit& hit, IsoStats& stats) {
-    return iso_walk(v, o, d, t_max, inside, p, false, hit, stats);
+    return iso_walk<k_regions>(v, o, d, t_max, inside, p, false, hit, stats);
 }
 
 /// The same for a ray in the model's local frame with default IsoParams (its flag decides the
@@ -441,10 +444,11 @@ PRT_HD inline bool trace_iso(const IsoView& v, const Ray& ray, float t_max, IsoH
 
 /// Whether the segment [0, t_max) of the ray meets the surface with a face the ray accepts
 /// (shadow rays keep the flag of the ray they leave, so a surface never shadows itself).
+template <bool k_regions = true>
 PRT_HD inline bool iso_occluded(const IsoView& v, Vec3 o, Vec3 d, float t_max, bool inside,
                                 const IsoParams& p, IsoStats& stats) {
     IsoHit hit;
-    return iso_walk(v, o, d, t_max, inside, p, true, hit, stats);
+    return iso_walk<k_regions>(v, o, d, t_max, inside, p, true, hit, stats);
 }
 
 /// f at a point of the local frame: the trilinear value in the filled leaf holding it, in

@@ -568,14 +568,17 @@ PRT_HD PRT_INLINE bool walk_step(OctreeWalk& w, OctreeLeaf& leaf, Descend&& desc
 /// the previous leaf's path shares with this cell rather than from the root: the same leaf, found
 /// with fewer dependent reads. Always inlined: g++ once left it a call per step in the host's splat
 /// walks (63 % of a CPU frame's samples). With the view's node boxes, descend_boxed; with its
-/// macro-regions, an empty leaf that has one is left through it.
+/// macro-regions, an empty leaf that has one is left through it. `k_regions` false: the walk
+/// compiled without the macro-region code (leaf by leaf, the view's regions unread), for kernels
+/// that trace scenes where regions do not pay (core::k_mask_plain_walk).
+template <bool k_regions = true>
 PRT_HD PRT_INLINE bool walk_next(const OctreeView& v, OctreeWalk& w, OctreeLeaf& leaf) {
+    const MacroRegion* regions = k_regions ? v.macro_regions : nullptr;
     if (v.node_boxes != nullptr)
         return walk_step(
-            w, leaf, [&](std::uint32_t& level) { return descend_boxed(v, w, w.path, level); },
-            v.macro_regions);
+            w, leaf, [&](std::uint32_t& level) { return descend_boxed(v, w, w.path, level); }, regions);
     return walk_step(
-        w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); }, v.macro_regions);
+        w, leaf, [&](std::uint32_t& level) { return descend(v, w.p, w.path, level); }, regions);
 }
 
 /// The splat index range [begin, end) of a filled leaf, clamped to the arrays (empty if invalid).

@@ -163,6 +163,11 @@ enum KernelMask : std::uint32_t {
     /// shadow rays share one walk loop (trace_ray_shared), as ISO kernels with secondary rays
     /// always do. Not in k_mask_all: it picks a code shape, not code a scene needs.
     k_mask_shadow_walk = k_mask_secondary << 1,
+    /// ISO kernels whose walk has no macro-region code (walk_next<false>): leaf by leaf, the regions
+    /// unread. Where a scene's regions save few steps (a dense model seen from outside: most empty
+    /// leaves small), the walk without their loads and clamps is the faster one; the CUDA backend
+    /// times both (cuda_backend.cu, WalkChoice). Not in k_mask_all: a code shape, as above.
+    k_mask_plain_walk = k_mask_shadow_walk << 1,
 };
 
 /// Which materials of a scene could spawn secondary rays (spawn_secondary): the frame's parameters
@@ -215,6 +220,11 @@ template <SurfaceKind S>
 struct SurfaceTag {
     static constexpr SurfaceKind kind = S;
 };
+/// ISO, walked with its macro-regions (`k_regions`) or without (k_mask_plain_walk kernels).
+template <bool k_regions>
+struct IsoTag {
+    static constexpr SurfaceKind kind = SurfaceKind::iso;
+};
 /// Splats of a bricked pool (ModelView::bricks set): a surface of its own for the dispatch.
 struct BricksTag {
     static constexpr SurfaceKind kind = SurfaceKind::splats;
@@ -233,20 +243,22 @@ struct ModelRay {
 // Splats (thesis 3.3 blending), ISO (thesis 4.5), MLS (WS05 3.2), patches (seed 002, 3). Every
 // surface takes the seamless flag (thesis 3.6) instead of an epsilon.
 
-PRT_HD PRT_INLINE bool closest_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q,
-                                  float t_max, ModelHit& out, RayCounters& c) {
+template <bool k_regions>
+PRT_HD PRT_INLINE bool closest_on(IsoTag<k_regions>, const SceneView& s, const ModelRay& q, float t_max,
+                                  ModelHit& out, RayCounters& c) {
     IsoHit h;
     IsoStats st;
-    const bool hit = trace_iso(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), h, st);
+    const bool hit = trace_iso<k_regions>(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), h, st);
     add_stats(c, st);
     if (hit)
         out = ModelHit{h.t, h.normal, (q.mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1}};
     return hit;
 }
-PRT_HD PRT_INLINE bool occluded_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q,
-                                   RayCounters& c) {
+template <bool k_regions>
+PRT_HD PRT_INLINE bool occluded_on(IsoTag<k_regions>, const SceneView& s, const ModelRay& q, RayCounters& c) {
     IsoStats st;
-    const bool hit = iso_occluded(q.mv.iso, q.o, q.d, q.ray.t_max, q.inside, iso_params_for(s), st);
+    const bool hit =
+        iso_occluded<k_regions>(q.mv.iso, q.o, q.d, q.ray.t_max, q.inside, iso_params_for(s), st);
     add_stats(c, st);
     return hit;
 }
@@ -357,7 +369,7 @@ PRT_HD PRT_INLINE bool occluded_on(BricksTag, const SceneView& s, const ModelRay
     return hit;
 }
 
-/// The one surface dispatch: visit(SurfaceTag<kind>{}) for a model's surface kind, among the
+/// The one surface dispatch: visit(SurfaceTag<kind>{}) for a model's surface kind (ISO: IsoTag), among the
 /// kinds K carries; splats take whatever is not ISO, MLS or patches, as BricksTag when the model's
 /// pool is bricked and K carries k_mask_bricks (a kernel is launched only for scenes whose surfaces
 /// it carries: scene_mask()). False for a surface K does not carry.
@@ -365,7 +377,12 @@ template <std::uint32_t K, class Visit>
 PRT_HD PRT_INLINE bool dispatch_surface(const ModelView& mv, Visit&& visit) {
     const SurfaceKind kind = mv.surface;
     if constexpr ((K & k_mask_iso) != 0)
-        if (kind == SurfaceKind::iso) return visit(SurfaceTag<SurfaceKind::iso>{});
+        if (kind == SurfaceKind::iso) {
+            if constexpr ((K & k_mask_plain_walk) != 0)
+                return visit(IsoTag<false>{});
+            else
+                return visit(IsoTag<true>{});
+        }
     if constexpr ((K & k_mask_mls) != 0)
         if (kind == SurfaceKind::mls) return visit(SurfaceTag<SurfaceKind::mls>{});
     if constexpr ((K & k_mask_patches) != 0)
@@ -464,12 +481,13 @@ PRT_HD PRT_INLINE void scene_hit(const SceneView& s, const Ray& r, std::uint32_t
 /// shadow rays and lanes tracing closest hits run the same walk code together: ISO's walk takes
 /// the choice as an argument (iso_walk). Only ISO has one (splat-shared-walk.patch in
 /// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared: slower for splats).
-PRT_HD PRT_INLINE bool query_on(SurfaceTag<SurfaceKind::iso>, const SceneView& s, const ModelRay& q, bool any,
+template <bool k_regions>
+PRT_HD PRT_INLINE bool query_on(IsoTag<k_regions>, const SceneView& s, const ModelRay& q, bool any,
                                 float t_max, ModelHit& out, RayCounters& c) {
     IsoHit h;
     IsoStats st;
     // A shadow ray stops at its first hit, so t_max is still its own (occluded_on's q.ray.t_max).
-    const bool hit = iso_walk(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), any, h, st);
+    const bool hit = iso_walk<k_regions>(q.mv.iso, q.o, q.d, t_max, q.inside, iso_params_for(s), any, h, st);
     add_stats(c, st);
     if (hit && !any)
         out = ModelHit{h.t, h.normal, (q.mv.iso.flags & pool::k_iso_colors) != 0 ? h.color : Vec3{1, 1, 1}};
@@ -677,8 +695,9 @@ struct SceneTracer {
 /// slower and shadow frames 13-24 % faster (H100, 2026-12-06,
 /// preprocess/bench/results/h100-2026-12-06-issue19-iso-shared, s4.txt).
 template <std::uint32_t K>
-inline constexpr bool k_shared_walk = (K & ~(k_mask_secondary | k_mask_shadow_walk)) == k_mask_iso &&
-                                      (K & (k_mask_secondary | k_mask_shadow_walk)) != 0;
+inline constexpr bool k_shared_walk = (K & ~(k_mask_secondary | k_mask_shadow_walk |
+                                             k_mask_plain_walk)) == k_mask_iso
+                                      && (K & (k_mask_secondary | k_mask_shadow_walk)) != 0;
 
 /// trace_ray with the default tracer for ISO-only kernels (k_shared_walk): the same rays, the
 /// same sums in the same order (so the same image as trace_ray), but closest hits and shadow rays

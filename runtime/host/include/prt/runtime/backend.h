@@ -135,6 +135,11 @@ struct BackendOptions {
     int cuda_min_blocks =
         0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
     bool cuda_max_l1 = true;  ///< prefer L1 over shared memory for the megakernel
+    /// ISO megakernels on a scene with macro-regions: "auto" (the first frames of each kind time the
+    /// walk with its regions and the walk compiled without them, core::k_mask_plain_walk, and keep
+    /// the faster, checking the other now and then), "regions" or "plain". Without regions the plain
+    /// walk always runs (the same leaves, less code).
+    std::string cuda_iso_walk = "auto";
 };
 
 /// Creates a backend by name: "cpu", "cuda", "hybrid" or "auto" (cuda when a device exists, else
