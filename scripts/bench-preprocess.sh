@@ -20,7 +20,10 @@
 # Environment: KEEP=1 keeps the work folder (its path is printed); BACKEND=auto|cpu|cuda is
 #   prt-radii's and prt-cull's --backend (CULL_BACKEND, its older name, still works) (default cpu:
 #   the chain on the cores alone; auto is what a user on a GPU
-#   machine gets).
+#   machine gets); FRESH=1 removes each step's output of the previous run before timing the step
+#   (default 0: every run after the first writes over it, as in every measurement before
+#   2026-12-06, and pays for the old file's removal in its rename: 0.04 s for 150 MB on the H100
+#   host's ext4, preprocess/bench/results/h100-2026-12-06-issue19-chain-close/).
 set -euo pipefail
 # shellcheck source=lib/bench-common.sh
 . "$(dirname "$0")/lib/bench-common.sh"
@@ -30,6 +33,12 @@ cores=$(nproc)
 threads=${3:-$(printf '1\n2\n%s\n' "$cores" | sort -nu | paste -sd,)}
 repeat=${4:-2}
 cull_backend=${BACKEND:-${CULL_BACKEND:-cpu}}
+fresh=${FRESH:-0}
+case $fresh in 0 | 1) ;; *)
+    echo "bench-preprocess: FRESH must be 0 or 1, not '$fresh'" >&2
+    exit 1
+    ;;
+esac
 case $cull_backend in auto | cpu | cuda) ;; *)
     echo "bench-preprocess: BACKEND must be auto, cpu or cuda, not '$cull_backend'" >&2
     exit 1
@@ -74,7 +83,7 @@ with open(path, "wb") as f:
     v.tofile(f)
 EOF
 
-echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step; prt-radii and prt-cull --backend $cull_backend"
+echo "# preprocessing chain, $points points (room PLY with normals), fastest of $repeat runs per step; prt-radii and prt-cull --backend $cull_backend$([ "$fresh" = 1 ] && echo "; each run into a new file")"
 echo "# machine: $cores cores, $(uname -m), $(bench_cpu_model); load $(bench_load)"
 declare -A best
 IFS=, read -r -a counts <<<"$threads"
@@ -89,6 +98,7 @@ for t in "${counts[@]}"; do
             out=$work/$s.pool
             extra=()
             [ "$s" = prt-cull ] || [ "$s" = prt-radii ] && extra=(--backend "$cull_backend")
+            [ "$fresh" = 1 ] && rm -f "$out"  # untimed
             t0=$(date +%s.%N)
             taskset -c "0-$((t - 1))" "$build/bin/$s" "$in" -o "$out" --quiet "${extra[@]}"
             t1=$(date +%s.%N)

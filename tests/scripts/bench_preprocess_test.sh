@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # scripts/bench-preprocess.sh on a small model: the chain runs on 1 core (and 2 where the process
 # has them), the table has a row per step and a total whose seconds are the steps' sum; a missing
-# tool and a thread count above the cores are one-line errors.
+# tool, a thread count above the cores and a FRESH other than 0 or 1 are one-line errors; FRESH=1
+# runs the chain into new files.
 # Usage: bench_preprocess_test.sh SCRIPT BIN_DIR   (exit 77: skipped)
 set -euo pipefail
 script=$1
@@ -23,6 +24,12 @@ done
 # total = sum of the steps, in the first thread count's column
 echo "$out" | awk '$1 ~ /^prt-/ { s += $2 } $1 == "total" { t = $2 }
     END { if (s - t > 0.002 || t - s > 0.002) { print "FAIL: total " t " != sum " s; exit 1 } }'
+# FRESH=1: each run into a new file (two runs, the second after removing the first's outputs)
+fresh=$(FRESH=1 bash "$script" "$build" 3000 1 2)
+echo "$fresh" | grep -q "each run into a new file" || { echo "FAIL: FRESH=1 not announced: $fresh"; exit 1; }
+echo "$fresh" | grep -q "^total " || { echo "FAIL: FRESH=1 gave no total: $fresh"; exit 1; }
+if err=$(FRESH=yes bash "$script" "$build" 3000 1 1 2>&1); then echo "FAIL: FRESH=yes accepted"; exit 1; fi
+echo "$err" | grep -q "FRESH must be 0 or 1" || { echo "FAIL: $err"; exit 1; }
 if err=$(bash "$script" "$build" 3000 "$(($(nproc) + 1))" 1 2>&1); then
     echo "FAIL: more threads than cores accepted"; exit 1
 fi
