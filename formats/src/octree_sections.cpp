@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 
+#include "prt/parallel.h"
 #include "section_checks.h"
 
 namespace prt::pool {
@@ -34,7 +35,8 @@ void check_octree_nodes(const PoolFile& pool, const SectionEntry* entry, std::sp
                 return true;
         }
     };
-    const std::size_t i = first_bad(nodes.size(), bad);  // on every core: the same node a serial scan finds
+    const std::size_t i =
+        parallel_find_first(nodes.size(), resolve_threads(0), bad);  // the node a serial scan finds
     if (i == nodes.size()) return;
     const std::uint32_t a = node_address(nodes[i]);
     const std::string node = "node " + std::to_string(i) + ": ";
@@ -73,8 +75,9 @@ void check_splat_octree(const PoolFile& pool, const ModelInfo& model) {
         pool.fail(li, "leaf ranges do not cover the splats exactly");
     const auto splats = pool.array<Splat>(SectionType::splats);
     if (model.point_count > 0) {
-        const std::size_t i =
-            first_bad(splats.size(), [&](std::size_t k) { return splats[k].point >= model.point_count; });
+        const std::size_t i = parallel_find_first(splats.size(), resolve_threads(0), [&](std::size_t k) {
+            return splats[k].point >= model.point_count;
+        });
         if (i < splats.size())
             pool.fail(sp, "splat " + std::to_string(i) + ": point index " + std::to_string(splats[i].point) +
                               " out of range");

@@ -2,36 +2,13 @@
 // to formats/src; every failure is PoolFile::fail's one line "FILE: section NAME: what is wrong".
 #pragma once
 
-#include <atomic>
-#include <cstddef>
 #include <cstdint>
 #include <span>
 #include <string>
 
 #include "prt/formats/pool.h"
-#include "prt/parallel.h"
 
 namespace prt::pool::detail {
-
-/// The first i in [0, count) where bad(i) holds, or count when there is none: the answer a serial
-/// scan gives, from every core's chunks (the 1M room's octree pool holds 4.5M splats, whose point
-/// check took 0.07 s on one thread of the dev VM in every tool that opens it).
-template <class Bad>
-std::size_t first_bad(std::size_t count, Bad&& bad) {
-    std::atomic<std::size_t> first{count};
-    parallel_chunks(count, std::size_t{1} << 16, resolve_threads(0),
-                    [&](std::size_t b, std::size_t e, unsigned) {
-                        if (b >= first.load(std::memory_order_relaxed)) return;  // a bad one comes earlier
-                        for (std::size_t i = b; i < e; ++i)
-                            if (bad(i)) {
-                                std::size_t seen = first.load();
-                                while (i < seen && !first.compare_exchange_weak(seen, i)) {
-                                }
-                                return;
-                            }
-                    });
-    return first.load();
-}
 
 /// The entry of the first of `types` the pool holds, or nullptr when it holds none.
 const SectionEntry* first_present(const PoolFile& pool, std::span<const SectionType> types);

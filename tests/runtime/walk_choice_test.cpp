@@ -30,7 +30,7 @@ int count(const std::vector<int>& ran, int k, std::size_t from = 0) {
 TEST(WalkChoice, TrialsThenTheFasterWithARecheck) {
     for (const int faster : {0, 1}) {
         WalkChoice c;
-        const WalkChoice::Key key{1, 1024, 1024, 0};
+        const WalkChoice::Key key{1, 1024, 1024};
         float ms[2] = {1.0f, 1.0f};
         ms[faster] = 0.9f;
         const std::vector<int> ran = run(c, key, 200, ms);
@@ -46,7 +46,7 @@ TEST(WalkChoice, TrialsThenTheFasterWithARecheck) {
 
 TEST(WalkChoice, FollowsAViewThatChangesAndIgnoresNoise) {
     WalkChoice c;
-    const WalkChoice::Key key{1, 640, 480, 0};
+    const WalkChoice::Key key{1, 640, 480};
     const float plain_faster[2] = {1.0f, 0.8f};
     run(c, key, 10, plain_faster);
     EXPECT_EQ(c.chosen(key), 1);
@@ -63,7 +63,7 @@ TEST(WalkChoice, FollowsAViewThatChangesAndIgnoresNoise) {
 
 TEST(WalkChoice, KindsAreApartAndTheColdFrameIsNotTimed) {
     WalkChoice c;
-    const WalkChoice::Key a{1, 64, 64, 0}, b{2, 64, 64, 0};
+    const WalkChoice::Key a{1, 64, 64}, b{2, 64, 64};
     // The first frame of a kind runs the walk with regions whatever it takes.
     EXPECT_EQ(c.next(a), 0);
     c.record(100.0f);  // cold: ignored
@@ -80,7 +80,7 @@ TEST(WalkChoice, KindsAreApartAndTheColdFrameIsNotTimed) {
     c.record(0.0f);
     EXPECT_EQ(c.chosen(a), 0);
     // Kinds beyond k_max_kinds push out the oldest, which then starts over.
-    for (std::uint32_t k = 0; k < WalkChoice::k_max_kinds; ++k) run(c, {100 + k, 64, 64, 0}, 1, ms);
+    for (std::uint32_t k = 0; k < WalkChoice::k_max_kinds; ++k) run(c, {100 + k, 64, 64}, 1, ms);
     EXPECT_EQ(c.chosen(b), 0) << "b was pushed out: its trials start again";
 }
 

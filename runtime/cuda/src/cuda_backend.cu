@@ -719,7 +719,7 @@ private:
         if (!m_iso_regions || m_options.cuda_iso_walk == "plain") return true;
         if (m_options.cuda_iso_walk == "regions") return false;
         timed = true;
-        return m_walk_choice.next({mask, w, h, 0}) == 1;
+        return m_walk_choice.next({mask, w, h}) == 1;
     }
 
     /// The megakernel over rows [y0, y1); `order_frame`: zero_counters()'s frame number. Returns

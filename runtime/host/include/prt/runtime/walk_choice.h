@@ -9,7 +9,7 @@
 
 namespace prt::rt {
 
-/// Per kind of frame (a key: the kernel mask and the rows), frame 0 runs kernel 0 untimed (cold
+/// Per kind of frame (a key: the kernel mask and the image size), frame 0 runs kernel 0 untimed (cold
 /// caches, first launch), frames 1-4 run kernel 0, 1, 0, 1 and keep each one's best time, then the
 /// faster runs and every k_recheck-th frame the other once; the choice then follows the two latest
 /// times, switching when the other is k_margin faster (so noise does not flip it). A view that moves
@@ -17,7 +17,7 @@ namespace prt::rt {
 /// k_recheck on the slower one.
 class WalkChoice {
 public:
-    using Key = std::array<std::uint32_t, 4>;
+    using Key = std::array<std::uint32_t, 3>;
     static constexpr std::uint32_t k_trial_frames = 5;  ///< frame 0 (untimed) and 4 timed trials
     static constexpr std::uint32_t k_recheck = 64;
     static constexpr float k_margin = 0.98f;
@@ -35,22 +35,23 @@ public:
         return m_running;
     }
 
-    /// The device time of the frame next() chose the kernel for.
-    void record(float ms) {
+    /// The time of the frame next() chose the kernel for, in one unit for every frame of its kind
+    /// (the CUDA backend: nanoseconds per pixel).
+    void record(float time) {
         if (m_current == nullptr) return;
         Entry& e = *m_current;
         m_current = nullptr;
         const std::uint32_t frame = e.frames++;
-        if (frame == 0 || !(ms > 0.0f)) return;  // the cold frame; a frame with no time
-        float& t = e.ms[m_running];
+        if (frame == 0 || !(time > 0.0f)) return;  // the cold frame; a frame with no time
+        float& t = e.time[m_running];
         if (frame < k_trial_frames) {
-            t = t > 0.0f ? (ms < t ? ms : t) : ms;
-            if (frame + 1 == k_trial_frames) e.chosen = e.ms[1] < e.ms[0] ? 1 : 0;
+            t = t > 0.0f ? (time < t ? time : t) : time;
+            if (frame + 1 == k_trial_frames) e.chosen = e.time[1] < e.time[0] ? 1 : 0;
             return;
         }
-        t = ms;
+        t = time;
         const int other = 1 - e.chosen;
-        if (e.ms[other] > 0.0f && e.ms[other] < k_margin * e.ms[e.chosen]) e.chosen = other;
+        if (e.time[other] > 0.0f && e.time[other] < k_margin * e.time[e.chosen]) e.chosen = other;
     }
 
     /// The kernel kind `key` runs outside its checks (0 before its trials end).
@@ -64,7 +65,7 @@ private:
     struct Entry {
         Key key{};
         std::uint32_t frames = 0;
-        std::array<float, 2> ms{0.0f, 0.0f};  ///< best trial time, then latest time, per kernel
+        std::array<float, 2> time{0.0f, 0.0f};  ///< best trial time, then latest time, per kernel
         int chosen = 0;
     };
 
