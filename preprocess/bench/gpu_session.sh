@@ -72,7 +72,7 @@ for step in $steps; do
         run_bench cull2_leaf16 $bench --backend cuda --max-leaf 16
         run_bench cull2_leaf64 $bench --backend cuda --max-leaf 64
         run_bench cull0_leaf64 $bench --backend cuda --leaf-culling 0 --max-leaf 64
-        for b in 3 5 2; do run_bench cull2_blocks$b $bench --backend cuda --min-blocks $b; done
+        for b in 4 5 2; do run_bench cull2_blocks$b $bench --backend cuda --min-blocks $b; done
         run_bench cull2_wave $bench --backend cuda --kernel wavefront
         run_bench cull2_again $bench --backend cuda
         run_bench cull0_again $bench --backend cuda --leaf-culling 0
@@ -88,7 +88,7 @@ for step in $steps; do
         run_bench linear $bench --backend cuda --mapping linear
         run_bench wavefront $bench --backend cuda --kernel wavefront
         run_bench leaf64 $bench --backend cuda --max-leaf 64
-        run_bench blocks3 $bench --backend cuda --min-blocks 3
+        run_bench blocks4 $bench --backend cuda --min-blocks 4
         run_bench blocks5 $bench --backend cuda --min-blocks 5
         run_bench hybrid $bench --backend hybrid
         ;;

@@ -132,10 +132,10 @@ void add_backend_options(CLI::App& app, BackendChoice& b) {
     app.add_option(
            "--min-blocks", b.min_blocks,
            "CUDA megakernel occupancy hint: resident 256-thread blocks per SM, 1-6, which caps registers "
-           "per thread (0: the measured default, 4; 3 for bricked splats and ISO without reflections or "
-           "refractions; 2 for patch-only scenes, whose kernel "
-           "has variants 1, 2 and 4). Values other than the defaults need a build with "
-           "-DPRT_CUDA_TUNING_KERNELS=ON")
+           "per thread (0: the measured default of the frame's kernel: 3 for splats, bricked splats and "
+           "ISO, 2 for patches and MLS, 4 for the general kernel of mixed surfaces, several samples per "
+           "pixel or path tracing, its only variant; the patch kernel has variants 1, 2 and 4). Values "
+           "other than the defaults need a build with -DPRT_CUDA_TUNING_KERNELS=ON")
         ->check(CLI::Range(0, 6));
     app.add_flag("--default-carveout", b.default_carveout,
                  "CUDA: leave the L1 / shared-memory split to the driver instead of preferring L1");

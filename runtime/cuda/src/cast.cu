@@ -19,7 +19,11 @@ namespace {
 constexpr std::uint32_t k_cast_block = 256;
 
 /// Closest hits: splat scenes get a kernel without the other surfaces' code (as the megakernel's
-/// splat variant, 4 blocks per SM), everything else the general one.
+/// splat variant), everything else the general one. 4 blocks per SM: unlike the megakernel's splat
+/// variants (3 since 2026-12-06), the splat cast kernel at 3 was slower (H100, 10M random rays from
+/// a sphere of radius 3, on the device: kernel 14.2 -> 15.7 ms on the culled 1M sphere, 16.6 -> 17.1
+/// on the culled room, 21.1 -> 24.1 on the culled 10M sphere;
+/// preprocess/bench/results/h100-2026-12-06-issue19-occupancy, e3.txt).
 template <std::uint32_t K>
 __global__ void __launch_bounds__(k_cast_block, 4)
     cast_kernel(const core::SceneView scene, const core::CastRays rays, const core::CastOutputs out) {

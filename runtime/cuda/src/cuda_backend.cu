@@ -254,10 +254,17 @@ constexpr std::uint32_t k_plain = core::k_mask_plain_walk;
 /// lanes' sums, no spills) much faster: the culled room's primary / shadow 0.036 / 0.033 -> 0.097 /
 /// 0.078 Grays/s (1 block: 0.077 / 0.060, 3: 0.064 / 0.051, 4: 0.034 / 0.030), and 0.129 / 0.096 with
 /// the while-while walk of core/mls.h (H200, preprocess/bench/results/h200-2026-12-03-issue19-mls).
-/// Occupancy: splats and the general kernel at 4 blocks per SM, patches at 2, ISO at 3 (H200, the
+/// Occupancy: the general kernel at 4 blocks per SM, patches at 2, ISO at 3 (H200, the
 /// culled 1M room, primary / shadow at 2, 3, 4, 5 blocks: 1.43 / 1.21, 1.57 / 1.36, 1.36 / 1.39,
-/// 1.11 / 1.25 Grays/s; the splat kernel without secondary rays keeps 4: 0.88 / 1.37, 1.09 / 1.66,
-/// 1.16 / 1.78, 1.05 / 1.66 on prt-bench's room; gpu-k4.sh there), bricked
+/// 1.11 / 1.25 Grays/s), splats at 3: 4 was the best on 2026-12-02 (without secondary rays, prt-bench's
+/// room at 2 / 3 / 4 / 5: 0.88 / 1.37, 1.09 / 1.66, 1.16 / 1.78, 1.05 / 1.66; gpu-k4.sh there), but
+/// it spilled there (above) and its walk has grown since (macro-regions): H100, 2026-12-06, 4 -> 3
+/// blocks, primary / shadow / reflect4 / full4 Grays/s: the culled room (bench_room.json) 2.14 / 2.97 /
+/// 1.25 / 1.54 -> 2.71-2.73 / 3.29-3.36 / 1.57 / 1.68, prt-bench's room 1.37 / 2.07-2.10 / 0.615 / 0.99
+/// -> 1.48 / 2.17 / 0.71 / 1.11, the culled 10M sphere 1.52-1.53 / 1.46 / 1.48-1.49 / 1.33 -> 1.71 /
+/// 1.54 / 1.75-1.76 / 1.44, the culled 1M sphere 2.20 / 2.14-2.15 / 2.01-2.02 -> 2.66-2.67 / 2.28 /
+/// 2.50 (2 blocks: reflect4 / full4 1.43 / 1.55 on the room, 5: primary 1.30;
+/// preprocess/bench/results/h100-2026-12-06-issue19-occupancy), bricked
 /// splats (issue 17: their own kernel, so the float splat kernel does not carry the brick walk) at 3
 /// (H100, culled 1M sphere, Grays/s primary / shadow / reflect4: 1.297 / 1.774 / 1.757 at 3, 1.177 /
 /// 1.658 / 1.479 at 4, 1.193 / 1.619 / 1.605 at 2; preprocess/bench/results/h100-2026-11-25-issue17-onewalk).
@@ -265,13 +272,13 @@ constexpr std::uint32_t k_plain = core::k_mask_plain_walk;
 /// and bricked splat models takes the general kernel): 740 B of spills at 3 blocks against 824, and
 /// on an H200 shadow rays 5-7 % faster, full4 5-6 %, primary under 1 %; 4 blocks were 6-8 % slower on
 /// primary rays there (preprocess/bench/results/h200-2026-11-28-issue17-direct). The tuning variants of
-/// --min-blocks (with secondary rays: splats 1, 2, 3, 5, 6; patches 1, 4; bricked splats 2, 4; ISO 2,
-/// 4; without: splats 2, 3, 5, bricked splats 2, 4, ISO 2, 4, 5: runtime/README.md) only with the
-/// CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 15 megakernels instead of 37.
-/// ISO's three come twice: also compiled without macro-region code (k_plain, WalkChoice).
+/// --min-blocks (with secondary rays: splats 1, 2, 4, 5, 6; patches 1, 4; bricked splats 2, 4; ISO 2,
+/// 4; without: splats 2, 4, 5, bricked splats 2, 4, ISO 2, 4, 5, plain ISO 2, 4: runtime/README.md) only with
+/// the CMake option PRT_CUDA_TUNING_KERNELS, so a default build compiles 15 megakernels instead of 39. ISO's
+/// three come twice: also compiled without macro-region code (k_plain, WalkChoice).
 const Megakernel k_megakernels[] = {
     // clang-format off
-    megakernel<core::k_mask_splats, 4>(),  megakernel<core::k_mask_splats | k_secondary, 4>(),
+    megakernel<core::k_mask_splats, 3>(),  megakernel<core::k_mask_splats | k_secondary, 3>(),
     megakernel<core::k_mask_bricks, 3>(),  megakernel<core::k_mask_bricks | k_secondary, 3>(),
     megakernel<core::k_mask_patches, 2>(), megakernel<core::k_mask_patches | k_secondary, 2>(),
     megakernel<core::k_mask_iso, 3>(),     megakernel<core::k_mask_iso | k_secondary, 3>(),
@@ -283,7 +290,7 @@ const Megakernel k_megakernels[] = {
 #if PRT_CUDA_TUNING_KERNELS
     megakernel<core::k_mask_splats | k_secondary, 1>(),
     megakernel<core::k_mask_splats | k_secondary, 2>(),
-    megakernel<core::k_mask_splats | k_secondary, 3>(),
+    megakernel<core::k_mask_splats | k_secondary, 4>(),
     megakernel<core::k_mask_splats | k_secondary, 5>(),
     megakernel<core::k_mask_splats | k_secondary, 6>(),
     megakernel<core::k_mask_patches | k_secondary, 1>(),
@@ -291,7 +298,7 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_bricks | k_secondary, 2>(),
     megakernel<core::k_mask_bricks | k_secondary, 4>(),
     megakernel<core::k_mask_splats, 2>(),
-    megakernel<core::k_mask_splats, 3>(),
+    megakernel<core::k_mask_splats, 4>(),
     megakernel<core::k_mask_splats, 5>(),
     megakernel<core::k_mask_bricks, 2>(),
     megakernel<core::k_mask_bricks, 4>(),
@@ -300,6 +307,8 @@ const Megakernel k_megakernels[] = {
     megakernel<core::k_mask_iso, 5>(),
     megakernel<core::k_mask_iso | k_secondary, 2>(),
     megakernel<core::k_mask_iso | k_secondary, 4>(),
+    megakernel<core::k_mask_iso | k_plain, 2>(),
+    megakernel<core::k_mask_iso | k_plain, 4>(),
     megakernel<core::k_mask_mls, 1>(),
     megakernel<core::k_mask_mls, 3>(),
     megakernel<core::k_mask_mls, 4>(),
@@ -343,15 +352,15 @@ const Megakernel& find_megakernel(std::uint32_t surface_mask, bool sampling, boo
     const std::uint32_t mask = kernel_mask(surface_mask, sampling, secondary, shadows, plain);
     const std::uint32_t kind = mask & ~(k_secondary | core::k_mask_shadow_walk | k_plain);
     if (asked < 1 || asked > 6) asked = 0;
-    int blocks = 4;  // the splat kernel's default; the general kernel's only occupancy
+    int blocks = 4;  // the general kernel's only occupancy
     if (kind == core::k_mask_patches)
         blocks = asked == 0 ? 2 : (asked <= 2 ? asked : 4);  // variants 1, 2 and 4
     else if (kind == core::k_mask_bricks)
         blocks = asked == 0 ? 3 : asked;  // variants 2, 3 and 4
     else if (kind == core::k_mask_iso)
         blocks = asked == 0 ? 3 : asked;  // variants 2, 3, 4 and 5
-    else if (kind == core::k_mask_splats && asked != 0)
-        blocks = asked;
+    else if (kind == core::k_mask_splats)
+        blocks = asked == 0 ? 3 : asked;  // variants 1-6 with secondary rays, 2-5 without
     else if (kind == core::k_mask_mls)
         blocks = asked == 0 ? 2 : asked;  // variants 1, 2, 3 and 4
     for (const std::uint32_t walk : {mask, mask & ~k_plain}) {

@@ -132,8 +132,9 @@ struct BackendOptions {
     /// same shape (cuda_backend.cu, ItemOrder), instead of image order alone
     bool cuda_heavy_first = true;
     bool cuda_linear_mapping = false;  ///< rays to threads row by row instead of in Z-order (thesis 2.3)
-    int cuda_min_blocks =
-        0;  ///< megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: default 4, patches 2)
+    /// megakernel occupancy hint: 256-thread blocks per SM, 1-6 (0: each kernel's default: splats,
+    /// bricked splats and ISO 3, patches and MLS 2, the general kernel 4)
+    int cuda_min_blocks = 0;
     bool cuda_max_l1 = true;  ///< prefer L1 over shared memory for the megakernel
     /// ISO megakernels on a scene with macro-regions: "auto" (the first frames of each kind time the
     /// walk with its regions and the walk compiled without them, core::k_mask_plain_walk, and keep
